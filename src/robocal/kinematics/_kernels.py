@@ -1,0 +1,322 @@
+"""Compiled (numba) kernels for forward kinematics and Jacobians, looping over poses.
+
+Two program forms, both built by :mod:`robocal.kinematics.model` from the link operations:
+
+* the *fused* program for forward kinematics: per moving joint ``m`` a constant affine ``K[m]``
+  (3x4) from its parent joint's frame, then the joint motion ``Rz(q)`` or ``Tz(q)``; end effectors
+  hang off a joint by a constant ``E[e]``. This is the fast path (one 3x4 product per joint).
+* the *operation* program for Jacobians: every elementary operation of every link, so that each
+  parameter's spatial twist is read off where it acts.
+
+Twists are spatial, in the world frame: ``(omega, v)`` with the velocity of a world point ``p``
+equal to ``omega x p + v``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .links import OP_RU, OP_RX, OP_RY, OP_RZ, OP_TU, OP_TX, OP_TY, OP_TZ
+
+_CACHE = True
+
+
+@njit(cache=_CACHE, inline="always")
+def _mul_affine(A, B, out):
+    """out = A @ B for affine 3x4 matrices (implicit last row 0 0 0 1)."""
+    for i in range(3):
+        a0, a1, a2 = A[i, 0], A[i, 1], A[i, 2]
+        out[i, 0] = a0 * B[0, 0] + a1 * B[1, 0] + a2 * B[2, 0]
+        out[i, 1] = a0 * B[0, 1] + a1 * B[1, 1] + a2 * B[2, 1]
+        out[i, 2] = a0 * B[0, 2] + a1 * B[1, 2] + a2 * B[2, 2]
+        out[i, 3] = a0 * B[0, 3] + a1 * B[1, 3] + a2 * B[2, 3] + A[i, 3]
+
+
+@njit(cache=_CACHE, inline="always")
+def _model_joint(q_row, m, cpl_ptr, cpl_idx, cpl_coef):
+    acc = 0.0
+    for t in range(cpl_ptr[m], cpl_ptr[m + 1]):
+        acc += cpl_coef[t] * q_row[cpl_idx[t]]
+    return acc
+
+
+# Cody-Waite split of pi/2 (fdlibm's pio2_1, pio2_1t) and Taylor coefficients 1/n!.
+_PIO2_HI = 1.57079632673412561417e+00
+_PIO2_LO = 6.07710050650619224932e-11
+_TWO_OVER_PI = 0.63661977236758134308
+
+
+@njit(cache=_CACHE, inline="always")
+def _sincos(x):
+    """sin(x), cos(x) to ~1 ulp for |x| < 1e5 rad; branch-free so loops over it vectorize."""
+    k = np.floor(x * _TWO_OVER_PI + 0.5)
+    r = (x - k * _PIO2_HI) - k * _PIO2_LO
+    z = r * r
+    sp = r * (1.0 + z * (-1.6666666666666666e-01 + z * (8.3333333333333332e-03 + z * (
+        -1.9841269841269841e-04 + z * (2.7557319223985893e-06 + z * (-2.5052108385441720e-08 + z * (
+            1.6059043836821613e-10 + z * (-7.6471637318198164e-13 + z * 2.8114572543455206e-15))))))))
+    cp = 1.0 + z * (-0.5 + z * (4.1666666666666664e-02 + z * (-1.3888888888888889e-03 + z * (
+        2.4801587301587302e-05 + z * (-2.7557319223985888e-07 + z * (2.0876756987868100e-09 + z * (
+            -1.1470745597729725e-11 + z * (4.7794773323873853e-14 + z * -1.5619206968586225e-16))))))))
+    k4 = k - 4.0 * np.floor(k * 0.25)  # quadrant 0..3 as a float (keeps the loop vectorizable)
+    swap = (k4 == 1.0) | (k4 == 3.0)
+    s = cp if swap else sp
+    c = sp if swap else cp
+    s = -s if k4 >= 2.0 else s
+    c = -c if (k4 == 1.0) | (k4 == 2.0) else c
+    return s, c
+
+
+@njit(cache=_CACHE)
+def sincos_array(x):
+    """Element-wise (sin, cos) of a contiguous float array (vectorized polynomial)."""
+    flat = x.ravel()
+    s = np.empty_like(flat)
+    c = np.empty_like(flat)
+    for i in range(flat.size):
+        s[i], c[i] = _sincos(flat[i])
+    return s.reshape(x.shape), c.reshape(x.shape)
+
+
+def pack_fused(K, mparent, mtype, cpl_ptr, cpl_idx, cpl_coef, ee_anchor, E, post):
+    """Pack the fused FK program into one int and one float array (cheap kernel dispatch)."""
+    n_m, n_e = len(K), len(E)
+    ints = np.concatenate([[n_m, n_e, len(cpl_idx)], mparent, mtype, cpl_ptr, cpl_idx, ee_anchor]).astype(np.int64)
+    floats = np.concatenate([np.ravel(K), np.ravel(E), np.ravel(post), cpl_coef]).astype(float)
+    return ints, floats
+
+
+@njit(cache=_CACHE, inline="always")
+def _unpack(ints, floats):
+    n_m, n_e, nnz = ints[0], ints[1], ints[2]
+    o = 3
+    mparent = ints[o:o + n_m]
+    o += n_m
+    mtype = ints[o:o + n_m]
+    o += n_m
+    cpl_ptr = ints[o:o + n_m + 1]
+    o += n_m + 1
+    cpl_idx = ints[o:o + nnz]
+    o += nnz
+    ee_anchor = ints[o:o + n_e]
+    f = 0
+    K = floats[f:f + 12 * n_m].reshape((n_m, 3, 4))
+    f += 12 * n_m
+    E = floats[f:f + 12 * n_e].reshape((n_e, 3, 4))
+    f += 12 * n_e
+    post = floats[f:f + 12 * n_m].reshape((n_m, 3, 4))
+    f += 12 * n_m
+    cpl_coef = floats[f:f + nnz]
+    return n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef
+
+
+@njit(cache=_CACHE, inline="always")
+def _chain(n_m, qm, c, s, K, mparent, mtype, G, tmp):
+    """Fill G (n_m, 3, 4) with each joint's frame after its motion, for one configuration."""
+    for m in range(n_m):
+        p = mparent[m]
+        if p < 0:
+            for i in range(3):
+                for j in range(4):
+                    tmp[i, j] = K[m, i, j]
+        else:
+            _mul_affine(G[p], K[m], tmp)
+        g = G[m]
+        if mtype[m] == 0:
+            cm = c[m]
+            sm = s[m]
+            for i in range(3):
+                x0 = tmp[i, 0]
+                x1 = tmp[i, 1]
+                g[i, 0] = cm * x0 + sm * x1
+                g[i, 1] = cm * x1 - sm * x0
+                g[i, 2] = tmp[i, 2]
+                g[i, 3] = tmp[i, 3]
+        else:
+            d = qm[m]
+            for i in range(3):
+                g[i, 0] = tmp[i, 0]
+                g[i, 1] = tmp[i, 1]
+                g[i, 2] = tmp[i, 2]
+                g[i, 3] = tmp[i, 3] + d * tmp[i, 2]
+
+
+@njit(cache=_CACHE, inline="always")
+def _write_pose(G, a, E, out, tmp):
+    if a < 0:
+        for i in range(3):
+            for j in range(4):
+                tmp[i, j] = E[i, j]
+    else:
+        _mul_affine(G[a], E, tmp)
+    for i in range(3):
+        for j in range(4):
+            out[i, j] = tmp[i, j]
+    out[3, 0] = 0.0
+    out[3, 1] = 0.0
+    out[3, 2] = 0.0
+    out[3, 3] = 1.0
+
+
+@njit(cache=_CACHE, fastmath={"contract"})
+def fk_fused(q, ints, floats, want_links):
+    """Batched forward kinematics of a packed fused program (see :func:`pack_fused`).
+
+    q (N, n_ctrl) controller joints [rad | mm]. Returns (N, n_e, 4, 4) end-effector poses and
+    (N, n_m, 4, 4) link frames (size 0 unless ``want_links``).
+    """
+    n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
+    N = q.shape[0]
+    out = np.empty((N, n_e, 4, 4))
+    links = np.empty((N if want_links else 0, n_m, 4, 4))
+    G = np.empty((n_m, 3, 4))
+    tmp = np.empty((3, 4))
+    # Work in cache-sized chunks: model joints, then their sines/cosines (a vectorized loop),
+    # then the chain products pose by pose.
+    B = 512
+    qm = np.empty((B, n_m))
+    s = np.empty((B, n_m))
+    c = np.empty((B, n_m))
+    for start in range(0, N, B):
+        stop = min(start + B, N)
+        nb = stop - start
+        for n in range(nb):
+            for m in range(n_m):
+                qm[n, m] = _model_joint(q[start + n], m, cpl_ptr, cpl_idx, cpl_coef)
+        qf = qm.ravel()
+        sf = s.ravel()
+        cf = c.ravel()
+        for i in range(nb * n_m):
+            sf[i], cf[i] = _sincos(qf[i])
+        for n in range(nb):
+            _chain(n_m, qm[n], c[n], s[n], K, mparent, mtype, G, tmp)
+            for e in range(n_e):
+                _write_pose(G, ee_anchor[e], E[e], out[start + n, e], tmp)
+            if want_links:
+                for m in range(n_m):
+                    _write_pose(G, m, post[m], links[start + n, m], tmp)
+    return out, links
+
+
+@njit(cache=_CACHE, fastmath={"contract"})
+def fk_fused_single(q, ints, floats, out):
+    """One configuration ``q`` (n_ctrl,), first end effector, written into ``out`` (4, 4).
+
+    Writes in place and returns nothing: boxing a returned array costs more than the kinematics.
+    """
+    n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
+    scratch = np.empty(15 * n_m + 12)  # one allocation: qm, c, s, G, tmp
+    qm = scratch[:n_m]
+    c = scratch[n_m:2 * n_m]
+    s = scratch[2 * n_m:3 * n_m]
+    G = scratch[3 * n_m:15 * n_m].reshape((n_m, 3, 4))
+    tmp = scratch[15 * n_m:].reshape((3, 4))
+    for m in range(n_m):
+        qm[m] = _model_joint(q, m, cpl_ptr, cpl_idx, cpl_coef)
+        s[m], c[m] = _sincos(qm[m])
+    _chain(n_m, qm, c, s, K, mparent, mtype, G, tmp)
+    _write_pose(G, ee_anchor[0], E[0], out, tmp)
+
+
+@njit(cache=_CACHE, inline="always")
+def _apply_op(M, code, value, ax):
+    """Right-multiply the affine frame M (3x4) in place by one elementary operation."""
+    if code == OP_TX or code == OP_TY or code == OP_TZ:
+        k = code - OP_TX
+        for i in range(3):
+            M[i, 3] += value * M[i, k]
+    elif code == OP_TU:
+        for i in range(3):
+            M[i, 3] += value * (M[i, 0] * ax[0] + M[i, 1] * ax[1] + M[i, 2] * ax[2])
+    elif code == OP_RU:
+        c = math.cos(value)
+        s = math.sin(value)
+        v = 1.0 - c
+        x, y, z = ax[0], ax[1], ax[2]
+        R00 = c + x * x * v
+        R01 = x * y * v - z * s
+        R02 = x * z * v + y * s
+        R10 = y * x * v + z * s
+        R11 = c + y * y * v
+        R12 = y * z * v - x * s
+        R20 = z * x * v - y * s
+        R21 = z * y * v + x * s
+        R22 = c + z * z * v
+        for i in range(3):
+            m0, m1, m2 = M[i, 0], M[i, 1], M[i, 2]
+            M[i, 0] = m0 * R00 + m1 * R10 + m2 * R20
+            M[i, 1] = m0 * R01 + m1 * R11 + m2 * R21
+            M[i, 2] = m0 * R02 + m1 * R12 + m2 * R22
+    else:
+        # Rotation about a coordinate axis: columns j, k mix.
+        a = code - OP_RX
+        j = (a + 1) % 3
+        k = (a + 2) % 3
+        c = math.cos(value)
+        s = math.sin(value)
+        for i in range(3):
+            mj = M[i, j]
+            mk = M[i, k]
+            M[i, j] = c * mj + s * mk
+            M[i, k] = c * mk - s * mj
+
+
+@njit(cache=_CACHE)
+def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
+              cpl_ptr, cpl_idx, cpl_coef, n_params, n_model_joints):
+    """Spatial twists of every parameter and every model joint, and every link frame.
+
+    Returns ``param_twists`` (N, 6, n_params), ``joint_twists`` (N, 6, n_model_joints) as
+    (omega, v) in the world frame, and ``frames`` (N, n_links, 3, 4): each link's frame.
+    Parameters whose operation is absent get zero columns.
+    """
+    N = q.shape[0]
+    n_ops = op_code.shape[0]
+    n_links = link_parent.shape[0]
+    ptw = np.zeros((N, 6, n_params))
+    jtw = np.zeros((N, 6, n_model_joints))
+    frames = np.empty((N, n_links, 3, 4))
+    M = np.empty((3, 4))
+    for n in range(N):
+        qn = q[n]
+        cur = -1
+        for t in range(n_ops):
+            L = op_link[t]
+            if L != cur:
+                if cur >= 0:
+                    frames[n, cur] = M
+                cur = L
+                p = link_parent[L]
+                if p < 0:
+                    M[:, :] = root
+                else:
+                    M[:, :] = frames[n, p]
+            code = op_code[t]
+            value = op_value[t]
+            jm = op_joint[t]
+            if jm >= 0:
+                value += _model_joint(qn, jm, cpl_ptr, cpl_idx, cpl_coef)
+            pi = op_param[t]
+            if pi >= 0 or jm >= 0:
+                ax = op_axis[t]
+                w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
+                w1 = M[1, 0] * ax[0] + M[1, 1] * ax[1] + M[1, 2] * ax[2]
+                w2 = M[2, 0] * ax[0] + M[2, 1] * ax[1] + M[2, 2] * ax[2]
+                if code == OP_RX or code == OP_RY or code == OP_RZ or code == OP_RU:
+                    ox, oy, oz = M[0, 3], M[1, 3], M[2, 3]
+                    tw = (w0, w1, w2, oy * w2 - oz * w1, oz * w0 - ox * w2, ox * w1 - oy * w0)
+                else:
+                    tw = (0.0, 0.0, 0.0, w0, w1, w2)
+                if pi >= 0:
+                    for r in range(6):
+                        ptw[n, r, pi] = tw[r]
+                if jm >= 0:
+                    for r in range(6):
+                        jtw[n, r, jm] = tw[r]
+            _apply_op(M, code, value, op_axis[t])
+        if cur >= 0:
+            frames[n, cur] = M
+    return ptw, jtw, frames

@@ -1,0 +1,432 @@
+"""The robot model: named kinematic parameters, joint coupling, batched FK and Jacobians.
+
+A :class:`RobotModel` is immutable (like a Pinocchio ``Model``): algorithms never change it;
+identification returns a new model via :meth:`RobotModel.with_params`. Internally lengths are
+millimetres and angles radians.
+
+Joints: the *controller* joints ``q`` (what the robot controller reports, shape ``(N, n_ctrl)``)
+map linearly to the *model* joints ``q_model = q @ coupling.T`` (``(N, n_model)``), which covers
+direction signs (Kawasaki BX200L joint 1), FANUC's J2/J3 coupling and passive joints driven by
+others (DLR Justin's torso). A revolute link's angle is ``theta = q_model + theta_0``; a prismatic
+link's offset is ``d = q_model + d_0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..transforms import invert_transforms
+from . import _kernels
+from .links import (
+    ANGLE_PARAMS,
+    OP_RU,
+    OP_RZ,
+    OP_TU,
+    OP_TZ,
+    Link,
+    elementary_transforms,
+    link_operations,
+    op_axis,
+)
+
+__all__ = ["RobotModel", "EndEffector", "ParameterTable"]
+
+
+@dataclass(frozen=True)
+class EndEffector:
+    """A frame carried by link ``link`` (index; ``-1`` = the base) at ``T_link_ee`` (4x4, mm)."""
+
+    name: str
+    link: int
+    T_link_ee: np.ndarray
+
+
+@dataclass(frozen=True)
+class ParameterTable:
+    """Named kinematic parameters: ``values`` (P,) in mm / rad, ``units``, ``free`` mask (P,)."""
+
+    names: tuple
+    values: np.ndarray
+    units: tuple
+    free: np.ndarray
+    link_of: np.ndarray  # (P,) index of the link each parameter belongs to
+
+    def index(self, name: str) -> int:
+        try:
+            return self.names.index(name)
+        except ValueError:
+            import difflib
+
+            close = difflib.get_close_matches(name, self.names, n=3)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            raise KeyError(f"unknown parameter {name!r}{hint}") from None
+
+    def as_dict(self) -> dict:
+        return dict(zip(self.names, self.values.tolist()))
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+def _rz_to(axis) -> np.ndarray:
+    """A rotation (3, 3) whose z column is the unit ``axis``."""
+    z = np.asarray(axis, dtype=float)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return np.stack([x, y, z], axis=1)
+
+
+class RobotModel:
+    """Kinematic model of a serial or tree-shaped robot.
+
+    Parameters
+    ----------
+    name, title, source: identification and provenance strings.
+    kind: the model kind of its links (``dh``, ``dh_beta``, ``mdh``, ``urdf``).
+    links: sequence of :class:`Link` in topological order (parents before children).
+    controller_joints: names of the controller joints, length ``n_ctrl``.
+    coupling: (n_model, n_ctrl) matrix, ``q_model = coupling @ q``; n_model = moving links.
+    limits: (n_ctrl, 2) controller joint limits [rad | mm].
+    T_world_base: (4, 4) robot base in the world (instrument) frame [mm].
+    end_effectors: sequence of :class:`EndEffector`.
+    """
+
+    def __init__(self, *, name, kind, links, controller_joints, coupling, limits, T_world_base,
+                 end_effectors, title="", source="", extra=None):
+        self.name = name
+        self.kind = kind
+        self.title = title
+        self.source = source
+        self.extra = dict(extra or {})
+        self.links = tuple(links)
+        for k, link in enumerate(self.links):
+            if not -1 <= link.parent < k:
+                raise ValueError(f"link {link.name!r}: parent index {link.parent} must refer to an earlier link")
+        self.moving = np.array([k for k, L in enumerate(self.links) if L.moves], dtype=np.int64)
+        self.controller_joints = tuple(controller_joints)
+        self.coupling = np.array(coupling, dtype=float, copy=True)
+        n_m, n_c = len(self.moving), len(self.controller_joints)
+        if self.coupling.shape != (n_m, n_c):
+            raise ValueError(f"coupling: expected shape ({n_m}, {n_c}) (model x controller joints), got {self.coupling.shape}")
+        self.limits = np.array(limits, dtype=float, copy=True).reshape(n_c, 2)
+        self.T_world_base = np.array(T_world_base, dtype=float, copy=True)
+        self.end_effectors = tuple(end_effectors)
+        if not self.end_effectors:
+            raise ValueError("a robot needs at least one end effector")
+        for arr in (self.coupling, self.limits, self.T_world_base):
+            arr.setflags(write=False)
+
+        names, values, units, free, link_of = [], [], [], [], []
+        for k, link in enumerate(self.links):
+            for p, v in link.params.items():
+                names.append(f"{p}{k + 1}")
+                values.append(float(v))
+                units.append("rad" if p in ANGLE_PARAMS else "mm")
+                free.append(p not in link.fixed)
+                link_of.append(k)
+        vals = np.array(values)
+        vals.setflags(write=False)
+        fr = np.array(free, dtype=bool)
+        fr.setflags(write=False)
+        self.params = ParameterTable(tuple(names), vals, tuple(units), fr, np.array(link_of, dtype=np.int64))
+        self._build_programs()
+
+    # ------------------------------------------------------------------ construction helpers
+    @property
+    def n_joints(self) -> int:
+        """Number of controller joints (columns of ``q``)."""
+        return len(self.controller_joints)
+
+    @property
+    def n_model_joints(self) -> int:
+        return len(self.moving)
+
+    @property
+    def is_serial(self) -> bool:
+        return all(L.parent == k - 1 for k, L in enumerate(self.links))
+
+    def end_effector_index(self, end_effector) -> int:
+        if end_effector is None:
+            return 0
+        if isinstance(end_effector, (int, np.integer)):
+            if not 0 <= end_effector < len(self.end_effectors):
+                raise IndexError(f"end effector index {end_effector} out of range 0..{len(self.end_effectors) - 1}")
+            return int(end_effector)
+        for i, e in enumerate(self.end_effectors):
+            if e.name == end_effector:
+                return i
+        raise KeyError(f"{self.name}: unknown end effector {end_effector!r}; have {[e.name for e in self.end_effectors]}")
+
+    def replace(self, **changes) -> "RobotModel":
+        """A copy with constructor arguments replaced (the model itself never changes)."""
+        args = dict(name=self.name, kind=self.kind, links=self.links, controller_joints=self.controller_joints,
+                    coupling=self.coupling, limits=self.limits, T_world_base=self.T_world_base,
+                    end_effectors=self.end_effectors, title=self.title, source=self.source, extra=self.extra)
+        args.update(changes)
+        return RobotModel(**args)
+
+    def with_params(self, values=None, **named) -> "RobotModel":
+        """A new model with parameter values replaced: a full vector (P,) and/or ``name=value``."""
+        new = self.params.values.copy() if values is None else np.array(values, dtype=float, copy=True)
+        if new.shape != self.params.values.shape:
+            raise ValueError(f"parameter vector: expected shape {self.params.values.shape}, got {new.shape}")
+        for k, v in named.items():
+            new[self.params.index(k)] = v
+        links = []
+        for k, link in enumerate(self.links):
+            p = {name: float(new[self.params.index(f"{name}{k + 1}")]) for name in link.params}
+            links.append(Link(link.name, link.joint_type, link.convention, p, link.parent, link.axis, link.fixed))
+        return self.replace(links=links)
+
+    def with_free(self, free) -> "RobotModel":
+        """A new model whose link parameters' fixed sets follow the boolean mask ``free`` (P,)."""
+        free = np.asarray(free, dtype=bool)
+        links = []
+        for k, link in enumerate(self.links):
+            fixed = frozenset(n for n in link.params if not free[self.params.index(f"{n}{k + 1}")])
+            links.append(Link(link.name, link.joint_type, link.convention, dict(link.params), link.parent,
+                              link.axis, fixed))
+        return self.replace(links=links)
+
+    def _build_programs(self) -> None:
+        # Operation program (Jacobians, reference FK).
+        codes, axes, vals, pidx, joint, owner = [], [], [], [], [], []
+        model_index = {int(k): m for m, k in enumerate(self.moving)}
+        for k, link in enumerate(self.links):
+            for code, pname, moves in link_operations(link):
+                codes.append(code)
+                axes.append(op_axis(code, link.axis))
+                vals.append(link.params[pname])
+                pidx.append(self.params.index(f"{pname}{k + 1}"))
+                joint.append(model_index[k] if moves else -1)
+                owner.append(k)
+        self._op_code = np.array(codes, dtype=np.int64)
+        self._op_axis = np.array(axes, dtype=float).reshape(-1, 3)
+        self._op_value = np.array(vals, dtype=float)
+        self._op_param = np.array(pidx, dtype=np.int64)
+        self._op_joint = np.array(joint, dtype=np.int64)
+        self._op_link = np.array(owner, dtype=np.int64)
+        self._link_parent = np.array([L.parent for L in self.links], dtype=np.int64)
+
+        # Sparse coupling rows.
+        ptr, idx, coef = [0], [], []
+        for row in self.coupling:
+            nz = np.flatnonzero(row)
+            idx.extend(nz.tolist())
+            coef.extend(row[nz].tolist())
+            ptr.append(len(idx))
+        self._cpl = (np.array(ptr, dtype=np.int64), np.array(idx, dtype=np.int64), np.array(coef, dtype=float))
+
+        # Fused program (FK fast path): per link Pre (before motion) and Post (after motion),
+        # motion canonicalized to Rz(q) or Tz(q).
+        n_m = len(self.moving)
+        K = np.zeros((n_m, 3, 4))
+        post_m = np.zeros((n_m, 3, 4))
+        mparent = np.full(n_m, -1, dtype=np.int64)
+        mtype = np.zeros(n_m, dtype=np.int64)
+        ref = []  # per link: (moving index of the frame it hangs from or -1, 4x4 from that frame to the link frame)
+        for k, link in enumerate(self.links):
+            pre, post, motion = np.eye(4), np.eye(4), None
+            for code, pname, moves in link_operations(link):
+                value = link.params[pname]
+                if moves:
+                    # motion(q + offset) = [Ru] Rz|Tz(q) . Rz|Tz(offset) [Ru^T]
+                    motion = code
+                    canon = OP_RZ if code in (OP_RZ, OP_RU) else OP_TZ
+                    post = elementary_transforms(canon, value)
+                    if code in (OP_RU, OP_TU):
+                        Ru = np.eye(4)
+                        Ru[:3, :3] = _rz_to(link.axis)
+                        pre = pre @ Ru
+                        post = post @ invert_transforms(Ru)
+                    continue
+                E = elementary_transforms(code, value, op_axis(code, link.axis))
+                if motion is None:
+                    pre = pre @ E
+                else:
+                    post = post @ E
+            if link.parent < 0:
+                anchor, T_from = -1, self.T_world_base
+            else:
+                anchor, T_from = ref[link.parent]
+            if link.moves:
+                m = model_index[k]
+                K[m] = (T_from @ pre)[:3]
+                mparent[m] = anchor
+                mtype[m] = 0 if motion in (OP_RZ, OP_RU) else 1
+                post_m[m] = post[:3]
+                ref.append((m, post))
+            else:
+                ref.append((anchor, T_from @ pre @ post))
+        E_ee = np.zeros((len(self.end_effectors), 3, 4))
+        anchor_ee = np.zeros(len(self.end_effectors), dtype=np.int64)
+        for e, ee in enumerate(self.end_effectors):
+            if ee.link < 0:
+                anchor, T_from = -1, self.T_world_base
+            else:
+                anchor, T_from = ref[ee.link]
+            anchor_ee[e] = anchor
+            E_ee[e] = (T_from @ np.asarray(ee.T_link_ee, dtype=float))[:3]
+        # T_from already contains T_world_base for root-level links.
+        self._fused = _kernels.pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
+        # Which links each end effector depends on (ancestors), for Jacobian masking.
+        anc = np.zeros((len(self.end_effectors), len(self.links)), dtype=bool)
+        for e, ee in enumerate(self.end_effectors):
+            k = ee.link
+            while k >= 0:
+                anc[e, k] = True
+                k = self.links[k].parent
+        self._ee_ancestors = anc
+        self._root_affine = self.T_world_base[:3].copy()
+
+    # ------------------------------------------------------------------ joints
+    def _as_joints(self, q) -> tuple[np.ndarray, bool]:
+        q = np.asarray(q, dtype=float)
+        single = q.ndim == 1
+        q2 = np.atleast_2d(q)
+        if q2.ndim != 2 or q2.shape[1] != self.n_joints:
+            raise ValueError(f"{self.name}: joints must have shape (N, {self.n_joints}) or ({self.n_joints},), got {q.shape}")
+        return np.ascontiguousarray(q2), single
+
+    def model_joints(self, q) -> np.ndarray:
+        """Model joint values (..., n_model) from controller joints (..., n_ctrl)."""
+        return np.asarray(q, dtype=float) @ self.coupling.T
+
+    def within_limits(self, q, tol: float = 1e-9) -> np.ndarray:
+        """Boolean (N,) or scalar: every joint within its limits."""
+        q = np.asarray(q, dtype=float)
+        return np.all((q >= self.limits[:, 0] - tol) & (q <= self.limits[:, 1] + tol), axis=-1)
+
+    # ------------------------------------------------------------------ forward kinematics
+    def fk(self, q, end_effector=None) -> np.ndarray:
+        """End-effector poses ``T_world_ee``.
+
+        q: (N, n_ctrl) or (n_ctrl,) controller joints [rad | mm].
+        Returns (N, 4, 4) [mm] (or (4, 4) for a single configuration) for the named end effector
+        (default: the first, the flange of a single-chain robot).
+        """
+        q2, single = self._as_joints(q)
+        e = self.end_effector_index(end_effector)
+        out, _ = _kernels.fk_fused(q2, *self._fused, False)
+        out = out[:, e]
+        return out[0] if single else out
+
+    def fk_all(self, q) -> np.ndarray:
+        """Poses of every end effector: (N, n_ee, 4, 4) [mm]."""
+        q2, single = self._as_joints(q)
+        out, _ = _kernels.fk_fused(q2, *self._fused, False)
+        return out[0] if single else out
+
+    def link_frames(self, q) -> np.ndarray:
+        """World poses of every moving link's frame, (N, n_model, 4, 4) [mm]."""
+        q2, single = self._as_joints(q)
+        _, links = _kernels.fk_fused(q2, *self._fused, True)
+        return links[0] if single else links
+
+    def fk_single(self, q, out=None) -> np.ndarray:
+        """Low-latency FK of one configuration: ``q`` float64 (n_ctrl,) -> (4, 4) pose [mm].
+
+        First end effector only; no input checking beyond numba's typing (use :meth:`fk` for
+        checked calls). Pass ``out`` (4, 4) float64 to reuse a buffer.
+        """
+        if out is None:
+            out = np.empty((4, 4))
+        _kernels.fk_fused_single(q, self._fused[0], self._fused[1], out)
+        return out
+
+    def fk_reference(self, q, end_effector=None) -> np.ndarray:
+        """Forward kinematics by plain numpy products of the elementary operations.
+
+        Slow and independent of the compiled kernels; used to check them.
+        """
+        q2, single = self._as_joints(q)
+        qm = self.model_joints(q2)
+        N = len(q2)
+        frames = []
+        for k, link in enumerate(self.links):
+            T = np.broadcast_to(self.T_world_base, (N, 4, 4)) if link.parent < 0 else frames[link.parent]
+            m = np.searchsorted(self.moving, k)
+            for code, pname, moves in link_operations(link):
+                value = np.full(N, link.params[pname]) + (qm[:, m] if moves else 0.0)
+                T = T @ elementary_transforms(code, value, op_axis(code, link.axis))
+            frames.append(T)
+        ee = self.end_effectors[self.end_effector_index(end_effector)]
+        base = np.broadcast_to(self.T_world_base, (N, 4, 4)) if ee.link < 0 else frames[ee.link]
+        out = base @ ee.T_link_ee
+        return out[0] if single else out
+
+    # ------------------------------------------------------------------ Jacobians
+    def twists(self, q):
+        """Spatial twists (world frame, rows omega then v) of every parameter and model joint.
+
+        Returns ``param_twists`` (N, 6, P), ``joint_twists`` (N, 6, n_model) and the link frames
+        (N, n_links, 3, 4). The velocity of a world point p is ``omega x p + v``.
+        """
+        q2, _ = self._as_joints(q)
+        return _kernels.op_twists(q2, self._op_link, self._op_code, self._op_axis, self._op_value,
+                                  self._op_param, self._op_joint, self._link_parent, self._root_affine,
+                                  *self._cpl, len(self.params), self.n_model_joints)
+
+    def _ee_masks(self, e):
+        anc = self._ee_ancestors[e]
+        pmask = anc[self.params.link_of]
+        jmask = anc[self.moving]
+        return pmask, jmask
+
+    def jacobian(self, q, end_effector=None) -> np.ndarray:
+        """Geometric Jacobian w.r.t. controller joints, in the world frame.
+
+        Returns (N, 6, n_ctrl) (or (6, n_ctrl)): rows 0-2 the velocity of the end-effector origin
+        [mm per rad | mm per mm], rows 3-5 its angular velocity [rad per rad | rad per mm].
+        """
+        q2, single = self._as_joints(q)
+        e = self.end_effector_index(end_effector)
+        _, jtw, _ = self.twists(q2)
+        T = self.fk(q2, e)
+        J6 = _twists_to_pose_rows(jtw * self._ee_masks(e)[1], T[:, :3, 3])
+        J = J6 @ self.coupling
+        return J[0] if single else J
+
+    def identification_jacobian(self, q, points=None, end_effector=None) -> np.ndarray:
+        """Derivatives of measurements w.r.t. every kinematic parameter ((3-6) of METHODS.md).
+
+        Without ``points``: pose Jacobian (N, 6, P): rows 0-2 the end-effector origin [mm per unit],
+        rows 3-5 the small rotation of the end-effector frame (world frame) [rad per unit].
+        With ``points`` (3,) or (k, 3) [mm] given in the end-effector frame: (N, 3, P) or
+        (N, k, 3, P), the derivatives of those points' world coordinates.
+        Units per column follow ``params.units`` (mm or rad).
+        """
+        q2, single = self._as_joints(q)
+        e = self.end_effector_index(end_effector)
+        ptw, _, _ = self.twists(q2)
+        ptw = ptw * self._ee_masks(e)[0]
+        T = self.fk(q2, e)
+        if points is None:
+            J = _twists_to_pose_rows(ptw, T[:, :3, 3])
+        else:
+            pts = np.asarray(points, dtype=float)
+            world = (T[:, None, :3, :3] @ np.atleast_2d(pts)[None, :, :, None])[..., 0] + T[:, None, :3, 3]
+            J = _twists_to_point_rows(ptw[:, None], world)
+            if pts.ndim == 1:
+                J = J[:, 0]
+        return J[0] if single else J
+
+
+def _twists_to_point_rows(tw, p):
+    """Point derivatives omega x p + v; tw (..., 6, C), p (..., 3) -> (..., 3, C)."""
+    w, v = tw[..., :3, :], tw[..., 3:, :]
+    cross = np.stack([
+        w[..., 1, :] * p[..., 2, None] - w[..., 2, :] * p[..., 1, None],
+        w[..., 2, :] * p[..., 0, None] - w[..., 0, :] * p[..., 2, None],
+        w[..., 0, :] * p[..., 1, None] - w[..., 1, :] * p[..., 0, None],
+    ], axis=-2)
+    return cross + v
+
+
+def _twists_to_pose_rows(tw, p):
+    """Rows (dp of origin p, omega): (..., 6, C)."""
+    return np.concatenate([_twists_to_point_rows(tw, p), tw[..., :3, :]], axis=-2)

@@ -1,0 +1,227 @@
+"""Read and write robot files (format ``robocal-robot/1``, see docs/robot-files.md)."""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ..kinematics.links import ANGLE_PARAMS, MODEL_KINDS, Link, link_param_names
+from ..kinematics.model import EndEffector, RobotModel
+from ..transforms import rot_x, rot_y, rot_z, transforms_from
+
+__all__ = ["RobotFileError", "load_robot", "list_robots", "robot_path", "parse_robot", "frame_from_xyz_rpy"]
+
+FORMAT = "robocal-robot/1"
+_LENGTH = {"mm": 1.0, "m": 1000.0}
+_ANGLE = {"deg": math.pi / 180.0, "rad": 1.0}
+
+
+class RobotFileError(ValueError):
+    """A robot file is malformed; the message names the file and the offending entry."""
+
+
+def _data_dir():
+    return resources.files("robocal.robots") / "data"
+
+
+def list_robots() -> list[str]:
+    """Names of the robots shipped with robocal."""
+    return sorted(p.name[:-5] for p in _data_dir().iterdir() if p.name.endswith(".toml"))
+
+
+def robot_path(name_or_path) -> Path:
+    """Path of a shipped robot by name, or the given file path; raises with close-name hints."""
+    p = Path(str(name_or_path))
+    if p.suffix == ".toml" or p.exists():
+        if not p.is_file():
+            raise RobotFileError(f"{p}: no such robot file")
+        return p
+    cand = _data_dir() / f"{name_or_path}.toml"
+    if not cand.is_file():
+        names = list_robots()
+        close = difflib.get_close_matches(str(name_or_path), names, n=3, cutoff=0.4)
+        hint = f" Did you mean: {', '.join(close)}?" if close else f" Known robots: {', '.join(names)}."
+        raise RobotFileError(f"unknown robot {name_or_path!r}.{hint}")
+    return Path(str(cand))
+
+
+def load_robot(name_or_path) -> RobotModel:
+    """Load a shipped robot by name (see :func:`list_robots`) or a robot file by path."""
+    path = robot_path(name_or_path)
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise RobotFileError(f"{path}: not valid TOML: {exc}") from None
+    return parse_robot(data, origin=str(path))
+
+
+def frame_from_xyz_rpy(xyz, rpy) -> np.ndarray:
+    """(4, 4) from a translation and fixed-axis roll, pitch, yaw: ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    r, p, y = rpy
+    return transforms_from(rot_z(y) @ rot_y(p) @ rot_x(r), np.asarray(xyz, dtype=float))
+
+
+def _vec(where, d, key, n, default=None):
+    if key not in d:
+        if default is None:
+            raise RobotFileError(f"{where}: missing key {key!r}")
+        return list(default)
+    v = d[key]
+    if not isinstance(v, list) or len(v) != n or not all(isinstance(x, (int, float)) for x in v):
+        raise RobotFileError(f"{where}: {key!r} must be a list of {n} numbers, got {v!r}")
+    return [float(x) for x in v]
+
+
+def _frame(where, d, lscale, ascale):
+    if d is None:
+        return np.eye(4)
+    xyz = np.array(_vec(where, d, "xyz", 3, (0, 0, 0))) * lscale
+    rpy = np.array(_vec(where, d, "rpy", 3, (0, 0, 0))) * ascale
+    return frame_from_xyz_rpy(xyz, rpy)
+
+
+def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
+    """Build a :class:`RobotModel` from the parsed TOML of a robot file."""
+    fmt = data.get("format")
+    if fmt != FORMAT:
+        raise RobotFileError(f"{origin}: 'format' is {fmt!r}, expected {FORMAT!r}")
+    kind = data.get("model")
+    if kind not in MODEL_KINDS:
+        raise RobotFileError(f"{origin}: 'model' is {kind!r}, expected one of {', '.join(MODEL_KINDS)}")
+    lu, au = data.get("length_unit", "mm"), data.get("angle_unit", "deg")
+    if lu not in _LENGTH:
+        raise RobotFileError(f"{origin}: 'length_unit' is {lu!r}, expected 'mm' or 'm'")
+    if au not in _ANGLE:
+        raise RobotFileError(f"{origin}: 'angle_unit' is {au!r}, expected 'deg' or 'rad'")
+    ls, as_ = _LENGTH[lu], _ANGLE[au]
+    entries = data.get("joints")
+    if not isinstance(entries, list) or not entries:
+        raise RobotFileError(f"{origin}: needs a non-empty [[joints]] list")
+
+    links, names, limits_by_name = [], [], {}
+    couplings = []
+    for i, j in enumerate(entries):
+        where = f"{origin}: joints[{i}]"
+        name = j.get("name")
+        if not isinstance(name, str) or not name:
+            raise RobotFileError(f"{where}: missing 'name'")
+        if name in names:
+            raise RobotFileError(f"{where}: duplicate joint name {name!r}")
+        where = f"{origin}: joint {name!r}"
+        jtype = j.get("type", "revolute")
+        if jtype not in ("revolute", "prismatic", "fixed"):
+            raise RobotFileError(f"{where}: type {jtype!r}, expected revolute, prismatic or fixed")
+        parent_name = j.get("parent")
+        if parent_name is None:
+            parent = i - 1
+        elif parent_name in ("base", ""):
+            parent = -1
+        elif parent_name in names:
+            parent = names.index(parent_name)
+        else:
+            raise RobotFileError(f"{where}: parent {parent_name!r} is not an earlier joint")
+        if kind == "urdf" or (jtype == "fixed" and "xyz" in j):
+            conv = "urdf" if kind == "urdf" else "frame"
+            xyz = _vec(where, j, "xyz", 3, (0, 0, 0))
+            rpy = _vec(where, j, "rpy", 3, (0, 0, 0))
+            params = dict(zip(("x", "y", "z"), (v * ls for v in xyz)))
+            params.update(zip(("roll", "pitch", "yaw"), (v * as_ for v in rpy)))
+            if conv == "urdf" and jtype != "fixed":
+                off = "theta" if jtype == "revolute" else "d"
+                params[off] = float(j.get(off, 0.0)) * (as_ if off == "theta" else ls)
+            axis = _vec(where, j, "axis", 3, (0, 0, 1))
+            n = math.sqrt(sum(a * a for a in axis))
+            if n == 0:
+                raise RobotFileError(f"{where}: 'axis' has zero length")
+            axis = tuple(a / n for a in axis)
+        else:
+            conv = kind
+            expected = link_param_names(kind, jtype, has_beta="beta" in j or kind == "dh_beta")
+            params = {}
+            for p in expected:
+                if p not in j:
+                    if p == "beta":
+                        params[p] = 0.0
+                        continue
+                    raise RobotFileError(f"{where}: missing parameter {p!r} (model {kind} needs {', '.join(expected)})")
+                v = j[p]
+                if not isinstance(v, (int, float)) or not math.isfinite(v):
+                    raise RobotFileError(f"{where}: parameter {p!r} must be a finite number, got {v!r}")
+                params[p] = float(v) * (as_ if p in ANGLE_PARAMS else ls)
+            axis = (0.0, 0.0, 1.0)
+        fixed = j.get("fixed", [])
+        if not isinstance(fixed, list) or not all(isinstance(f, str) for f in fixed):
+            raise RobotFileError(f"{where}: 'fixed' must be a list of parameter names")
+        unknown = [f for f in fixed if f not in params]
+        if unknown:
+            raise RobotFileError(f"{where}: 'fixed' names unknown parameters {unknown}; this joint has {list(params)}")
+        try:
+            links.append(Link(name, jtype, conv, params, parent, axis, frozenset(fixed)))
+        except ValueError as exc:
+            raise RobotFileError(f"{origin}: {exc}") from None
+        names.append(name)
+        if jtype != "fixed":
+            cpl = j.get("coupling")
+            if cpl is None:
+                sign = j.get("sign", 1)
+                if sign not in (1, -1):
+                    raise RobotFileError(f"{where}: 'sign' must be 1 or -1, got {sign!r}")
+                cpl = {name: float(sign)}
+            elif not isinstance(cpl, dict) or not all(isinstance(v, (int, float)) for v in cpl.values()):
+                raise RobotFileError(f"{where}: 'coupling' must map controller joint names to numbers")
+            couplings.append((where, cpl))
+            if "limits" in j:
+                lim = _vec(where, j, "limits", 2)
+                scale = as_ if jtype == "revolute" else ls
+                if lim[0] >= lim[1]:
+                    raise RobotFileError(f"{where}: limits {lim} must be [lower, upper] with lower < upper")
+                limits_by_name[name] = [lim[0] * scale, lim[1] * scale]
+
+    moving_names = [L.name for L in links if L.moves]
+    ctrl = data.get("controller_joints", moving_names)
+    if not isinstance(ctrl, list) or not all(isinstance(c, str) for c in ctrl) or len(set(ctrl)) != len(ctrl):
+        raise RobotFileError(f"{origin}: 'controller_joints' must be a list of distinct names")
+    coupling = np.zeros((len(moving_names), len(ctrl)))
+    for m, (where, cpl) in enumerate(couplings):
+        for cname, coef in cpl.items():
+            if cname not in ctrl:
+                raise RobotFileError(f"{where}: coupling names controller joint {cname!r}, not in {ctrl}")
+            coupling[m, ctrl.index(cname)] = float(coef)
+    ctrl_limits = data.get("controller_limits", {})
+    limits = np.tile([-np.inf, np.inf], (len(ctrl), 1))
+    for c, cname in enumerate(ctrl):
+        if cname in ctrl_limits:
+            lim = _vec(f"{origin}: controller_limits", ctrl_limits, cname, 2)
+            # a controller joint's unit follows the first model joint it drives
+            m = int(np.flatnonzero(coupling[:, c])[0]) if np.any(coupling[:, c]) else None
+            pris = m is not None and links[[k for k, L in enumerate(links) if L.moves][m]].joint_type == "prismatic"
+            limits[c] = np.array(lim) * (ls if pris else as_)
+        elif cname in limits_by_name:
+            limits[c] = limits_by_name[cname]
+
+    T_world_base = _frame(f"{origin}: [base]", data.get("base"), ls, as_)
+    ees = []
+    if "end_effectors" in data:
+        for i, e in enumerate(data["end_effectors"]):
+            where = f"{origin}: end_effectors[{i}]"
+            if e.get("link") not in names:
+                raise RobotFileError(f"{where}: 'link' must name a joint entry, got {e.get('link')!r}")
+            ees.append(EndEffector(str(e.get("name", f"ee{i}")), names.index(e["link"]), _frame(where, e, ls, as_)))
+    else:
+        tool = data.get("tool")
+        ees.append(EndEffector("flange" if tool is None else "tool", len(links) - 1,
+                               _frame(f"{origin}: [tool]", tool, ls, as_)))
+    try:
+        return RobotModel(
+            name=str(data.get("name", Path(origin).stem)), kind=kind, links=links, controller_joints=ctrl,
+            coupling=coupling, limits=limits, T_world_base=T_world_base, end_effectors=ees,
+            title=str(data.get("title", "")), source=str(data.get("source", "")),
+            extra={"length_unit": lu, "angle_unit": au, "origin": origin},
+        )
+    except ValueError as exc:
+        raise RobotFileError(f"{origin}: {exc}") from None

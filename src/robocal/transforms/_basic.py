@@ -1,0 +1,210 @@
+"""Batched SO(3)/SE(3) primitives on arrays shaped ``(..., 3, 3)`` and ``(..., 4, 4)``.
+
+Naming rule (see ``docs/conventions.md``): ``T_a_b`` is the pose of frame ``b`` written in frame
+``a``; its columns are b's axes and origin in a-coordinates, so ``p_a = T_a_b @ p_b`` and poses
+compose as ``T_a_c = T_a_b @ T_b_c``. Lengths are millimetres and angles radians unless a name
+says otherwise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "check_rotations",
+    "check_transforms",
+    "rot_x",
+    "rot_y",
+    "rot_z",
+    "rot_axis",
+    "transforms_from",
+    "translations",
+    "invert_transforms",
+    "compose",
+    "transform_points",
+    "skew",
+    "so3_exp",
+    "so3_log",
+    "rotation_angle",
+    "se3_exp",
+    "se3_log",
+]
+
+
+def check_transforms(T, name: str = "T") -> np.ndarray:
+    """Return ``T`` as a float array shaped ``(..., 4, 4)`` or raise ``ValueError`` naming it."""
+    T = np.asarray(T, dtype=float)
+    if T.ndim < 2 or T.shape[-2:] != (4, 4):
+        raise ValueError(f"{name}: expected shape (..., 4, 4), got {T.shape}")
+    if not np.all(np.isfinite(T)):
+        raise ValueError(f"{name}: contains NaN or infinite values")
+    if not np.allclose(T[..., 3, :], [0.0, 0.0, 0.0, 1.0], atol=1e-9):
+        raise ValueError(f"{name}: last row must be [0, 0, 0, 1]")
+    check_rotations(T[..., :3, :3], name=f"{name}[..., :3, :3]")
+    return T
+
+
+def check_rotations(R, name: str = "R", tol: float = 1e-6) -> np.ndarray:
+    """Return ``R`` as ``(..., 3, 3)`` floats; raise ``ValueError`` if not proper rotations."""
+    R = np.asarray(R, dtype=float)
+    if R.ndim < 2 or R.shape[-2:] != (3, 3):
+        raise ValueError(f"{name}: expected shape (..., 3, 3), got {R.shape}")
+    err = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(initial=0.0)
+    if err > tol:
+        raise ValueError(f"{name}: not orthonormal (max |R^T R - I| = {err:.2e} > {tol:.0e})")
+    if np.any(np.linalg.det(R) < 0):
+        raise ValueError(f"{name}: determinant is negative (a reflection, not a rotation)")
+    return R
+
+
+def _rot(angle, i: int, j: int) -> np.ndarray:
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.zeros(angle.shape + (3, 3))
+    k = 3 - i - j
+    R[..., k, k] = 1.0
+    R[..., i, i] = c
+    R[..., j, j] = c
+    R[..., i, j] = -s
+    R[..., j, i] = s
+    return R
+
+
+def rot_x(angle) -> np.ndarray:
+    """Rotation about x by ``angle`` [rad], shape ``angle.shape + (3, 3)``."""
+    return _rot(angle, 1, 2)
+
+
+def rot_y(angle) -> np.ndarray:
+    """Rotation about y by ``angle`` [rad], shape ``angle.shape + (3, 3)``."""
+    return _rot(angle, 2, 0)
+
+
+def rot_z(angle) -> np.ndarray:
+    """Rotation about z by ``angle`` [rad], shape ``angle.shape + (3, 3)``."""
+    return _rot(angle, 0, 1)
+
+
+def rot_axis(axis, angle) -> np.ndarray:
+    """Rotation by ``angle`` [rad] about unit-normalized ``axis`` (3,), Rodrigues formula."""
+    axis = np.asarray(axis, dtype=float)
+    n = np.linalg.norm(axis, axis=-1, keepdims=True)
+    if np.any(n == 0):
+        raise ValueError("rot_axis: axis has zero length")
+    return so3_exp(axis / n * np.asarray(angle, dtype=float)[..., None])
+
+
+def transforms_from(R=None, p=None) -> np.ndarray:
+    """Homogeneous transforms ``(..., 4, 4)`` from rotations ``(..., 3, 3)`` and translations ``(..., 3)``."""
+    if R is None and p is None:
+        return np.eye(4)
+    R = np.broadcast_to(np.eye(3), np.shape(p)[:-1] + (3, 3)) if R is None else np.asarray(R, float)
+    p = np.zeros(R.shape[:-1]) if p is None else np.asarray(p, float)
+    shape = np.broadcast_shapes(R.shape[:-2], p.shape[:-1])
+    T = np.zeros(shape + (4, 4))
+    T[..., :3, :3] = R
+    T[..., :3, 3] = p
+    T[..., 3, 3] = 1.0
+    return T
+
+
+def translations(p) -> np.ndarray:
+    """Pure translations ``(..., 4, 4)`` from ``(..., 3)`` vectors."""
+    return transforms_from(None, p)
+
+
+def invert_transforms(T) -> np.ndarray:
+    """Inverse of rigid transforms ``(..., 4, 4)`` using ``R^T`` (no general matrix inverse)."""
+    T = np.asarray(T, dtype=float)
+    Rt = np.swapaxes(T[..., :3, :3], -1, -2)
+    out = np.zeros(T.shape)
+    out[..., :3, :3] = Rt
+    out[..., :3, 3] = -(Rt @ T[..., :3, 3:4])[..., 0]
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def compose(*Ts) -> np.ndarray:
+    """Product ``T_0 @ T_1 @ ...`` of broadcastable transform stacks."""
+    out = np.asarray(Ts[0], dtype=float)
+    for T in Ts[1:]:
+        out = out @ np.asarray(T, dtype=float)
+    return out
+
+
+def transform_points(T, p) -> np.ndarray:
+    """Apply ``T (..., 4, 4)`` to points ``p (..., 3)``: ``R p + t``."""
+    T = np.asarray(T, dtype=float)
+    p = np.asarray(p, dtype=float)
+    return (T[..., :3, :3] @ p[..., None])[..., 0] + T[..., :3, 3]
+
+
+def skew(v) -> np.ndarray:
+    """Cross-product matrices ``(..., 3, 3)`` with ``skew(v) @ w == cross(v, w)``."""
+    v = np.asarray(v, dtype=float)
+    S = np.zeros(v.shape + (3,))
+    S[..., 0, 1], S[..., 0, 2] = -v[..., 2], v[..., 1]
+    S[..., 1, 0], S[..., 1, 2] = v[..., 2], -v[..., 0]
+    S[..., 2, 0], S[..., 2, 1] = -v[..., 1], v[..., 0]
+    return S
+
+
+def so3_exp(rotvec) -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)`` from rotation vectors ``(..., 3)`` [rad] (axis * angle)."""
+    w = np.asarray(rotvec, dtype=float)
+    th = np.linalg.norm(w, axis=-1)[..., None, None]
+    small = th < 1e-6
+    th_safe = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th**2 / 6.0, np.sin(th_safe) / th_safe)
+    b = np.where(small, 0.5 - th**2 / 24.0, (1.0 - np.cos(th_safe)) / th_safe**2)
+    K = skew(w)
+    return np.eye(3) + a * K + b * (K @ K)
+
+
+def so3_log(R) -> np.ndarray:
+    """Rotation vectors ``(..., 3)`` [rad], angle in [0, pi], from rotations ``(..., 3, 3)``."""
+    R = np.asarray(R, dtype=float)
+    cos_th = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    th = np.arccos(cos_th)
+    v = np.stack(
+        [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1
+    )
+    sin_th = np.sin(th)
+    small = th < 1e-6
+    scale = np.where(small, 0.5 + th**2 / 12.0, th / (2.0 * np.where(small, 1.0, sin_th)))
+    out = v * scale[..., None]
+    # Near pi the antisymmetric part vanishes: recover the axis from the symmetric part.
+    near_pi = th > np.pi - 1e-3
+    if np.any(near_pi):
+        Rn = R[near_pi]
+        B = (Rn + np.swapaxes(Rn, -1, -2)) / 2.0 - np.eye(3) * cos_th[near_pi][..., None, None]
+        col = np.argmax(np.einsum("...ii->...i", B), axis=-1)
+        axis = B[np.arange(len(Rn)), :, col]
+        axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+        sign = np.sign(np.einsum("...i,...i->...", axis, v[near_pi]))
+        sign = np.where(sign == 0, 1.0, sign)
+        out[near_pi] = axis * (th[near_pi] * sign)[..., None]
+    return out
+
+
+def rotation_angle(R) -> np.ndarray:
+    """Rotation angle [rad] in [0, pi] of rotations ``(..., 3, 3)``."""
+    R = np.asarray(R, dtype=float)
+    return np.arccos(np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0))
+
+
+def se3_exp(twist) -> np.ndarray:
+    """Transforms from the 6-vector ``(rx, ry, rz, x, y, z)``: rotation vector [rad] and translation [mm].
+
+    This is the minimal, always-valid frame parametrization used by calibration: rotation by
+    ``so3_exp`` and a plain translation (not the screw exponential), so the translation part is
+    directly the frame origin.
+    """
+    twist = np.asarray(twist, dtype=float)
+    return transforms_from(so3_exp(twist[..., :3]), twist[..., 3:])
+
+
+def se3_log(T) -> np.ndarray:
+    """Inverse of :func:`se3_exp`: ``(..., 6)`` = (rotation vector [rad], origin [mm])."""
+    T = np.asarray(T, dtype=float)
+    return np.concatenate([so3_log(T[..., :3, :3]), T[..., :3, 3]], axis=-1)
