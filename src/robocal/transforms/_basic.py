@@ -162,29 +162,14 @@ def so3_exp(rotvec) -> np.ndarray:
 
 
 def so3_log(R) -> np.ndarray:
-    """Rotation vectors ``(..., 3)`` [rad], angle in [0, pi], from rotations ``(..., 3, 3)``."""
-    R = np.asarray(R, dtype=float)
-    cos_th = np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
-    th = np.arccos(cos_th)
-    v = np.stack(
-        [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1
-    )
-    sin_th = np.sin(th)
-    small = th < 1e-6
-    scale = np.where(small, 0.5 + th**2 / 12.0, th / (2.0 * np.where(small, 1.0, sin_th)))
-    out = v * scale[..., None]
-    # Near pi the antisymmetric part vanishes: recover the axis from the symmetric part.
-    near_pi = th > np.pi - 1e-3
-    if np.any(near_pi):
-        Rn = R[near_pi]
-        B = (Rn + np.swapaxes(Rn, -1, -2)) / 2.0 - np.eye(3) * cos_th[near_pi][..., None, None]
-        col = np.argmax(np.einsum("...ii->...i", B), axis=-1)
-        axis = B[np.arange(len(Rn)), :, col]
-        axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
-        sign = np.sign(np.einsum("...i,...i->...", axis, v[near_pi]))
-        sign = np.where(sign == 0, 1.0, sign)
-        out[near_pi] = axis * (th[near_pi] * sign)[..., None]
-    return out
+    """Rotation vectors ``(..., 3)`` [rad], angle in [0, pi], from rotations ``(..., 3, 3)``.
+
+    Same as :func:`robocal.transforms.rotvec_from_matrix` (through the quaternion, accurate
+    to rounding up to pi).
+    """
+    from ._orientation import rotvec_from_matrix
+
+    return rotvec_from_matrix(R)
 
 
 def rotation_angle(R) -> np.ndarray:
