@@ -1,0 +1,1 @@
+"""Plots and reports (matplotlib, headless). Imports the library; the library never imports this."""

@@ -1,0 +1,1 @@
+"""Orchestration of library steps for the command line (may import I/O and reports)."""
