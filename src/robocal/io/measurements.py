@@ -1,0 +1,644 @@
+"""Measurement files (format ``robocal-measurements/1``, see docs/measurement-files.md).
+
+A measurement file is a CSV file: a header block of ``# key: value`` lines declaring the format,
+robot and units, then one CSV header row naming the columns, then one row per robot pose::
+
+    # format: robocal-measurements/1
+    # robot: kuka_kr150_r3100
+    # length_unit: mm
+    # angle_unit: deg
+    # instrument: laser tracker
+    # frame: tracker
+    pose,A1,A2,A3,A4,A5,A6,x,y,z
+    1,12.5,-90.0,95.0,0.0,30.0,0.0,2512.113,-803.377,1422.901
+
+Inside robocal (the :class:`Measurements` arrays) lengths are millimetres and angles radians;
+the file's declared units are converted on reading and writing. Every problem in a file raises
+:class:`MeasurementFileError` naming the file, the line (1-based, counted in the file) and the
+column. Writing never replaces an existing file unless ``overwrite=True`` and never leaves a
+half-written file: the text goes to a temporary file in the same directory, then is renamed.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import io
+import math
+import os
+import re
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..transforms import (
+    ANGLE_UNITS,
+    LENGTH_UNITS,
+    POSE_CONVENTIONS,
+    euler_from_matrix,
+    matrix_from_euler,
+    matrix_from_quaternion,
+    matrix_from_rotvec,
+    quaternion_from_matrix,
+    rotvec_from_matrix,
+)
+
+__all__ = [
+    "FORMAT",
+    "DEFAULT_TARGET",
+    "Measurements",
+    "MeasurementFileError",
+    "read_measurements",
+    "write_measurements",
+    "atomic_write_text",
+]
+
+FORMAT = "robocal-measurements/1"
+#: Name of the single target whose columns are plain ``x, y, z``.
+DEFAULT_TARGET = "point"
+
+_REQUIRED_KEYS = ("format", "robot", "length_unit", "angle_unit")
+# Keys written first, in this order; any other key follows, then the notes.
+_KEY_ORDER = ("format", "robot", "length_unit", "angle_unit", "prismatic", "orientation", "instrument", "frame")
+_KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
+_TARGET_RE = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
+_EULER_COLUMNS = ("rx", "ry", "rz")
+_QUAT_COLUMNS = ("qw", "qx", "qy", "qz")
+_AXES = ("x", "y", "z")
+
+# Plausibility limits (internal mm / rad).
+_MM_LOOKS_LIKE_M = 10.0  # every point closer than 10 mm to the origin: the numbers are metres
+_M_LOOKS_LIKE_MM = 1.0e6  # a point farther than 1 km: the numbers are millimetres
+_RAD_LOOKS_LIKE_DEG = 4.0 * math.pi  # a revolute joint beyond two turns: the numbers are degrees
+
+
+class MeasurementFileError(ValueError):
+    """A measurement file is malformed or implausible.
+
+    The message names the file, the 1-based line number in the file and the column where known;
+    the same are available as ``path``, ``line`` and ``column`` (``None`` when not applicable).
+    """
+
+    def __init__(self, path, message: str, line: int | None = None, column: str | None = None):
+        self.path = str(path)
+        self.line = line
+        self.column = column
+        where = self.path if line is None else f"{self.path}, line {line}"
+        if column is not None:
+            where += f", column {column!r}"
+        super().__init__(f"{where}: {message}")
+
+
+# ---------------------------------------------------------------------------------------------
+# the in-memory form
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    """Measured points (and optionally orientations) for a sequence of robot poses.
+
+    joints: (N, n) controller joint values [rad | mm (prismatic)], columns ``joint_names``.
+    points: (N, k, 3) measured target positions [mm] in the instrument frame, one per target.
+    targets: k target names (``DEFAULT_TARGET`` for a single plain ``x, y, z`` target).
+    joint_names: n controller joint names, in column order of ``joints``.
+    pose_ids: N pose identifiers (strings; default ``"1" .. "N"``).
+    rotations: optional (N, 3, 3) measured orientations in the instrument frame.
+    prismatic: (n,) bool, which joints are prismatic (values in mm, not rad).
+    metadata: header values as strings (``robot``, ``instrument``, ``frame``, ``note``,
+        ``orientation``, ...). ``length_unit`` / ``angle_unit`` here only record the units of
+        the file this came from; the arrays are always mm / rad.
+    """
+
+    joints: np.ndarray
+    points: np.ndarray
+    targets: tuple = (DEFAULT_TARGET,)
+    joint_names: tuple = ()
+    pose_ids: tuple = ()
+    rotations: np.ndarray | None = None
+    prismatic: np.ndarray | None = None
+    metadata: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        q = np.array(self.joints, dtype=float)
+        if q.ndim != 2:
+            raise ValueError(f"Measurements.joints: expected shape (N, n_joints), got {q.shape}")
+        N, n = q.shape
+        p = np.array(self.points, dtype=float)
+        if p.ndim == 2 and p.shape[-1] == 3:
+            p = p[:, None, :]
+        if p.ndim != 3 or p.shape[0] != N or p.shape[2] != 3:
+            raise ValueError(f"Measurements.points: expected shape ({N}, k, 3), got {p.shape}")
+        for name, arr in (("joints", q), ("points", p)):
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"Measurements.{name}: contains NaN or infinite values")
+        targets = tuple(str(t) for t in self.targets)
+        if len(targets) != p.shape[1]:
+            raise ValueError(f"Measurements.targets: {len(targets)} names for {p.shape[1]} targets")
+        if len(set(targets)) != len(targets):
+            raise ValueError(f"Measurements.targets: duplicate names in {targets}")
+        for t in targets:
+            if not _TARGET_RE.match(t):
+                raise ValueError(f"Measurements.targets: {t!r} is not a valid target name (letters and digits, "
+                                 "starting with a letter)")
+        names = tuple(str(j) for j in self.joint_names) or tuple(f"J{i + 1}" for i in range(n))
+        if len(names) != n:
+            raise ValueError(f"Measurements.joint_names: {len(names)} names for {n} joint columns")
+        if len(set(names)) != n:
+            raise ValueError(f"Measurements.joint_names: duplicate names in {names}")
+        ids = tuple(str(i) for i in self.pose_ids) or tuple(str(i + 1) for i in range(N))
+        if len(ids) != N:
+            raise ValueError(f"Measurements.pose_ids: {len(ids)} ids for {N} poses")
+        for i in ids:
+            if not i.strip() or "\n" in i or "\r" in i:
+                raise ValueError(f"Measurements.pose_ids: {i!r} is not a valid pose id (empty or multi-line)")
+        R = None
+        if self.rotations is not None:
+            R = np.array(self.rotations, dtype=float)
+            if R.shape != (N, 3, 3):
+                raise ValueError(f"Measurements.rotations: expected shape ({N}, 3, 3), got {R.shape}")
+            if not np.all(np.isfinite(R)):
+                raise ValueError("Measurements.rotations: contains NaN or infinite values")
+            R.setflags(write=False)
+        pr = np.zeros(n, dtype=bool) if self.prismatic is None else np.array(self.prismatic, dtype=bool)
+        if pr.shape != (n,):
+            raise ValueError(f"Measurements.prismatic: expected shape ({n},), got {pr.shape}")
+        for arr in (q, p, pr):
+            arr.setflags(write=False)
+        set_(self, "joints", q)
+        set_(self, "points", p)
+        set_(self, "targets", targets)
+        set_(self, "joint_names", names)
+        set_(self, "pose_ids", ids)
+        set_(self, "rotations", R)
+        set_(self, "prismatic", pr)
+        set_(self, "metadata", {str(k): str(v) for k, v in dict(self.metadata).items()})
+
+    @property
+    def n_poses(self) -> int:
+        return self.joints.shape[0]
+
+    @property
+    def n_targets(self) -> int:
+        return self.points.shape[1]
+
+    @property
+    def robot(self) -> str | None:
+        return self.metadata.get("robot")
+
+    def __len__(self) -> int:
+        return self.n_poses
+
+    def subset(self, index) -> "Measurements":
+        """The poses selected by ``index`` (indices, slice or boolean mask), same metadata."""
+        idx = np.arange(self.n_poses)[index]
+        return Measurements(
+            joints=self.joints[idx], points=self.points[idx], targets=self.targets,
+            joint_names=self.joint_names, pose_ids=[self.pose_ids[i] for i in np.atleast_1d(idx)],
+            rotations=None if self.rotations is None else self.rotations[idx],
+            prismatic=self.prismatic, metadata=self.metadata,
+        )
+
+
+# ---------------------------------------------------------------------------------------------
+# atomic writing
+# ---------------------------------------------------------------------------------------------
+
+
+def atomic_write_text(path, text: str, overwrite: bool = False) -> Path:
+    """Write ``text`` to ``path`` via a temporary file in the same directory and a rename.
+
+    Without ``overwrite`` an existing ``path`` raises ``FileExistsError`` and is left untouched
+    (the final step is a hard link, which fails atomically if the name exists). With
+    ``overwrite=True`` the old file is replaced atomically (``os.replace``): a reader sees either
+    the old or the new content, never a mixture.
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    if not directory.is_dir():
+        raise FileNotFoundError(f"{path}: directory {directory} does not exist")
+    if not overwrite and path.exists():
+        raise FileExistsError(f"{path}: file exists; pass overwrite=True to replace it")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        if overwrite:
+            os.replace(tmp, path)
+        else:
+            try:
+                os.link(tmp, path)  # atomic no-clobber
+            except FileExistsError:
+                raise FileExistsError(f"{path}: file exists; pass overwrite=True to replace it") from None
+            except OSError:  # file system without hard links
+                if path.exists():
+                    raise FileExistsError(f"{path}: file exists; pass overwrite=True to replace it") from None
+                os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+# ---------------------------------------------------------------------------------------------
+# writing
+# ---------------------------------------------------------------------------------------------
+
+
+def _orientation_columns(convention: str) -> tuple:
+    return _QUAT_COLUMNS if convention == "quaternion" else _EULER_COLUMNS
+
+
+def _check_convention(convention) -> str:
+    key = str(convention).strip().lower()
+    if key not in POSE_CONVENTIONS:
+        raise ValueError(f"unknown orientation convention {convention!r}; valid names: "
+                         f"{', '.join(sorted(POSE_CONVENTIONS))}")
+    return key
+
+
+def _point_columns(targets) -> list:
+    if len(targets) == 1 and targets[0] == DEFAULT_TARGET:
+        return list(_AXES)
+    return [f"{t}_{a}" for t in targets for a in _AXES]
+
+
+def write_measurements(path, meas: Measurements, *, length_unit: str | None = None,
+                       angle_unit: str | None = None, orientation: str | None = None,
+                       overwrite: bool = False, float_format: str | None = None,
+                       metadata: dict | None = None) -> Path:
+    """Write ``meas`` to the CSV measurement file ``path`` (atomically).
+
+    length_unit: "mm" or "m" for points and prismatic joints (default: ``meas.metadata`` or mm).
+    angle_unit: "deg" or "rad" for revolute joints and Euler / rotation-vector angles
+        (default: ``meas.metadata`` or deg).
+    orientation: convention of the orientation columns when ``meas.rotations`` is set (a name of
+        ``robocal.transforms.POSE_CONVENTIONS``; default: ``meas.metadata`` or "quaternion").
+    overwrite: replace an existing file; otherwise ``FileExistsError``.
+    float_format: a ``format()`` spec for numbers such as ``".6f"``; default ``None`` writes the
+        shortest text that reads back to the identical float (exact round trip).
+    metadata: extra or replacing header entries (``instrument``, ``frame``, ``note``, ...).
+    """
+    md = dict(meas.metadata)
+    md.update({str(k): str(v) for k, v in (metadata or {}).items()})
+    lu = length_unit or md.get("length_unit", "mm")
+    au = angle_unit or md.get("angle_unit", "deg")
+    if lu not in LENGTH_UNITS:
+        raise ValueError(f"unknown length_unit {lu!r}; valid: {', '.join(LENGTH_UNITS)}")
+    if au not in ANGLE_UNITS:
+        raise ValueError(f"unknown angle_unit {au!r}; valid: {', '.join(ANGLE_UNITS)}")
+    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
+    if "robot" not in md or not md["robot"].strip():
+        raise ValueError("write_measurements: metadata must name the robot (metadata={'robot': ...})")
+
+    md["format"] = FORMAT
+    md["length_unit"], md["angle_unit"] = lu, au
+    md.pop("prismatic", None)
+    if meas.prismatic.any():
+        md["prismatic"] = ", ".join(n for n, p in zip(meas.joint_names, meas.prismatic) if p)
+    conv = None
+    if meas.rotations is not None:
+        conv = _check_convention(orientation or md.get("orientation", "quaternion"))
+        md["orientation"] = conv
+    else:
+        md.pop("orientation", None)
+
+    clash = {"pose"} & set(meas.joint_names) | set(_point_columns(meas.targets)) & set(meas.joint_names)
+    if clash:
+        raise ValueError(f"write_measurements: joint names {sorted(clash)} clash with other column names")
+
+    lines = []
+    notes = md.pop("note", None)
+    for key in list(_KEY_ORDER) + sorted(k for k in md if k not in _KEY_ORDER):
+        if key not in md:
+            continue
+        value = md[key]
+        if "\n" in value or "\r" in value:
+            raise ValueError(f"write_measurements: metadata {key!r} must be a single line (use 'note' for text)")
+        if not _KEY_RE.match(f"# {key}: x"):
+            raise ValueError(f"write_measurements: metadata key {key!r} is not a valid header key")
+        lines.append(f"# {key}: {value}")
+    if notes:
+        lines.extend(f"# note: {line}".rstrip() for line in notes.splitlines())
+
+    # data block in file units
+    q = np.where(meas.prismatic, meas.joints / lf, meas.joints / af)
+    blocks = [q, meas.points.reshape(meas.n_poses, -1) / lf]
+    columns = ["pose", *meas.joint_names, *_point_columns(meas.targets)]
+    if conv is not None:
+        columns += list(_orientation_columns(conv))
+        if conv == "quaternion":
+            blocks.append(quaternion_from_matrix(meas.rotations))
+        elif conv == "rotvec":
+            blocks.append(rotvec_from_matrix(meas.rotations) / af)
+        else:
+            blocks.append(euler_from_matrix(meas.rotations, conv) / af)
+    data = np.concatenate(blocks, axis=1)
+    fmt = repr if float_format is None else (lambda v: format(v, float_format))
+
+    buf = io.StringIO()
+    buf.write("\n".join(lines) + "\n")
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
+    for pid, row in zip(meas.pose_ids, data.tolist()):
+        writer.writerow([pid, *(fmt(v) for v in row)])
+    return atomic_write_text(path, buf.getvalue(), overwrite=overwrite)
+
+
+# ---------------------------------------------------------------------------------------------
+# reading
+# ---------------------------------------------------------------------------------------------
+
+
+def _controller_joint_types(robot) -> np.ndarray:
+    """(n_ctrl,) bool: controller joint drives a prismatic model joint."""
+    prismatic_model = np.array([robot.links[k].joint_type == "prismatic" for k in robot.moving], dtype=bool)
+    drives = robot.coupling != 0.0  # (n_model, n_ctrl)
+    return np.array([bool(np.any(drives[:, j] & prismatic_model)) for j in range(robot.n_joints)], dtype=bool)
+
+
+def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
+    """Read a measurement file; arrays come back in mm / rad.
+
+    robot: optional :class:`~robocal.kinematics.RobotModel`. When given, the joint columns must be
+        exactly its controller joints (any order; returned in the model's order), prismatic
+        joints are taken from the model, and the file's ``robot:`` must match ``robot.name``
+        unless the file names a path.
+    min_rows: fewer data rows than this is an error.
+
+    Raises :class:`MeasurementFileError` (a ``ValueError``) naming file, line and column.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path}: no such measurement file") from None
+    except UnicodeDecodeError as exc:
+        raise MeasurementFileError(path, f"not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
+
+    def fail(message, line=None, column=None):
+        raise MeasurementFileError(path, message, line, column)
+
+    lines = text.splitlines()
+    # ---- header block
+    md: dict[str, str] = {}
+    key_line: dict[str, int] = {}
+    notes: list[str] = []
+    i = 0
+    while i < len(lines):
+        raw = lines[i].strip()
+        if not raw:
+            i += 1
+            continue
+        if not raw.startswith("#"):
+            break
+        m = _KEY_RE.match(raw)
+        if m:
+            key, value = m.group(1).lower(), m.group(2).strip()
+            if key == "note":
+                notes.append(value)
+            elif key in md:
+                fail(f"header key {key!r} given twice (first on line {key_line[key]})", i + 1)
+            else:
+                md[key], key_line[key] = value, i + 1
+        i += 1  # other '#' lines are free comments
+    if notes:
+        md["note"] = "\n".join(notes)
+    for key in _REQUIRED_KEYS:
+        if key not in md or not md[key]:
+            fail(f"header is missing '# {key}: ...' (required: {', '.join(_REQUIRED_KEYS)})")
+    if md["format"] != FORMAT:
+        fail(f"format {md['format']!r} is not supported; expected {FORMAT!r}", key_line["format"])
+    lu, au = md["length_unit"], md["angle_unit"]
+    if lu not in LENGTH_UNITS:
+        fail(f"unknown length_unit {lu!r}; valid: {', '.join(LENGTH_UNITS)}", key_line["length_unit"])
+    if au not in ANGLE_UNITS:
+        fail(f"unknown angle_unit {au!r}; valid: {', '.join(ANGLE_UNITS)}", key_line["angle_unit"])
+    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
+    conv = None
+    if "orientation" in md:
+        conv = md["orientation"].strip().lower()
+        if conv not in POSE_CONVENTIONS:
+            fail(f"unknown orientation convention {md['orientation']!r}; valid: {', '.join(sorted(POSE_CONVENTIONS))}",
+                 key_line["orientation"])
+        md["orientation"] = conv
+    if robot is not None:
+        file_robot = md["robot"]
+        if file_robot != robot.name and not (file_robot.endswith(".toml") or "/" in file_robot):
+            fail(f"file is for robot {file_robot!r} but robot model {robot.name!r} was given", key_line["robot"])
+
+    # ---- column header row
+    if i >= len(lines):
+        fail("no column header row after the '#' header block")
+    header_line = i + 1
+    columns = [c.strip() for c in next(csv.reader([lines[i]]))]
+    seen: dict[str, int] = {}
+    for j, c in enumerate(columns):
+        if not c:
+            fail(f"column {j + 1} has an empty name", header_line)
+        if c in seen:
+            fail(f"column name given twice (columns {seen[c] + 1} and {j + 1})", header_line, c)
+        seen[c] = j
+    if "pose" not in seen:
+        fail("missing column 'pose' (pose identifiers)", header_line)
+    if seen["pose"] != 0:
+        fail("'pose' must be the first column", header_line, "pose")
+
+    # orientation columns
+    ori_cols: list[str] = []
+    has_euler = any(c in seen for c in _EULER_COLUMNS)
+    has_quat = any(c in seen for c in _QUAT_COLUMNS)
+    if conv is None:
+        if has_euler or has_quat:
+            found = [c for c in (*_EULER_COLUMNS, *_QUAT_COLUMNS) if c in seen]
+            fail(f"orientation columns {found} but no '# orientation: <convention>' in the header", header_line, found[0])
+    else:
+        ori_cols = list(_orientation_columns(conv))
+        missing = [c for c in ori_cols if c not in seen]
+        if missing:
+            fail(f"orientation {conv!r} needs columns {ori_cols}; missing {missing}", header_line, missing[0])
+        wrong = [c for c in (_QUAT_COLUMNS if conv != "quaternion" else _EULER_COLUMNS) if c in seen]
+        if wrong:
+            fail(f"column does not belong to orientation {conv!r} (expected {ori_cols})", header_line, wrong[0])
+
+    # joint columns (known from the model) and point columns
+    joint_cols: list[str]
+    rest = [c for c in columns[1:] if c not in ori_cols]
+    if robot is not None:
+        expected = list(robot.controller_joints)
+        joint_cols = [c for c in rest if c in expected]
+        missing = [c for c in expected if c not in seen]
+        if missing:
+            hint = ""
+            unknown = [c for c in rest if c not in expected and not _is_point_column(c)]
+            if unknown:
+                hint = f"; the file has {unknown}"
+            fail(f"missing joint column(s) {missing} of robot {robot.name!r} "
+                 f"(its controller joints are {expected}){hint}", header_line, missing[0])
+    else:
+        joint_cols = []
+    point_cols = [c for c in rest if c not in joint_cols]
+    try:
+        targets, point_idx, leftovers = _classify_point_columns(point_cols)
+    except _ColumnProblem as exc:
+        fail(exc.message, header_line, exc.column)
+    if robot is None:
+        joint_cols = leftovers
+        leftovers = []
+    if leftovers:
+        c = leftovers[0]
+        close = difflib.get_close_matches(c, list(robot.controller_joints), n=2)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        fail(f"unknown column: not a joint of robot {robot.name!r} ({', '.join(robot.controller_joints)}), "
+             f"a point column (x, y, z or <target>_x ...) or an orientation column{hint}", header_line, c)
+    if not targets:
+        fail("no point columns: expected x, y, z or <target>_x, <target>_y, <target>_z", header_line)
+    if not joint_cols:
+        fail("no joint columns", header_line)
+    if robot is None:
+        joint_names = joint_cols
+    else:
+        joint_names = list(robot.controller_joints)
+
+    # prismatic joints
+    declared = [s.strip() for s in md.get("prismatic", "").split(",") if s.strip()]
+    for name in declared:
+        if name not in joint_names:
+            fail(f"'prismatic' names {name!r}, which is not a joint column ({', '.join(joint_names)})",
+                 key_line["prismatic"])
+    if robot is not None:
+        prismatic = _controller_joint_types(robot)
+        model_set = {n for n, p in zip(joint_names, prismatic) if p}
+        if "prismatic" in md and set(declared) != model_set:
+            fail(f"'prismatic: {md['prismatic']}' disagrees with robot {robot.name!r}, whose prismatic "
+                 f"joints are {sorted(model_set) or 'none'}", key_line["prismatic"])
+    else:
+        prismatic = np.array([n in declared for n in joint_names], dtype=bool)
+
+    # ---- data rows
+    rows: list[list[str]] = []
+    row_lines: list[int] = []
+    ncol = len(columns)
+    for k in range(i + 1, len(lines)):
+        raw = lines[k]
+        if not raw.strip() or raw.lstrip().startswith("#"):
+            continue
+        fields = next(csv.reader([raw]))
+        if len(fields) != ncol:
+            fail(f"{len(fields)} fields, expected {ncol} (one per column of line {header_line})", k + 1)
+        rows.append([f.strip() for f in fields])
+        row_lines.append(k + 1)
+    if len(rows) < max(min_rows, 1):
+        fail(f"{len(rows)} data row(s); at least {max(min_rows, 1)} required")
+
+    pose_ids = [r[0] for r in rows]
+    for pid, ln in zip(pose_ids, row_lines):
+        if not pid:
+            fail("empty pose id", ln, "pose")
+
+    def numbers(col_names) -> np.ndarray:
+        idx = [seen[c] for c in col_names]
+        out = np.empty((len(rows), len(idx)))
+        for r, (row, ln) in enumerate(zip(rows, row_lines)):
+            for c, j in enumerate(idx):
+                cell = row[j]
+                try:
+                    v = float(cell)
+                except ValueError:
+                    what = "empty cell" if not cell else f"{cell!r} is not a number"
+                    fail(f"{what} (column {j + 1})", ln, columns[j])
+                if not math.isfinite(v):
+                    fail(f"{cell!r} is not a finite number (column {j + 1})", ln, columns[j])
+                out[r, c] = v
+        return out
+
+    q_file = numbers(joint_cols)
+    if robot is not None:  # reorder to the model's controller joints
+        order = [joint_cols.index(n) for n in joint_names]
+        q_file = q_file[:, order]
+    pts_file = numbers([c for cols in point_idx for c in cols]).reshape(len(rows), len(targets), 3)
+    q = np.where(prismatic, q_file * lf, q_file * af)
+    points = pts_file * lf
+
+    # ---- plausibility of units
+    dist = np.linalg.norm(points, axis=-1)
+    if lu == "mm" and dist.max() < _MM_LOOKS_LIKE_M:
+        fail(f"every point is within {_MM_LOOKS_LIKE_M:g} mm of the origin (largest {dist.max():.4g} mm): "
+             "the values look like metres; declare '# length_unit: m'", key_line["length_unit"])
+    if lu == "m" and dist.max() > _M_LOOKS_LIKE_MM:
+        r, t = np.unravel_index(np.argmax(dist), dist.shape)
+        fail(f"a point {dist.max() / 1000.0:.4g} m from the origin: the values look like millimetres; "
+             "declare '# length_unit: mm'", row_lines[r], point_idx[t][0])
+    if au == "rad":
+        big = np.abs(q) > _RAD_LOOKS_LIKE_DEG
+        big[:, prismatic] = False
+        if big.any():
+            r, j = np.argwhere(big)[0]
+            fail(f"revolute joint value {q_file[r, j]:g} rad is more than two turns: the values look like "
+                 "degrees; declare '# angle_unit: deg'", row_lines[r], joint_names[j])
+
+    # ---- orientation
+    rotations = None
+    if conv is not None:
+        o = numbers(ori_cols)
+        if conv == "quaternion":
+            norm = np.linalg.norm(o, axis=1)
+            bad = np.flatnonzero(np.abs(norm - 1.0) > 1e-3)
+            if bad.size:
+                r = bad[0]
+                fail(f"quaternion (qw, qx, qy, qz) has norm {norm[r]:.6g}, expected 1 (check the component "
+                     "order: w first)", row_lines[r], "qw")
+            rotations = matrix_from_quaternion(o)
+        elif conv == "rotvec":
+            rotations = matrix_from_rotvec(o * af)
+        else:
+            rotations = matrix_from_euler(o * af, conv)
+
+    return Measurements(joints=q, points=points, targets=targets, joint_names=joint_names,
+                        pose_ids=pose_ids, rotations=rotations, prismatic=prismatic, metadata=md)
+
+
+def _is_point_column(c: str) -> bool:
+    return c in _AXES or (len(c) > 2 and c[-2] == "_" and c[-1] in _AXES)
+
+
+def _classify_point_columns(cols):
+    """Split column names into targets with their (x, y, z) columns, and leftovers (non-point).
+
+    Raises ``ValueError`` (message only) for an incomplete triple or a target given twice.
+    """
+    targets: list[str] = []
+    point_idx: list[tuple] = []
+    used = set()
+    present = set(cols)
+    for c in cols:
+        if c in used or not _is_point_column(c):
+            continue
+        prefix = "" if c in _AXES else c[:-2]
+        if prefix and not _TARGET_RE.match(prefix):
+            continue
+        triple = tuple(f"{prefix}_{a}" if prefix else a for a in _AXES)
+        missing = [t for t in triple if t not in present]
+        if missing:
+            raise _ColumnProblem(c, f"point column without {', '.join(repr(m) for m in missing)} "
+                                    f"(a target needs all of {', '.join(triple)})")
+        name = prefix or DEFAULT_TARGET
+        if name in targets:
+            raise _ColumnProblem(c, f"target {name!r} given twice (plain x, y, z is the target {DEFAULT_TARGET!r})")
+        targets.append(name)
+        point_idx.append(triple)
+        used.update(triple)
+    leftovers = [c for c in cols if c not in used]
+    return targets, point_idx, leftovers
+
+
+class _ColumnProblem(Exception):
+    def __init__(self, column, message):
+        super().__init__(message)
+        self.column = column
+        self.message = message
