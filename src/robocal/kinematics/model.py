@@ -371,6 +371,33 @@ class RobotModel:
                                   self._op_param, self._op_joint, self._link_parent, self._root_affine,
                                   *self._cpl, len(self.params), self.n_model_joints)
 
+    def kinematics_with(self, q, params=None, T_world_base=None, end_effectors=None):
+        """Forward kinematics and spatial twists with a parameter vector, without building a model.
+
+        The hot path of calibration: ``params`` (P,) [mm | rad] replaces the model's values (the
+        model itself is untouched); ``T_world_base`` (4, 4) replaces its base.
+        Returns ``T`` (N, n_e, 4, 4) end-effector poses, ``param_twists`` (N, 6, P) and
+        ``joint_twists`` (N, 6, n_model) in the world frame (rows omega, v), and ``masks`` (n_e, P)
+        bool: which parameters move each end effector.
+        """
+        q2, _ = self._as_joints(q)
+        values = self._op_value if params is None else np.asarray(params, dtype=float)[self._op_param]
+        root = self._root_affine if T_world_base is None else np.ascontiguousarray(np.asarray(T_world_base, float)[:3])
+        ptw, jtw, frames = _kernels.op_twists(q2, self._op_link, self._op_code, self._op_axis, values,
+                                              self._op_param, self._op_joint, self._link_parent, root,
+                                              *self._cpl, len(self.params), self.n_model_joints)
+        ees = range(len(self.end_effectors)) if end_effectors is None else end_effectors
+        N = len(q2)
+        T = np.empty((N, len(ees), 4, 4))
+        for i, e in enumerate(ees):
+            ee = self.end_effectors[e]
+            F = np.zeros((N, 4, 4))
+            F[:, 3, 3] = 1.0
+            F[:, :3] = root if ee.link < 0 else frames[:, ee.link]
+            T[:, i] = F @ ee.T_link_ee
+        masks = self._ee_ancestors[list(ees)][:, self.params.link_of]
+        return T, ptw, jtw, masks
+
     def _ee_masks(self, e):
         anc = self._ee_ancestors[e]
         pmask = anc[self.params.link_of]

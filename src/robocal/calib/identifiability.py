@@ -1,0 +1,109 @@
+"""Identifiability: which parameters a pose set can determine, which trade off, and why.
+
+The analysis works on the Jacobian with unit-norm columns (so mm and rad compare). A column that
+is (numerically) zero has no effect on the measurements: *not observable*. Otherwise a greedy
+pass over the columns in priority order keeps a column when its component orthogonal to the
+columns kept so far is larger than ``tol`` of its norm (one QR factorization in priority order). The kept set is a maximal independent
+set (a basis of the column space): every dropped column is a combination of kept ones, and no
+identifiable column is dropped unless it is exactly such a combination. Each dropped parameter
+is explained by the kept parameters it trades off against (least-squares coefficients).
+
+Observability indices of a pose set (Sun & Hollerbach's review): O1 = (prod s_i)^(1/n) / sqrt(m),
+O2 = s_min / s_max, O3 = s_min, O4 = s_min^2 / s_max, on the scaled Jacobian.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["IdentifiabilityReport", "analyse_identifiability", "observability_indices", "DEFAULT_PRIORITY"]
+
+#: Blocks are tried in this order: frames the measurement setup always needs come first, so a
+#: robot parameter that only duplicates a base or target coordinate is the one reported.
+DEFAULT_PRIORITY = ("base", "targets", "planes", "geometry")
+
+
+@dataclass
+class IdentifiabilityReport:
+    """identifiable: names kept; dropped: list of dicts (name, why, trades_off_with);
+    rank, condition_number (of the scaled Jacobian of all candidates), singular_values."""
+
+    identifiable: list
+    dropped: list = field(default_factory=list)
+    rank: int = 0
+    condition_number: float = float("nan")
+    singular_values: np.ndarray | None = None
+
+    @classmethod
+    def trivial(cls, names):
+        return cls(list(names))
+
+    @property
+    def dropped_names(self) -> list:
+        return [d["name"] for d in self.dropped]
+
+    def explain(self) -> str:
+        if not self.dropped:
+            return f"all {len(self.identifiable)} parameters identifiable (condition {self.condition_number:.3g})"
+        return "\n".join(f"{d['name']}: {d['why']}" for d in self.dropped)
+
+
+def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priority=DEFAULT_PRIORITY) -> IdentifiabilityReport:
+    """Analyse the columns of ``J`` (M, n) named ``names``; ``blocks`` (n,) gives each column's block."""
+    J = np.asarray(J, dtype=float)
+    n = J.shape[1]
+    names = list(names)
+    blocks = np.array(["geometry"] * n) if blocks is None else np.asarray(blocks)
+    norms = np.linalg.norm(J, axis=0)
+    scale = norms.max(initial=0.0)
+    order = [i for b in priority for i in range(n) if blocks[i] == b]
+    order += [i for i in range(n) if i not in order]
+    kept, dropped = [], []
+    zero = norms <= 1e-12 * max(scale, 1e-300)
+    cand = [i for i in order if not zero[i]]
+    for i in order:
+        if zero[i]:
+            dropped.append({"name": names[i], "why": "has no effect on the measurements (zero Jacobian column)",
+                            "trades_off_with": []})
+    if cand:
+        # |R_jj| of a QR factorization with the columns in priority order is the part of column j
+        # independent of all earlier columns (Gram-Schmidt in one Householder pass)
+        Rdiag = np.abs(np.diag(np.linalg.qr(J[:, cand] / norms[cand], mode="r")))
+        for i, rjj in zip(cand, Rdiag):
+            if rjj > tol:
+                kept.append(i)
+            else:
+                dropped.append({"name": names[i], "column": i, "why": None, "trades_off_with": []})
+    pending = [d for d in dropped if d.get("why") is None]
+    if kept and pending:
+        Jk = J[:, kept] / norms[kept]
+        cols = [d["column"] for d in pending]
+        coefs, *_ = np.linalg.lstsq(Jk, J[:, cols] / norms[cols], rcond=None)
+        for d, coef in zip(pending, coefs.T):
+            big = np.argsort(-np.abs(coef))[:3]
+            partners = [(names[kept[b]], float(coef[b])) for b in big if abs(coef[b]) > 0.05]
+            d["trades_off_with"] = partners
+            terms = " ".join(f"{'+' if c >= 0 else '-'} {abs(c):.3g}*{nm}" for nm, c in partners)
+            d["why"] = f"trades off against other parameters (its effect = {terms.lstrip('+ ')} in scaled units)"
+    for d in dropped:
+        d.pop("column", None)
+    Js = J / np.where(norms > 0, norms, 1.0)
+    s = np.sqrt(np.maximum(np.linalg.eigvalsh(Js.T @ Js)[::-1], 0.0)) if n else np.zeros(0)
+    rank = len(kept)
+    cond = float(s[0] / s[rank - 1]) if rank else float("inf")
+    kept_sorted = [names[i] for i in sorted(kept)]
+    return IdentifiabilityReport(kept_sorted, dropped, rank, cond, s)
+
+
+def observability_indices(J) -> dict:
+    """Observability indices O1..O4 of a Jacobian (M, n), columns scaled to unit norm first."""
+    J = np.asarray(J, dtype=float)
+    norms = np.linalg.norm(J, axis=0)
+    s = np.linalg.svd(J / np.where(norms > 0, norms, 1.0), compute_uv=False)
+    m, n = J.shape
+    if s[-1] <= 0:
+        return {"O1": 0.0, "O2": 0.0, "O3": 0.0, "O4": 0.0}
+    return {"O1": float(np.exp(np.mean(np.log(s))) / np.sqrt(m)), "O2": float(s[-1] / s[0]),
+            "O3": float(s[-1]), "O4": float(s[-1] ** 2 / s[0])}

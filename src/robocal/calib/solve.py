@@ -1,0 +1,327 @@
+"""Solvers over a :class:`~robocal.calib.problem.CalibrationProblem`, and the result object.
+
+* :func:`solve_lm` -- Levenberg-Marquardt with the analytic Jacobian, Jacobian column scaling
+  (so millimetres and radians are comparable, like ``x_scale='jac'``), optional robust loss
+  (Huber, Cauchy) by iteratively reweighted least squares per pose, and an outlier report;
+* ``method="svd"`` -- Gauss-Newton steps solved by truncated SVD ((3-9), (3-10) of METHODS.md):
+  singular values below ``rcond * s_max`` are dropped instead of damped.
+
+Both re-linearize around the current state every iteration; frames are updated by the problem's
+``retract`` so they stay valid rotations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .identifiability import IdentifiabilityReport, analyse_identifiability
+from .problem import CalibrationProblem, State
+
+__all__ = ["CalibrationResult", "solve", "NotConvergedWarning"]
+
+
+class NotConvergedWarning(UserWarning):
+    """The solver stopped without meeting its convergence criteria."""
+
+
+@dataclass
+class CalibrationResult:
+    """Outcome of a calibration.
+
+    names, units: of the state variables (free model parameters, base, targets, planes);
+    values (n,) final values in those units (base: the final frame as rotation vector and
+    origin, targets: the points); initial (n,) the same at the start; std (n,) standard
+    deviations (NaN where not identifiable); covariance (n, n).
+    state: final :class:`State`; model: the calibrated :class:`RobotModel`.
+    residuals_before / residuals_after: (M,) weighted residual vectors; rms_before / rms_after
+    per measured point (mm, unweighted) where point measurements exist.
+    iterations, converged, reason, rank, condition_number, identifiability, outliers (list of
+    dicts: pose, residual_mm, weight, reason).
+    """
+
+    names: tuple
+    units: tuple
+    values: np.ndarray
+    initial: np.ndarray
+    std: np.ndarray
+    covariance: np.ndarray
+    state: State
+    model: object
+    residuals_before: np.ndarray
+    residuals_after: np.ndarray
+    iterations: int
+    converged: bool
+    reason: str
+    rank: int
+    condition_number: float
+    sigma0: float
+    identifiability: IdentifiabilityReport
+    outliers: list = field(default_factory=list)
+    point_errors_before: np.ndarray | None = None
+    point_errors_after: np.ndarray | None = None
+
+    @property
+    def rms_before(self) -> float:
+        e = self.point_errors_before
+        return float(np.sqrt(np.mean(e**2))) if e is not None and e.size else float("nan")
+
+    @property
+    def rms_after(self) -> float:
+        e = self.point_errors_after
+        return float(np.sqrt(np.mean(e**2))) if e is not None and e.size else float("nan")
+
+    def parameter_table(self) -> list[dict]:
+        """One dict per variable: name, unit, initial, value, change, std, identifiable."""
+        ident = set(self.identifiability.identifiable)
+        rows = []
+        for i, n in enumerate(self.names):
+            rows.append({"name": n, "unit": self.units[i], "initial": float(self.initial[i]),
+                         "value": float(self.values[i]), "change": float(self.values[i] - self.initial[i]),
+                         "std": float(self.std[i]), "identifiable": n in ident})
+        return rows
+
+    def summary(self) -> str:
+        lines = [f"{'converged' if self.converged else 'NOT CONVERGED'} after {self.iterations} iterations ({self.reason}); "
+                 f"rank {self.rank}/{len(self.names)}, condition {self.condition_number:.3g}",
+                 f"point RMS before {self.rms_before:.4f} mm, after {self.rms_after:.4f} mm"]
+        if self.identifiability.dropped:
+            lines.append("not identifiable from these data (held at their initial values):")
+            lines += [f"  {d['name']}: {d['why']}" for d in self.identifiability.dropped]
+        if self.outliers:
+            lines.append(f"{len(self.outliers)} pose(s) down-weighted as outliers: "
+                         + ", ".join(str(o["pose"]) for o in self.outliers))
+        return "\n".join(lines)
+
+
+def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
+          max_iterations: int = 50, ftol: float = 1e-10, xtol: float = 1e-10, rcond: float = 1e-8,
+          auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
+          state0: State | None = None, progress=None) -> CalibrationResult:
+    """Identify the problem's free variables (see :func:`_solve_once` for the arguments).
+
+    With ``auto_identifiable`` the identifiable set is chosen at the starting point, and chosen
+    again at the solution: a start far from the truth (a tool point guessed on the joint-6 axis,
+    say) can hide parameters that the data do determine. If the set changes, the solve continues
+    from the solution with the new set (at most three rounds).
+    """
+    kw = dict(method=method, loss=loss, f_scale=f_scale, max_iterations=max_iterations, ftol=ftol, xtol=xtol,
+              rcond=rcond, auto_identifiable=auto_identifiable, prior_weight=prior_weight,
+              outlier_threshold=outlier_threshold, progress=progress)
+    res = _solve_once(problem, state0=state0, **kw)
+    if not auto_identifiable:
+        return res
+    start = problem.initial_state() if state0 is None else state0
+    for _ in range(2):
+        _, J, _ = problem.evaluate(res.state)
+        ident = analyse_identifiability(J, problem.names, problem.blocks)
+        if set(ident.identifiable) == set(res.identifiability.identifiable):
+            break
+        iters = res.iterations
+        before, err_before = res.residuals_before, res.point_errors_before
+        res = _solve_once(problem, state0=res.state, ident=ident, **kw)
+        res.iterations += iters
+        res.residuals_before, res.point_errors_before = before, err_before
+        res.initial = _state_values(problem, start)
+    return res
+
+
+def _state_values(problem: CalibrationProblem, state: State) -> np.ndarray:
+    from ..transforms import so3_log
+
+    out = np.empty(problem.n_variables)
+    out[problem._sl_geom] = state.params[problem.free_index]
+    if problem.estimate_base:
+        b = np.concatenate([so3_log(state.bases[:, :3, :3]), state.bases[:, :3, 3]], axis=1)
+        out[problem._sl_base] = b.ravel()
+    for k, sl in problem._target_cols.items():
+        out[sl] = state.targets[k]
+    if len(state.planes):
+        out[problem._sl_planes] = state.planes.ravel()
+    return out
+
+
+def _robust_weights(r_pose, loss, f_scale):
+    """IRLS weights per pose from residual norms r_pose (n,) [same units as f_scale]."""
+    z = r_pose / f_scale
+    if loss == "linear":
+        return np.ones_like(z)
+    if loss == "huber":
+        return np.where(z <= 1.0, 1.0, 1.0 / np.maximum(z, 1e-300))
+    if loss == "cauchy":
+        return 1.0 / (1.0 + z**2)
+    raise ValueError(f"loss must be 'linear', 'huber' or 'cauchy', got {loss!r}")
+
+
+def _point_errors(problem, r, labels):
+    if problem.points is None:
+        return None
+    sel = labels[:, 1] == 0
+    w = 1.0 if problem.point_sigma is None else problem.point_sigma
+    return np.linalg.norm((r[sel] * w).reshape(-1, 3), axis=1)
+
+
+def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
+          max_iterations: int = 50, ftol: float = 1e-10, xtol: float = 1e-10, rcond: float = 1e-8,
+          auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
+          state0: State | None = None, progress=None, ident=None) -> CalibrationResult:
+    """Identify the problem's free variables.
+
+    method: ``"lm"`` (Levenberg-Marquardt) or ``"svd"`` (truncated-SVD Gauss-Newton, (3-9, 3-10)).
+    loss: ``"linear"``, ``"huber"`` or ``"cauchy"``; robust losses act per pose on the norm of the
+        pose's weighted residuals with scale ``f_scale`` (default: 3 x the robust spread (MAD) of the
+        first linear fit).
+    auto_identifiable: analyse the Jacobian first and hold unidentifiable variables fixed
+        (reported in ``result.identifiability``); otherwise all free variables are solved and rank
+        deficiency shows in ``rank`` and ``condition_number``.
+    prior_weight: optional Tikhonov weight pulling model parameters toward their initial values
+        (per scaled unit); 0 disables it.
+    outlier_threshold: poses whose robust weight ends below this are reported as outliers.
+    progress: optional callable ``progress(iteration, cost)``.
+    """
+    if method not in ("lm", "svd"):
+        raise ValueError(f"method must be 'lm' or 'svd', got {method!r}")
+    state = problem.initial_state() if state0 is None else state0
+    start_state = state
+    r, J, labels = problem.evaluate(state)
+    M, n = J.shape
+    if M < n:
+        raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
+                         f"add poses or fix parameters")
+    if ident is None:
+        ident = analyse_identifiability(J, problem.names, problem.blocks) if auto_identifiable else \
+            IdentifiabilityReport.trivial(problem.names)
+    active = np.array([nm in set(ident.identifiable) for nm in problem.names])
+    r0 = r.copy()
+    pose_of_row = labels[:, 0]
+    n_poses = problem.n_poses
+    col_scale = np.linalg.norm(J, axis=0)
+    col_scale[col_scale == 0] = 1.0
+    geom = problem.blocks == "geometry"
+    p_start = start_state.params[problem.free_index]
+
+    def augmented(st, with_jac=True):
+        """Residuals (and Jacobian) with the optional prior rows on the model parameters."""
+        rr, JJ, _ = problem.evaluate(st, jacobian=with_jac)
+        if not prior_weight:
+            return rr, JJ
+        pr = prior_weight * col_scale[geom] * (p_start - st.params[problem.free_index])
+        rr = np.concatenate([rr, pr])
+        if with_jac:
+            Jp = np.zeros((int(geom.sum()), n))
+            Jp[:, np.flatnonzero(geom)] = np.diag(prior_weight * col_scale[geom])
+            JJ = np.vstack([JJ, Jp])
+        return rr, JJ
+
+    weights = np.ones(n_poses)
+    if loss != "linear":
+        pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_poses))
+        if f_scale is None:
+            med = np.median(pose_norm)
+            f_scale = med + 3.0 * max(1.4826 * np.median(np.abs(pose_norm - med)), 1e-12)
+        weights = _robust_weights(pose_norm, loss, f_scale)
+
+    def row_weights():
+        w = weights[pose_of_row]
+        return np.concatenate([w, np.ones(int(geom.sum()))]) if prior_weight else w
+
+    r, J = augmented(state)
+    w_rows = row_weights()
+    cost = 0.5 * float(np.sum(w_rows * r**2))
+    lam = 1e-3
+    reason, converged, it = "maximum iterations reached", False, 0
+    for it in range(1, max_iterations + 1):
+        sw = np.sqrt(w_rows)
+        Ja = (J[:, active] * sw[:, None]) / col_scale[active]
+        ra = r * sw
+        g = Ja.T @ ra
+        if method == "svd":
+            U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
+            keep = s > rcond * s[0]
+            step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
+            s_max = s[0]
+        else:
+            # eigen-decomposition of the (scaled) normal matrix once per iteration; the damping
+            # loop then costs only a few small products
+            ev, V = np.linalg.eigh(Ja.T @ Ja)
+            ev = np.maximum(ev, 0.0)
+            s_max = math.sqrt(ev[-1])
+            Vg = V.T @ g
+        if np.max(np.abs(g), initial=0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * cost)):
+            reason, converged = "gradient is zero", True
+            break
+        accepted = False
+        for _ in range(30):
+            if method == "lm":
+                step_s = V @ (Vg / (ev + lam * ev[-1]))
+            step = np.zeros(n)
+            step[active] = step_s / col_scale[active]
+            trial = problem.retract(state, step)
+            r_t, _ = augmented(trial, with_jac=False)
+            c_t = 0.5 * float(np.sum(w_rows * r_t**2))
+            if c_t <= cost:
+                accepted = True
+                break
+            if method == "svd":
+                step_s = 0.5 * step_s  # backtracking
+            else:
+                lam *= 10.0
+        if not accepted:
+            reason, converged = "no step reduces the cost further (numerical precision reached)", True
+            break
+        state = trial
+        r, J = augmented(state)
+        if loss != "linear":
+            pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r[:len(pose_of_row)] ** 2, minlength=n_poses))
+            weights = _robust_weights(pose_norm, loss, f_scale)
+            w_rows = row_weights()
+        new_cost = 0.5 * float(np.sum(w_rows * r**2))
+        lam = max(lam / 10.0, 1e-12)
+        if progress:
+            progress(it, new_cost)
+        dcost, cost = cost - new_cost, new_cost
+        if abs(dcost) <= ftol * max(cost, 1e-300):
+            reason, converged = "relative cost reduction below ftol", True
+            break
+        if np.linalg.norm(step_s) <= xtol * (1.0 + np.linalg.norm(_state_values(problem, state)[active] * col_scale[active])):
+            reason, converged = "step below xtol", True
+            break
+    r = r[:len(pose_of_row)]
+    J = J[:len(pose_of_row)]
+
+    # Covariance from the final (weighted) Jacobian on the identifiable set.
+    sw = np.sqrt(weights[pose_of_row])
+    Ja = J[:, active] * sw[:, None]
+    ra = r * sw
+    dof = max(Ja.shape[0] - Ja.shape[1], 1)
+    sigma0 = math.sqrt(float(ra @ ra) / dof)
+    Js = Ja / col_scale[active]
+    U, s, Vt = np.linalg.svd(Js, full_matrices=False)
+    rank = int(np.sum(s > rcond * s[0])) if s.size else 0
+    cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
+    inv = np.where(s > rcond * s[0], 1.0 / np.where(s > 0, s, 1.0) ** 2, 0.0)
+    cov_s = (Vt.T * inv) @ Vt
+    scale_for_cov = 1.0 if problem.point_sigma is not None else sigma0**2
+    cov_a = cov_s / np.outer(col_scale[active], col_scale[active]) * scale_for_cov
+    cov = np.full((n, n), np.nan)
+    cov[np.ix_(active, active)] = cov_a
+    std = np.sqrt(np.diag(cov))
+    outliers = []
+    if loss != "linear":
+        pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_poses))
+        unit = 1.0 if problem.point_sigma is None else problem.point_sigma
+        for p in np.flatnonzero(weights < outlier_threshold):
+            outliers.append({"pose": int(p), "residual": float(pose_norm[p] * unit), "weight": float(weights[p]),
+                             "reason": f"residual {pose_norm[p] * unit:.4g} is {pose_norm[p] / f_scale:.1f} x the "
+                                       f"robust scale {f_scale * unit:.4g} ({loss} loss)"})
+    r_before_pts = _point_errors(problem, r0, labels)
+    r_after_pts = _point_errors(problem, r, labels)
+    return CalibrationResult(
+        names=problem.names, units=problem.units, values=_state_values(problem, state),
+        initial=_state_values(problem, start_state), std=std,
+        covariance=cov, state=state, model=problem.model_at(state), residuals_before=r0, residuals_after=r,
+        iterations=it, converged=converged, reason=reason, rank=rank, condition_number=cond, sigma0=sigma0,
+        identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts)
+
