@@ -86,6 +86,9 @@ class CalibrationProblem:
     free: names of the model parameters to identify (default: the model's free parameters).
     stations: (N,) integer station index per pose (one base frame per station), default all 0.
     estimate_base: identify the base frame(s).
+    base_initial: (4, 4) or (G, 4, 4) initial base frame(s) in the instrument frame; ``"fit"`` for a
+        rigid fit of the nominal model's predicted target positions to the measured ones per
+        station (needs ``points``); default the model's ``T_world_base``.
     point_sigma_mm: measurement standard deviation of one coordinate [mm] (weights; also the
         reference for uncertainty when given).
     rotations: optional (N, 3, 3) measured end-effector orientations (instrument frame) of
@@ -128,8 +131,15 @@ class CalibrationProblem:
             raise ProblemError(f"stations: station(s) {missing} have no poses")
         self.n_stations = G
         self.estimate_base = estimate_base
-        T0 = model.T_world_base if base_initial is None else np.asarray(base_initial, dtype=float)
-        self.base_initial = np.broadcast_to(T0, (G, 4, 4)).copy()
+        if isinstance(base_initial, str):
+            if base_initial != "fit":
+                raise ProblemError(f"base_initial: expected a (4, 4) transform, (G, 4, 4), 'fit' or None, got {base_initial!r}")
+            if points is None:
+                raise ProblemError("base_initial='fit' needs point measurements")
+            self.base_initial = self._fit_bases(G)
+        else:
+            T0 = model.T_world_base if base_initial is None else np.asarray(base_initial, dtype=float)
+            self.base_initial = np.broadcast_to(T0, (G, 4, 4)).copy()
 
         names = model.params.names
         if free is None:
@@ -155,6 +165,25 @@ class CalibrationProblem:
             if not (0 <= n < N and 0 <= k < K and 0 <= l < len(self.planes_initial)):
                 raise ProblemError(f"on_plane[{i}]: pose, target or plane index out of range")
         self._build_layout()
+
+    def _fit_bases(self, G):
+        """Per-station rigid fit of the nominal model's predicted target positions to the measured ones."""
+        from .initial import rigid_fit
+
+        pts0 = np.array([t.point for t in self.targets], dtype=float).reshape(-1, 3)
+        T_all = self.model.replace(T_world_base=np.eye(4)).fk_all(self.q)
+        pred = np.empty(self.points.shape)
+        for k, e in enumerate(self.ee_of_target):
+            T = T_all[:, e]
+            pred[:, k] = (T[:, :3, :3] @ pts0[k]) + T[:, :3, 3]
+        out = np.empty((G, 4, 4))
+        for g in range(G):
+            sel = self.stations == g
+            try:
+                out[g] = rigid_fit(pred[sel].reshape(-1, 3), self.points[sel].reshape(-1, 3))
+            except ValueError as exc:
+                raise ProblemError(f"station {g}: cannot fit an initial base frame: {exc}") from None
+        return out
 
     # ------------------------------------------------------------------ layout of the state vector
     def _build_layout(self):
