@@ -131,6 +131,8 @@ class CalibrationProblem:
             raise ProblemError(f"stations: station(s) {missing} have no poses")
         self.n_stations = G
         self.estimate_base = estimate_base
+        if points is not None and np.any(self.point_mask):
+            self._check_scale(self._nominal_predictions())
         if isinstance(base_initial, str):
             if base_initial != "fit":
                 raise ProblemError(f"base_initial: expected a (4, 4) transform, (G, 4, 4), 'fit' or None, got {base_initial!r}")
@@ -170,12 +172,7 @@ class CalibrationProblem:
         """Per-station rigid fit of the nominal model's predicted target positions to the measured ones."""
         from .initial import rigid_fit
 
-        pts0 = np.array([t.point for t in self.targets], dtype=float).reshape(-1, 3)
-        T_all = self.model.replace(T_world_base=np.eye(4)).fk_all(self.q)
-        pred = np.empty(self.points.shape)
-        for k, e in enumerate(self.ee_of_target):
-            T = T_all[:, e]
-            pred[:, k] = (T[:, :3, :3] @ pts0[k]) + T[:, :3, 3]
+        pred = self._nominal_predictions()
         out = np.empty((G, 4, 4))
         for g in range(G):
             sel = self.stations == g
@@ -184,6 +181,32 @@ class CalibrationProblem:
             except ValueError as exc:
                 raise ProblemError(f"station {g}: cannot fit an initial base frame: {exc}") from None
         return out
+
+    def _nominal_predictions(self):
+        """Target positions (N, K, 3) in the robot base frame from the nominal model and initial targets."""
+        pts0 = np.array([t.point for t in self.targets], dtype=float).reshape(-1, 3)
+        T_all = self.model.replace(T_world_base=np.eye(4)).fk_all(self.q)
+        pred = np.empty((len(self.q), len(self.targets), 3))
+        for k, e in enumerate(self.ee_of_target):
+            T = T_all[:, e]
+            pred[:, k] = (T[:, :3, :3] @ pts0[k]) + T[:, :3, 3]
+        return pred
+
+    def _check_scale(self, pred):
+        """Refuse point measurements whose spread is ~1000x off the model's (metres given as mm)."""
+        meas = self.points[self.point_mask]
+        if len(meas) < 3:
+            return
+        spread_meas = np.sqrt(np.mean(np.var(meas, axis=0)) * 3)
+        spread_pred = np.sqrt(np.mean(np.var(pred[self.point_mask], axis=0)) * 3)
+        if spread_pred <= 0 or spread_meas <= 0:
+            return
+        ratio = spread_meas / spread_pred
+        if ratio < 0.02 or ratio > 50:
+            hint = "metres given as millimetres?" if ratio < 0.02 else "millimetres given as metres?"
+            raise ProblemError(
+                f"points: the measured positions spread {spread_meas:.4g} mm but the robot model predicts "
+                f"{spread_pred:.4g} mm over the same poses (ratio {ratio:.3g}); {hint} Points must be in mm.")
 
     # ------------------------------------------------------------------ layout of the state vector
     def _build_layout(self):
@@ -261,9 +284,14 @@ class CalibrationProblem:
     # ------------------------------------------------------------------ prediction
     def predict_points(self, state: State, q=None, stations=None, jacobian: bool = False):
         """Predicted target positions (N, K, 3) in the instrument frame, and optionally their
-        Jacobian (N, K, 3, n_variables)."""
-        q = self.q if q is None else np.asarray(q, dtype=float)
-        stations = self.stations if stations is None else np.asarray(stations, dtype=int)
+        Jacobian (N, K, 3, n_variables). Without ``q`` the problem's poses and stations are used;
+        with ``q`` the stations default to 0 (the first base frame)."""
+        if q is None:
+            q, stations = self.q, self.stations if stations is None else stations
+        q = np.asarray(q, dtype=float)
+        stations = np.zeros(len(q), dtype=int) if stations is None else np.asarray(stations, dtype=int)
+        if stations.shape != (len(q),):
+            raise ProblemError(f"stations: expected shape ({len(q)},), got {stations.shape}")
         N, K = len(q), len(self.targets)
         T_all, ptw, _, masks = self.model.kinematics_with(q, state.params, np.eye(4))  # base frame
         Rb = state.bases[stations, :3, :3]

@@ -99,7 +99,7 @@ class CalibrationResult:
 def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-10, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
-          state0: State | None = None, progress=None) -> CalibrationResult:
+          reject_outliers: bool = True, state0: State | None = None, progress=None) -> CalibrationResult:
     """Identify the problem's free variables (see :func:`_solve_once` for the arguments).
 
     With ``auto_identifiable`` the identifiable set is chosen at the starting point, and chosen
@@ -109,7 +109,7 @@ def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linea
     """
     kw = dict(method=method, loss=loss, f_scale=f_scale, max_iterations=max_iterations, ftol=ftol, xtol=xtol,
               rcond=rcond, auto_identifiable=auto_identifiable, prior_weight=prior_weight,
-              outlier_threshold=outlier_threshold, progress=progress)
+              outlier_threshold=outlier_threshold, reject_outliers=reject_outliers, progress=progress)
     res = _solve_once(problem, state0=state0, **kw)
     if not auto_identifiable:
         return res
@@ -166,7 +166,7 @@ def _point_errors(problem, r, labels):
 def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-10, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
-          state0: State | None = None, progress=None, ident=None) -> CalibrationResult:
+          reject_outliers: bool = True, state0: State | None = None, progress=None, ident=None) -> CalibrationResult:
     """Identify the problem's free variables.
 
     method: ``"lm"`` (Levenberg-Marquardt) or ``"svd"`` (truncated-SVD Gauss-Newton, (3-9, 3-10)).
@@ -179,6 +179,8 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     prior_weight: optional Tikhonov weight pulling model parameters toward their initial values
         (per scaled unit); 0 disables it.
     outlier_threshold: poses whose robust weight ends below this are reported as outliers.
+    reject_outliers: after the robust solve, drop the reported outliers and finish with plain
+        least squares (their residuals are still reported; the covariance excludes them).
     progress: optional callable ``progress(iteration, cost)``.
     """
     if method not in ("lm", "svd"):
@@ -232,66 +234,84 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     cost = 0.5 * float(np.sum(w_rows * r**2))
     lam = 1e-3
     reason, converged, it = "maximum iterations reached", False, 0
-    for it in range(1, max_iterations + 1):
-        sw = np.sqrt(w_rows)
-        Ja = (J[:, active] * sw[:, None]) / col_scale[active]
-        ra = r * sw
-        g = Ja.T @ ra
-        if method == "svd":
-            U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
-            keep = s > rcond * s[0]
-            step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
-            s_max = s[0]
-        else:
-            # eigen-decomposition of the (scaled) normal matrix once per iteration; the damping
-            # loop then costs only a few small products
-            ev, V = np.linalg.eigh(Ja.T @ Ja)
-            ev = np.maximum(ev, 0.0)
-            s_max = math.sqrt(ev[-1])
-            Vg = V.T @ g
-        if np.max(np.abs(g), initial=0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * cost)):
-            reason, converged = "gradient is zero", True
-            break
-        accepted = False
-        for _ in range(30):
-            if method == "lm":
-                step_s = V @ (Vg / (ev + lam * ev[-1]))
-            step = np.zeros(n)
-            step[active] = step_s / col_scale[active]
-            trial = problem.retract(state, step)
-            r_t, _ = augmented(trial, with_jac=False)
-            c_t = 0.5 * float(np.sum(w_rows * r_t**2))
-            if c_t <= cost:
-                accepted = True
-                break
+    robust = loss != "linear"
+    rejected = np.zeros(n_poses, dtype=bool)
+    total_it = 0
+    for phase in range(2):
+        for it in range(total_it + 1, total_it + max_iterations + 1):
+            sw = np.sqrt(w_rows)
+            Ja = (J[:, active] * sw[:, None]) / col_scale[active]
+            ra = r * sw
+            g = Ja.T @ ra
             if method == "svd":
-                step_s = 0.5 * step_s  # backtracking
+                U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
+                keep = s > rcond * s[0]
+                step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
+                s_max = s[0]
             else:
-                lam *= 10.0
-        if not accepted:
-            reason, converged = "no step reduces the cost further (numerical precision reached)", True
+                # eigen-decomposition of the (scaled) normal matrix once per iteration; the damping
+                # loop then costs only a few small products
+                ev, V = np.linalg.eigh(Ja.T @ Ja)
+                ev = np.maximum(ev, 0.0)
+                s_max = math.sqrt(ev[-1])
+                Vg = V.T @ g
+            if np.max(np.abs(g), initial=0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * cost)):
+                reason, converged = "gradient is zero", True
+                break
+            accepted = False
+            for _ in range(30):
+                if method == "lm":
+                    step_s = V @ (Vg / (ev + lam * ev[-1]))
+                step = np.zeros(n)
+                step[active] = step_s / col_scale[active]
+                trial = problem.retract(state, step)
+                r_t, _ = augmented(trial, with_jac=False)
+                c_t = 0.5 * float(np.sum(w_rows * r_t**2))
+                if c_t <= cost:
+                    accepted = True
+                    break
+                if method == "svd":
+                    step_s = 0.5 * step_s  # backtracking
+                else:
+                    lam *= 10.0
+            if not accepted:
+                reason, converged = "no step reduces the cost further (numerical precision reached)", True
+                break
+            state = trial
+            r, J = augmented(state)
+            if robust:
+                pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r[:len(pose_of_row)] ** 2, minlength=n_poses))
+                weights = _robust_weights(pose_norm, loss, f_scale)
+                w_rows = row_weights()
+            new_cost = 0.5 * float(np.sum(w_rows * r**2))
+            lam = max(lam / 10.0, 1e-12)
+            if progress:
+                progress(it, new_cost)
+            dcost, cost = cost - new_cost, new_cost
+            if abs(dcost) <= ftol * max(cost, 1e-300):
+                reason, converged = "relative cost reduction below ftol", True
+                break
+            if np.linalg.norm(step_s) <= xtol * (1.0 + np.linalg.norm(_state_values(problem, state)[active] * col_scale[active])):
+                reason, converged = "step below xtol", True
+                break
+        total_it = it
+        if not (robust and reject_outliers) or phase == 1:
             break
-        state = trial
-        r, J = augmented(state)
-        if loss != "linear":
-            pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r[:len(pose_of_row)] ** 2, minlength=n_poses))
-            weights = _robust_weights(pose_norm, loss, f_scale)
-            w_rows = row_weights()
-        new_cost = 0.5 * float(np.sum(w_rows * r**2))
-        lam = max(lam / 10.0, 1e-12)
-        if progress:
-            progress(it, new_cost)
-        dcost, cost = cost - new_cost, new_cost
-        if abs(dcost) <= ftol * max(cost, 1e-300):
-            reason, converged = "relative cost reduction below ftol", True
+        # Robust phase done: drop the poses it down-weighted and finish by plain least squares.
+        rejected = weights < outlier_threshold
+        if not rejected.any():
             break
-        if np.linalg.norm(step_s) <= xtol * (1.0 + np.linalg.norm(_state_values(problem, state)[active] * col_scale[active])):
-            reason, converged = "step below xtol", True
-            break
+        robust_weights, robust = weights.copy(), False
+        weights = (~rejected).astype(float)
+        w_rows = row_weights()
+        cost = 0.5 * float(np.sum(w_rows * r**2))
+        lam = 1e-3
+        reason, converged = "maximum iterations reached", False
     r = r[:len(pose_of_row)]
     J = J[:len(pose_of_row)]
 
     # Covariance from the final (weighted) Jacobian on the identifiable set.
+    robust_weights = weights if not rejected.any() else robust_weights
     sw = np.sqrt(weights[pose_of_row])
     Ja = J[:, active] * sw[:, None]
     ra = r * sw
@@ -310,6 +330,8 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     std = np.sqrt(np.diag(cov))
     outliers = []
     if loss != "linear":
+        if rejected.any():
+            weights = np.where(rejected, robust_weights, 1.0)
         pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_poses))
         unit = 1.0 if problem.point_sigma is None else problem.point_sigma
         for p in np.flatnonzero(weights < outlier_threshold):
