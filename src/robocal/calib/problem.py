@@ -72,6 +72,16 @@ def _plane_normal_derivatives(pl):
     return d_az, d_el
 
 
+def _so3_right_jacobian_inverse(phi):
+    """Inverse right Jacobian of SO(3) at rotation vectors phi (N, 3): (N, 3, 3)."""
+    th = np.linalg.norm(phi, axis=-1)[:, None, None]
+    K = skew(phi)
+    small = th < 1e-6
+    ths = np.where(small, 1.0, th)
+    c = np.where(small, 1.0 / 12.0, 1.0 / ths**2 - (1.0 + np.cos(ths)) / (2.0 * ths * np.sin(ths)))
+    return np.eye(3) + 0.5 * K + c * (K @ K)
+
+
 class CalibrationProblem:
     """Measurements of a robot and the parameters to identify from them.
 
@@ -397,6 +407,8 @@ class CalibrationProblem:
         r = (err * self.rotation_weight).ravel()
         if not jacobian:
             return r, None
+        # a rotation d of the prediction changes the error log(E exp(-d)) by -Jr^-1(err) d
+        Jr_inv = _so3_right_jacobian_inverse(err)
         J = np.zeros((self.n_poses, 3, self.n_variables))
         if len(self.free_index):
             Jg = (ptw[:, :3] * masks[0])[..., self.free_index]
@@ -406,4 +418,5 @@ class CalibrationProblem:
                 sel = self.stations == g
                 c0 = self._sl_base.start + 6 * g
                 J[sel, :, c0:c0 + 3] = np.eye(3)
+        J = Jr_inv @ J
         return r, (J * self.rotation_weight).reshape(-1, self.n_variables)
