@@ -274,9 +274,54 @@ def _nominal_seed(nominal, T, q_ref, end_effector):
     return q
 
 
+def _ik(model, T, q0, **kw):
+    """``ik_numeric`` over all targets; where the batched solve hits a singular damped system
+    (every joint blocked at a limit), solve target by target and mark the failing ones."""
+    try:
+        res = ik_numeric(model, T, q0, **kw)
+        return (np.atleast_2d(res.q), np.atleast_1d(res.converged), np.atleast_1d(res.status),
+                np.atleast_1d(res.iterations), np.atleast_1d(res.position_error_mm))
+    except np.linalg.LinAlgError:
+        pass
+    N = len(T)
+    q, conv = np.array(q0, dtype=float, copy=True), np.zeros(N, dtype=bool)
+    status, iters, err = np.full(N, "singular", dtype=object), np.zeros(N, dtype=int), np.full(N, np.inf)
+    for i in range(N):
+        try:
+            r = ik_numeric(model, T[i:i + 1], q0[i:i + 1], **kw)
+        except np.linalg.LinAlgError:
+            continue
+        q[i], conv[i], status[i], iters[i], err[i] = r.q[0], r.converged[0], r.status[0], r.iterations[0], \
+            r.position_error_mm[0]
+    return q, conv, status.astype(str), iters, err
+
+
+def _ik_with_restarts(model, T, q0, n_restarts, **kw):
+    """:func:`_ik` from ``q0``; targets that do not converge are tried again from deterministic
+    (seeded) starting points spread over the joint ranges, keeping the best outcome."""
+    q, conv, status, iters, err = _ik(model, T, q0, **kw)
+    if n_restarts and not np.all(conv):
+        rng = np.random.default_rng(0)  # fixed: the same targets always give the same joints
+        lo, hi = model.limits[:, 0], model.limits[:, 1]
+        lo = np.where(np.isfinite(lo), lo, -np.pi)
+        hi = np.where(np.isfinite(hi), hi, np.pi)
+        for _ in range(n_restarts):
+            todo = np.flatnonzero(~conv)
+            if todo.size == 0:
+                break
+            start = rng.uniform(lo, hi, (todo.size, model.n_joints))
+            q2, c2, s2, i2, e2 = _ik(model, T[todo], start, **kw)
+            better = c2 | (e2 < err[todo])
+            sel = todo[better]
+            q[sel], conv[sel], status[sel], iters[sel], err[sel] = q2[better], c2[better], s2[better], \
+                i2[better], e2[better]
+    return q, conv, status, iters, err
+
+
 def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets, rotations=None, *,
                             q_seed=None, end_effector=None, frame: str = "world", tol_mm: float = 1e-7,
-                            tol_rad: float = 1e-10, max_iterations: int = 200) -> CorrectedTargets:
+                            tol_rad: float = 1e-10, max_iterations: int = 200,
+                            n_restarts: int = 16) -> CorrectedTargets:
     """Joints that put the calibrated robot exactly on Cartesian targets ("program filtering").
 
     calibrated: the identified model (how the robot really moves); nominal: the model its
@@ -337,16 +382,29 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
         seed = _nominal_seed(nominal, T, q_ref, end_effector)
         have = np.all(np.isfinite(seed), axis=1)
         q0[have] = seed[have]
-    nom = ik_numeric(nominal, T, q0, end_effector=end_effector, position_only=position_only, tol_mm=tol_mm,
-                     tol_rad=tol_rad, max_iterations=max_iterations)
-    q_nom = np.atleast_2d(nom.q)
+    kw = dict(end_effector=end_effector, tol_mm=tol_mm, tol_rad=tol_rad, max_iterations=max_iterations)
+    q_nom, nom_conv, nom_status, _, nom_err = _ik_with_restarts(nominal, T, q0, n_restarts,
+                                                                position_only=position_only, **kw)
     if position_only:
         T[:, :3, :3] = nominal.fk(q_nom, end_effector)[:, :3, :3]
 
-    # 2. the calibrated model from there
-    cal = ik_numeric(calibrated, T, q_nom, end_effector=end_effector, tol_mm=tol_mm, tol_rad=tol_rad,
-                     max_iterations=max_iterations)
-    q = np.atleast_2d(cal.q)
+    # 2. the calibrated model from there (same branch)
+    q, conv, status, iters, _ = _ik(calibrated, T, q_nom, **kw)
+    if position_only and not np.all(conv):
+        # near a singularity the nominal orientation may be out of the calibrated robot's reach:
+        # then the position alone is met (the orientation stays as close as the solver leaves it)
+        todo = np.flatnonzero(~conv)
+        q2, c2, s2, i2, _ = _ik(calibrated, T[todo], q_nom[todo], position_only=True, **kw)
+        sel = todo[c2]
+        q[sel], conv[sel], iters[sel] = q2[c2], True, i2[c2]
+        status = status.astype(object)
+        status[sel] = "converged (position only)"
+    if not np.all(conv):  # last resort: other starting points (may land on another branch)
+        todo = np.flatnonzero(~conv)
+        q2, c2, s2, i2, _ = _ik_with_restarts(calibrated, T[todo], q_nom[todo], n_restarts, **kw)
+        q[todo], conv[todo], iters[todo] = q2, c2, i2
+        status = status.astype(object)
+        status[todo] = s2
     T_reached = calibrated.fk(q, end_effector)
     dp, dr = pose_errors(T_reached, T)
     pos_err, rot_err = np.linalg.norm(dp, axis=1), np.linalg.norm(dr, axis=1)
@@ -354,15 +412,13 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
     T_filtered = nominal_base.fk(q, end_effector)
     dT, dR = pose_errors(T, T_filtered_world)
     within = calibrated.within_limits(q)
-    conv = np.atleast_1d(cal.converged)
     report = []
     for i in range(N):
         report.append({
-            "index": i, "converged": bool(conv[i]), "status": str(np.atleast_1d(cal.status)[i]),
-            "iterations": int(np.atleast_1d(cal.iterations)[i]),
+            "index": i, "converged": bool(conv[i]), "status": str(status[i]), "iterations": int(iters[i]),
             "position_error_mm": float(pos_err[i]), "rotation_error_rad": float(rot_err[i]),
-            "nominal_status": str(np.atleast_1d(nom.status)[i]),
-            "nominal_position_error_mm": float(np.atleast_1d(nom.position_error_mm)[i]),
+            "nominal_converged": bool(nom_conv[i]), "nominal_status": str(nom_status[i]),
+            "nominal_position_error_mm": float(nom_err[i]),
             "joint_change": (q[i] - q_nom[i]).tolist(),
             "max_joint_change": float(np.max(np.abs(q[i] - q_nom[i]))),
             "cartesian_correction_mm": float(np.linalg.norm(dT[i])),

@@ -303,39 +303,27 @@ class CalibrationProblem:
         if stations.shape != (len(q),):
             raise ProblemError(f"stations: expected shape ({len(q)},), got {stations.shape}")
         N, K = len(q), len(self.targets)
-        T_all, ptw, _, masks = self.model.kinematics_with(q, state.params, np.eye(4))  # base frame
+        p_base, R_base_ee, Jg = self.model.target_points(q, state.params, state.targets, self.ee_of_target,
+                                                          self.free_index, jacobian)
         Rb = state.bases[stations, :3, :3]
         tb = state.bases[stations, :3, 3]
-        pts = np.empty((N, K, 3))
-        J = np.zeros((N, K, 3, self.n_variables)) if jacobian else None
-        for e in np.unique(self.ee_of_target):
-            ks = np.flatnonzero(self.ee_of_target == e)
-            T = T_all[:, e]
-            local = state.targets[ks]  # (k, 3)
-            p_base = (T[:, None, :3, :3] @ local[None, :, :, None])[..., 0] + T[:, None, :3, 3]
-            p_inst = (Rb[:, None] @ p_base[..., None])[..., 0] + tb[:, None]
-            pts[:, ks] = p_inst
-            if jacobian:
-                if len(self.free_index):
-                    tw = ptw[..., self.free_index] * masks[e, self.free_index]  # (N, 6, F)
-                    w, v = tw[:, None, :3], tw[:, None, 3:]
-                    p = p_base[..., None]
-                    Jg = np.concatenate([w[:, :, 1:2] * p[:, :, 2:3] - w[:, :, 2:3] * p[:, :, 1:2],
-                                         w[:, :, 2:3] * p[:, :, 0:1] - w[:, :, 0:1] * p[:, :, 2:3],
-                                         w[:, :, 0:1] * p[:, :, 1:2] - w[:, :, 1:2] * p[:, :, 0:1]], axis=2) + v
-                    J[:, ks, :, self._sl_geom] = Rb[:, None] @ Jg  # (N, k, 3, F)
-                if self.estimate_base:
-                    blockJ = np.zeros((N, len(ks), 3, 6))
-                    blockJ[..., :3] = -skew(p_inst)
-                    blockJ[..., 3:] = np.eye(3)
-                    for g in range(self.n_stations):
-                        idx = np.flatnonzero(stations == g)
-                        c0 = self._sl_base.start + 6 * g
-                        J[idx[:, None], ks[None, :], :, c0:c0 + 6] = blockJ[idx]
-                R_inst_ee = Rb @ T[:, :3, :3]
-                for a, k in enumerate(ks):
-                    if k in self._target_cols:
-                        J[:, k, :, self._target_cols[k]] = R_inst_ee
+        pts = np.einsum("nij,nkj->nki", Rb, p_base) + tb[:, None]
+        if not jacobian:
+            return pts
+        J = np.zeros((N, K, 3, self.n_variables))
+        J[..., self._sl_geom] = np.einsum("nij,nkjf->nkif", Rb, Jg)
+        if self.estimate_base:
+            blockJ = np.zeros((N, K, 3, 6))
+            blockJ[..., :3] = -skew(pts)
+            blockJ[..., 3:] = np.eye(3)
+            for g in range(self.n_stations):
+                idx = np.flatnonzero(stations == g)
+                c0 = self._sl_base.start + 6 * g
+                J[idx, :, :, c0:c0 + 6] = blockJ[idx]
+        if self._target_cols:
+            R_inst_ee = np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
+            for k, sl in self._target_cols.items():
+                J[:, k, :, sl] = R_inst_ee[:, k]
         return (pts, J) if jacobian else pts
 
     # ------------------------------------------------------------------ residuals

@@ -35,7 +35,7 @@ class CalibrationResult:
     values (n,) final values in those units (base: the final frame as rotation vector and
     origin, targets: the points); initial (n,) the same at the start; std (n,) standard
     deviations (NaN where not identifiable); covariance (n, n).
-    state: final :class:`State`; model: the calibrated :class:`RobotModel`.
+    state: final :class:`State`; problem: the problem solved; model: the calibrated :class:`RobotModel`.
     residuals_before / residuals_after: (M,) weighted residual vectors; rms_before / rms_after
     per measured point (mm, unweighted) where point measurements exist.
     iterations, converged, reason, rank, condition_number, identifiability, outliers (list of
@@ -49,7 +49,7 @@ class CalibrationResult:
     std: np.ndarray
     covariance: np.ndarray
     state: State
-    model: object
+    problem: object
     residuals_before: np.ndarray
     residuals_after: np.ndarray
     iterations: int
@@ -62,6 +62,11 @@ class CalibrationResult:
     outliers: list = field(default_factory=list)
     point_errors_before: np.ndarray | None = None
     point_errors_after: np.ndarray | None = None
+
+    @property
+    def model(self):
+        """The calibrated :class:`RobotModel` (base = the first station's frame), built on demand."""
+        return self.problem.model_at(self.state)
 
     @property
     def rms_before(self) -> float:
@@ -343,7 +348,7 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     return CalibrationResult(
         names=problem.names, units=problem.units, values=_state_values(problem, state),
         initial=_state_values(problem, start_state), std=std,
-        covariance=cov, state=state, model=problem.model_at(state), residuals_before=r0, residuals_after=r,
+        covariance=cov, state=state, problem=problem, residuals_before=r0, residuals_after=r,
         iterations=it, converged=converged, reason=reason, rank=rank, condition_number=cond, sigma0=sigma0,
         identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts)
 

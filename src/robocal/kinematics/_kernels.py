@@ -320,3 +320,95 @@ def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_p
         if cur >= 0:
             frames[n, cur] = M
     return ptw, jtw, frames
+
+
+@njit(cache=_CACHE)
+def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
+                  cpl_ptr, cpl_idx, cpl_coef, target_link, target_T, target_anc, free_col, n_free, want_jac):
+    """Positions of points carried by links, and their derivatives w.r.t. selected parameters.
+
+    target_link (K,) link index carrying each point (-1: the root); target_T (K, 3, 4) the point's
+    end-effector frame in that link's frame, point at its origin; target_anc (K, n_links) bool:
+    the link moves the point; free_col (P,) column of each parameter in the output or -1.
+    Returns p (N, K, 3) in the root frame, R (N, K, 3, 3) the end-effector orientations, and
+    J (N, K, 3, n_free) (size 0 unless ``want_jac``).
+    """
+    N = q.shape[0]
+    n_ops = op_code.shape[0]
+    n_links = link_parent.shape[0]
+    K = target_link.shape[0]
+    pts = np.empty((N, K, 3))
+    rot = np.empty((N, K, 3, 3))
+    J = np.zeros((N if want_jac else 0, K, 3, n_free))
+    frames = np.empty((n_links, 3, 4))
+    tw = np.zeros((n_free, 6))
+    tw_link = np.full(n_free, -1, dtype=np.int64)
+    M = np.empty((3, 4))
+    tmp = np.empty((3, 4))
+    for n in range(N):
+        qn = q[n]
+        cur = -1
+        for t in range(n_ops):
+            L = op_link[t]
+            if L != cur:
+                if cur >= 0:
+                    frames[cur] = M
+                cur = L
+                p = link_parent[L]
+                if p < 0:
+                    M[:, :] = root
+                else:
+                    M[:, :] = frames[p]
+            code = op_code[t]
+            value = op_value[t]
+            jm = op_joint[t]
+            if jm >= 0:
+                value += _model_joint(qn, jm, cpl_ptr, cpl_idx, cpl_coef)
+            col = free_col[op_param[t]]
+            if want_jac and col >= 0:
+                ax = op_axis[t]
+                w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
+                w1 = M[1, 0] * ax[0] + M[1, 1] * ax[1] + M[1, 2] * ax[2]
+                w2 = M[2, 0] * ax[0] + M[2, 1] * ax[1] + M[2, 2] * ax[2]
+                tw_link[col] = L
+                if code == OP_RX or code == OP_RY or code == OP_RZ or code == OP_RU:
+                    ox, oy, oz = M[0, 3], M[1, 3], M[2, 3]
+                    tw[col, 0] = w0
+                    tw[col, 1] = w1
+                    tw[col, 2] = w2
+                    tw[col, 3] = oy * w2 - oz * w1
+                    tw[col, 4] = oz * w0 - ox * w2
+                    tw[col, 5] = ox * w1 - oy * w0
+                else:
+                    tw[col, 0] = 0.0
+                    tw[col, 1] = 0.0
+                    tw[col, 2] = 0.0
+                    tw[col, 3] = w0
+                    tw[col, 4] = w1
+                    tw[col, 5] = w2
+            _apply_op(M, code, value, op_axis[t])
+        if cur >= 0:
+            frames[cur] = M
+        for k in range(K):
+            L = target_link[k]
+            if L < 0:
+                _mul_affine(root, target_T[k], tmp)
+            else:
+                _mul_affine(frames[L], target_T[k], tmp)
+            px, py, pz = tmp[0, 3], tmp[1, 3], tmp[2, 3]
+            pts[n, k, 0] = px
+            pts[n, k, 1] = py
+            pts[n, k, 2] = pz
+            for i in range(3):
+                for j in range(3):
+                    rot[n, k, i, j] = tmp[i, j]
+            if want_jac:
+                for c in range(n_free):
+                    Lc = tw_link[c]
+                    if Lc < 0 or not target_anc[k, Lc]:
+                        continue
+                    w0, w1, w2 = tw[c, 0], tw[c, 1], tw[c, 2]
+                    J[n, k, 0, c] = w1 * pz - w2 * py + tw[c, 3]
+                    J[n, k, 1, c] = w2 * px - w0 * pz + tw[c, 4]
+                    J[n, k, 2, c] = w0 * py - w1 * px + tw[c, 5]
+    return pts, rot, J

@@ -398,6 +398,32 @@ class RobotModel:
         masks = self._ee_ancestors[list(ees)][:, self.params.link_of]
         return T, ptw, jtw, masks
 
+    def target_points(self, q, params, points_in_ee, ee_of_point, free_index, want_jacobian=True):
+        """Points carried by end effectors, in the base frame (no ``T_world_base``), with their
+        derivatives w.r.t. the parameters ``free_index`` -- the calibration hot path, one kernel call.
+
+        params (P,) [mm | rad]; points_in_ee (K, 3) [mm]; ee_of_point (K,) end-effector indices.
+        Returns p (N, K, 3), R_base_ee (N, K, 3, 3), J (N, K, 3, len(free_index)).
+        """
+        q2, _ = self._as_joints(q)
+        params = np.asarray(params, dtype=float)
+        K = len(ee_of_point)
+        tl = np.empty(K, dtype=np.int64)
+        tT = np.empty((K, 3, 4))
+        anc = np.zeros((K, len(self.links)), dtype=np.bool_)
+        for k, e in enumerate(ee_of_point):
+            ee = self.end_effectors[e]
+            tl[k] = ee.link
+            T = ee.T_link_ee.copy()
+            T[:3, 3] = T[:3, :3] @ np.asarray(points_in_ee[k], dtype=float) + T[:3, 3]
+            tT[k] = T[:3]
+            anc[k] = self._ee_ancestors[e]
+        free_col = np.full(len(self.params), -1, dtype=np.int64)
+        free_col[np.asarray(free_index, dtype=np.int64)] = np.arange(len(free_index))
+        return _kernels.target_points(q2, self._op_link, self._op_code, self._op_axis, params[self._op_param],
+                                      self._op_param, self._op_joint, self._link_parent, np.eye(4)[:3].copy(),
+                                      *self._cpl, tl, tT, anc, free_col, len(free_index), bool(want_jacobian))
+
     def _ee_masks(self, e):
         anc = self._ee_ancestors[e]
         pmask = anc[self.params.link_of]
