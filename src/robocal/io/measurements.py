@@ -355,13 +355,6 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
 # ---------------------------------------------------------------------------------------------
 
 
-def _controller_joint_types(robot) -> np.ndarray:
-    """(n_ctrl,) bool: controller joint drives a prismatic model joint."""
-    prismatic_model = np.array([robot.links[k].joint_type == "prismatic" for k in robot.moving], dtype=bool)
-    drives = robot.coupling != 0.0  # (n_model, n_ctrl)
-    return np.array([bool(np.any(drives[:, j] & prismatic_model)) for j in range(robot.n_joints)], dtype=bool)
-
-
 def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
     """Read a measurement file; arrays come back in mm / rad.
 
@@ -512,7 +505,7 @@ def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
             fail(f"'prismatic' names {name!r}, which is not a joint column ({', '.join(joint_names)})",
                  key_line["prismatic"])
     if robot is not None:
-        prismatic = _controller_joint_types(robot)
+        prismatic = robot.prismatic_joints
         model_set = {n for n, p in zip(joint_names, prismatic) if p}
         if "prismatic" in md and set(declared) != model_set:
             fail(f"'prismatic: {md['prismatic']}' disagrees with robot {robot.name!r}, whose prismatic "

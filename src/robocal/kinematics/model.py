@@ -142,6 +142,12 @@ class RobotModel:
         return len(self.controller_joints)
 
     @property
+    def prismatic_joints(self) -> np.ndarray:
+        """(n_ctrl,) bool: the controller joint drives a prismatic model joint (its unit is mm)."""
+        pris = np.array([self.links[k].joint_type == "prismatic" for k in self.moving], dtype=bool)
+        return np.any((self.coupling != 0.0) & pris[:, None], axis=0)
+
+    @property
     def n_model_joints(self) -> int:
         return len(self.moving)
 

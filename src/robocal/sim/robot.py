@@ -31,9 +31,7 @@ def as_rng(rng) -> np.random.Generator:
 
 def controller_joint_prismatic(model: RobotModel) -> np.ndarray:
     """(n_ctrl,) bool: the controller joint drives a prismatic model joint (its unit is mm)."""
-    prismatic_model = np.array([model.links[k].joint_type == "prismatic" for k in model.moving], dtype=bool)
-    drives = model.coupling != 0.0
-    return np.array([bool(np.any(drives[:, j] & prismatic_model)) for j in range(model.n_joints)], dtype=bool)
+    return model.prismatic_joints
 
 
 def parameter_kinds(model: RobotModel) -> np.ndarray:
