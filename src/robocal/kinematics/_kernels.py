@@ -264,6 +264,18 @@ def _apply_op(M, code, value, ax):
             M[i, k] = c * mk - s * mj
 
 
+@njit(cache=_CACHE, inline="always")
+def _op_twist(M, code, ax):
+    """Spatial twist (omega, v) of an elementary operation acting at frame M (3x4)."""
+    w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
+    w1 = M[1, 0] * ax[0] + M[1, 1] * ax[1] + M[1, 2] * ax[2]
+    w2 = M[2, 0] * ax[0] + M[2, 1] * ax[1] + M[2, 2] * ax[2]
+    if code == OP_RX or code == OP_RY or code == OP_RZ or code == OP_RU:
+        ox, oy, oz = M[0, 3], M[1, 3], M[2, 3]
+        return w0, w1, w2, oy * w2 - oz * w1, oz * w0 - ox * w2, ox * w1 - oy * w0
+    return 0.0, 0.0, 0.0, w0, w1, w2
+
+
 @njit(cache=_CACHE)
 def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
               cpl_ptr, cpl_idx, cpl_coef, n_params, n_model_joints):
@@ -301,15 +313,7 @@ def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_p
                 value += _model_joint(qn, jm, cpl_ptr, cpl_idx, cpl_coef)
             pi = op_param[t]
             if pi >= 0 or jm >= 0:
-                ax = op_axis[t]
-                w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
-                w1 = M[1, 0] * ax[0] + M[1, 1] * ax[1] + M[1, 2] * ax[2]
-                w2 = M[2, 0] * ax[0] + M[2, 1] * ax[1] + M[2, 2] * ax[2]
-                if code == OP_RX or code == OP_RY or code == OP_RZ or code == OP_RU:
-                    ox, oy, oz = M[0, 3], M[1, 3], M[2, 3]
-                    tw = (w0, w1, w2, oy * w2 - oz * w1, oz * w0 - ox * w2, ox * w1 - oy * w0)
-                else:
-                    tw = (0.0, 0.0, 0.0, w0, w1, w2)
+                tw = _op_twist(M, code, op_axis[t])
                 if pi >= 0:
                     for r in range(6):
                         ptw[n, r, pi] = tw[r]
@@ -366,26 +370,14 @@ def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, li
                 value += _model_joint(qn, jm, cpl_ptr, cpl_idx, cpl_coef)
             col = free_col[op_param[t]]
             if want_jac and col >= 0:
-                ax = op_axis[t]
-                w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
-                w1 = M[1, 0] * ax[0] + M[1, 1] * ax[1] + M[1, 2] * ax[2]
-                w2 = M[2, 0] * ax[0] + M[2, 1] * ax[1] + M[2, 2] * ax[2]
                 tw_link[col] = L
-                if code == OP_RX or code == OP_RY or code == OP_RZ or code == OP_RU:
-                    ox, oy, oz = M[0, 3], M[1, 3], M[2, 3]
-                    tw[col, 0] = w0
-                    tw[col, 1] = w1
-                    tw[col, 2] = w2
-                    tw[col, 3] = oy * w2 - oz * w1
-                    tw[col, 4] = oz * w0 - ox * w2
-                    tw[col, 5] = ox * w1 - oy * w0
-                else:
-                    tw[col, 0] = 0.0
-                    tw[col, 1] = 0.0
-                    tw[col, 2] = 0.0
-                    tw[col, 3] = w0
-                    tw[col, 4] = w1
-                    tw[col, 5] = w2
+                tw0, tw1, tw2, tw3, tw4, tw5 = _op_twist(M, code, op_axis[t])
+                tw[col, 0] = tw0
+                tw[col, 1] = tw1
+                tw[col, 2] = tw2
+                tw[col, 3] = tw3
+                tw[col, 4] = tw4
+                tw[col, 5] = tw5
             _apply_op(M, code, value, op_axis[t])
         if cur >= 0:
             frames[cur] = M
