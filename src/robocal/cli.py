@@ -220,5 +220,132 @@ def demo(out_dir, seed, poses):
     click.echo(f"wrote {r['files']['accuracy_map']} and {r['files']['result']}")
 
 
+def _user_error(exc) -> click.ClickException:
+    """One line ``Error: ...`` from an exception of the library (file, value, name problems)."""
+    msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+    return click.ClickException(" ".join(str(msg).split()))
+
+
+def _names(values):
+    """Parameter names from repeated options, each comma or space separated."""
+    return [n for v in values for n in v.replace(",", " ").split()]
+
+
+def _step_printer(i, n, text):
+    click.echo(f"[{i}/{n}] {text}", err=True)
+
+
+@main.command()
+@click.argument("robot")
+@click.argument("data", type=click.Path(dir_okay=False))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for result.json, calibrated_robot.toml/.urdf and report.html (created if needed).")
+@click.option("--free", "free", multiple=True, metavar="NAMES",
+              help="Parameters to identify (comma separated, repeatable), e.g. --free a2,a3,theta2. "
+                   "Default: every parameter the robot file does not list as fixed.")
+@click.option("--free-all", is_flag=True,
+              help="Identify every kinematic parameter (ignore the robot file's fixed lists).")
+@click.option("--fix", "fix", multiple=True, metavar="NAMES",
+              help="Parameters to hold at nominal (comma separated, repeatable).")
+@click.option("--holdout", default=0.2, show_default=True, help="Fraction of poses held out for validation.")
+@click.option("--seed", default=0, show_default=True, help="Seed of the calibration/held-out split.")
+@click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
+              help="Loss per pose (huber/cauchy down-weight outlier poses).")
+@click.option("--sigma", "sigma_mm", type=float, default=None,
+              help="Measurement noise per coordinate [mm] (default: estimated from the residuals).")
+@click.option("--tool", nargs=3, type=float, default=None, metavar="X Y Z",
+              help="Initial target point in the flange frame [mm] (default 0 0 0).")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
+def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite):
+    """Calibrate ROBOT (name or robot file) from the measurement file DATA."""
+    from .workflows.calibrate import run_calibration
+
+    try:
+        r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
+                            holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
+                            progress=_step_printer)
+    except (ValueError, KeyError, OSError) as exc:
+        raise _user_error(exc) from None
+    res = r["result"]
+    click.echo(r["calibration_result"].summary())
+    click.echo("")
+    click.echo(f"{'position error [mm]':<30}{'RMS':>9}{'mean':>9}{'p95':>9}{'max':>9}")
+    rows = [("calibration poses, before", res["residuals"]["before"]),
+            ("calibration poses, after", res["residuals"]["after"])]
+    if res.get("validation"):
+        rows += [("held-out poses, before", res["validation"]["before"]),
+                 ("held-out poses, after", res["validation"]["after"])]
+    for label, s in rows:
+        click.echo(f"{label:<30}{s['rms']:9.4f}{s['mean']:9.4f}{s['p95']:9.4f}{s['max']:9.4f}")
+    for note in r["notes"]:
+        click.echo(f"note: {note}")
+    click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
+
+
+@main.command()
+@click.argument("robot_file")
+@click.argument("targets", type=click.Path(dir_okay=False))
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
+              help="CSV file for the corrected joint targets.")
+@click.option("--nominal", default=None,
+              help="Nominal robot the controller runs (default: the robot named in ROBOT_FILE).")
+@click.option("--frame", type=click.Choice(["world", "base"]), default=None,
+              help="Frame of the targets (default: the targets file's '# frame:', else world).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+def correct(robot_file, targets, out_file, nominal, frame, overwrite):
+    """Corrected joint targets: joints that put the calibrated ROBOT_FILE on the Cartesian TARGETS.
+
+    TARGETS is a CSV file (robocal-targets/1): header lines '# format: robocal-targets/1',
+    '# length_unit: mm|m', '# angle_unit: deg|rad', optional '# orientation: <convention>' and
+    '# frame: world|base', then columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>]
+    (joints: taught values that seed the solver).
+    """
+    from .workflows.calibrate import run_correct
+
+    try:
+        r = run_correct(robot_file, targets, out_file, nominal=nominal, frame=frame, overwrite=overwrite)
+    except (ValueError, KeyError, OSError) as exc:
+        raise _user_error(exc) from None
+    c = r["corrected"]
+    click.echo(c.summary())
+    bad = [n for n, ok in zip(r["names"], c.converged) if not ok]
+    if bad:
+        click.echo(f"not reached: {', '.join(bad)} (see the status column)", err=True)
+    click.echo(f"wrote {r['file']}")
+    if bad:
+        sys.exit(2)
+
+
+@main.group()
+def simulate():
+    """Simulated measurement campaigns (files in the real formats, with the hidden truth)."""
+
+
+@simulate.command("tracker")
+@click.argument("robot")
+@click.option("--poses", "n_poses", default=100, show_default=True, help="Number of random poses.")
+@click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
+@click.option("--reflectors", type=click.Choice(["1", "3"]), default="1", show_default=True,
+              help="Reflectors on the flange (3: the file also holds the flange orientation).")
+@click.option("--joint-noise", "joint_noise_deg", default=0.0, show_default=True, help="Encoder noise [deg].")
+@click.option("--seed", default=0, show_default=True, help="Seed of the true parameters, tracker placement and poses.")
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
+              help="Measurement CSV file; the truth goes to <name>.truth.json next to it.")
+@click.option("--overwrite", is_flag=True, help="Replace existing files.")
+def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, seed, out_file, overwrite):
+    """Simulate a laser-tracker campaign of ROBOT with hidden true parameters."""
+    from .workflows.simulate import simulate_tracker
+
+    if n_poses < 1:
+        raise click.ClickException(f"--poses must be at least 1, got {n_poses}")
+    try:
+        r = simulate_tracker(robot, out_file, n_poses=n_poses, noise_mm=noise_mm, reflectors=int(reflectors),
+                             joint_noise_deg=joint_noise_deg, seed=seed, overwrite=overwrite)
+    except (ValueError, KeyError, OSError) as exc:
+        raise _user_error(exc) from None
+    click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm)")
+    click.echo(f"wrote {r['measurements']} and {r['truth']}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())

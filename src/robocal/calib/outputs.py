@@ -1,5 +1,5 @@
-"""What a calibration gives the user: every number as plain data, predicted uncertainty, and
-corrected joint targets ("program filtering").
+"""What a calibration gives the user: every number as plain data, and corrected joint targets
+("program filtering").
 
 Pure functions (no files, no plots): the workflows write what these return.
 
@@ -7,8 +7,7 @@ Pure functions (no files, no plots): the workflows write what these return.
   parameters with names, units, initial and final values, change, standard deviation and
   identifiability; base frame(s); target points; residual statistics before and after; solver
   state; dropped parameters with the reason; outliers.
-* :func:`predicted_point_std` -- the uncertainty of predicted target positions at any joint
-  configurations, ``J Cov J^T`` over the identified variables.
+  (Predicted position uncertainty at any configuration: :mod:`robocal.calib.uncertainty`.)
 * :func:`corrected_joint_targets` -- the joints to command so that the *real* (calibrated) robot
   reaches Cartesian targets, and the "filtered" Cartesian targets a controller running the
   nominal model needs to produce those joints.
@@ -28,8 +27,7 @@ from ..kinematics.model import RobotModel
 from ..metrics import error_statistics
 from ..transforms import euler_from_matrix
 
-__all__ = ["RESULT_FORMAT", "result_to_dict", "json_ready", "predicted_point_std", "CorrectedTargets",
-           "corrected_joint_targets"]
+__all__ = ["RESULT_FORMAT", "result_to_dict", "json_ready", "CorrectedTargets", "corrected_joint_targets"]
 
 #: ``format`` value of the dict returned by :func:`result_to_dict` (and of ``result.json``).
 RESULT_FORMAT = "robocal-calibration-result/1"
@@ -177,28 +175,6 @@ def result_to_dict(result, problem, *, nominal: RobotModel | None = None, pose_i
     if metadata is not None:
         out["metadata"] = metadata
     return json_ready(out)
-
-
-def predicted_point_std(result, problem, q, stations=None, *, return_covariance: bool = False):
-    """Standard uncertainty of predicted target positions at joint configurations ``q``.
-
-    The covariance of the identified variables (``result.covariance`` restricted to its finite
-    block) is propagated through the prediction Jacobian: ``C_p = J C J^T`` per target point.
-    q: (N, n_ctrl) [rad | mm]; stations: (N,) station per configuration (default 0).
-    Returns ``std`` (N, K) [mm] = sqrt(trace C_p) (the RMS length of the position error), and
-    with ``return_covariance`` also ``C_p`` (N, K, 3, 3) [mm^2]. Positions are in the instrument
-    frame, so the base frame's uncertainty is included.
-    """
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    stations = np.zeros(len(q), dtype=int) if stations is None else np.asarray(stations, dtype=int)
-    _, J = problem.predict_points(result.state, q=q, stations=stations, jacobian=True)
-    d = np.diag(result.covariance)
-    act = np.flatnonzero(np.isfinite(d))
-    C = result.covariance[np.ix_(act, act)]
-    Ja = J[..., act]  # (N, K, 3, a)
-    Cp = np.einsum("nkia,ab,nkjb->nkij", Ja, C, Ja)
-    std = np.sqrt(np.maximum(np.trace(Cp, axis1=-2, axis2=-1), 0.0))
-    return (std, Cp) if return_covariance else std
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,5 +1,7 @@
-"""Robot library: robot definitions as TOML data files, and their loader."""
+"""Robot library: robot definitions as TOML data files, their loader and writer."""
 
 from .loader import RobotFileError, frame_from_xyz_rpy, list_robots, load_robot, parse_robot, robot_path
+from .writer import robot_to_toml, save_robot
 
-__all__ = ["RobotFileError", "frame_from_xyz_rpy", "list_robots", "load_robot", "parse_robot", "robot_path"]
+__all__ = ["RobotFileError", "frame_from_xyz_rpy", "list_robots", "load_robot", "parse_robot", "robot_path",
+           "robot_to_toml", "save_robot"]

@@ -1,0 +1,439 @@
+"""`robocal calibrate` and `robocal correct`: file-to-file calibration workflows.
+
+``run_calibration`` reads a robot and a measurement file, splits the poses (seeded) into a
+calibration and a held-out set, identifies the kinematic parameters, base frame and target
+points, validates on the held-out poses and writes into one folder:
+
+* ``result.json``            every number (:func:`robocal.calib.outputs.result_to_dict` + validation)
+* ``calibrated_robot.toml``  the calibrated robot (``robocal-robot/1``; its base is the robot in the
+                             measurement instrument's frame)
+* ``calibrated_robot.urdf``  the same as URDF (skipped, with a note, when a joint coupling cannot be
+                             expressed in URDF)
+* ``report.html``            self-contained report with plots
+
+"Before" numbers are the nominal kinematics with the best-fit base frame and target points (a
+first solve with the geometry held nominal), so they measure what calibration of the robot itself
+gains, not the unknown placement of the instrument.
+
+``run_correct`` turns Cartesian targets into corrected joint targets with a calibrated robot.
+
+Target files (``robocal-targets/1``) read by ``robocal correct``: a CSV file like the measurement
+files, a ``#`` header declaring the units, then one row per target::
+
+    # format: robocal-targets/1
+    # length_unit: mm                 (mm | m)
+    # angle_unit: deg                 (deg | rad: Euler / rotation-vector angles, seed joints)
+    # orientation: kuka_abc           (optional: a name of robocal.transforms.POSE_CONVENTIONS)
+    # frame: world                    (optional: world (default) | base)
+    name,x,y,z,rx,ry,rz,J1,J2,J3,J4,J5,J6
+    P1,1510.2,-220.0,980.5,180.0,0.0,90.0,10.0,-80.0,95.0,0.0,30.0,0.0
+
+``name`` (optional) names the target; ``x, y, z`` the position; orientation columns (optional,
+need ``orientation``) as in measurement files: ``qw, qx, qy, qz`` for ``quaternion``, otherwise
+``rx, ry, rz`` holding the convention's three numbers in its order (KUKA A, B, C) in
+``angle_unit``. Optional joint columns named as the robot's controller joints (all of them) give
+the taught joints, used to seed the solver (branch choice). ``frame: world`` means the calibrated
+robot's world frame (for ``robocal calibrate`` output: the instrument frame); ``base`` the robot
+base frame. Without orientation the targets are position-only (the orientation stays as the
+nominal solution has it).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import re
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from ..calib import CalibrationProblem, Target, solve
+from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
+from ..calib.uncertainty import predicted_point_std
+from ..calib.validation import train_holdout_split
+from ..io.measurements import atomic_write_text, read_measurements
+from ..metrics import error_statistics
+from ..robots import load_robot, save_robot
+from ..transforms import ANGLE_UNITS, LENGTH_UNITS, POSE_CONVENTIONS, pose_from_transform, transform_from_pose
+
+__all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
+           "TARGETS_FORMAT", "read_targets", "run_correct"]
+
+OUTPUT_FILES = {"result": "result.json", "robot": "calibrated_robot.toml", "urdf": "calibrated_robot.urdf",
+                "report": "report.html"}
+TARGETS_FORMAT = "robocal-targets/1"
+CORRECTED_FORMAT = "robocal-corrected-targets/1"
+
+
+class CalibrationInputError(ValueError):
+    """The inputs of a calibration cannot work (too few poses, unknown parameter names, ...)."""
+
+
+def output_paths(out_dir) -> dict:
+    out = Path(out_dir)
+    return {k: out / v for k, v in OUTPUT_FILES.items()}
+
+
+def split_poses(n: int, holdout: float, seed: int):
+    """Seeded split of ``n`` poses: (train indices, held-out indices), both sorted
+    (:func:`robocal.calib.validation.train_holdout_split` with a clear error for a bad fraction)."""
+    if not 0.0 <= holdout < 1.0:
+        raise CalibrationInputError(f"--holdout must be a fraction in [0, 1), got {holdout}")
+    return train_holdout_split(n, holdout, seed)
+
+
+def select_free(model, free=None, free_all: bool = False, fix=()) -> list:
+    """Names of the parameters to identify: the model's free ones (robot file ``fixed`` lists
+    respected), or ``free`` (names), or all with ``free_all``; minus ``fix``."""
+    names = list(model.params.names)
+
+    def check(ns, what):
+        for n in ns:
+            try:
+                model.params.index(n)
+            except KeyError as exc:
+                raise CalibrationInputError(f"{what}: {exc.args[0]} (robot {model.name})") from None
+
+    if free and free_all:
+        raise CalibrationInputError("give either --free or --free-all, not both")
+    if free_all:
+        sel = names
+    elif free:
+        check(free, "--free")
+        sel = [n for n in names if n in set(free)]
+    else:
+        sel = [n for n, f in zip(names, model.params.free) if f]
+    check(fix, "--fix")
+    return [n for n in sel if n not in set(fix)]
+
+
+def _point_errors(pred, measured):
+    """Per-point error magnitudes (N, K) (NaN where not measured)."""
+    return np.linalg.norm(measured - pred, axis=-1)
+
+
+def _per_point(errors_before, errors_after, pose_ids, targets):
+    mask = np.isfinite(errors_after)
+    pi, ki = np.nonzero(mask)
+    return {"pose": [pose_ids[i] for i in pi], "target": [targets[k] for k in ki],
+            "before": errors_before[mask], "after": errors_after[mask]}
+
+
+def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, fix=(), holdout: float = 0.2,
+                    seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
+                    overwrite: bool = False, progress=None, method: str = "lm") -> dict:
+    """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
+
+    robot: shipped robot name or robot file path (the nominal model). data: a
+    ``robocal-measurements/1`` file of that robot. free / free_all / fix: parameter selection
+    (:func:`select_free`). holdout, seed: fraction of poses held out for validation and the seed
+    of the split. loss: ``linear``, ``huber`` or ``cauchy`` (robust, per pose). sigma_mm:
+    measurement noise per coordinate [mm] (weights and absolute uncertainty; default: estimated
+    from the residuals). tool: initial target point (3,) [mm] in the flange frame (default origin).
+    progress(step, total, text): called between steps.
+
+    Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
+    naming the file, checked before any work). Returns a dict with ``result`` (the JSON dict),
+    ``files`` and ``notes``.
+    """
+    step = progress or (lambda i, n, text: None)
+    total = 6
+    out = Path(out_dir)
+    paths = output_paths(out)
+    if not overwrite:
+        for p in paths.values():
+            if p.exists():
+                raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
+    if out.exists() and not out.is_dir():
+        raise CalibrationInputError(f"{out}: exists and is not a folder")
+    if loss not in ("linear", "huber", "cauchy"):
+        raise CalibrationInputError(f"--loss must be linear, huber or cauchy, got {loss!r}")
+    if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
+        raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
+
+    nominal = load_robot(robot)
+    meas = read_measurements(data, robot=nominal)
+    free_names = select_free(nominal, free, free_all, fix)
+    N, K = meas.n_poses, meas.n_targets
+    train, hold = split_poses(N, holdout, seed)
+    n_unknowns = len(free_names) + 6 + 3 * K
+    n_res = 3 * K * len(train)
+    if n_res < n_unknowns or len(train) < 3:
+        need = max(3, math.ceil(n_unknowns / (3 * K)))
+        raise CalibrationInputError(
+            f"{data}: too few poses: {len(train)} calibration pose(s) ({N} in the file, {len(hold)} held out) give "
+            f"{n_res} residuals for {n_unknowns} unknowns ({len(free_names)} parameters, base frame, {K} target "
+            f"point(s)); at least {need} calibration poses are needed, 3-5 times that for a useful result")
+    step(1, total, f"read {N} poses of {nominal.name} from {data}: {len(train)} to calibrate, {len(hold)} held out "
+                   f"(seed {seed})")
+    point0 = (0.0, 0.0, 0.0) if tool is None else tuple(float(v) for v in tool)
+    targets = [Target(t, point=point0) for t in meas.targets]
+    pose_ids = list(meas.pose_ids)
+    q_tr, p_tr = meas.joints[train], meas.points[train]
+
+    step(2, total, f"initial base frame and target point(s) with the nominal geometry ({len(train)} poses)")
+    problem0 = CalibrationProblem(nominal, q_tr, targets, p_tr, free=[], base_initial="fit", point_sigma_mm=sigma_mm)
+    res0 = solve(problem0, loss=loss, method=method)
+
+    step(3, total, f"identifying {len(free_names)} parameter(s) + base + {K} target point(s) ({loss} loss)")
+    problem = CalibrationProblem(nominal, q_tr, targets, p_tr, free=free_names, base_initial="fit",
+                                 point_sigma_mm=sigma_mm)
+    result = solve(problem, loss=loss, method=method, state0=res0.state)
+
+    step(4, total, f"validating on {len(hold)} held-out pose(s)")
+    validation = None
+    if len(hold):
+        q_h, p_h = meas.joints[hold], meas.points[hold]
+        e_before = _point_errors(problem0.predict_points(res0.state, q=q_h, stations=np.zeros(len(hold), int)), p_h)
+        e_after = _point_errors(problem.predict_points(result.state, q=q_h, stations=np.zeros(len(hold), int)), p_h)
+        ok = np.isfinite(e_after)
+        validation = {
+            "n_poses": int(len(hold)), "pose_ids": [pose_ids[i] for i in hold],
+            "before": error_statistics(e_before[ok]), "after": error_statistics(e_after[ok]),
+            "per_point": _per_point(e_before, e_after, [pose_ids[i] for i in hold], meas.targets),
+        }
+    # predicted uncertainty over every pose of the file (accuracy map)
+    std_pts = predicted_point_std(problem, result, meas.joints)  # (N, K)
+    base_model = result.model.replace(T_world_base=np.eye(4))
+    positions = base_model.fk(meas.joints)[:, :3, 3]
+    accuracy = {
+        "quantity": "predicted position uncertainty (1 std, sqrt of the trace of J Cov J^T) of the targets in the "
+                    "instrument frame, largest over the targets of each pose",
+        "pose_ids": pose_ids, "flange_position_base_mm": positions, "predicted_std_mm": std_pts.max(axis=1),
+        "statistics": error_statistics(std_pts.max(axis=1)),
+    }
+
+    step(5, total, "writing result.json, calibrated robot (TOML, URDF)")
+    out.mkdir(parents=True, exist_ok=True)
+    notes = []
+    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    metadata = {
+        "robot": str(robot), "measurements": str(data), "n_poses_file": N, "n_poses_calibration": int(len(train)),
+        "n_poses_holdout": int(len(hold)), "holdout_fraction": holdout, "seed": seed, "loss": loss,
+        "sigma_mm": sigma_mm, "method": method, "free": free_names, "fixed_by_option": list(fix),
+        "initial_target_mm": list(point0), "targets": list(meas.targets), "instrument": meas.metadata.get("instrument"),
+        "frame": meas.metadata.get("frame"), "written": stamp,
+    }
+    rdict = result_to_dict(result, problem, nominal=nominal, pose_ids=[pose_ids[i] for i in train],
+                           validation=json_ready(validation) if validation else None, metadata=metadata)
+    rdict["baseline"] = json_ready({
+        "description": "nominal geometry with best-fit base frame and target point(s) (the 'before' state)",
+        "iterations": res0.iterations, "converged": res0.converged, "reason": res0.reason,
+        "rms_mm": res0.rms_after, "T_instrument_base": res0.state.bases[0], "targets_mm": res0.state.targets})
+    rdict["accuracy_map"] = json_ready(accuracy)
+
+    calibrated = result.model.replace(
+        title=f"{nominal.title or nominal.name} (calibrated)",
+        source=f"robocal calibrate of {Path(str(data)).name} ({len(train)} poses, {stamp}) from nominal: "
+               f"{nominal.source}")
+    comment = (f"Calibrated by robocal from {data} ({len(train)} of {N} poses; held-out RMS "
+               + (f"{validation['before']['rms']:.4f} -> {validation['after']['rms']:.4f} mm" if validation else "n/a")
+               + ").\n[base] is the robot base in the measurement instrument's frame "
+               f"({meas.metadata.get('frame') or 'instrument'}). Identified target points (flange frame, mm): "
+               + "; ".join(f"{t.name} = [{', '.join(f'{v:.4f}' for v in result.state.targets[k])}]"
+                           for k, t in enumerate(targets))
+               + ".\nAll numbers with uncertainties: result.json.")
+    files = {}
+    files["robot"] = save_robot(calibrated, paths["robot"], overwrite=overwrite, comment=comment)
+    from ..io.urdf import UrdfError, write_urdf
+
+    try:
+        files["urdf"] = write_urdf(calibrated, paths["urdf"], overwrite=overwrite)
+    except UrdfError as exc:
+        notes.append(f"calibrated_robot.urdf not written: {exc}")
+        if overwrite and paths["urdf"].exists():
+            paths["urdf"].unlink()  # a stale URDF from an earlier run must not sit next to new results
+    rdict["notes"] = notes
+    text = json.dumps(rdict, indent=2, allow_nan=False) + "\n"
+    files["result"] = atomic_write_text(paths["result"], text, overwrite=overwrite)
+
+    step(6, total, "writing report.html")
+    from ..report.html import write_report
+
+    amap = {"positions_mm": positions, "values_mm": accuracy["predicted_std_mm"],
+            "label": "predicted position std [mm]",
+            "title": f"{nominal.name}: predicted uncertainty of the calibrated model at the measured poses",
+            "note": "Flange positions in the robot base frame, coloured by the predicted 1-std position uncertainty "
+                    "(J Cov J^T over the identified variables, base frame included)."}
+    files["report"] = write_report(paths["report"], rdict, accuracy_map=amap, overwrite=overwrite,
+                                   title=f"Calibration of {nominal.name} from {Path(str(data)).name}")
+    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem}
+
+
+# ---------------------------------------------------------------------------------------------
+# corrected joint targets
+# ---------------------------------------------------------------------------------------------
+
+_KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
+
+
+class TargetFileError(ValueError):
+    """A targets file is malformed; the message names file, line and column."""
+
+
+def read_targets(path, robot) -> dict:
+    """Read a ``robocal-targets/1`` file (module docstring). Returns {``names`` (N,),
+    ``positions`` (N, 3) [mm], ``rotations`` (N, 3, 3) or None, ``q_seed`` (N, n) [rad | mm] or None,
+    ``frame``, ``orientation``, ``length_unit``, ``angle_unit``}."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path}: no such targets file") from None
+
+    def fail(msg, line=None, column=None):
+        where = str(path) + (f", line {line}" if line else "") + (f", column {column!r}" if column else "")
+        raise TargetFileError(f"{where}: {msg}")
+
+    lines = text.splitlines()
+    md, i = {}, 0
+    while i < len(lines):
+        raw = lines[i].strip()
+        if raw and not raw.startswith("#"):
+            break
+        m = _KEY_RE.match(raw)
+        if m:
+            md[m.group(1).lower()] = (m.group(2).strip(), i + 1)
+        i += 1
+    if md.get("format", ("",))[0] != TARGETS_FORMAT:
+        fail(f"header must start with '# format: {TARGETS_FORMAT}' (got {md.get('format', ('nothing',))[0]!r})")
+    for key in ("length_unit", "angle_unit"):
+        if key not in md:
+            fail(f"header is missing '# {key}: ...'")
+    lu, au = md["length_unit"][0], md["angle_unit"][0]
+    if lu not in LENGTH_UNITS:
+        fail(f"unknown length_unit {lu!r}; valid: {', '.join(LENGTH_UNITS)}", md["length_unit"][1])
+    if au not in ANGLE_UNITS:
+        fail(f"unknown angle_unit {au!r}; valid: {', '.join(ANGLE_UNITS)}", md["angle_unit"][1])
+    frame = md.get("frame", ("world", 0))[0]
+    if frame not in ("world", "base"):
+        fail(f"frame {frame!r}: expected world or base", md["frame"][1])
+    conv = md.get("orientation", (None, 0))[0]
+    if conv is not None:
+        conv = conv.lower()
+        if conv not in POSE_CONVENTIONS:
+            fail(f"unknown orientation convention {conv!r}; valid: {', '.join(sorted(POSE_CONVENTIONS))}",
+                 md["orientation"][1])
+    if i >= len(lines):
+        fail("no column row")
+    header_line = i + 1
+    cols = [c.strip() for c in next(csv.reader([lines[i]]))]
+    rows = []
+    for j in range(i + 1, len(lines)):
+        raw = lines[j].strip()
+        if raw and not raw.startswith("#"):
+            rows.append((j + 1, [c.strip() for c in next(csv.reader([lines[j]]))]))
+    if not rows:
+        fail("0 target rows; at least 1 required")
+    for c in ("x", "y", "z"):
+        if c not in cols:
+            fail(f"missing column {c!r} (columns: {', '.join(cols)})", header_line)
+    ori_cols = [] if conv is None else (["qw", "qx", "qy", "qz"] if conv == "quaternion" else ["rx", "ry", "rz"])
+    for c in ori_cols:
+        if c not in cols:
+            fail(f"orientation {conv!r} needs column {c!r}", header_line)
+    if conv is None and any(c in cols for c in ("rx", "ry", "rz", "qw", "qx", "qy", "qz")):
+        fail("orientation columns without '# orientation: <convention>' in the header", header_line)
+    joint_cols = [c for c in robot.controller_joints if c in cols]
+    if joint_cols and len(joint_cols) != robot.n_joints:
+        missing = [c for c in robot.controller_joints if c not in cols]
+        fail(f"seed joint columns must name all joints of {robot.name}; missing {missing}", header_line)
+    known = {"name", "x", "y", "z", *ori_cols, *joint_cols}
+    unknown = [c for c in cols if c not in known]
+    if unknown:
+        fail(f"unknown column(s) {unknown}; expected name, x, y, z, orientation columns, joints "
+             f"{list(robot.controller_joints)}", header_line)
+
+    def numbers(names):
+        out = np.empty((len(rows), len(names)))
+        for r, (ln, vals) in enumerate(rows):
+            if len(vals) != len(cols):
+                fail(f"{len(vals)} fields, expected {len(cols)} (one per column of line {header_line})", ln)
+            for c, name in enumerate(names):
+                v = vals[cols.index(name)]
+                try:
+                    x = float(v)
+                except ValueError:
+                    fail(f"{v!r} is not a number", ln, name)
+                if not math.isfinite(x):
+                    fail(f"{v!r} is not a finite number", ln, name)
+                out[r, c] = x
+        return out
+
+    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
+    xyz = numbers(["x", "y", "z"])
+    if lu == "mm" and np.all(np.linalg.norm(xyz, axis=1) < 10.0):
+        fail("every target lies within 10 mm of the origin: the numbers look like metres; declare '# length_unit: m'")
+    rotations = None
+    if conv is not None:
+        vals = numbers(ori_cols)
+        try:
+            T = transform_from_pose(np.concatenate([xyz, vals], axis=1), conv, length_unit=lu, angle_unit=au)
+        except ValueError as exc:
+            fail(str(exc))
+        rotations = T[:, :3, :3]
+    q_seed = None
+    if joint_cols:
+        from ..sim.robot import controller_joint_prismatic
+
+        q = numbers(list(robot.controller_joints))
+        q_seed = np.where(controller_joint_prismatic(robot), q * lf, q * af)
+    names = [vals[cols.index("name")] if "name" in cols else str(r + 1) for r, (_, vals) in enumerate(rows)]
+    return {"names": names, "positions": xyz * lf, "rotations": rotations, "q_seed": q_seed, "frame": frame,
+            "orientation": conv, "length_unit": lu, "angle_unit": au}
+
+
+def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None, overwrite: bool = False) -> dict:
+    """Corrected joint targets for the targets in ``targets_file`` with the calibrated robot
+    ``robot_file``; writes ``out_file`` (CSV, ``robocal-corrected-targets/1``).
+
+    nominal: the nominal robot (name or file) the controller runs; default the robot named in the
+    calibrated file (``name``). frame: overrides the targets file's ``frame``.
+
+    Output columns: ``name``, the corrected joints (controller joint names, in the file's
+    ``angle_unit``; prismatic in ``length_unit``), the filtered Cartesian target to send to a
+    nominal-model controller in the robot base frame (``x, y, z`` and orientation columns in the
+    input's convention, ``quaternion`` if it had none), ``converged``, ``status``,
+    ``position_error_mm``, ``rotation_error_deg`` (of the calibrated model at the joints).
+    """
+    out_file = Path(out_file)
+    if out_file.exists() and not overwrite:
+        raise FileExistsError(f"{out_file}: output file exists; pass --overwrite to replace it")
+    calibrated = load_robot(robot_file)
+    nominal_model = load_robot(nominal if nominal is not None else calibrated.name)
+    if tuple(nominal_model.controller_joints) != tuple(calibrated.controller_joints):
+        raise CalibrationInputError(f"nominal robot {nominal_model.name} has joints "
+                                    f"{list(nominal_model.controller_joints)}, the calibrated robot "
+                                    f"{list(calibrated.controller_joints)}")
+    tg = read_targets(targets_file, calibrated)
+    fr = frame or tg["frame"]
+    targets = tg["positions"]
+    corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr)
+
+    from ..sim.robot import controller_joint_prismatic
+
+    lu, au = tg["length_unit"], tg["angle_unit"]
+    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
+    conv = tg["orientation"] or "quaternion"
+    pris = controller_joint_prismatic(calibrated)
+    qf = np.where(pris, corr.q / lf, corr.q / af)
+    pose = pose_from_transform(corr.T_filtered, conv, length_unit=lu, angle_unit=au)
+    ori_cols = ["qw", "qx", "qy", "qz"] if conv == "quaternion" else ["rx", "ry", "rz"]
+    buf = io.StringIO()
+    for key, val in (("format", CORRECTED_FORMAT), ("robot", str(robot_file)), ("nominal", nominal_model.name),
+                     ("length_unit", lu), ("angle_unit", au), ("orientation", conv),
+                     ("frame", "base (filtered targets: what a controller running the nominal model needs)"),
+                     ("targets", f"{targets_file} (frame {fr})")):
+        buf.write(f"# {key}: {val}\n")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["name", *calibrated.controller_joints, "x", "y", "z", *ori_cols, "converged", "status",
+                "position_error_mm", "rotation_error_deg"])
+    for i, name in enumerate(tg["names"]):
+        w.writerow([name, *(repr(float(v)) for v in qf[i]), *(repr(float(v)) for v in pose[i]),
+                    "yes" if corr.converged[i] else "no", corr.report[i]["status"],
+                    f"{corr.position_error_mm[i]:.3e}", f"{math.degrees(corr.rotation_error_rad[i]):.3e}"])
+    atomic_write_text(out_file, buf.getvalue(), overwrite=overwrite)
+    return {"corrected": corr, "file": out_file, "names": tg["names"], "frame": fr, "nominal": nominal_model.name}
