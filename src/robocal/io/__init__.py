@@ -1,11 +1,11 @@
 """Reading and writing files at robocal's boundaries (measurement files; see docs/measurement-files.md)."""
 
+from .atomic import atomic_write_bytes, atomic_write_text
 from .measurements import (
     DEFAULT_TARGET,
     FORMAT,
     MeasurementFileError,
     Measurements,
-    atomic_write_text,
     read_measurements,
     write_measurements,
 )
@@ -15,6 +15,7 @@ __all__ = [
     "FORMAT",
     "MeasurementFileError",
     "Measurements",
+    "atomic_write_bytes",
     "atomic_write_text",
     "read_measurements",
     "write_measurements",

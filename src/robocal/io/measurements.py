@@ -25,14 +25,13 @@ import csv
 import difflib
 import io
 import math
-import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .atomic import atomic_write_text
 from ..transforms import (
     ANGLE_UNITS,
     LENGTH_UNITS,
@@ -206,43 +205,6 @@ class Measurements:
 # ---------------------------------------------------------------------------------------------
 # atomic writing
 # ---------------------------------------------------------------------------------------------
-
-
-def atomic_write_text(path, text: str, overwrite: bool = False) -> Path:
-    """Write ``text`` to ``path`` via a temporary file in the same directory and a rename.
-
-    Without ``overwrite`` an existing ``path`` raises ``FileExistsError`` and is left untouched
-    (the final step is a hard link, which fails atomically if the name exists). With
-    ``overwrite=True`` the old file is replaced atomically (``os.replace``): a reader sees either
-    the old or the new content, never a mixture.
-    """
-    path = Path(path)
-    directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        raise FileNotFoundError(f"{path}: directory {directory} does not exist")
-    if not overwrite and path.exists():
-        raise FileExistsError(f"{path}: file exists; pass overwrite=True to replace it")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        if overwrite:
-            os.replace(tmp, path)
-        else:
-            try:
-                os.link(tmp, path)  # atomic no-clobber
-            except FileExistsError:
-                raise FileExistsError(f"{path}: file exists; pass overwrite=True to replace it") from None
-            except OSError:  # file system without hard links
-                if path.exists():
-                    raise FileExistsError(f"{path}: file exists; pass overwrite=True to replace it") from None
-                os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
 
 
 # ---------------------------------------------------------------------------------------------

@@ -9,14 +9,13 @@ joints without limits, and ``<mimic>`` joints as model joints coupled to their l
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from ..kinematics.convert import to_urdf_kind
+from .atomic import atomic_write_text
 from ..kinematics.links import Link
 from ..kinematics.model import EndEffector, RobotModel
 from ..transforms import euler_from_matrix
@@ -244,14 +243,8 @@ def write_urdf(model: RobotModel, path, overwrite: bool = False) -> Path:
         _origin(j, e.T_link_ee[:3, 3], e.T_link_ee[:3, :3])
     ET.indent(robot)
     data = ET.tostring(robot, encoding="unicode")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write('<?xml version="1.0"?>\n<!-- written by robocal; lengths in metres -->\n' + data + "\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write_text(path, '<?xml version="1.0"?>\n<!-- written by robocal; lengths in metres -->\n' + data + "\n",
+                      overwrite=overwrite)
     return path
 
 

@@ -125,7 +125,7 @@ def ik_numeric(model: RobotModel, T_target, q0, *, end_effector=None, position_o
 def _dls_step(J, r, lam):
     """Damped least-squares steps ``J^T (J J^T + lam s I)^-1 r`` for stacks J (N, m, n), r (N, m)."""
     JJt = J @ np.swapaxes(J, 1, 2)
-    scale = np.trace(JJt, axis1=1, axis2=2) / JJt.shape[1]
+    scale = np.maximum(np.trace(JJt, axis1=1, axis2=2) / JJt.shape[1], 1e-12)  # all joints blocked: no step
     A = JJt + (lam * scale)[:, None, None] * np.eye(JJt.shape[1])
     return (np.swapaxes(J, 1, 2) @ np.linalg.solve(A, r[..., None]))[..., 0]
 

@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..io.measurements import atomic_write_text  # noqa: E402
+from ..io.atomic import atomic_write_text  # noqa: E402
 
 __all__ = ["write_report", "render_report", "figure_png"]
 

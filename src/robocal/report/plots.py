@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
+import io
 from pathlib import Path
 
 import matplotlib
@@ -12,23 +11,19 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..io.atomic import atomic_write_bytes  # noqa: E402
+
 __all__ = ["plot_accuracy_map", "save_figure"]
 
 
-def save_figure(fig, path) -> Path:
-    """Save a figure atomically (temporary file in the same folder, then rename)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
+def save_figure(fig, path, overwrite: bool = True) -> Path:
+    """Save a figure atomically (rendered in memory, then a temporary file and a rename)."""
+    buf = io.BytesIO()
     try:
-        fig.savefig(tmp, dpi=120, bbox_inches="tight")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        fig.savefig(buf, format=Path(path).suffix.lstrip(".") or "png", dpi=120, bbox_inches="tight")
     finally:
         plt.close(fig)
-    return path
+    return atomic_write_bytes(path, buf.getvalue(), overwrite=overwrite)
 
 
 def plot_accuracy_map(positions_mm, errors_mm, path, title: str, repeatability_mm: float | None = None) -> Path:
@@ -38,7 +33,7 @@ def plot_accuracy_map(positions_mm, errors_mm, path, title: str, repeatability_m
     """
     p = np.asarray(positions_mm, dtype=float)
     e = np.asarray(errors_mm, dtype=float)
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.6), gridspec_kw={"wspace": 0.35})
     vmax = float(np.percentile(e, 99))
     for ax, (i, j, lab) in zip(axes[:2], [(0, 1, ("x [mm]", "y [mm]")), (0, 2, ("x [mm]", "z [mm]"))]):
         sc = ax.scatter(p[:, i], p[:, j], c=e, s=10, cmap="viridis", vmin=0.0, vmax=vmax)

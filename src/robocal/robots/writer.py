@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.measurements import atomic_write_text
+from ..io.atomic import atomic_write_text
 from ..kinematics.links import ANGLE_PARAMS
 from ..kinematics.model import RobotModel
 from ..transforms import euler_from_matrix

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.measurements import DEFAULT_TARGET, Measurements, atomic_write_text, write_measurements
+from ..io.atomic import atomic_write_text
+from ..io.measurements import DEFAULT_TARGET, Measurements, write_measurements
 from ..transforms import (
     check_transforms,
     invert_transforms,

@@ -54,7 +54,8 @@ from ..calib import CalibrationProblem, Target, solve
 from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
-from ..io.measurements import atomic_write_text, read_measurements
+from ..io.atomic import atomic_write_text
+from ..io.measurements import read_measurements
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
 from ..transforms import ANGLE_UNITS, LENGTH_UNITS, POSE_CONVENTIONS, pose_from_transform, transform_from_pose

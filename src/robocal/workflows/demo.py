@@ -10,12 +10,11 @@ every number and an accuracy map.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from ..io.atomic import atomic_write_text
 from ..metrics import error_statistics
 from ..robots import load_robot
 from ..sim import VirtualRobot
@@ -23,19 +22,9 @@ from ..sim import VirtualRobot
 __all__ = ["run_demo", "write_json"]
 
 
-def write_json(path, data) -> Path:
+def write_json(path, data, overwrite: bool = True) -> Path:
     """Write JSON atomically (temporary file, then rename)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(data, fh, indent=2)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return atomic_write_text(path, json.dumps(data, indent=2) + "\n", overwrite=overwrite)
 
 
 def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses: int = 500,
