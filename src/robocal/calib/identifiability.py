@@ -50,8 +50,13 @@ class IdentifiabilityReport:
         return "\n".join(f"{d['name']}: {d['why']}" for d in self.dropped)
 
 
-def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priority=DEFAULT_PRIORITY) -> IdentifiabilityReport:
-    """Analyse the columns of ``J`` (M, n) named ``names``; ``blocks`` (n,) gives each column's block."""
+def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priority=DEFAULT_PRIORITY,
+                            explain: bool = True) -> IdentifiabilityReport:
+    """Analyse the columns of ``J`` (M, n) named ``names``; ``blocks`` (n,) gives each column's block.
+
+    ``explain=False`` skips the least-squares explanation of each dropped parameter (and the
+    singular values): a quick check of which set is identifiable.
+    """
     J = np.asarray(J, dtype=float)
     n = J.shape[1]
     names = list(names)
@@ -77,7 +82,7 @@ def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priorit
             else:
                 dropped.append({"name": names[i], "column": i, "why": None, "trades_off_with": []})
     pending = [d for d in dropped if d.get("why") is None]
-    if kept and pending:
+    if kept and pending and explain:
         Jk = J[:, kept] / norms[kept]
         cols = [d["column"] for d in pending]
         coefs, *_ = np.linalg.lstsq(Jk, J[:, cols] / norms[cols], rcond=None)
@@ -90,9 +95,9 @@ def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priorit
     for d in dropped:
         d.pop("column", None)
     Js = J / np.where(norms > 0, norms, 1.0)
-    s = np.sqrt(np.maximum(np.linalg.eigvalsh(Js.T @ Js)[::-1], 0.0)) if n else np.zeros(0)
+    s = np.sqrt(np.maximum(np.linalg.eigvalsh(Js.T @ Js)[::-1], 0.0)) if n and explain else np.zeros(0)
     rank = len(kept)
-    cond = float(s[0] / s[rank - 1]) if rank else float("inf")
+    cond = float(s[0] / s[rank - 1]) if rank and len(s) else float("inf")
     kept_sorted = [names[i] for i in sorted(kept)]
     return IdentifiabilityReport(kept_sorted, dropped, rank, cond, s)
 

@@ -305,13 +305,18 @@ class CalibrationProblem:
         N, K = len(q), len(self.targets)
         p_base, R_base_ee, Jg = self.model.target_points(q, state.params, state.targets, self.ee_of_target,
                                                           self.free_index, jacobian)
-        Rb = state.bases[stations, :3, :3]
-        tb = state.bases[stations, :3, 3]
-        pts = np.einsum("nij,nkj->nki", Rb, p_base) + tb[:, None]
+        single = self.n_stations == 1
+        if single:  # one base frame: plain matrix products instead of per-pose ones
+            R0, t0 = state.bases[0, :3, :3], state.bases[0, :3, 3]
+            pts = p_base @ R0.T + t0
+        else:
+            Rb = state.bases[stations, :3, :3]
+            tb = state.bases[stations, :3, 3]
+            pts = np.einsum("nij,nkj->nki", Rb, p_base) + tb[:, None]
         if not jacobian:
             return pts
         J = np.zeros((N, K, 3, self.n_variables))
-        J[..., self._sl_geom] = np.einsum("nij,nkjf->nkif", Rb, Jg)
+        J[..., self._sl_geom] = R0 @ Jg if single else np.einsum("nij,nkjf->nkif", Rb, Jg)
         if self.estimate_base:
             blockJ = np.zeros((N, K, 3, 6))
             blockJ[..., :3] = -skew(pts)
@@ -321,7 +326,7 @@ class CalibrationProblem:
                 c0 = self._sl_base.start + 6 * g
                 J[idx, :, :, c0:c0 + 6] = blockJ[idx]
         if self._target_cols:
-            R_inst_ee = np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
+            R_inst_ee = R0 @ R_base_ee if single else np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
             for k, sl in self._target_cols.items():
                 J[:, k, :, sl] = R_inst_ee[:, k]
         return (pts, J) if jacobian else pts
@@ -342,12 +347,16 @@ class CalibrationProblem:
             pts, Jp = out if jacobian else (out, None)
         if self.points is not None:
             mask = self.point_mask
-            r = (self.points - pts)[mask] * w  # (M', 3)
-            rows_r.append(r.ravel())
+            if mask.all():
+                rows_r.append(((self.points - pts) * w).ravel())
+                if jacobian:
+                    rows_J.append(Jp.reshape(-1, self.n_variables) * w)
+            else:
+                rows_r.append(((self.points - pts)[mask] * w).ravel())
+                if jacobian:
+                    rows_J.append(Jp[mask].reshape(-1, self.n_variables) * w)
             pose_idx = np.broadcast_to(np.arange(self.n_poses)[:, None], mask.shape)[mask]
             labels.append(np.stack([np.repeat(pose_idx, 3), np.zeros(3 * len(pose_idx), int)], axis=1))
-            if jacobian:
-                rows_J.append(Jp[mask].reshape(-1, self.n_variables) * w)
         if self.rotations is not None:
             r, J = self._rotation_residuals(state, jacobian)
             rows_r.append(r * w)

@@ -62,6 +62,7 @@ class CalibrationResult:
     outliers: list = field(default_factory=list)
     point_errors_before: np.ndarray | None = None
     point_errors_after: np.ndarray | None = None
+    jacobian: np.ndarray | None = None  # (M, n) final prediction Jacobian (unweighted by robust losses)
 
     @property
     def model(self):
@@ -102,7 +103,7 @@ class CalibrationResult:
 
 
 def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
-          max_iterations: int = 50, ftol: float = 1e-10, xtol: float = 1e-10, rcond: float = 1e-8,
+          max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
           reject_outliers: bool = True, state0: State | None = None, progress=None) -> CalibrationResult:
     """Identify the problem's free variables (see :func:`_solve_once` for the arguments).
@@ -120,10 +121,10 @@ def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linea
         return res
     start = problem.initial_state() if state0 is None else state0
     for _ in range(2):
-        _, J, _ = problem.evaluate(res.state)
-        ident = analyse_identifiability(J, problem.names, problem.blocks)
-        if set(ident.identifiable) == set(res.identifiability.identifiable):
+        quick = analyse_identifiability(res.jacobian, problem.names, problem.blocks, explain=False)
+        if set(quick.identifiable) == set(res.identifiability.identifiable):
             break
+        ident = analyse_identifiability(res.jacobian, problem.names, problem.blocks)
         iters = res.iterations
         before, err_before = res.residuals_before, res.point_errors_before
         res = _solve_once(problem, state0=res.state, ident=ident, **kw)
@@ -169,7 +170,7 @@ def _point_errors(problem, r, labels):
 
 
 def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
-          max_iterations: int = 50, ftol: float = 1e-10, xtol: float = 1e-10, rcond: float = 1e-8,
+          max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
           reject_outliers: bool = True, state0: State | None = None, progress=None, ident=None) -> CalibrationResult:
     """Identify the problem's free variables.
@@ -234,7 +235,8 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
         w = weights[pose_of_row]
         return np.concatenate([w, np.ones(int(geom.sum()))]) if prior_weight else w
 
-    r, J = augmented(state)
+    if prior_weight:
+        r, J = augmented(state)
     w_rows = row_weights()
     cost = 0.5 * float(np.sum(w_rows * r**2))
     lam = 1e-3
@@ -270,7 +272,7 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
                 step = np.zeros(n)
                 step[active] = step_s / col_scale[active]
                 trial = problem.retract(state, step)
-                r_t, _ = augmented(trial, with_jac=False)
+                r_t, J_t = augmented(trial)  # with the Jacobian: an accepted step needs it next
                 c_t = 0.5 * float(np.sum(w_rows * r_t**2))
                 if c_t <= cost:
                     accepted = True
@@ -282,8 +284,7 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
             if not accepted:
                 reason, converged = "no step reduces the cost further (numerical precision reached)", True
                 break
-            state = trial
-            r, J = augmented(state)
+            state, r, J = trial, r_t, J_t
             if robust:
                 pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r[:len(pose_of_row)] ** 2, minlength=n_poses))
                 weights = _robust_weights(pose_norm, loss, f_scale)
@@ -296,7 +297,7 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
             if abs(dcost) <= ftol * max(cost, 1e-300):
                 reason, converged = "relative cost reduction below ftol", True
                 break
-            if np.linalg.norm(step_s) <= xtol * (1.0 + np.linalg.norm(_state_values(problem, state)[active] * col_scale[active])):
+            if np.linalg.norm(step_s) <= xtol * (1.0 + math.sqrt(2.0 * cost)):
                 reason, converged = "step below xtol", True
                 break
         total_it = it
@@ -323,11 +324,15 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     dof = max(Ja.shape[0] - Ja.shape[1], 1)
     sigma0 = math.sqrt(float(ra @ ra) / dof)
     Js = Ja / col_scale[active]
-    U, s, Vt = np.linalg.svd(Js, full_matrices=False)
-    rank = int(np.sum(s > rcond * s[0])) if s.size else 0
+    # singular values from the (small, scaled) normal matrix: s_i^2 are its eigenvalues
+    ev, V = np.linalg.eigh(Js.T @ Js)
+    s = np.sqrt(np.maximum(ev[::-1], 0.0))
+    V = V[:, ::-1]
+    keep = s > max(rcond, 1e-7) * s[0] if s.size else s > 0  # squared: rcond below ~1e-8 is noise
+    rank = int(np.sum(keep))
     cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
-    inv = np.where(s > rcond * s[0], 1.0 / np.where(s > 0, s, 1.0) ** 2, 0.0)
-    cov_s = (Vt.T * inv) @ Vt
+    inv = np.where(keep, 1.0 / np.where(s > 0, s, 1.0) ** 2, 0.0)
+    cov_s = (V * inv) @ V.T
     scale_for_cov = 1.0 if problem.point_sigma is not None else sigma0**2
     cov_a = cov_s / np.outer(col_scale[active], col_scale[active]) * scale_for_cov
     cov = np.full((n, n), np.nan)
@@ -350,5 +355,6 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
         initial=_state_values(problem, start_state), std=std,
         covariance=cov, state=state, problem=problem, residuals_before=r0, residuals_after=r,
         iterations=it, converged=converged, reason=reason, rank=rank, condition_number=cond, sigma0=sigma0,
-        identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts)
+        identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts,
+        jacobian=J)
 

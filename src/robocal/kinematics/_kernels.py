@@ -328,11 +328,12 @@ def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_p
 
 @njit(cache=_CACHE)
 def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
-                  cpl_ptr, cpl_idx, cpl_coef, target_link, target_T, target_anc, free_col, n_free, want_jac):
+                  cpl_ptr, cpl_idx, cpl_coef, target_link, target_T, target_p, target_anc, free_col, n_free, want_jac):
     """Positions of points carried by links, and their derivatives w.r.t. selected parameters.
 
     target_link (K,) link index carrying each point (-1: the root); target_T (K, 3, 4) the point's
-    end-effector frame in that link's frame, point at its origin; target_anc (K, n_links) bool:
+    end-effector frame in that link's frame; target_p (K, 3) the point in that end-effector frame;
+    target_anc (K, n_links) bool:
     the link moves the point; free_col (P,) column of each parameter in the output or -1.
     Returns p (N, K, 3) in the root frame, R (N, K, 3, 3) the end-effector orientations, and
     J (N, K, 3, n_free) (size 0 unless ``want_jac``).
@@ -387,7 +388,10 @@ def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, li
                 _mul_affine(root, target_T[k], tmp)
             else:
                 _mul_affine(frames[L], target_T[k], tmp)
-            px, py, pz = tmp[0, 3], tmp[1, 3], tmp[2, 3]
+            a, b, c = target_p[k, 0], target_p[k, 1], target_p[k, 2]
+            px = tmp[0, 0] * a + tmp[0, 1] * b + tmp[0, 2] * c + tmp[0, 3]
+            py = tmp[1, 0] * a + tmp[1, 1] * b + tmp[1, 2] * c + tmp[1, 3]
+            pz = tmp[2, 0] * a + tmp[2, 1] * b + tmp[2, 2] * c + tmp[2, 3]
             pts[n, k, 0] = px
             pts[n, k, 1] = py
             pts[n, k, 2] = pz

@@ -288,6 +288,8 @@ class RobotModel:
                 k = self.links[k].parent
         self._ee_ancestors = anc
         self._root_affine = self.T_world_base[:3].copy()
+        self._identity_root = np.eye(4)[:3].copy()
+        self._target_cache = {}
 
     # ------------------------------------------------------------------ joints
     def _as_joints(self, q) -> tuple[np.ndarray, bool]:
@@ -413,22 +415,26 @@ class RobotModel:
         """
         q2, _ = self._as_joints(q)
         params = np.asarray(params, dtype=float)
-        K = len(ee_of_point)
-        tl = np.empty(K, dtype=np.int64)
-        tT = np.empty((K, 3, 4))
-        anc = np.zeros((K, len(self.links)), dtype=np.bool_)
-        for k, e in enumerate(ee_of_point):
-            ee = self.end_effectors[e]
-            tl[k] = ee.link
-            T = ee.T_link_ee.copy()
-            T[:3, 3] = T[:3, :3] @ np.asarray(points_in_ee[k], dtype=float) + T[:3, 3]
-            tT[k] = T[:3]
-            anc[k] = self._ee_ancestors[e]
-        free_col = np.full(len(self.params), -1, dtype=np.int64)
-        free_col[np.asarray(free_index, dtype=np.int64)] = np.arange(len(free_index))
+        key = (tuple(int(e) for e in ee_of_point), tuple(int(i) for i in free_index))
+        cached = self._target_cache.get(key)
+        if cached is None:
+            K = len(ee_of_point)
+            tl = np.empty(K, dtype=np.int64)
+            tT = np.empty((K, 3, 4))
+            anc = np.zeros((K, len(self.links)), dtype=np.bool_)
+            for k, e in enumerate(ee_of_point):
+                ee = self.end_effectors[e]
+                tl[k] = ee.link
+                tT[k] = ee.T_link_ee[:3]
+                anc[k] = self._ee_ancestors[e]
+            free_col = np.full(len(self.params), -1, dtype=np.int64)
+            free_col[np.asarray(free_index, dtype=np.int64)] = np.arange(len(free_index))
+            cached = self._target_cache[key] = (tl, tT, anc, free_col, len(free_index))
+        tl, tT, anc, free_col, n_free = cached
         return _kernels.target_points(q2, self._op_link, self._op_code, self._op_axis, params[self._op_param],
-                                      self._op_param, self._op_joint, self._link_parent, np.eye(4)[:3].copy(),
-                                      *self._cpl, tl, tT, anc, free_col, len(free_index), bool(want_jacobian))
+                                      self._op_param, self._op_joint, self._link_parent, self._identity_root,
+                                      *self._cpl, tl, tT, np.ascontiguousarray(points_in_ee, dtype=float).reshape(-1, 3),
+                                      anc, free_col, n_free, bool(want_jacobian))
 
     def _ee_masks(self, e):
         anc = self._ee_ancestors[e]
