@@ -126,6 +126,10 @@ def test_points_on_a_plane_identify_the_plane_and_the_robot():
                               on_plane=on_plane, planes_initial=[[0.0, np.pi / 2 - 0.01, 590.0]], point_sigma_mm=0.01)
     res = solve(prob)
     assert res.converged
+    # the plane height and d1 both shift the probe along base z: d1 is reported and held, so the
+    # fitted height is only known up to the robot's d1 error (0.5 mm standard deviation here)
+    dropped = {d["name"]: d for d in res.identifiability.dropped}
+    assert "plane0.offset" in [p for p, _ in dropped["d1"]["trades_off_with"]]
     off = prob.names.index("plane0.offset")
-    assert abs(res.values[off] - 600.0) < 0.5
+    assert abs(res.values[off] - 600.0) < 1.5
     assert np.max(np.abs(res.residuals_after)) * 0.01 < 1e-6

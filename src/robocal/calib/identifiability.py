@@ -75,6 +75,8 @@ def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priorit
     if cand:
         # |R_jj| of a QR factorization with the columns in priority order is the part of column j
         # independent of all earlier columns (Gram-Schmidt in one Householder pass)
+        # (a Gram-matrix Cholesky would be cheaper but squares the conditioning: on badly
+        # conditioned problems it keeps columns that are exact combinations of others)
         Rdiag = np.abs(np.diag(np.linalg.qr(J[:, cand] / norms[cand], mode="r")))
         for i, rjj in zip(cand, Rdiag):
             if rjj > tol:

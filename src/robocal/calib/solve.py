@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg import cho_factor, cho_solve
 
 from .identifiability import IdentifiabilityReport, analyse_identifiability
 from .problem import CalibrationProblem, State
@@ -256,19 +257,22 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
                 step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
                 s_max = s[0]
             else:
-                # eigen-decomposition of the (scaled) normal matrix once per iteration; the damping
-                # loop then costs only a few small products
-                ev, V = np.linalg.eigh(Ja.T @ Ja)
-                ev = np.maximum(ev, 0.0)
-                s_max = math.sqrt(ev[-1])
-                Vg = V.T @ g
+                # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky
+                G = Ja.T @ Ja
+                g_max = float(np.max(np.diag(G)))
+                s_max = math.sqrt(g_max)
             if np.max(np.abs(g), initial=0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * cost)):
                 reason, converged = "gradient is zero", True
                 break
             accepted = False
             for _ in range(30):
                 if method == "lm":
-                    step_s = V @ (Vg / (ev + lam * ev[-1]))
+                    try:
+                        step_s = cho_solve(cho_factor(G + (lam * g_max) * np.eye(len(G)), check_finite=False), g,
+                                           check_finite=False)
+                    except np.linalg.LinAlgError:
+                        lam *= 10.0
+                        continue
                 step = np.zeros(n)
                 step[active] = step_s / col_scale[active]
                 trial = problem.retract(state, step)
@@ -325,14 +329,17 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     sigma0 = math.sqrt(float(ra @ ra) / dof)
     Js = Ja / col_scale[active]
     # singular values from the (small, scaled) normal matrix: s_i^2 are its eigenvalues
-    ev, V = np.linalg.eigh(Js.T @ Js)
-    s = np.sqrt(np.maximum(ev[::-1], 0.0))
-    V = V[:, ::-1]
+    G = Js.T @ Js
+    s = np.sqrt(np.maximum(np.linalg.eigvalsh(G)[::-1], 0.0))
     keep = s > max(rcond, 1e-7) * s[0] if s.size else s > 0  # squared: rcond below ~1e-8 is noise
     rank = int(np.sum(keep))
     cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
-    inv = np.where(keep, 1.0 / np.where(s > 0, s, 1.0) ** 2, 0.0)
-    cov_s = (V * inv) @ V.T
+    if rank == len(s):
+        cov_s = cho_solve(cho_factor(G, check_finite=False), np.eye(len(G)), check_finite=False)
+    else:  # rank deficient (auto_identifiable off): pseudo-inverse on the resolvable directions
+        ev, V = np.linalg.eigh(G)
+        ev, V = ev[::-1], V[:, ::-1]
+        cov_s = (V * np.where(keep, 1.0 / np.where(ev > 0, ev, 1.0), 0.0)) @ V.T
     scale_for_cov = 1.0 if problem.point_sigma is not None else sigma0**2
     cov_a = cov_s / np.outer(col_scale[active], col_scale[active]) * scale_for_cov
     cov = np.full((n, n), np.nan)
