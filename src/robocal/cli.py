@@ -39,9 +39,7 @@ def _numbers(values, what):
 
 
 def _prismatic(model):
-    from .sim.robot import controller_joint_prismatic
-
-    return controller_joint_prismatic(model)
+    return model.prismatic_joints
 
 
 def _joints_from_cli(model, values, deg):
@@ -345,6 +343,16 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
         raise _user_error(exc) from None
     click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm)")
     click.echo(f"wrote {r['measurements']} and {r['truth']}")
+
+
+def _register_subcommands():
+    """Command groups that live in their own modules (imported here so `robocal --help` lists them)."""
+    from .cli_tcp import tcp
+
+    main.add_command(tcp)
+
+
+_register_subcommands()
 
 
 if __name__ == "__main__":  # pragma: no cover

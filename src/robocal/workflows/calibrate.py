@@ -378,10 +378,9 @@ def read_targets(path, robot) -> dict:
         rotations = T[:, :3, :3]
     q_seed = None
     if joint_cols:
-        from ..sim.robot import controller_joint_prismatic
 
         q = numbers(list(robot.controller_joints))
-        q_seed = np.where(controller_joint_prismatic(robot), q * lf, q * af)
+        q_seed = np.where(robot.prismatic_joints, q * lf, q * af)
     names = [vals[cols.index("name")] if "name" in cols else str(r + 1) for r, (_, vals) in enumerate(rows)]
     return {"names": names, "positions": xyz * lf, "rotations": rotations, "q_seed": q_seed, "frame": frame,
             "orientation": conv, "length_unit": lu, "angle_unit": au}
@@ -414,12 +413,11 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     targets = tg["positions"]
     corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr)
 
-    from ..sim.robot import controller_joint_prismatic
 
     lu, au = tg["length_unit"], tg["angle_unit"]
     lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
     conv = tg["orientation"] or "quaternion"
-    pris = controller_joint_prismatic(calibrated)
+    pris = calibrated.prismatic_joints
     qf = np.where(pris, corr.q / lf, corr.q / af)
     pose = pose_from_transform(corr.T_filtered, conv, length_unit=lu, angle_unit=au)
     ori_cols = ["qw", "qx", "qy", "qz"] if conv == "quaternion" else ["rx", "ry", "rz"]
