@@ -4,7 +4,9 @@
 - :mod:`.parallel_barriers`: tool axis (4-6) and length (4-7) from two parallel light barriers;
 - :mod:`.sensor`: cross-laser sensor calibration (4-15 ... 4-27) and the beta correction
   (4-28 ... 4-30);
-- :mod:`.tool_data`: a tool frame as KUKA / FANUC / ABB / UR / Kawasaki tool data.
+- :mod:`.tool_data`: a tool frame as KUKA / FANUC / ABB / UR / Kawasaki tool data;
+- :mod:`.cross_laser`: the cross-laser method (4-8 ... 4-14): motion planning, event evaluation,
+  the full recalibration cycle.
 
 Frames: ``T_a_b`` is the pose of b in a; lengths in mm, angles in rad unless a name says ``_deg``.
 """
