@@ -348,8 +348,14 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
 def _register_subcommands():
     """Command groups that live in their own modules (imported here so `robocal --help` lists them)."""
     from .cli_tcp import tcp
+    from .cli_tcp_sim import cross_laser_cmd, simulate_cmd
 
+    from .cli_history import history_cmd
+
+    tcp.add_command(cross_laser_cmd)
+    tcp.add_command(simulate_cmd)
     main.add_command(tcp)
+    main.add_command(history_cmd)
 
 
 _register_subcommands()

@@ -1,0 +1,181 @@
+"""``robocal history ROBOT``: the robot's calibration and maintenance cycles and its parameter drift.
+
+Thin: opens the history database, asks the store, prints (and plots). Errors are one line.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from datetime import datetime, timezone
+from pathlib import Path
+
+import click
+import numpy as np
+
+from .store import (
+    HistoryError, HistoryInputError, HistoryStore, default_history_target,
+)
+
+# Metrics shown as table columns first (when present), then the others alphabetically.
+_PREFERRED_METRICS = ("residual_rms_before", "residual_rms_after", "lambda", "cycle_time")
+_MAX_METRIC_COLUMNS = 4
+
+
+def _since(value):
+    if value is None:
+        return None
+    s = value.strip()
+    try:
+        t = datetime.fromisoformat(s[:-1] + "+00:00" if s.endswith("Z") else s)
+    except ValueError:
+        raise click.ClickException(f"--since {value!r} is not an ISO 8601 time (e.g. 2024-05-01 or 2024-05-01T06:00Z)") from None
+    return t if t.tzinfo is not None else t.replace(tzinfo=timezone.utc)
+
+
+def _fmt(v, signed=False) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return f"{v:+.4g}" if signed else f"{v:.4g}"
+
+
+def _table(headers, rows, right) -> list:
+    cols = list(zip(headers, *rows)) if rows else [(h,) for h in headers]
+    widths = [max(len(str(x)) for x in col) for col in cols]
+    out = []
+    for r in [headers, *rows]:
+        cells = [str(x).rjust(w) if right[i] else str(x).ljust(w) for i, (x, w) in enumerate(zip(r, widths))]
+        out.append("  " + "  ".join(cells).rstrip())
+    return out
+
+
+def _metric_columns(cycles) -> list:
+    names = {n for c in cycles for n in c.metrics}
+    ordered = [n for n in _PREFERRED_METRICS if n in names] + sorted(names - set(_PREFERRED_METRICS))
+    return ordered[:_MAX_METRIC_COLUMNS]
+
+
+def _num(v):
+    return None if v is None or not math.isfinite(float(v)) else float(v)
+
+
+def _series_json(s) -> dict:
+    return {"unit": s.unit, "times": [str(t) + "Z" for t in s.times.astype("datetime64[us]")],
+            "values": [_num(v) for v in s.values], "std": [_num(v) for v in s.std],
+            "cycle_ids": [int(i) for i in s.cycle_ids], "kinds": list(s.kinds)}
+
+
+@click.command("history")
+@click.argument("robot")
+@click.option("--db", "db", default=None, metavar="PATH_OR_URL",
+              help="History database: an SQLite file or a URL (default: $ROBOCAL_HISTORY_DB or robocal-history.sqlite).")
+@click.option("--params", "params", default=None, metavar="NAMES",
+              help="Comma-separated parameter names to show and plot (default: all stored).")
+@click.option("--kind", "kinds", multiple=True,
+              type=click.Choice(["geometric_calibration", "thermal_compensation", "tool_recalibration", "measurement"]),
+              help="Only cycles of this kind (repeatable).")
+@click.option("--since", default=None, metavar="TIME", help="Only cycles started at or after TIME (ISO 8601; UTC if no zone).")
+@click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False), metavar="FILE.png",
+              help="Write a drift plot (parameter deltas and metrics over time).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+def history_cmd(robot, db, params, kinds, since, plot_path, as_json):
+    """Print (and plot) ROBOT's calibration and maintenance history and its parameter drift."""
+    target = db or default_history_target()
+    since_t = _since(since)
+    kind = list(kinds) or None
+    names = None
+    if params is not None:
+        names = [p.strip() for p in params.split(",") if p.strip()]
+        if not names:
+            raise click.ClickException("--params: give one or more parameter names separated by commas")
+    if plot_path is not None:
+        pp = Path(plot_path)
+        if pp.suffix.lower() not in (".png", ".svg", ".pdf"):
+            raise click.ClickException(f"--plot {plot_path}: give a .png, .svg or .pdf file name")
+        if not pp.parent.exists():
+            raise click.ClickException(f"--plot {plot_path}: folder {pp.parent} does not exist")
+    try:
+        with HistoryStore.open(target, create=False) as store:
+            cycles = store.cycles(robot, kind=kind, since=since_t)
+            stored = store.parameter_names(robot)
+            if names is None:
+                names = stored
+            series = store.parameter_history(robot, names, kind=kind, since=since_t) if names else {}
+            mcols = _metric_columns(cycles)
+            metric_series = {}
+            for m in store.metric_names(robot):
+                s = store.metric_history(robot, m, kind=kind, since=since_t)
+                if len(s):
+                    metric_series[m] = s
+            where = store.url
+    except (HistoryError, HistoryInputError) as exc:
+        raise click.ClickException(str(exc)) from None
+
+    if plot_path is not None:
+        from .report.history_plot import plot_history
+
+        plot_metrics = {m: metric_series[m] for m in mcols if m in metric_series}
+        plot_metrics |= {m: s for m, s in metric_series.items() if m not in plot_metrics}
+        events = [(c.started_at, c.kind) for c in cycles if c.status == "committed"]
+        try:
+            plot_history(series, plot_metrics, plot_path, f"{robot}: drift over time", events=events)
+        except ValueError as exc:
+            raise click.ClickException(f"--plot: {exc}") from None
+        except OSError as exc:
+            raise click.ClickException(f"--plot {plot_path}: {exc}") from None
+
+    if as_json:
+        out = {
+            "robot": robot, "database": where,
+            "cycles": [{"id": c.id, "kind": c.kind, "status": c.status, "started_at": c.started_at.isoformat(),
+                        "finished_at": c.finished_at.isoformat() if c.finished_at else None, "notes": c.notes,
+                        "metrics": {n: {"value": q.value, "unit": q.unit} for n, q in c.metrics.items()},
+                        "n_measurements": c.n_measurements, "n_parameters": c.n_parameters,
+                        "n_corrections": c.n_corrections} for c in cycles],
+            "parameters": {n: _series_json(s) for n, s in series.items()},
+            "metrics": {n: _series_json(s) for n, s in metric_series.items()},
+        }
+        if plot_path is not None:
+            out["plot"] = str(plot_path)
+        click.echo(json.dumps(out, indent=2))
+        return
+
+    n_failed = sum(c.status == "failed" for c in cycles)
+    click.echo(f"History of robot {robot!r} in {where}: {len(cycles)} cycles"
+               + (f" ({len(cycles) - n_failed} committed, {n_failed} failed)" if n_failed else ""))
+    if not cycles:
+        click.echo("  (no cycles match)")
+    else:
+        units = {}
+        for c in cycles:
+            for n, q in c.metrics.items():
+                units.setdefault(n, q.unit)
+        headers = ["id", "started (UTC)", "kind", "status", "meas", "params", "corr"] + [f"{m} [{units[m]}]" for m in mcols]
+        rows = []
+        for c in cycles:
+            rows.append([c.id, c.started_at.strftime("%Y-%m-%d %H:%M:%S"), c.kind, c.status, c.n_measurements,
+                         c.n_parameters, c.n_corrections]
+                        + [_fmt(c.metrics[m].value) if m in c.metrics else "-" for m in mcols])
+        click.echo("")
+        click.echo("cycles")
+        for line in _table(headers, rows, [True, False, False, False, True, True, True] + [True] * len(mcols)):
+            click.echo(line)
+    click.echo("")
+    if not series:
+        click.echo("parameter drift: no parameters stored" + (" for the selected cycles" if stored else ""))
+    else:
+        click.echo("parameter drift (Δ from nominal over committed cycles; mm and rad)")
+        rows = []
+        for n, s in series.items():
+            v = s.values
+            if len(v) == 0:
+                rows.append([n, s.unit, 0, "-", "-", "-", "-", "-"])
+                continue
+            rows.append([n, s.unit, len(v), _fmt(v[0], True), _fmt(v[-1], True), _fmt(v[-1] - v[0], True),
+                         _fmt(float(np.min(v)), True), _fmt(float(np.max(v)), True)])
+        for line in _table(["name", "unit", "cycles", "first", "last", "change", "min", "max"], rows,
+                           [False, False, True, True, True, True, True, True]):
+            click.echo(line)
+    if plot_path is not None:
+        click.echo("")
+        click.echo(f"plot: {plot_path}")

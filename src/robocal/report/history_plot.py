@@ -1,0 +1,92 @@
+"""Drift over time from the history database: parameter deltas and cycle metrics (PNG).
+
+Takes the :class:`robocal.store.Series` the store returns; no database access and no numerics here.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, timezone
+
+import numpy as np
+
+from .plots import plt, save_figure
+
+__all__ = ["plot_history"]
+
+# Display units: the store keeps mm and rad; thermal angle deltas are micro- to milliradians.
+_DISPLAY = {"mm": (1.0, "mm"), "rad": (1e3, "mrad"), "1": (1.0, "1"), "s": (1.0, "s"), "px": (1.0, "px"),
+            "degC": (1.0, "°C"), "mm/s": (1.0, "mm/s")}
+_EVENT_STYLE = {"geometric_calibration": ("tab:green", "geometric calibration"),
+                "tool_recalibration": ("tab:red", "tool recalibration")}
+
+
+def _display(unit: str):
+    return _DISPLAY.get(unit, (1.0, unit))
+
+
+def plot_history(parameters: dict, metrics: dict, path, title: str, *, events=(), max_metrics: int = 4,
+                 field: str = "delta"):
+    """Parameters grouped by unit (one panel per unit: lengths in mm, angles in mrad) and one panel
+    per metric, against time (UTC).
+
+    parameters, metrics: ``{name: Series}`` from ``HistoryStore.parameter_history`` /
+    ``metric_history``; events: ``(time, kind)`` pairs drawn as vertical lines (geometric and tool
+    calibrations); field: the name of the plotted parameter quantity, for the axis label.
+    Returns the written path (saved atomically).
+    """
+    groups: dict = {}
+    for name, s in parameters.items():
+        if len(s):
+            groups.setdefault(s.unit, []).append((name, s))
+    mets = [(n, s) for n, s in metrics.items() if len(s)][:max_metrics]
+    n_panels = len(groups) + len(mets)
+    if n_panels == 0:
+        raise ValueError("nothing to plot: no parameter or metric values in the selection")
+    fig, axes = plt.subplots(n_panels, 1, figsize=(11, 2.6 * n_panels + 0.8), sharex=True, squeeze=False,
+                             layout="constrained")
+    axes = axes[:, 0]
+    panel = 0
+    label = "Δ" if field == "delta" else "value"
+    for unit in sorted(groups, key=lambda u: (u not in ("mm", "rad"), u)):
+        ax = axes[panel]
+        panel += 1
+        k, shown = _display(unit)
+        items = groups[unit]
+        for name, s in items:
+            line, = ax.plot(s.times, s.values * k, marker="o", ms=3, lw=1.2, label=name)
+            ok = np.isfinite(s.std)
+            if ok.any():
+                ax.errorbar(s.times[ok], s.values[ok] * k, yerr=s.std[ok] * k, fmt="none", ecolor=line.get_color(),
+                            alpha=0.5, capsize=2)
+        ax.axhline(0.0, color="0.6", lw=0.8)
+        ax.set_ylabel(f"{label} [{shown}]")
+        ax.set_title(f"parameters in {shown}", loc="left", fontsize=10)
+        ax.legend(fontsize=8, ncol=min(6, max(1, (len(items) + 5) // 6)), loc="upper left", frameon=False)
+        ax.grid(alpha=0.3)
+    for name, s in mets:
+        ax = axes[panel]
+        panel += 1
+        k, shown = _display(s.unit)
+        ax.plot(s.times, s.values * k, marker="o", ms=3, lw=1.2, color="tab:purple")
+        ax.set_ylabel(f"[{shown}]")
+        ax.set_title(name, loc="left", fontsize=10)
+        ax.grid(alpha=0.3)
+    seen = set()
+    for t, kind in events:
+        if kind not in _EVENT_STYLE:
+            continue
+        color = _EVENT_STYLE[kind][0]
+        if isinstance(t, datetime) and t.tzinfo is not None:
+            t = t.astimezone(timezone.utc).replace(tzinfo=None)
+        for ax in axes:
+            ax.axvline(np.datetime64(t, "us"), color=color, ls="--", lw=1.0)
+        seen.add(kind)
+    if seen:
+        handles = [plt.Line2D([], [], color=_EVENT_STYLE[k][0], ls="--", label=_EVENT_STYLE[k][1]) for k in sorted(seen)]
+        fig.legend(handles=handles, loc="outside upper right", fontsize=8, frameon=False, ncol=len(handles))
+    axes[-1].set_xlabel("time (UTC)")
+    for lab in axes[-1].get_xticklabels():
+        lab.set_rotation(25)
+        lab.set_horizontalalignment("right")
+    fig.suptitle(title)
+    return save_figure(fig, path)
