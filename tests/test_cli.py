@@ -64,13 +64,25 @@ def test_robots_lists_the_library():
             "dlr_justin19", "hilti_trailblazer"} <= names
 
 
-def test_demo_shows_accuracy_far_worse_than_repeatability(tmp_path):
+def test_demo_runs_the_maintenance_cycle(tmp_path):
     r = run("demo", "--out", tmp_path / "d", "--poses", 200, "--seed", 3)
     assert r.exit_code == 0, r.output
     res = json.loads((tmp_path / "d" / "demo_result.json").read_text())
     assert (tmp_path / "d" / "accuracy_map.png").stat().st_size > 10_000
+    assert (tmp_path / "d" / "report.html").stat().st_size > 50_000
     acc, rep = res["accuracy_mm"], res["repeatability_mm"]
     # realistic tolerances give mm-level errors; repeatability stays below 0.1 mm
     assert 0.5 < acc["mean"] < 10.0
     assert rep["max_deviation"] < 0.1
     assert acc["mean"] > 10 * rep["max_deviation"]
+    # calibration brings the model to the tracker's noise level over the whole workspace
+    assert res["geometric_calibration"]["workspace_accuracy_mm"]["after"]["rms"] < 0.05
+    # the bent tool is found again to a fraction of a millimetre, in under 15 s of robot time
+    tool = res["tool_recalibration"]
+    assert tool["tcp_error_mm"] < 0.2 and tool["cycle_time_s"] < 15.0
+    # every cycle is in the history database
+    from robocal.store import HistoryStore
+
+    with HistoryStore.open(tmp_path / "d" / "history.sqlite", create=False) as store:
+        kinds = [c.kind for c in store.cycles(res["robot"])]
+    assert kinds == ["geometric_calibration", "tool_recalibration"]

@@ -102,9 +102,10 @@ def tcp_repeatability_study(*, collisions: int = 10, seed: int = 0, robot: str |
         raise ValueError("sensor_calibration must be 'simulated' or 'truth'")
     if sensor_path is not None:
         import json
-        from pathlib import Path
 
-        Path(sensor_path).write_text(json.dumps(cal_d, indent=2) + "\n", encoding="utf-8")
+        from ..io.atomic import atomic_write_text
+
+        atomic_write_text(sensor_path, json.dumps(cal_d, indent=2) + "\n", overwrite=True)
     cal_T = np.asarray(cal_d["T_base_sensor"], float)
     sensor_report = {
         "calibration": sensor_calibration,
