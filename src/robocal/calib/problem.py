@@ -303,30 +303,39 @@ class CalibrationProblem:
         if stations.shape != (len(q),):
             raise ProblemError(f"stations: expected shape ({len(q)},), got {stations.shape}")
         N, K = len(q), len(self.targets)
-        p_base, R_base_ee, Jg = self.model.target_points(q, state.params, state.targets, self.ee_of_target,
-                                                          self.free_index, jacobian)
         single = self.n_stations == 1
-        if single:  # one base frame: plain matrix products instead of per-pose ones
-            R0, t0 = state.bases[0, :3, :3], state.bases[0, :3, 3]
-            pts = p_base @ R0.T + t0
+        if single:  # one base frame: the kernel works in the instrument frame directly
+            pts, R_inst_ee, Jg = self.model.target_points(q, state.params, state.targets, self.ee_of_target,
+                                                          self.free_index, jacobian, root=state.bases[0])
+            if not jacobian:
+                return pts
+            J = np.zeros((N, K, 3, self.n_variables))
+            J[..., self._sl_geom] = Jg
         else:
+            p_base, R_base_ee, Jg = self.model.target_points(q, state.params, state.targets, self.ee_of_target,
+                                                              self.free_index, jacobian)
             Rb = state.bases[stations, :3, :3]
             tb = state.bases[stations, :3, 3]
             pts = np.einsum("nij,nkj->nki", Rb, p_base) + tb[:, None]
-        if not jacobian:
-            return pts
-        J = np.zeros((N, K, 3, self.n_variables))
-        J[..., self._sl_geom] = R0 @ Jg if single else np.einsum("nij,nkjf->nkif", Rb, Jg)
+            if not jacobian:
+                return pts
+            J = np.zeros((N, K, 3, self.n_variables))
+            J[..., self._sl_geom] = np.einsum("nij,nkjf->nkif", Rb, Jg)
+            R_inst_ee = np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
         if self.estimate_base:
-            blockJ = np.zeros((N, K, 3, 6))
-            blockJ[..., :3] = -skew(pts)
-            blockJ[..., 3:] = np.eye(3)
+            # left perturbation of the base: d p = omega x p + v  ->  [-skew(p) | I]
+            x, y, z = pts[..., 0], pts[..., 1], pts[..., 2]
             for g in range(self.n_stations):
-                idx = np.flatnonzero(stations == g)
+                sel = slice(None) if single else np.flatnonzero(stations == g)
                 c0 = self._sl_base.start + 6 * g
-                J[idx, :, :, c0:c0 + 6] = blockJ[idx]
+                Jb = J[sel, :, :, c0:c0 + 6]
+                Jb[..., 0, 1], Jb[..., 0, 2] = z[sel], -y[sel]
+                Jb[..., 1, 0], Jb[..., 1, 2] = -z[sel], x[sel]
+                Jb[..., 2, 0], Jb[..., 2, 1] = y[sel], -x[sel]
+                Jb[..., 0, 3] = Jb[..., 1, 4] = Jb[..., 2, 5] = 1.0
+                if not single:
+                    J[sel, :, :, c0:c0 + 6] = Jb
         if self._target_cols:
-            R_inst_ee = R0 @ R_base_ee if single else np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
             for k, sl in self._target_cols.items():
                 J[:, k, :, sl] = R_inst_ee[:, k]
         return (pts, J) if jacobian else pts

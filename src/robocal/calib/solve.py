@@ -106,7 +106,8 @@ class CalibrationResult:
 def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
-          reject_outliers: bool = True, state0: State | None = None, progress=None) -> CalibrationResult:
+          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0: State | None = None,
+          progress=None) -> CalibrationResult:
     """Identify the problem's free variables (see :func:`_solve_once` for the arguments).
 
     With ``auto_identifiable`` the identifiable set is chosen at the starting point, and chosen
@@ -116,7 +117,8 @@ def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linea
     """
     kw = dict(method=method, loss=loss, f_scale=f_scale, max_iterations=max_iterations, ftol=ftol, xtol=xtol,
               rcond=rcond, auto_identifiable=auto_identifiable, prior_weight=prior_weight,
-              outlier_threshold=outlier_threshold, reject_outliers=reject_outliers, progress=progress)
+              outlier_threshold=outlier_threshold, reject_outliers=reject_outliers, chi2_tol=chi2_tol,
+              progress=progress)
     res = _solve_once(problem, state0=state0, **kw)
     if not auto_identifiable:
         return res
@@ -173,7 +175,7 @@ def _point_errors(problem, r, labels):
 def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
-          reject_outliers: bool = True, state0: State | None = None, progress=None, ident=None) -> CalibrationResult:
+          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0: State | None = None, progress=None, ident=None) -> CalibrationResult:
     """Identify the problem's free variables.
 
     method: ``"lm"`` (Levenberg-Marquardt) or ``"svd"`` (truncated-SVD Gauss-Newton, (3-9, 3-10)).
@@ -188,6 +190,9 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     outlier_threshold: poses whose robust weight ends below this are reported as outliers.
     reject_outliers: after the robust solve, drop the reported outliers and finish with plain
         least squares (their residuals are still reported; the covariance excludes them).
+    chi2_tol: stop when an accepted step changes chi^2 by less than this many residual variances
+        (the estimate is then within a few hundredths of a standard deviation of the optimum);
+        ``ftol`` (relative cost change) and ``xtol`` (scaled step) stop it too.
     progress: optional callable ``progress(iteration, cost)``.
     """
     if method not in ("lm", "svd"):
@@ -243,13 +248,19 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     lam = 1e-3
     reason, converged, it = "maximum iterations reached", False, 0
     robust = loss != "linear"
+    weighted = robust or bool(prior_weight)
+    all_active = bool(active.all())
     rejected = np.zeros(n_poses, dtype=bool)
     total_it = 0
     for phase in range(2):
         for it in range(total_it + 1, total_it + max_iterations + 1):
-            sw = np.sqrt(w_rows)
-            Ja = (J[:, active] * sw[:, None]) / col_scale[active]
-            ra = r * sw
+            if weighted:
+                sw = np.sqrt(w_rows)
+                Ja = (J[:, active] * sw[:, None]) / col_scale[active]
+                ra = r * sw
+            else:
+                Ja = (J[:, active] if not all_active else J) / col_scale[active]
+                ra = r
             g = Ja.T @ ra
             if method == "svd":
                 U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
@@ -301,6 +312,13 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
             if abs(dcost) <= ftol * max(cost, 1e-300):
                 reason, converged = "relative cost reduction below ftol", True
                 break
+            # statistical criterion: the last step changed chi^2 by less than chi2_tol residual
+            # variances, so the estimate is within a small fraction of a standard deviation of
+            # the optimum (Gauss-Newton converges quadratically: the next change is smaller still)
+            s2 = 2.0 * cost / max(len(r) - int(active.sum()), 1)
+            if 2.0 * abs(dcost) <= chi2_tol * max(s2, 1e-300) and lam <= 1e-3:
+                reason, converged = f"chi-square change below {chi2_tol:g} residual variances", True
+                break
             if np.linalg.norm(step_s) <= xtol * (1.0 + math.sqrt(2.0 * cost)):
                 reason, converged = "step below xtol", True
                 break
@@ -311,7 +329,7 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
         rejected = weights < outlier_threshold
         if not rejected.any():
             break
-        robust_weights, robust = weights.copy(), False
+        robust_weights, robust, weighted = weights.copy(), False, True
         weights = (~rejected).astype(float)
         w_rows = row_weights()
         cost = 0.5 * float(np.sum(w_rows * r**2))

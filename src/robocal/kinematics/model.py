@@ -406,9 +406,10 @@ class RobotModel:
         masks = self._ee_ancestors[list(ees)][:, self.params.link_of]
         return T, ptw, jtw, masks
 
-    def target_points(self, q, params, points_in_ee, ee_of_point, free_index, want_jacobian=True):
-        """Points carried by end effectors, in the base frame (no ``T_world_base``), with their
-        derivatives w.r.t. the parameters ``free_index`` -- the calibration hot path, one kernel call.
+    def target_points(self, q, params, points_in_ee, ee_of_point, free_index, want_jacobian=True, root=None):
+        """Points carried by end effectors, in the base frame (no ``T_world_base``) or in the frame
+        where the base sits at ``root`` (4, 4), with their derivatives w.r.t. the parameters
+        ``free_index`` -- the calibration hot path, one kernel call.
 
         params (P,) [mm | rad]; points_in_ee (K, 3) [mm]; ee_of_point (K,) end-effector indices.
         Returns p (N, K, 3), R_base_ee (N, K, 3, 3), J (N, K, 3, len(free_index)).
@@ -431,8 +432,9 @@ class RobotModel:
             free_col[np.asarray(free_index, dtype=np.int64)] = np.arange(len(free_index))
             cached = self._target_cache[key] = (tl, tT, anc, free_col, len(free_index))
         tl, tT, anc, free_col, n_free = cached
+        root3 = self._identity_root if root is None else np.ascontiguousarray(np.asarray(root, dtype=float)[:3])
         return _kernels.target_points(q2, self._op_link, self._op_code, self._op_axis, params[self._op_param],
-                                      self._op_param, self._op_joint, self._link_parent, self._identity_root,
+                                      self._op_param, self._op_joint, self._link_parent, root3,
                                       *self._cpl, tl, tT, np.ascontiguousarray(points_in_ee, dtype=float).reshape(-1, 3),
                                       anc, free_col, n_free, bool(want_jacobian))
 
