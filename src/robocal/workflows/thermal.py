@@ -1,0 +1,166 @@
+"""The thesis-like thermal compensation experiment (METHODS.md 4; thesis 5.1, tables 5-1 and 5-2).
+
+:func:`run_thermal_experiment` on the simulated KR150 R3100 (DH + beta):
+
+1. the cell (:meth:`robocal.sim.thermal.ThermalCell.standard`): 20 sphere poses for screening,
+   34 monitored car-body points, fixed stereo sensor (0.02 mm), robot-held sensor (0.02 mm);
+2. system calibration (thesis 3.3) from 9 cold sphere poses by nonlinear least squares
+   (:func:`robocal.thermal.calibrate_system`); everything afterwards uses the *estimated*
+   ``T_sensor_base`` and ``P_e`` (``system_calibration=False``: the true ones);
+3. three runs of 90 ~3-min cycles with different production schedules
+   (:func:`robocal.sim.thermal.standard_schedules`), each starting cold;
+4. screening (:func:`robocal.thermal.screening.screen_parameters`) on run 1 with all 20 sphere
+   poses per cycle, 24 -> 8 parameters;
+5. for the traditional set (non-zero lengths) and the screened set, the 6 online sphere poses
+   (of the 20) that minimise the predicted noise at the monitored points
+   (:func:`~robocal.thermal.screening.select_online_poses`), and per run, per cycle, the
+   identification from those 6 poses and the compensated residuals; lambda before / traditional /
+   screened per run (table 5-2). Run 1 is in-sample for the screening; runs 2 and 3 are the
+   evaluation.
+
+:func:`format_thermal_table` renders the table; :func:`format_thermal_report` adds the screening
+table (5-1) and the settings.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..sim.robot import as_rng
+from ..sim.thermal import ThermalCell, standard_schedules, write_run
+from ..thermal.screening import (
+    LAMBDA_THRESHOLD_MM,
+    ScreeningProblem,
+    screen_parameters,
+    select_online_poses,
+    traditional_parameters,
+)
+
+__all__ = ["run_thermal_experiment", "screening_problem", "format_thermal_table", "format_thermal_report"]
+
+
+def screening_problem(cell: ThermalCell, run, *, T_sensor_base=None, P_e=None, model=None) -> ScreeningProblem:
+    """The :class:`ScreeningProblem` of a simulated run, from its measurements (the model,
+    ``T_sensor_base`` and ``P_e`` default to the cell's nominal model and true sensor set-up)."""
+    model = cell.model if model is None else model
+    return ScreeningProblem.from_measurements(
+        model, cell.T_sensor_base if T_sensor_base is None else T_sensor_base, cell.P_e if P_e is None else P_e,
+        run.q_sphere, run.sphere_cold, run.sphere, run.q_monitor, run.monitor_cold, run.monitor,
+        cell.T_flange_sensor, times_s=run.times_s)
+
+
+def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles: int = 90, n_screen_poses: int = 20,
+                           n_online_poses: int = 6, n_keep: int = 8, threshold_mm: float = LAMBDA_THRESHOLD_MM,
+                           statistic: str = "rms", system_calibration: bool = True, n_system_poses: int = 9,
+                           out_dir=None, cell_options: dict | None = None,
+                           screening_options: dict | None = None) -> dict:
+    """Run the experiment (module docstring); every draw from ``seed`` / ``schedule_seed``.
+
+    out_dir: if given, every run is also written as measurement files (``run1/``, ``run2/``,
+    ``run3/``; :func:`robocal.sim.thermal.write_run`).
+    Returns a dict: ``rows`` (one per run: run, role, cycles, hours, TCP drift after 3 h [mm],
+    lambda before / traditional / screened [%]), ``screening`` (the
+    :class:`~robocal.thermal.screening.ScreeningResult`), ``traditional`` and ``screened`` (names),
+    ``online_poses`` ({"traditional": idx, "screened": idx} into the 20 sphere poses),
+    ``lambda_screening_20`` (the screened set with all 20 poses on run 1), ``system_calibration``
+    (the result or None) and its ``frame_errors``, ``cell``, ``runs``, ``problems``, ``settings``,
+    ``timings_s``.
+    """
+    t_start = time.perf_counter()
+    timings = {}
+    rng = as_rng(seed)
+    run_seeds = rng.integers(0, 2**31, 4)
+    cell = ThermalCell.standard(seed, n_sphere_poses=n_screen_poses, **(cell_options or {}))
+    model = cell.model
+    timings["cell"] = time.perf_counter() - t_start
+
+    T_sb, P_e, calib, ferr = cell.T_sensor_base, cell.P_e, None, None
+    if system_calibration:
+        from ..thermal import calibrate_system, frame_errors
+
+        t0 = time.perf_counter()
+        q_sys = cell.q_sphere[:n_system_poses]
+        P_s = cell.measure_sphere(q_sys, cell.robot.true_model.params.values, int(run_seeds[0]))
+        calib = calibrate_system(model, q_sys, P_s, point_sigma_mm=cell.sphere_noise_mm)
+        T_sb, P_e = calib.T_sensor_base, calib.P_e
+        ferr = frame_errors(T_sb, cell.T_sensor_base, P_e, cell.P_e, at_base=cell.sphere_centre_base)
+        timings["system_calibration"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    schedules = standard_schedules(schedule_seed, n_cycles)
+    runs = [cell.simulate(s, int(run_seeds[1 + i])) for i, s in enumerate(schedules)]
+    timings["simulate"] = time.perf_counter() - t0
+    if out_dir is not None:
+        for i, r in enumerate(runs):
+            write_run(Path(out_dir) / f"run{i + 1}", cell, r, overwrite=True)
+
+    t0 = time.perf_counter()
+    problems = [screening_problem(cell, r, T_sensor_base=T_sb, P_e=P_e) for r in runs]
+    timings["problems"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    screening = screen_parameters(problems[0], n_keep, threshold_mm=threshold_mm, statistic=statistic,
+                                  **(screening_options or {}))
+    timings["screening"] = time.perf_counter() - t0
+
+    sets = {"traditional": traditional_parameters(model), "screened": screening.selected}
+    online = {k: select_online_poses(problems[0], v, n_online_poses) for k, v in sets.items()}
+    rows = []
+    for i, (r, p) in enumerate(zip(runs, problems)):
+        row = {"run": i + 1, "role": "screening" if i == 0 else "evaluation", "cycles": r.n_cycles,
+               "hours": r.schedule.duration_s / 3600.0,
+               "tcp_drift_3h_mm": float(np.interp(3 * 3600.0, r.timeline_s, r.tcp_drift_mm)),
+               "tcp_drift_max_mm": float(r.tcp_drift_mm.max()),
+               "before": p.evaluate((), threshold_mm, statistic).lam}
+        for k, names in sets.items():
+            row[k] = p.with_poses(online[k]).evaluate(names, threshold_mm, statistic).lam
+        rows.append(row)
+    timings["total"] = time.perf_counter() - t_start
+    return {
+        "rows": rows,
+        "screening": screening,
+        "traditional": sets["traditional"],
+        "screened": sets["screened"],
+        "online_poses": online,
+        "lambda_screening_20": screening.lam,
+        "system_calibration": calib,
+        "frame_errors": ferr,
+        "cell": cell,
+        "runs": runs,
+        "problems": problems,
+        "settings": {"seed": seed, "schedule_seed": schedule_seed, "n_cycles": n_cycles,
+                     "n_screen_poses": n_screen_poses, "n_online_poses": n_online_poses, "n_keep": n_keep,
+                     "threshold_mm": threshold_mm, "statistic": statistic, "system_calibration": system_calibration,
+                     "n_monitored_points": len(cell.q_monitor)},
+        "timings_s": timings,
+    }
+
+
+def format_thermal_table(result: dict) -> str:
+    """Table 5-2: lambda [%] before / traditional / screened for every run."""
+    s = result["settings"]
+    lines = [f"share of monitored directions with {s['statistic']} residual < {s['threshold_mm']:g} mm (lambda, %); "
+             f"{s['n_monitored_points']} points, {s['n_online_poses']} sphere poses online",
+             f"{'run':>3}  {'role':<10} {'cycles':>6} {'hours':>5} {'TCP 3h mm':>9}  {'before':>7} {'traditional':>11} "
+             f"{'screened':>8}"]
+    for r in result["rows"]:
+        lines.append(f"{r['run']:>3}  {r['role']:<10} {r['cycles']:>6} {r['hours']:>5.2f} "
+                     f"{r['tcp_drift_3h_mm']:>9.3f}  "
+                     f"{r['before']:>7.2f} {r['traditional']:>11.2f} {r['screened']:>8.2f}")
+    lines.append(f"traditional: {', '.join(result['traditional'])}")
+    lines.append(f"screened:    {', '.join(result['screened'])}")
+    return "\n".join(lines)
+
+
+def format_thermal_report(result: dict) -> str:
+    """The screening table (5-1), the comparison table (5-2) and the system calibration."""
+    parts = [result["screening"].format_table(), "", format_thermal_table(result)]
+    fe = result.get("frame_errors")
+    if fe:
+        parts += ["", "system calibration (9 cold poses, least squares) against the truth: " +
+                  ", ".join(f"{k} {v:.4g}" for k, v in fe.items() if isinstance(v, (int, float)))]
+    t = result["timings_s"]
+    parts += ["", "timings: " + ", ".join(f"{k} {v:.3f} s" for k, v in t.items())]
+    return "\n".join(parts)
