@@ -85,4 +85,9 @@ def test_demo_runs_the_maintenance_cycle(tmp_path):
 
     with HistoryStore.open(tmp_path / "d" / "history.sqlite", create=False) as store:
         kinds = [c.kind for c in store.cycles(res["robot"])]
-    assert kinds == ["geometric_calibration", "tool_recalibration"]
+    assert kinds[0] == "geometric_calibration" and kinds[-1] == "tool_recalibration"
+    assert kinds.count("thermal_compensation") == len(res["thermal"]["cycles"]) >= 5
+    # thermal: the screened parameters keep more monitored directions within 0.1 mm than the
+    # traditional lengths on every evaluation run
+    for row in res["thermal"]["rows"][1:]:
+        assert row["screened"] > row["traditional"] > row["before"]
