@@ -33,6 +33,9 @@ from .links import (
 
 __all__ = ["RobotModel", "EndEffector", "ParameterTable"]
 
+_empty44 = np.empty  # module-level aliases: fewer lookups on the single-call path
+_fk_single_kernel = _kernels.fk_fused_single
+
 
 @dataclass(frozen=True)
 class EndEffector:
@@ -279,6 +282,7 @@ class RobotModel:
             E_ee[e] = (T_from @ np.asarray(ee.T_link_ee, dtype=float))[:3]
         # T_from already contains T_world_base for root-level links.
         self._fused = _kernels.pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
+        self._fused_ints, self._fused_floats = self._fused
         # Which links each end effector depends on (ancestors), for Jacobian masking.
         anc = np.zeros((len(self.end_effectors), len(self.links)), dtype=bool)
         for e, ee in enumerate(self.end_effectors):
@@ -342,8 +346,8 @@ class RobotModel:
         checked calls). Pass ``out`` (4, 4) float64 to reuse a buffer.
         """
         if out is None:
-            out = np.empty((4, 4))
-        _kernels.fk_fused_single(q, self._fused[0], self._fused[1], out)
+            out = _empty44((4, 4))
+        _fk_single_kernel(q, self._fused_ints, self._fused_floats, out)
         return out
 
     def fk_reference(self, q, end_effector=None) -> np.ndarray:
