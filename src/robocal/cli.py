@@ -378,11 +378,13 @@ def _register_subcommands():
     from .cli_tcp_sim import cross_laser_cmd, simulate_cmd
 
     from .cli_history import history_cmd
+    from .cli_thermal import thermal
 
     tcp.add_command(cross_laser_cmd)
     tcp.add_command(simulate_cmd)
     main.add_command(tcp)
     main.add_command(history_cmd)
+    main.add_command(thermal)
 
 
 _register_subcommands()
