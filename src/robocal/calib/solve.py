@@ -124,6 +124,8 @@ def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linea
         return res
     start = problem.initial_state() if state0 is None else state0
     for _ in range(2):
+        if not _dropped_may_have_become_identifiable(res.jacobian, problem.names, res.identifiability):
+            break
         quick = analyse_identifiability(res.jacobian, problem.names, problem.blocks, explain=False)
         if set(quick.identifiable) == set(res.identifiability.identifiable):
             break
@@ -135,6 +137,33 @@ def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linea
         res.residuals_before, res.point_errors_before = before, err_before
         res.initial = _state_values(problem, start)
     return res
+
+
+def _dropped_may_have_become_identifiable(J, names, ident, screen: float = 1e-4) -> bool:
+    """Cheap screen before re-running the identifiability analysis at the solution.
+
+    Projects each held parameter's (unit) column on the kept columns through the Cholesky factor
+    of their Gram matrix: if every held column stays a combination of kept ones to better than
+    ``screen`` (far above the ~1e-8 this squared-conditioning shortcut can resolve), nothing
+    changed; otherwise the full QR analysis decides.
+    """
+    if not ident.dropped:
+        return False
+    idx = {n: i for i, n in enumerate(names)}
+    kept = [idx[n] for n in ident.identifiable]
+    held = [idx[n] for n in ident.dropped_names]
+    norms = np.linalg.norm(J[:, kept + held], axis=0)
+    if np.any(norms == 0):
+        return bool(np.any(norms[len(kept):] > 0))
+    K = J[:, kept] / norms[:len(kept)]
+    D = J[:, held] / norms[len(kept):]
+    try:
+        c = cho_factor(K.T @ K, check_finite=False)
+    except np.linalg.LinAlgError:
+        return True
+    coef = cho_solve(c, K.T @ D, check_finite=False)
+    independent2 = 1.0 - np.einsum("ij,ij->j", K.T @ D, coef)
+    return bool(np.any(independent2 > screen**2))
 
 
 def _state_values(problem: CalibrationProblem, state: State) -> np.ndarray:
