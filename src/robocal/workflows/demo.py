@@ -192,6 +192,19 @@ def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses
     from ..report.html import write_report
     from ..report.plots import plot_accuracy_map
 
+    extra = {}
+    if history:
+        from ..report.history_plot import plot_history
+        from ..store import HistoryStore
+
+        with HistoryStore.open(result["history"], create=False) as store:
+            cycles = store.cycles(nominal.name)
+            params = store.parameter_history(nominal.name)
+            metrics = {m: store.metric_history(nominal.name, m) for m in store.metric_names(nominal.name)}
+        events = [(c.started_at, c.kind) for c in cycles if c.status == "committed"]
+        extra["Maintenance history: thermal parameter drift and cycle metrics"] = plot_history(
+            params, metrics, out / "history.png", f"{nominal.name}: drift over time", events=events)
+
     before_png = plot_accuracy_map(T_nominal[:, :3, 3], err, out / "accuracy_map.png",
                                    f"{nominal.name}: nominal model error over {n_poses} poses",
                                    repeatability_mm=result["repeatability_mm"]["max_deviation"])
@@ -201,7 +214,7 @@ def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses
     report = write_report(out / "report.html", run["result"], overwrite=True,
                           title=f"robocal demo: keeping a simulated {nominal.name} accurate",
                           extra_plots={"Workspace accuracy of the nominal model": before_png,
-                                       "Workspace accuracy after calibration": after_png})
+                                       "Workspace accuracy after calibration": after_png, **extra})
     result["files"] = {"report": str(report), "accuracy_map": str(before_png),
                        "accuracy_map_calibrated": str(after_png), "result": str(out / "demo_result.json"),
                        "calibration": result["geometric_calibration"]["files"]}
