@@ -2,7 +2,6 @@
 differences, and recovery from each kind of measurement."""
 
 import numpy as np
-import pytest
 
 from robocal.calib import CalibrationProblem, Target, solve
 from robocal.robots import load_robot

@@ -227,8 +227,8 @@ def demo(out_dir, seed, poses):
         click.echo(row("held-out poses, before", ho["before"]))
         click.echo(row("held-out poses, after", ho["after"]))
     click.echo(row(f"workspace ({r['n_poses']} poses), after", g["workspace_accuracy_mm"]["after"]))
-    click.echo(f"   (held-out errors include tracker noise and encoder noise; the workspace row compares the "
-               f"calibrated model with the true robot)")
+    click.echo("   (held-out errors include tracker noise and encoder noise; the workspace row compares the "
+               "calibrated model with the true robot)")
     click.echo("")
     th = r["thermal"]
     click.echo("3. Production with heating (90 cycles of ~3 min per run): share of 34 monitored points' directions "

@@ -605,6 +605,6 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
         flag += "" if p["within_limits"] else "  outside joint limits"
         click.echo(f"  {p['point']:<10} {p['drift_before_mm']:>9.4f} {p['residual_mm']:>9.1e} "
                    f"{p['max_joint_correction_deg']:>11.5f} {p['iterations']:>4}{flag}")
-    click.echo(f"  (drift: predicted by the identified deltas at the taught joints; after: left on the warm model)")
+    click.echo("  (drift: predicted by the identified deltas at the taught joints; after: left on the warm model)")
     click.echo(comp.summary())
     click.echo(f"wrote {out_file}" + ("" if cycle_id is None else f"; history cycle {cycle_id} in {db}"))

@@ -25,7 +25,7 @@ Jacobian for a state (a :class:`State`), and :meth:`CalibrationProblem.retract` 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_text
+from .header import KEY_RE, FileFormatError, read_header_block
 from ..transforms import (
     ANGLE_UNITS,
     LENGTH_UNITS,
@@ -61,7 +62,6 @@ DEFAULT_TARGET = "point"
 _REQUIRED_KEYS = ("format", "robot", "length_unit", "angle_unit")
 # Keys written first, in this order; any other key follows, then the notes.
 _KEY_ORDER = ("format", "robot", "length_unit", "angle_unit", "prismatic", "orientation", "instrument", "frame")
-_KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
 _TARGET_RE = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
 _EULER_COLUMNS = ("rx", "ry", "rz")
 _QUAT_COLUMNS = ("qw", "qx", "qy", "qz")
@@ -73,21 +73,8 @@ _M_LOOKS_LIKE_MM = 1.0e6  # a point farther than 1 km: the numbers are millimetr
 _RAD_LOOKS_LIKE_DEG = 4.0 * math.pi  # a revolute joint beyond two turns: the numbers are degrees
 
 
-class MeasurementFileError(ValueError):
-    """A measurement file is malformed or implausible.
-
-    The message names the file, the 1-based line number in the file and the column where known;
-    the same are available as ``path``, ``line`` and ``column`` (``None`` when not applicable).
-    """
-
-    def __init__(self, path, message: str, line: int | None = None, column: str | None = None):
-        self.path = str(path)
-        self.line = line
-        self.column = column
-        where = self.path if line is None else f"{self.path}, line {line}"
-        if column is not None:
-            where += f", column {column!r}"
-        super().__init__(f"{where}: {message}")
+class MeasurementFileError(FileFormatError):
+    """A measurement file is malformed or implausible (file, line and column in the message)."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -282,7 +269,7 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
         value = md[key]
         if "\n" in value or "\r" in value:
             raise ValueError(f"write_measurements: metadata {key!r} must be a single line (use 'note' for text)")
-        if not _KEY_RE.match(f"# {key}: x"):
+        if not KEY_RE.match(f"# {key}: x"):
             raise ValueError(f"write_measurements: metadata key {key!r} is not a valid header key")
         lines.append(f"# {key}: {value}")
     if notes:
@@ -341,29 +328,7 @@ def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
 
     lines = text.splitlines()
     # ---- header block
-    md: dict[str, str] = {}
-    key_line: dict[str, int] = {}
-    notes: list[str] = []
-    i = 0
-    while i < len(lines):
-        raw = lines[i].strip()
-        if not raw:
-            i += 1
-            continue
-        if not raw.startswith("#"):
-            break
-        m = _KEY_RE.match(raw)
-        if m:
-            key, value = m.group(1).lower(), m.group(2).strip()
-            if key == "note":
-                notes.append(value)
-            elif key in md:
-                fail(f"header key {key!r} given twice (first on line {key_line[key]})", i + 1)
-            else:
-                md[key], key_line[key] = value, i + 1
-        i += 1  # other '#' lines are free comments
-    if notes:
-        md["note"] = "\n".join(notes)
+    md, key_line, i = read_header_block(lines, fail)
     for key in _REQUIRED_KEYS:
         if key not in md or not md[key]:
             fail(f"header is missing '# {key}: ...' (required: {', '.join(_REQUIRED_KEYS)})")

@@ -38,6 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.header import FileFormatError
+
 __all__ = [
     "SENSOR_POINT_LABELS",
     "TcpFileError",
@@ -60,21 +62,8 @@ BEAM_POINTS = ("A", "B", "C", "D")
 SENSOR_POINT_LABELS = tuple(f"{P}{i}" for P in BEAM_POINTS for i in (1, 2, 3, 4))
 
 
-class TcpFileError(ValueError):
-    """A tool-calibration input file is malformed.
-
-    The message names the file, the 1-based line number and the column where known; the same are
-    available as ``path``, ``line`` and ``column`` (``None`` when not applicable).
-    """
-
-    def __init__(self, path, message: str, line: int | None = None, column: str | None = None):
-        self.path = str(path)
-        self.line = line
-        self.column = column
-        where = self.path if line is None else f"{self.path}, line {line}"
-        if column is not None:
-            where += f", column {column!r}"
-        super().__init__(f"{where}: {message}")
+class TcpFileError(FileFormatError):
+    """A tool-calibration input file is malformed (file, line and column in the message)."""
 
 
 class SensorCalibrationError(ValueError):

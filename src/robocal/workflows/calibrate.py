@@ -44,7 +44,6 @@ import csv
 import io
 import json
 import math
-import re
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -55,6 +54,7 @@ from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
 from ..io.atomic import atomic_write_text
+from ..io.header import FileFormatError, read_header_block
 from ..io.measurements import read_measurements
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
@@ -268,10 +268,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
 # corrected joint targets
 # ---------------------------------------------------------------------------------------------
 
-_KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
 
 
-class TargetFileError(ValueError):
+class TargetFileError(FileFormatError):
     """A targets file is malformed; the message names file, line and column."""
 
 
@@ -286,19 +285,11 @@ def read_targets(path, robot) -> dict:
         raise FileNotFoundError(f"{path}: no such targets file") from None
 
     def fail(msg, line=None, column=None):
-        where = str(path) + (f", line {line}" if line else "") + (f", column {column!r}" if column else "")
-        raise TargetFileError(f"{where}: {msg}")
+        raise TargetFileError(path, msg, line or None, column)
 
     lines = text.splitlines()
-    md, i = {}, 0
-    while i < len(lines):
-        raw = lines[i].strip()
-        if raw and not raw.startswith("#"):
-            break
-        m = _KEY_RE.match(raw)
-        if m:
-            md[m.group(1).lower()] = (m.group(2).strip(), i + 1)
-        i += 1
+    values, key_line, i = read_header_block(lines, fail)
+    md = {k: (v, key_line[k]) for k, v in values.items()}
     if md.get("format", ("",))[0] != TARGETS_FORMAT:
         fail(f"header must start with '# format: {TARGETS_FORMAT}' (got {md.get('format', ('nothing',))[0]!r})")
     for key in ("length_unit", "angle_unit"):

@@ -23,13 +23,13 @@ import fnmatch
 import io
 import json
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..io.atomic import atomic_write_text
+from ..io.header import KEY_RE, FileFormatError, read_header_block
 from ..io.measurements import Measurements, read_measurements
 from ..transforms import ANGLE_UNITS, LENGTH_UNITS
 
@@ -47,18 +47,13 @@ RUN_FILES = ("sphere_cold.csv", "sphere.csv", "monitor_cold.csv", "monitor.csv",
 #: Joints of a current sphere pose and its cold reference must agree to this (0.0006 deg).
 COLD_MATCH_TOL_RAD = 1e-5
 
-_KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
 _KEY_ORDER = ("format", "robot", "angle_unit", "length_unit")
 _RAD_LOOKS_LIKE_DEG = 4.0 * math.pi
 
 
 # ---------------------------------------------------------------------------------------------- programs
-class ProgramFileError(ValueError):
+class ProgramFileError(FileFormatError):
     """A program file is malformed; the message names the file and line."""
-
-    def __init__(self, path, message: str, line: int | None = None):
-        where = str(path) if line is None else f"{path}, line {line}"
-        super().__init__(f"{where}: {message}")
 
 
 @dataclass
@@ -97,29 +92,7 @@ def read_program(path, model) -> Program:
         raise ProgramFileError(path, msg, line)
 
     lines = text.splitlines()
-    md: dict = {}
-    where: dict = {}
-    notes = []
-    i = 0
-    while i < len(lines):
-        raw = lines[i].strip()
-        if not raw:
-            i += 1
-            continue
-        if not raw.startswith("#"):
-            break
-        m = _KEY_RE.match(raw)
-        if m:
-            key, value = m.group(1).lower(), m.group(2).strip()
-            if key == "note":
-                notes.append(value)
-            elif key in md:
-                fail(f"header key {key!r} given twice (first on line {where[key]})", i + 1)
-            else:
-                md[key], where[key] = value, i + 1
-        i += 1
-    if notes:
-        md["note"] = "\n".join(notes)
+    md, where, i = read_header_block(lines, fail)
     for key in ("format", "robot", "angle_unit"):
         if not md.get(key):
             fail(f"header is missing '# {key}: ...' (a program file starts with '# format: {PROGRAM_FORMAT}', "
@@ -354,7 +327,7 @@ def _file_robot(path) -> str | None:
                 s = raw.strip()
                 if s and not s.startswith("#"):
                     break
-                m = _KEY_RE.match(s)
+                m = KEY_RE.match(s)
                 if m and m.group(1).lower() == "robot":
                     return m.group(2).strip()
     except (OSError, UnicodeDecodeError):
