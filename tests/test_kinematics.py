@@ -326,6 +326,16 @@ def test_bad_robot_files_name_the_problem(change, message):
     assert "my_robot.toml" in str(info.value)
 
 
+def test_non_finite_joints_are_refused_with_pose_and_joint():
+    m = load_robot("ur10")
+    q = np.zeros((5, 6))
+    q[3, 4] = np.nan
+    with pytest.raises(ValueError, match="pose 3, joint J5 is nan"):
+        m.fk(q)
+    with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
+        m.fk(np.zeros((5, 7)))
+
+
 def test_unknown_robot_suggests_close_names():
     with pytest.raises(RobotFileError, match="Did you mean: ur10"):
         load_robot("ur01")

@@ -302,6 +302,9 @@ class RobotModel:
         q2 = np.atleast_2d(q)
         if q2.ndim != 2 or q2.shape[1] != self.n_joints:
             raise ValueError(f"{self.name}: joints must have shape (N, {self.n_joints}) or ({self.n_joints},), got {q.shape}")
+        if not np.isfinite(q2).all():
+            r, c = np.argwhere(~np.isfinite(q2))[0]
+            raise ValueError(f"{self.name}: pose {r}, joint {self.controller_joints[c]} is {q2[r, c]} (not a finite number)")
         return np.ascontiguousarray(q2), single
 
     def model_joints(self, q) -> np.ndarray:
