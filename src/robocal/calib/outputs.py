@@ -251,25 +251,10 @@ def _nominal_seed(nominal, T, q_ref, end_effector):
 
 
 def _ik(model, T, q0, **kw):
-    """``ik_numeric`` over all targets; where the batched solve hits a singular damped system
-    (every joint blocked at a limit), solve target by target and mark the failing ones."""
-    try:
-        res = ik_numeric(model, T, q0, **kw)
-        return (np.atleast_2d(res.q), np.atleast_1d(res.converged), np.atleast_1d(res.status),
-                np.atleast_1d(res.iterations), np.atleast_1d(res.position_error_mm))
-    except np.linalg.LinAlgError:
-        pass
-    N = len(T)
-    q, conv = np.array(q0, dtype=float, copy=True), np.zeros(N, dtype=bool)
-    status, iters, err = np.full(N, "singular", dtype=object), np.zeros(N, dtype=int), np.full(N, np.inf)
-    for i in range(N):
-        try:
-            r = ik_numeric(model, T[i:i + 1], q0[i:i + 1], **kw)
-        except np.linalg.LinAlgError:
-            continue
-        q[i], conv[i], status[i], iters[i], err[i] = r.q[0], r.converged[0], r.status[0], r.iterations[0], \
-            r.position_error_mm[0]
-    return q, conv, status.astype(str), iters, err
+    """``ik_numeric`` over all targets: (q, converged, status, iterations, position error)."""
+    res = ik_numeric(model, T, q0, **kw)
+    return (np.atleast_2d(res.q), np.atleast_1d(res.converged), np.atleast_1d(res.status),
+            np.atleast_1d(res.iterations), np.atleast_1d(res.position_error_mm))
 
 
 def _ik_with_restarts(model, T, q0, n_restarts, **kw):
