@@ -58,7 +58,6 @@ def _problem(nominal, virtual, rng, n_poses, n_repeats):
 
 
 def _geometric_calibration(nominal, virtual, q_work, out, seed):
-    from ..calib.outputs import json_ready  # noqa: F401  (keeps the JSON of the result consistent)
     from .calibrate import run_calibration
 
     tracker = LaserTracker.placed(seed + 1, reflectors=np.atleast_2d(REFLECTOR_MM), sigma_mm=0.02)
@@ -117,7 +116,7 @@ def _tool_recalibration(seed):
     study = tcp_repeatability_study(collisions=1, seed=seed, robot=None, variants={"beta_corrected": {}})
     run = study["variants"]["beta_corrected"]["runs"][0]
     return {
-        "collision": study["collisions"][0] | {"T_flange_tool_true": None},
+        "collision": {k: v for k, v in study["collisions"][0].items() if k != "T_flange_tool_true"},
         "sensor": study["sensor"],
         "tcp_error_mm": run["tcp_error_mm"],
         "axis_error_deg": run["axis_error_deg"],
