@@ -1,4 +1,5 @@
-"""Calibration speed benchmark: robocal's solver against finite-difference least squares and peers.
+"""Calibration speed benchmark: robocal's solver against finite-difference least squares and peers
+(pybotics, figaroh).
 
 Scenario: full identification from 100 poses of one laser-tracker reflector: the identifiable
 DH parameters of a 6R robot, the robot base in the tracker frame (6) and the reflector on the
@@ -11,6 +12,7 @@ Run from the repository root (robocal installed in the environment)::
     python benchmarks/bench_calibration.py --quick    # 3 repeats, slow rows once or skipped (~15 s)
     python benchmarks/bench_calibration.py --robot ur10
     python benchmarks/bench_calibration.py --peers-path /tmp/peers   # pybotics installed there
+    /tmp/figaroh_venv/bin/python benchmarks/bench_calibration.py     # + figaroh rows (its own venv)
 
 This is a script, not a test: it prints machine information, the problem, one table (median and
 best of several repeats, all rows in one process, one thread) and, when robocal misses its 2 ms
@@ -336,6 +338,137 @@ def pybotics_setup(sc: Scenario, problem: CalibrationProblem):
     return run_example, run_xyz, to_values, float(np.abs(pb_pts - rc_pts).max()), int(sum(kc_mask)) + 3 + 6
 
 
+# ---------------------------------------------------------------------------- figaroh
+FIGAROH_WHY = None
+FIGAROH_VENV = ("python3 -m venv /tmp/figaroh_venv && /tmp/figaroh_venv/bin/pip install figaroh && "
+                "/tmp/figaroh_venv/bin/pip install -e .  (then run this script with /tmp/figaroh_venv/bin/python)")
+
+
+def load_figaroh():
+    """figaroh's calibration package if importable, else None with the reason in FIGAROH_WHY."""
+    global FIGAROH_WHY
+    try:
+        with warnings.catch_warnings(), contextlib.redirect_stderr(io.StringIO()):
+            warnings.simplefilter("ignore")  # ndcurves' duplicate boost converters
+            importlib.import_module("figaroh")
+            mod = importlib.import_module("figaroh.calibration")
+        import logging
+
+        for name in ("figaroh", "calibration"):
+            logging.getLogger(name).setLevel(logging.ERROR)
+        return mod
+    except ImportError as e:
+        FIGAROH_WHY = (f"not importable ({e}). figaroh pulls IPython, meshcat, pyzmq, tornado, pandas, ndcurves, "
+                       f"numdifftools, Pinocchio (~60 packages), so it lives in its own environment: {FIGAROH_VENV}")
+        return None
+
+
+class FigarohSetup:
+    """The benchmark's robot, data and unknowns as figaroh's geometric calibration takes them.
+
+    Files (in ``workdir``): the nominal robot as URDF (``robocal.io.urdf.write_urdf``, metres);
+    a unified YAML configuration (``calibration_level: full_params``, chain ``universe`` ->
+    ``flange``, one marker with x, y, z measured); the data as CSV (``x1 y1 z1`` in metres in the
+    tracker frame, one column per joint). Base frame and marker position are unknown
+    (``known_baseframe`` / ``known_tipframe`` False, as in figaroh's examples). The calibration
+    class follows figaroh's UR10 example: ``calc_updated_fkm`` -> ``_compute_logmap_residuals`` ->
+    ``apply_measurement_weighting``; everything else (structural base parameters by QR, the
+    data-level elimination of frame-absorbed parameters, closed-form frame guess, scipy LM,
+    outlier rounds, evaluation and quality report) is figaroh's ``initialize()`` + ``solve()``.
+    Parameters: figaroh's own 6 per joint placement (``d_px_J2`` ... ``d_phiz_J6``), not DH.
+    """
+
+    def __init__(self, sc: Scenario, workdir):
+        import pandas as pd
+        import pinocchio as pin
+        from figaroh.calibration import BaseCalibration
+        from figaroh.calibration.calibration_tools import calc_updated_fkm
+        from figaroh.tools.load_robot import load_robot as fig_load_robot
+
+        from robocal.io.urdf import write_urdf
+
+        self.sc, self.pin, self.calc_updated_fkm = sc, pin, calc_updated_fkm
+        d = Path(workdir)
+        self.urdf, self.yaml, self.csv = d / "robot.urdf", d / "calibration.yaml", d / "data.csv"
+        write_urdf(sc.nominal, self.urdf, overwrite=True)
+        self.robot = fig_load_robot(str(self.urdf), load_by_urdf=True)
+        model = self.robot.model
+        self.joints = [model.names[i] for i in range(1, model.njoints)]
+        pts = sc.points[:, 0] / 1000.0
+        df = pd.DataFrame({"x1": pts[:, 0], "y1": pts[:, 1], "z1": pts[:, 2]})
+        for k, jn in enumerate(self.joints):
+            df[jn] = sc.q[:, k]
+        df.to_csv(self.csv, index=False)
+        self.yaml.write_text(
+            "robot:\n  name: %s\ntasks:\n  calibration:\n    enabled: true\n    parameters:\n"
+            "      calibration_level: full_params\n      include_non_geometric: false\n"
+            "    kinematics:\n      base_frame: universe\n      tool_frame: flange\n"
+            "    measurements:\n      markers:\n        - name: reflector\n          reference_joint: %s\n"
+            "          measurable_dof: [true, true, true, false, false, false]\n"
+            "    data:\n      source_file: %s\n      number_of_samples: %d\n"
+            % (sc.nominal.name, self.joints[-1], self.csv, len(sc.q)))
+        counter = self.counter = [0]
+
+        class BenchCalibration(BaseCalibration):
+            def cost_function(self, var):  # figaroh's UR10 example, position-only marker
+                counter[0] += 1
+                est = calc_updated_fkm(self.model, self.data, var, self.q_measured, self.calib_config)
+                return self.apply_measurement_weighting(self._compute_logmap_residuals(self.PEE_measured, est),
+                                                        pos_weight=1.0, orient_weight=0.5)
+
+        self.cls = BenchCalibration
+
+    def calibration(self):
+        """A figaroh calibration object read from the files, not yet initialised."""
+        c = self.cls(self.robot, str(self.yaml))
+        c.calib_config["known_baseframe"] = False
+        c.calib_config["known_tipframe"] = False
+        return c
+
+    def run(self, extra=()):
+        """figaroh end to end: read config + CSV, select parameters, fit. ``extra``: names appended to
+        figaroh's selection before the fit (to restore parameters it dropped). Returns
+        (calibration, least_squares result, cost function calls)."""
+        self.counter[0] = 0
+        c = self.calibration()
+        c.initialize()
+        if extra:
+            c.calib_config["param_name"] = list(c.calib_config["param_name"]) + list(extra)
+        with contextlib.redirect_stdout(io.StringIO()):  # the quality report solve() prints
+            r = c.solve(enable_logging=False)
+        return c, r, self.counter[0]
+
+    def candidates(self, c) -> list:
+        """Every parameter figaroh could estimate here: base frame 6, joint placements 6 per joint
+        (``full_params``), marker position 3."""
+        from figaroh.calibration.parameter import BASE_TPL, get_fullparam_offset
+
+        cfg = c.calib_config
+        joints = [c.model.names[j] for j in cfg["actJoint_idx"]]
+        return list(BASE_TPL) + list(get_fullparam_offset(joints)) + ["pEEx_1", "pEEy_1", "pEEz_1"]
+
+    def dropped_identifiable(self, c, tol: float = 1e-4) -> list:
+        """Candidates figaroh's selection left out that its own data-level test keeps: the measurement
+        Jacobian of every candidate (``measurement_jacobian``, at the closed-form frame guess, as
+        ``eliminate_absorbed_parameters`` uses it) through ``select_identifiable_parameters`` with
+        figaroh's selection always kept, at figaroh's default tolerance 1e-4."""
+        from figaroh.calibration.calibration_tools import measurement_jacobian, select_identifiable_parameters
+
+        kept = list(c.calib_config["param_name"])
+        names = kept + [n for n in self.candidates(c) if n not in kept]
+        guess = c.initial_frame_guess()
+        x0 = np.array([guess.get(n, 0.0) for n in names])
+        J = measurement_jacobian(c.model, c.data, x0, c.q_measured, dict(c.calib_config, param_name=names))
+        sel, _ = select_identifiable_parameters(J, names, always_keep=kept, tol=tol)
+        return [n for n in sel if n not in kept]
+
+    def points_mm(self, c, x, q=None):
+        """(N, 3) reflector positions [mm] predicted by figaroh's model at its variables ``x``."""
+        q = c.q_measured if q is None else np.asarray(q, float)
+        cfg = dict(c.calib_config, NbSample=len(q))
+        return 1000.0 * self.calc_updated_fkm(c.model, c.data, x, q, cfg).reshape(3, -1).T
+
+
 # ---------------------------------------------------------------------------- robocal profile split
 class Split:
     """Exclusive wall time per part of ``solve``, from thin wrappers installed in this process only."""
@@ -434,7 +567,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=2026, help="seed of the simulated robot, tracker and data")
     ap.add_argument("--peers-path", default=os.environ.get("ROBOCAL_BENCH_PEERS"),
                     help="directory put first on sys.path for pybotics (env ROBOCAL_BENCH_PEERS)")
-    ap.add_argument("--no-peers", action="store_true", help="skip pybotics")
+    ap.add_argument("--no-peers", action="store_true", help="skip pybotics and figaroh")
     ap.add_argument("--profile", action="store_true", help="print robocal's profile split even if it meets its target")
     args = ap.parse_args(argv)
     repeat = args.repeat or (3 if args.quick else 7)
@@ -450,7 +583,11 @@ def main(argv=None) -> int:
     pyb = None if args.no_peers else load_pybotics()
     pyb_ver = "skipped (--no-peers)" if args.no_peers else (peer_version("pybotics") if pyb else "not available (see below)")
     print(f"  pybotics    {pyb_ver}")
-    print("  figaroh     not run (see benchmarks/README.md)")
+    fig = None if args.no_peers else load_figaroh()
+    fig_ver = ("skipped (--no-peers)" if args.no_peers else
+               (f"{peer_version('figaroh')} (pinocchio {peer_version('pin')})" if fig
+                else "not available (see below)"))
+    print(f"  figaroh     {fig_ver}")
     print(f"  repeats     {repeat} per fast row (each looped to ~{budget:g} s), {slow_repeat} per slow row; "
           "median and best reported; one thread")
 
@@ -514,8 +651,39 @@ def main(argv=None) -> int:
             notes.append(f"pybotics: set-up failed ({type(e).__name__}: {e}), skipped")
     elif not args.no_peers:
         notes.append(f"pybotics: skipped: {PYBOTICS_WHY}")
-    notes.append("figaroh: skipped: see benchmarks/README.md (its import pulls IPython, meshcat, pyzmq, tornado, "
-                 "pandas, ndcurves, numdifftools; its calibration is driven by a URDF + YAML config + CSV data file)")
+    external = {}  # rows not in robocal's variables: name -> out -> (iter/ev text, RMS mm, predicted points mm)
+    fig_tmp = None
+    if fig is not None:
+        try:
+            import tempfile
+
+            fig_tmp = tempfile.TemporaryDirectory(prefix="robocal_bench_figaroh_")
+            fs = FigarohSetup(sc, fig_tmp.name)
+            c0 = fs.calibration()
+            c0.initialize()
+            extra = fs.dropped_identifiable(c0)
+            n_sel = len(c0.calib_config["param_name"])
+
+            def fig_summary(out, fs=fs):
+                c, r, calls = out
+                pts = fs.points_mm(c, r.x)
+                e = np.linalg.norm(pts - sc.points[:, 0], axis=1)
+                return f"{calls} ev", float(np.sqrt(np.mean(e ** 2))), pts
+
+            name_sel = f"figaroh initialize()+solve(), its {n_sel} parameters"
+            rows.append((name_sel, fs.run, None, "slow"))
+            external[name_sel] = fig_summary
+            notes.append(f"figaroh ({n_sel} parameters: {' '.join(c0.calib_config['param_name'])}): its own "
+                         f"data-level test (select_identifiable_parameters, tol 1e-4) keeps {len(extra)} more "
+                         f"it dropped: {' '.join(extra) or '-'}; see benchmarks/figaroh_identifiability.py")
+            if extra:
+                name_all = f"figaroh, same + the {len(extra)} dropped ({n_sel + len(extra)} parameters)"
+                rows.append((name_all, lambda fs=fs, extra=tuple(extra): fs.run(extra), None, "slow"))
+                external[name_all] = fig_summary
+        except Exception as e:  # pragma: no cover - peer set-up problems are reported, not fatal
+            notes.append(f"figaroh: set-up failed ({type(e).__name__}: {e}), skipped")
+    elif not args.no_peers:
+        notes.append(f"figaroh: skipped: {FIGAROH_WHY}")
 
     # correctness first: every row once
     results = {}
@@ -543,6 +711,11 @@ def main(argv=None) -> int:
     for name, fn, st_of, kind in rows:
         med, best = float(np.median(times[name])), float(np.min(times[name]))
         out = results[name]
+        if name in external:  # figaroh: its own parametrization, no variable-by-variable comparison
+            iter_s, rms, _ = external[name](out)
+            print(f"{name:58s}{med:10.2f}{best:10.2f}  ms  {f'robocal x{med / ref_ms:.0f}':>15s}{iter_s:>9s}"
+                  f"{rms:9.4f}{'n/a':>12s}{'n/a':>13s}{'n/a':>11s}")
+            continue
         if st_of is None:  # the all-free problem: compare on the identifiable variables
             st = out.state
             vals = state_values(prob, st)
@@ -578,6 +751,30 @@ def main(argv=None) -> int:
           f"after {ref_res.rms_after:.4f} mm (noise alone ~{math.sqrt(3) * SIGMA_MM:.4f} mm)")
     for nt in notes:
         print(nt)
+    if external:
+        rc_pts = prob.predict_points(ref_res.state)[:, 0]
+        print("figaroh rows (joint-placement parameters, not robocal's DH: max|dx| n/a); parametrization-free "
+              "comparison with robocal's solution:")
+        for name, summ in external.items():
+            c, r, calls = results[name]
+            _, rms, pts = summ(results[name])
+            fv = np.linalg.norm(fs.points_mm(c, r.x, qv) - true_v, axis=1)
+            print(f"  {name}: fit RMS {rms:.4f} mm (robocal {ref_res.rms_after:.4f}); max |figaroh - robocal| "
+                  f"predicted point over the {args.poses} poses {np.abs(pts - rc_pts).max():.4f} mm; "
+                  f"1000 fresh poses: RMS {np.sqrt(np.mean(fv ** 2)):.4f} mm, max {fv.max():.4f} mm; "
+                  f"{len(r.x)} variables, {calls} cost-function calls")
+        t0 = time.perf_counter()
+        c = fs.calibration()
+        c.initialize()
+        t1 = time.perf_counter()
+        with contextlib.redirect_stdout(io.StringIO()):
+            c.solve(enable_logging=False)
+        t2 = time.perf_counter()
+        print(f"  figaroh split (one run, its selection): construct + initialize() (CSV, structural QR, absorbed "
+              f"parameters) {1e3 * (t1 - t0):.0f} ms, solve() (LM by scipy least_squares, evaluation, report) "
+              f"{1e3 * (t2 - t1):.0f} ms")
+    if fig_tmp is not None:
+        fig_tmp.cleanup()
 
     # ---------------------------------------------------------------- profile
     if ref_ms > TARGET_MS or args.profile:
