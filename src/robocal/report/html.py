@@ -226,7 +226,7 @@ def _stats_rows(result):
 
 
 def render_report(result: dict, *, accuracy_map: dict | None = None, title: str | None = None,
-                  extra_plots: dict | None = None) -> str:
+                  extra_plots: dict | None = None, extra_tables: dict | None = None) -> str:
     """The HTML text of the report (see :func:`write_report`)."""
     e = html.escape
     robot = result.get("robot", "?")
@@ -309,6 +309,9 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
         out.append(_table(["pose", "weight", "reason"],
                           [[e(str(o.get("pose_id", o["pose"]))), _f(o["weight"], 3), e(o["reason"])]
                            for o in result["outliers"]], left=(0, 2)))
+    for name, (header, rows) in (extra_tables or {}).items():
+        out.append(f"<h2>{e(name)}</h2>")
+        out.append(_table([e(str(h)) for h in header], [[e(str(c)) for c in row] for row in rows]))
     for name, png in (extra_plots or {}).items():
         data = png if isinstance(png, (bytes, bytearray)) else Path(png).read_bytes()
         out.append(f"<h2>{e(name)}</h2>" + _img(bytes(data), name))
@@ -318,7 +321,7 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
 
 
 def write_report(path, result: dict, *, accuracy_map: dict | None = None, title: str | None = None,
-                 extra_plots: dict | None = None, overwrite: bool = False) -> Path:
+                 extra_plots: dict | None = None, extra_tables: dict | None = None, overwrite: bool = False) -> Path:
     """Write a self-contained ``report.html`` (atomic; an existing file needs ``overwrite``).
 
     result: the dict of :func:`robocal.calib.outputs.result_to_dict`, optionally with
@@ -327,9 +330,11 @@ def write_report(path, result: dict, *, accuracy_map: dict | None = None, title:
     accuracy_map: optional {``positions_mm`` (N, 3), ``values_mm`` (N,), ``label``, ``title``,
         ``note``}: a value per workspace position (predicted uncertainty or residual) to map.
     extra_plots: optional {section title: PNG bytes or PNG file path} appended at the end.
+    extra_tables: optional {section title: (header, rows)} of preformatted cells, before the plots.
 
     Contents: error per pose before/after, error histograms, parameter changes with 1-std error
     bars (identified parameters), the accuracy map, and tables of every number.
     """
-    text = render_report(result, accuracy_map=accuracy_map, title=title, extra_plots=extra_plots)
+    text = render_report(result, accuracy_map=accuracy_map, title=title, extra_plots=extra_plots,
+                         extra_tables=extra_tables)
     return atomic_write_text(path, text, overwrite=overwrite)
