@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["FileFormatError", "KEY_RE", "read_header_block"]
+__all__ = ["FileFormatError", "KEY_RE", "read_header_block", "read_text"]
 
 #: ``# key: value`` header lines of measurement, target, program and sensor-point files.
 KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
@@ -61,3 +61,15 @@ def read_header_block(lines, fail):
     if notes:
         values["note"] = "\n".join(notes)
     return values, key_line, i
+
+
+def read_text(path, error=FileFormatError) -> str:
+    """The text of ``path`` (UTF-8, a byte-order mark allowed); problems raise ``error(path, message)``."""
+    from pathlib import Path
+
+    try:
+        return Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise error(path, "file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(path, f"cannot read: {exc}") from None

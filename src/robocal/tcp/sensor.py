@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.header import FileFormatError
+from ..io.header import FileFormatError, read_text
 
 __all__ = [
     "SENSOR_POINT_LABELS",
@@ -285,12 +285,7 @@ def read_sensor_points_csv(path) -> dict:
     non-numeric or non-finite values, unknown, duplicate or missing labels).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise TcpFileError(path, "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TcpFileError(path, f"cannot read: {exc}") from None
+    text = read_text(path, TcpFileError)
     scale = 1.0
     header = None
     found: dict = {}

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.header import read_text
 from ..transforms import POSE_CONVENTIONS, check_transforms, transform_from_pose
 from .sensor import TcpFileError
 
@@ -334,12 +335,7 @@ def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
     :class:`TcpFileError` naming the file, line and column of the first problem.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise TcpFileError(path, "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TcpFileError(path, f"cannot read: {exc}") from None
+    text = read_text(path, TcpFileError)
     meta: dict = {}
     header = None
     labels, rows = [], []
