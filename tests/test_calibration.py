@@ -43,7 +43,7 @@ def expected_holdout_mse(prob, res, q_hold, sigma):
     return float(np.einsum("ij,jk,ik->", Jh, cov, Jh)) * sigma**2 / len(q_hold)
 
 
-@pytest.mark.parametrize("name", ["kuka_kr150_r3100", "ur10"])
+@pytest.mark.parametrize("name", ["kuka_kr150_r3100", "ur10", "ur10_dh_beta"])
 def test_simulated_campaign_reaches_the_noise_floor(name):
     """Issue acceptance: 100 poses, 0.02 mm tracker noise, unknown base 6 + tool 3, every
     identifiable DH (+beta) parameter and joint offset free: holdout error within 10 % of the
@@ -71,6 +71,19 @@ def test_simulated_campaign_reaches_the_noise_floor(name):
     assert np.all(z < 4), z.max()
     assert np.mean(z < 3) >= 0.95
     assert 0.8 < np.sqrt(np.mean(z**2)) < 1.2  # the reported std is the real scale of the errors
+
+
+def test_ur10_in_dh_beta_form_identifies_what_plain_dh_cannot():
+    """UR10's parallel axes 2-3-4: in plain DH only d2 + d3 + d4 shows (two parameters lost); with
+    Hayati's beta on links 2 and 3 the count is the full 27 of a 6R arm measured by points."""
+    ranks = {}
+    for name in ("ur10", "ur10_dh_beta"):
+        nominal, robot, q, pts, truth, n = campaign(name, 12)
+        prob, res = fit(nominal, q[:n], pts[:n])
+        ranks[name] = (res.rank, set(res.identifiability.dropped_names))
+    assert ranks["ur10"][0] == 25 and {"d3", "d4"} <= ranks["ur10"][1]
+    assert ranks["ur10_dh_beta"][0] == 27
+    assert {"beta2", "beta3"}.isdisjoint(ranks["ur10_dh_beta"][1])
 
 
 def test_identifiability_reports_tradeoffs_and_keeps_a_maximal_set():
