@@ -140,8 +140,25 @@ def _arr(x, shape=None):
     return a
 
 
+class _TrapezoidMove:
+    """Shared timing of a programmed move: a trapezoidal speed profile over ``_length`` [mm]."""
+
+    @property
+    def _profile(self):
+        return _trapezoid(self._length, self.speed_mm_s, self.accel_mm_s2)
+
+    @property
+    def duration_s(self) -> float:
+        return self._profile[0]
+
+    @property
+    def constant_speed_window_s(self) -> tuple:
+        d, _, t_acc = self._profile
+        return t_acc, d - t_acc
+
+
 @dataclass(frozen=True)
-class CircleMove:
+class CircleMove(_TrapezoidMove):
     """A circular flange motion at constant orientation (a controller ``movec``), base frame.
 
     Flange position ``center + R (cos(phi) e1 + sin(phi) e2)`` with ``e1 = ref_dir``, ``e2 =
@@ -176,17 +193,8 @@ class CircleMove:
         object.__setattr__(self, "R_base_flange", _arr(self.R_base_flange, (3, 3)))
 
     @property
-    def _profile(self):
-        return _trapezoid(abs(self.sweep_rad) * self.radius_mm, self.speed_mm_s, self.accel_mm_s2)
-
-    @property
-    def duration_s(self) -> float:
-        return self._profile[0]
-
-    @property
-    def constant_speed_window_s(self) -> tuple:
-        d, _, t_acc = self._profile
-        return t_acc, d - t_acc
+    def _length(self) -> float:
+        return abs(self.sweep_rad) * self.radius_mm
 
     def phase(self, t) -> np.ndarray:
         """Programmed angle phi [rad] at motion time ``t`` [s] (from the start of this motion)."""
@@ -220,7 +228,7 @@ class CircleMove:
 
 
 @dataclass(frozen=True)
-class LinearMove:
+class LinearMove(_TrapezoidMove):
     """A straight flange motion with the orientation interpolated (``movel``), base frame.
 
     Position and rotation (about the fixed axis of ``R_start^T R_end``) follow the same
@@ -255,19 +263,6 @@ class LinearMove:
         dist = float(np.linalg.norm(self.end_mm - self.start_mm))
         ang = float(np.linalg.norm(self._rotvec))
         return max(dist, ang * self.speed_mm_s / self.angular_speed_rad_s)
-
-    @property
-    def _profile(self):
-        return _trapezoid(self._length, self.speed_mm_s, self.accel_mm_s2)
-
-    @property
-    def duration_s(self) -> float:
-        return self._profile[0]
-
-    @property
-    def constant_speed_window_s(self) -> tuple:
-        d, _, t_acc = self._profile
-        return t_acc, d - t_acc
 
     def fraction(self, t) -> np.ndarray:
         L = self._length
