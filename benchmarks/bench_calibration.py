@@ -33,11 +33,9 @@ for _var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MK
 import argparse  # noqa: E402
 import cProfile  # noqa: E402
 import contextlib  # noqa: E402
-import datetime  # noqa: E402
 import importlib  # noqa: E402
 import io  # noqa: E402
 import math  # noqa: E402
-import platform  # noqa: E402
 import pstats  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
@@ -46,6 +44,7 @@ from pathlib import Path  # noqa: E402
 
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
+from _machine import machine_info as _machine_info  # noqa: E402  (benchmarks/_machine.py)
 import scipy  # noqa: E402
 from scipy.optimize import least_squares  # noqa: E402
 
@@ -62,35 +61,11 @@ SIGMA_MM = 0.02  # tracker noise per coordinate
 
 
 # ---------------------------------------------------------------------------- helpers
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
 def machine_info() -> list[str]:
-    try:
-        affinity = len(os.sched_getaffinity(0))
-    except AttributeError:
-        affinity = os.cpu_count()
-    try:
-        load = "%.2f %.2f %.2f" % os.getloadavg()
-    except OSError:
-        load = "n/a"
-    return [
-        f"date        {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}",
-        f"cpu         {cpu_model()} ({os.cpu_count()} logical CPUs, {affinity} usable)",
-        f"load avg    {load}  (1/5/15 min, at start)",
-        f"os          {platform.platform()}",
-        f"python      {platform.python_version()} ({platform.python_implementation()})",
-        f"numpy       {np.__version__}",
+    return _machine_info([
         f"scipy       {scipy.__version__}",
         f"numba       {numba.__version__}  (NUMBA_NUM_THREADS={os.environ['NUMBA_NUM_THREADS']})",
-    ]
+    ])
 
 
 def loops_for(fn, budget: float) -> int:

@@ -22,8 +22,6 @@ for _var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MK
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
-import datetime  # noqa: E402
-import platform  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import timeit  # noqa: E402
@@ -31,6 +29,7 @@ from pathlib import Path  # noqa: E402
 
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
+from _machine import machine_info as _machine_info  # noqa: E402  (benchmarks/_machine.py)
 
 from robocal.io.urdf import write_urdf  # noqa: E402
 from robocal.robots import load_robot  # noqa: E402
@@ -51,36 +50,12 @@ TARGET_IDJAC = 0.3  # ms for 100 poses x 30 parameters
 
 
 # ---------------------------------------------------------------------------- helpers
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
 def machine_info() -> list[str]:
-    try:
-        affinity = len(os.sched_getaffinity(0))
-    except AttributeError:
-        affinity = os.cpu_count()
-    try:
-        load = "%.2f %.2f %.2f" % os.getloadavg()
-    except OSError:
-        load = "n/a"
-    return [
-        f"date        {datetime.datetime.now().astimezone().strftime('%Y-%m-%d %H:%M %Z')}",
-        f"cpu         {cpu_model()} ({os.cpu_count()} logical CPUs, {affinity} usable)",
-        f"load avg    {load}  (1/5/15 min, at start)",
-        f"os          {platform.platform()}",
-        f"python      {platform.python_version()} ({platform.python_implementation()})",
-        f"numpy       {np.__version__}",
+    return _machine_info([
         f"numba       {numba.__version__}  (NUMBA_NUM_THREADS={os.environ['NUMBA_NUM_THREADS']})",
         f"pinocchio   {pin.__version__ if pin else 'not installed'}",
         f"rtb         {rtb.__version__ if rtb else 'not installed (skipped)'}",
-    ]
+    ])
 
 
 def calibrate_number(fn, budget: float) -> int:
