@@ -350,7 +350,7 @@ def test_events_file_round_trip(tmp_path):
 
 
 def test_cli_simulate_then_cross_laser(tmp_path):
-    from robocal.cli_tcp_sim import cross_laser_cmd, simulate_cmd
+    from robocal.cli.tcp_cross_laser import cross_laser_cmd, simulate_cmd
 
     runner = CliRunner()
     ev, sj = tmp_path / "ev.csv", tmp_path / "sensor.json"

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from robocal.cli_history import history_cmd
+from robocal.cli.history import history_cmd
 from robocal.store import (
     CYCLE_KINDS, HistoryBusyError, HistoryError, HistoryInputError, HistoryLookupError, HistoryStore,
     UnknownRobotError, redact_url,

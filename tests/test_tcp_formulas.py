@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from robocal.cli_tcp import tcp as tcp_cli
+from robocal.cli.tcp import tcp as tcp_cli
 from robocal.tcp import (
     DegenerateToolPosesError,
     R_FLANGE_STEP3,

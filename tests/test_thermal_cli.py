@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from robocal.cli_thermal import thermal
+from robocal.cli.thermal import thermal
 from robocal.robots import load_robot
 from robocal.robots.writer import save_robot
 from robocal.thermal import frame_errors

@@ -13,8 +13,11 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .store import (
-    HistoryError, HistoryInputError, HistoryStore, default_history_target,
+from ..store import (
+    HistoryError,
+    HistoryInputError,
+    HistoryStore,
+    default_history_target,
 )
 
 # Metrics shown as table columns first (when present), then the others alphabetically.
@@ -112,7 +115,7 @@ def history_cmd(robot, db, params, kinds, since, plot_path, as_json):
         raise click.ClickException(str(exc)) from None
 
     if plot_path is not None:
-        from .report.history_plot import plot_history
+        from ..report.history_plot import plot_history
 
         plot_metrics = {m: metric_series[m] for m in mcols if m in metric_series}
         plot_metrics |= {m: s for m, s in metric_series.items() if m not in plot_metrics}

@@ -39,7 +39,7 @@ def _progress(i, n, text):
 
 
 def _robot(name):
-    from .robots import load_robot
+    from ..robots import load_robot
 
     try:
         return load_robot(name)
@@ -127,10 +127,10 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
       setup.json (robot-held sensor on the flange), truth.json (the cell and the true drifts);
     OUT/program.csv: a taught program (the 34 monitored poses, robocal-program/1).
     """
-    from .io.atomic import atomic_write_text
-    from .sim.robot import as_rng
-    from .sim.thermal import ThermalCell, standard_schedules, write_run
-    from .workflows.thermal_files import Program, setup_json, write_program
+    from ..io.atomic import atomic_write_text
+    from ..sim.robot import as_rng
+    from ..sim.thermal import ThermalCell, standard_schedules, write_run
+    from ..workflows.thermal_files import Program, setup_json, write_program
 
     if n_cycles < 2:
         raise click.ClickException(f"--cycles must be at least 2, got {n_cycles}")
@@ -246,9 +246,20 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
     SPHERE_FILE: measurement file (robocal-measurements/1) of sphere centres in the sensor frame
     (columns pose, <joints>, x, y, z), e.g. a simulated run's sphere_cold.csv.
     """
-    from .io.atomic import atomic_write_text
-    from .thermal import calibrate_system, calibrate_system_thesis, compare_system_calibrations, frame_errors
-    from .workflows.thermal_files import _load_json, _transform, read_sphere_file, select_poses, sensor_json
+    from ..io.atomic import atomic_write_text
+    from ..thermal import (
+        calibrate_system,
+        calibrate_system_thesis,
+        compare_system_calibrations,
+        frame_errors,
+    )
+    from ..workflows.thermal_files import (
+        _load_json,
+        _transform,
+        read_sphere_file,
+        select_poses,
+        sensor_json,
+    )
 
     model = _robot(robot)
     if sigma_mm is not None and not (sigma_mm > 0 and math.isfinite(sigma_mm)):
@@ -278,7 +289,7 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
         centre = None
         errors = {}
         if truth is not None:
-            from .thermal.system_calibration import _base_flange
+            from ..thermal.system_calibration import _base_flange
 
             T = _base_flange(model, q)
             centre = (T[:, :3, :3] @ truth["P_e"] + T[:, :3, 3]).mean(axis=0)
@@ -364,9 +375,14 @@ def screen_cmd(run_dir, n_keep, threshold_mm, statistic, n_online, params, senso
     lambda before / traditional / screened on this run. With --params the given set is evaluated
     instead (table 5-2 on an evaluation run).
     """
-    from .thermal import calibrate_system
-    from .thermal.screening import ScreeningProblem, screen_parameters, select_online_poses, traditional_parameters
-    from .workflows.thermal_files import read_run_dir, read_sensor_json
+    from ..thermal import calibrate_system
+    from ..thermal.screening import (
+        ScreeningProblem,
+        screen_parameters,
+        select_online_poses,
+        traditional_parameters,
+    )
+    from ..workflows.thermal_files import read_run_dir, read_sensor_json
 
     if not (threshold_mm > 0 and math.isfinite(threshold_mm)):
         raise click.ClickException(f"--threshold-mm must be a positive number, got {threshold_mm}")
@@ -497,9 +513,15 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
     """
     import time
 
-    from .thermal import compensate_program, identify_drift
-    from .workflows.thermal_files import (
-        Program, match_cold_reference, read_program, read_sensor_json, read_sphere_file, select_poses, write_program,
+    from ..thermal import compensate_program, identify_drift
+    from ..workflows.thermal_files import (
+        Program,
+        match_cold_reference,
+        read_program,
+        read_sensor_json,
+        read_sphere_file,
+        select_poses,
+        write_program,
     )
 
     t_start = time.perf_counter()
@@ -542,7 +564,7 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
     cycle_id = None
     db = None
     if history is not None:
-        from .store import HistoryError, HistoryStore, default_history_target
+        from ..store import HistoryError, HistoryStore, default_history_target
 
         db = history or default_history_target()
         rid = robot_id or model.name

@@ -1,5 +1,5 @@
 """``robocal tcp cross-laser`` and ``robocal tcp simulate`` (click commands, registered in the
-``tcp`` group by :mod:`robocal.cli_tcp`)."""
+``tcp`` group by :mod:`robocal.cli.tcp`)."""
 
 from __future__ import annotations
 
@@ -64,7 +64,13 @@ def _load_json(path, what):
                                                   "convention (e.g. kuka_abc, fanuc_wpr, quaternion).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, no_arc_correction, convention, as_json):
-    from .tcp.cross_laser import CrossLaserError, CrossLaserSettings, evaluate_recording, read_events_csv, sensor_frame
+    from ..tcp.cross_laser import (
+        CrossLaserError,
+        CrossLaserSettings,
+        evaluate_recording,
+        read_events_csv,
+        sensor_frame,
+    )
 
     try:
         records = read_events_csv(events_file)
@@ -98,7 +104,7 @@ def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, 
     out["steps"]["vertical"] = {"flange_mean_mm": steps["vertical"].flange_mean_mm.tolist(),
                                 "beam_heights_mm": steps["vertical"].beam_heights_mm}
     if convention:
-        from .transforms import pose_from_transform
+        from ..transforms import pose_from_transform
 
         try:
             out["pose"] = {"convention": convention,
@@ -152,8 +158,12 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     library's procedure), no_beta_correction, thesis_step3 (step 3 centred as in the thesis) and
     thesis_step3_no_beta.
     """
-    from .tcp.cross_laser import CrossLaserError
-    from .workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
+    from ..tcp.cross_laser import CrossLaserError
+    from ..workflows.tcp import (
+        DEFAULT_VARIANTS,
+        format_study_table,
+        tcp_repeatability_study,
+    )
 
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
     try:

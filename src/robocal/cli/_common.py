@@ -1,0 +1,71 @@
+"""Helpers shared by the command modules: argument parsing and one-line user errors."""
+
+from __future__ import annotations
+
+import math
+
+import click
+import numpy as np
+
+from ..robots import RobotFileError, load_robot
+
+JOINTS_ARG = dict(nargs=-1, type=str, required=True)
+NUMBERS_CONTEXT = {"ignore_unknown_options": True, "allow_interspersed_args": True}
+
+
+def _robot(name):
+    try:
+        return load_robot(name)
+    except RobotFileError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+def _numbers(values, what):
+    out = []
+    for i, v in enumerate(values, 1):
+        try:
+            x = float(v)
+        except ValueError:
+            raise click.ClickException(f"{what} {i}: {v!r} is not a number") from None
+        if not math.isfinite(x):
+            raise click.ClickException(f"{what} {i}: {v!r} is not a finite number")
+        out.append(x)
+    return np.array(out)
+
+
+def _prismatic(model):
+    return model.prismatic_joints
+
+
+def _joints_from_cli(model, values, deg):
+    q = _numbers(values, "joint")
+    if len(q) != model.n_joints:
+        raise click.ClickException(
+            f"{model.name} has {model.n_joints} joints ({', '.join(model.controller_joints)}), got {len(q)} values")
+    pris = _prismatic(model)
+    if deg:
+        q = np.where(pris, q, np.radians(q))
+    lo, hi = model.limits[:, 0], model.limits[:, 1]
+    bad = np.flatnonzero((q < lo - 1e-12) | (q > hi + 1e-12))
+    if bad.size:
+        j = int(bad[0])
+        scale, unit = (1.0, "mm") if pris[j] else ((180 / math.pi, "deg") if deg else (1.0, "rad"))
+        raise click.ClickException(
+            f"joint {model.controller_joints[j]} = {q[j] * scale:.6g} {unit} is outside its limits "
+            f"[{lo[j] * scale:.6g}, {hi[j] * scale:.6g}] {unit}" + ("" if deg else " (pass --deg for degrees)"))
+    return q
+
+
+def _user_error(exc) -> click.ClickException:
+    """One line ``Error: ...`` from an exception of the library (file, value, name problems)."""
+    msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+    return click.ClickException(" ".join(str(msg).split()))
+
+
+def _names(values):
+    """Parameter names from repeated options, each comma or space separated."""
+    return [n for v in values for n in v.replace(",", " ").split()]
+
+
+def _step_printer(i, n, text):
+    click.echo(f"[{i}/{n}] {text}", err=True)

@@ -1,0 +1,141 @@
+"""``robocal robots``, ``robocal fk``, ``robocal ik``: the robot library and kinematics."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import click
+import numpy as np
+
+from ..robots import list_robots, load_robot
+from ._common import (
+    JOINTS_ARG,
+    NUMBERS_CONTEXT,
+    _joints_from_cli,
+    _numbers,
+    _prismatic,
+    _robot,
+)
+
+
+@click.command()
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def robots(as_json):
+    """List the robots shipped with robocal."""
+    rows = []
+    for name in list_robots():
+        m = load_robot(name)
+        rows.append({"name": name, "model": m.kind, "joints": m.n_joints, "end_effectors": [e.name for e in m.end_effectors],
+                     "title": m.title})
+    if as_json:
+        click.echo(json.dumps(rows, indent=2))
+        return
+    w = max(len(r["name"]) for r in rows)
+    for r in rows:
+        click.echo(f"{r['name']:<{w}}  {r['model']:<8} {r['joints']:>2} joints  {r['title']}")
+
+
+@click.command(context_settings=NUMBERS_CONTEXT)
+@click.argument("robot")
+@click.argument("joints", **JOINTS_ARG)
+@click.option("--deg", is_flag=True, help="Joint angles in degrees (default radians); prismatic joints in mm.")
+@click.option("--euler", "convention", default=None,
+              help="Also print the orientation in this convention (kuka_abc, fanuc_wpr, zxz, rpy, quaternion, rotvec, ...).")
+@click.option("--ee", "end_effector", default=None, help="End effector of a tree robot (default: the first).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON with keys position_mm and rotation.")
+def fk(robot, joints, deg, convention, end_effector, as_json):
+    """Forward kinematics: flange pose of ROBOT at JOINTS (base frame, mm)."""
+    from ..transforms import pose_from_transform
+
+    model = _robot(robot)
+    q = _joints_from_cli(model, joints, deg)
+    try:
+        T = model.fk(q, end_effector)
+    except (KeyError, IndexError) as exc:
+        raise click.ClickException(str(exc).strip('"')) from None
+    out = {"robot": model.name, "end_effector": model.end_effectors[model.end_effector_index(end_effector)].name,
+           "position_mm": T[:3, 3].tolist(), "rotation": T[:3, :3].tolist()}
+    if convention:
+        try:
+            pose = pose_from_transform(T, convention, length_unit="mm", angle_unit="deg")
+        except ValueError as exc:
+            raise click.ClickException(str(exc)) from None
+        unit = "" if convention == "quaternion" else "deg"
+        out["orientation"] = {"convention": convention, "values": pose[3:].tolist(), "unit": unit}
+    if as_json:
+        click.echo(json.dumps(out, indent=2))
+        return
+    x, y, z = T[:3, 3]
+    click.echo(f"{model.name} {out['end_effector']}: position [mm] x={x:.4f} y={y:.4f} z={z:.4f}")
+    for row in T[:3, :3]:
+        click.echo("  [" + "  ".join(f"{v:+.6f}" for v in row) + "]")
+    if convention:
+        vals = "  ".join(f"{v:.6f}" for v in out["orientation"]["values"])
+        click.echo(f"orientation {convention} [{out['orientation']['unit'] or '-'}]: {vals}")
+
+
+@click.command(context_settings=NUMBERS_CONTEXT)
+@click.argument("robot")
+@click.argument("pose", **JOINTS_ARG)
+@click.option("--euler", "convention", default="kuka_abc", show_default=True,
+              help="Orientation convention of POSE (angles in degrees; quaternion: w x y z).")
+@click.option("--deg", is_flag=True, help="Print joint angles in degrees (default radians).")
+@click.option("--start", "start", default=None,
+              help="Starting joints for the numerical solver, comma separated (units as --deg).")
+@click.option("--all-branches", is_flag=True, help="All closed-form branches (6R spherical-wrist arms).")
+@click.option("--ee", "end_effector", default=None, help="End effector of a tree robot (default: the first).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def ik(robot, pose, convention, deg, start, all_branches, end_effector, as_json):
+    """Inverse kinematics: joints that put ROBOT's flange at POSE = X Y Z [mm] and orientation angles."""
+    from ..kinematics.ik import ik_numeric
+    from ..transforms import transform_from_pose
+
+    model = _robot(robot)
+    values = _numbers(pose, "pose value")
+    n_expected = 7 if convention == "quaternion" else 6
+    if len(values) != n_expected:
+        raise click.ClickException(f"POSE needs {n_expected} values (x y z in mm and the {convention} orientation), "
+                                   f"got {len(values)}")
+    try:
+        T = transform_from_pose(values, convention, length_unit="mm", angle_unit="deg")
+    except ValueError as exc:
+        raise click.ClickException(str(exc)) from None
+    pris = _prismatic(model)
+    to_out = (lambda q: np.where(pris, q, np.degrees(q))) if deg else (lambda q: q)
+    solutions = []
+    if all_branches:
+        try:
+            from ..kinematics.ik_analytic import ik_analytic
+            q_all, valid = ik_analytic(model, T)
+        except ValueError as exc:
+            raise click.ClickException(f"no closed-form solver for {model.name}: {exc}") from None
+        for b in range(q_all.shape[0]):
+            if valid[b]:
+                solutions.append({"branch": b, "joints": to_out(q_all[b]).tolist(),
+                                  "within_limits": bool(model.within_limits(q_all[b]))})
+        if not solutions:
+            raise click.ClickException("pose is not reachable (no valid closed-form branch)")
+    else:
+        if start is None:
+            lo, hi = model.limits[:, 0], model.limits[:, 1]
+            q0 = np.where(np.isfinite(lo) & np.isfinite(hi), (lo + hi) / 2, 0.0)
+        else:
+            q0 = _joints_from_cli(model, start.split(","), deg)
+        res = ik_numeric(model, T, q0, end_effector=end_effector)
+        if not res.converged:
+            raise click.ClickException(
+                f"IK did not converge ({res.status}): remaining error {res.position_error_mm:.4g} mm, "
+                f"{math.degrees(res.rotation_error_rad):.4g} deg; try --start closer to the solution")
+        solutions.append({"joints": to_out(res.q).tolist(), "iterations": int(res.iterations),
+                          "position_error_mm": float(res.position_error_mm)})
+    unit = "deg" if deg else "rad"
+    if as_json:
+        click.echo(json.dumps({"robot": model.name, "joint_unit": unit, "joints_names": list(model.controller_joints),
+                               "solutions": solutions}, indent=2))
+        return
+    for s in solutions:
+        tag = f"branch {s['branch']}" if "branch" in s else "solution"
+        extra = "" if s.get("within_limits", True) else "  (outside joint limits)"
+        click.echo(f"{tag} [{unit}]: " + "  ".join(f"{v:.6f}" for v in s["joints"]) + extra)
+
