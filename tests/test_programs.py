@@ -54,6 +54,7 @@ RAPID_MOD = "\n".join([
     "  CONST jointtarget jHome:=[[0,-20,30,0,80,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",
     "  ! CONST robtarget pAlt:=[[1,2,3],[1,0,0,0],[0,0,0,0],[9E+09,9E+09,9E+09,9E+09,9E+09,9E+09]];",
     "  VAR robtarget pTemp;",
+    "  VAR robtarget pAktuell := CRobT(\\Tool:=tGreifer \\WObj:=wobjTisch);",
     "  CONST robtarget pBahn{2}:=[[[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]],"
     "[[4,5,6],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]];",
     "",
@@ -209,7 +210,7 @@ def test_rapid_targets_and_values(tmp_path):
     assert home.kind == "joint" and (home.tool, home.base) == ("tGreifer", "wobj0")
     np.testing.assert_allclose(home.joints, np.radians([0, -20, 30, 0, 80, 0]))
     reasons = sorted(s.reason for s in prog.skipped)
-    assert len(reasons) == 2 and "array" in reasons[0] and "inline" in reasons[1]
+    assert len(reasons) == 3 and "array" in reasons[0] and "expression" in reasons[1] and "inline" in reasons[2]
 
 
 def test_krl_and_rapid_describe_the_same_rotation(tmp_path):

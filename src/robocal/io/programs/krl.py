@@ -30,7 +30,7 @@ _CARTESIAN = ("X", "Y", "Z", "A", "B", "C")
 _JOINTS = ("A1", "A2", "A3", "A4", "A5", "A6")
 _VERBATIM = {"E6POS": ("S", "T", "E1", "E2", "E3", "E4", "E5", "E6"), "POS": ("S", "T"), "FRAME": (),
              "E6AXIS": ("E1", "E2", "E3", "E4", "E5", "E6"), "AXIS": ()}
-_DECL = re.compile(r"^[ \t]*((?:(?:DECL|GLOBAL)[ \t]+)*)(E6POS|E6AXIS|POS|AXIS|FRAME|FDAT)[ \t]+"
+_DECL = re.compile(r"^[ \t]*((?:(?:DECL|GLOBAL|CONST)[ \t]+)*)(E6POS|E6AXIS|POS|AXIS|FRAME|FDAT)[ \t]+"
                    r"([A-Za-z_$][\w$]*)[ \t]*(\[[^\]\n]*\])?[ \t]*(=)?", re.I | re.M)
 _OPEN = re.compile(r"[ \t]*\{")
 _COMPONENT = re.compile(r"\s*([A-Za-z_]\w*)\s+(\S(?:.*\S)?)\s*$", re.S)

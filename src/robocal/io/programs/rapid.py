@@ -154,6 +154,11 @@ def parse_rapid(text: str, path) -> tuple[list, list]:
             continue
         if not m.group(4):
             continue  # declared without a value
+        value_at = _WS.match(masked, m.end()).end()
+        if masked[value_at:value_at + 1] != "[":
+            skipped.append(Skipped(line, text[m.start():value_at + 40].split(";")[0].strip(),
+                                   "initial value is an expression, not a literal aggregate"))
+            continue
         tree, end = _aggregate(masked, m.end(), fail)
         semicolon = _WS.match(masked, end).end()
         if masked[semicolon:semicolon + 1] != ";":
