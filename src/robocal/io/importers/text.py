@@ -14,6 +14,7 @@ from pathlib import Path
 from ..header import FileFormatError
 
 __all__ = [
+    "read_bytes",
     "decode_file",
     "detect_delimiter",
     "split_fields",
@@ -29,6 +30,16 @@ _HAS_COMMA_DECIMAL = re.compile(r"^[-+]?\d*,\d+(?:[eE][-+]?\d+)?$")
 _NAME_UNIT = re.compile(r"^(.*?)\s*(?:\[\s*([^\]]*?)\s*\]|\(\s*([^)]*?)\s*\)|/\s*(mm|m|in|inch|deg|rad|°|s|ms))\s*$", re.I)
 
 
+def read_bytes(path) -> bytes:
+    """The bytes of ``path``; a missing or unreadable file is a :class:`FileFormatError`."""
+    try:
+        return Path(path).read_bytes()
+    except FileNotFoundError:
+        raise FileFormatError(path, "file not found") from None
+    except OSError as exc:
+        raise FileFormatError(path, f"cannot read: {exc}") from None
+
+
 def decode_file(path, encoding: str | None = None) -> tuple[str, str]:
     """``(text, encoding)`` of ``path``.
 
@@ -36,12 +47,7 @@ def decode_file(path, encoding: str | None = None) -> tuple[str, str]:
     and, if the bytes are not UTF-8, Latin-1 (ISO 8859-1, which decodes every byte) is used, as
     written by many Windows export tools. The returned encoding names what was used.
     """
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise FileFormatError(path, "file not found") from None
-    except OSError as exc:
-        raise FileFormatError(path, f"cannot read: {exc}") from None
+    data = read_bytes(path)
     if encoding is not None:
         try:
             return data.decode(encoding), encoding

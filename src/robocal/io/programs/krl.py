@@ -20,7 +20,7 @@ import numpy as np
 
 from ...transforms import transform_from_pose
 from ..header import FileFormatError
-from .source import NUMBER, LineIndex, mask
+from .source import NUMBER_FULL, LineIndex, mask
 from .target import ProgramTarget, Skipped
 
 __all__ = ["parse_krl"]
@@ -34,7 +34,6 @@ _DECL = re.compile(r"^[ \t]*((?:(?:DECL|GLOBAL|CONST)[ \t]+)*)(E6POS|E6AXIS|POS|
                    r"([A-Za-z_$][\w$]*)[ \t]*(\[[^\]\n]*\])?[ \t]*(=)?", re.I | re.M)
 _OPEN = re.compile(r"[ \t]*\{")
 _COMPONENT = re.compile(r"\s*([A-Za-z_]\w*)\s+(\S(?:.*\S)?)\s*$", re.S)
-_NUMBER_FULL = re.compile(rf"^{NUMBER}$")
 
 
 def _components(text, masked, start, end, fail, line):
@@ -74,7 +73,7 @@ def _target(decl, name, comps, fail, line) -> ProgramTarget:
     if missing:
         fail(f"{decl} {name}: missing component(s) {', '.join(missing)} (expected {', '.join(keys)})", line, missing[0])
     for k in keys:
-        if not _NUMBER_FULL.match(comps[k][0]):
+        if not NUMBER_FULL.match(comps[k][0]):
             fail(f"{decl} {name}: {comps[k][0]!r} is not a number (component {k})", line, k)
     values = tuple(float(comps[k][0]) for k in keys)
     spans = tuple((comps[k][1], comps[k][2]) for k in keys)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ...transforms import transform_from_pose
 from ..header import FileFormatError
-from .source import NUMBER, LineIndex, mask
+from .source import NUMBER_FULL, LineIndex, mask
 from .target import ProgramTarget, Skipped
 
 __all__ = ["parse_rapid"]
@@ -30,7 +30,6 @@ _DECL = re.compile(r"\b(?:(?:LOCAL|TASK)\s+)?(?:CONST|PERS|VAR)\s+(robtarget|joi
 _MOVE = re.compile(r"\b(Move(?:L|J|C|AbsJ)(?:DO|Sync)?)\b([^;]*);", re.I)
 _WS = re.compile(r"\s*")
 _SCALAR = re.compile(r"[^\[\],;\s](?:[^\[\],;\n]*[^\[\],;\s])?")
-_NUMBER_FULL = re.compile(rf"^{NUMBER}$")
 _LAYOUT = {"robtarget": ((3, 4, 4, 6), "[[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[eax_a,...,eax_f]]"),
            "jointtarget": ((6, 6), "[[rax_1,...,rax_6],[eax_a,...,eax_f]]")}
 
@@ -67,7 +66,7 @@ def _aggregate(masked, pos, fail):
 def _numbers(text, nodes, what, fail):
     out = []
     for start, end, items in nodes:
-        if items is not None or not _NUMBER_FULL.match(text[start:end]):
+        if items is not None or not NUMBER_FULL.match(text[start:end]):
             fail(f"{what}: {text[start:end]!r} is not a number", start)
         out.append((float(text[start:end]), (start, end)))
     return out

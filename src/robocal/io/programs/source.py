@@ -5,15 +5,16 @@ from __future__ import annotations
 
 import bisect
 import re
-from pathlib import Path
 
-from ..header import FileFormatError
+from ..importers.text import read_bytes
 
-__all__ = ["NUMBER", "NUMBER_RE", "decode_program", "mask", "LineIndex", "format_like"]
+__all__ = ["NUMBER", "NUMBER_RE", "NUMBER_FULL", "decode_program", "mask", "LineIndex", "format_like"]
 
 #: A decimal number as controllers write it: ``-12``, ``12.50``, ``.5``, ``-.000``, ``9E+09``.
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 NUMBER_RE = re.compile(NUMBER)
+#: A whole text that is one such number.
+NUMBER_FULL = re.compile(rf"^{NUMBER}$")
 _NUMBER_PARTS = re.compile(r"^([-+]?)(\d*)(?:(\.)(\d*))?(?:([eE])([-+]?\d+))?$")
 
 
@@ -21,12 +22,7 @@ def decode_program(path) -> tuple[str, str]:
     """``(text, encoding)``: UTF-8 if the bytes are UTF-8, else Latin-1 (controller files written on
     Windows). Line endings and a byte-order mark stay in the text, so encoding it back with the same
     encoding gives the original bytes."""
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise FileFormatError(path, "file not found") from None
-    except OSError as exc:
-        raise FileFormatError(path, f"cannot read: {exc}") from None
+    data = read_bytes(path)
     try:
         return data.decode("utf-8"), "utf-8"
     except UnicodeDecodeError:

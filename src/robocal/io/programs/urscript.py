@@ -24,7 +24,7 @@ import numpy as np
 
 from ...transforms import transform_from_pose
 from ..header import FileFormatError
-from .source import NUMBER, LineIndex, mask
+from .source import NUMBER_FULL, LineIndex, mask
 from .target import ProgramTarget, Skipped
 
 __all__ = ["parse_urscript"]
@@ -32,7 +32,6 @@ __all__ = ["parse_urscript"]
 _MOVE = re.compile(r"\b(movel|movej|movep|movec)\s*\(\s*", re.I)
 _ASSIGN = re.compile(r"^[ \t]*(?:(?:global|local)[ \t]+)?([A-Za-z_]\w*)[ \t]*=[ \t]*(p?)\[", re.M)
 _LIST = re.compile(r"(p?)\[([^\[\]]*)\]")
-_NUMBER_FULL = re.compile(rf"^{NUMBER}$")
 
 
 def _list_values(text, masked, start, what, fail):
@@ -45,7 +44,7 @@ def _list_values(text, masked, start, what, fail):
     for piece in masked[m.start(2):m.end(2)].split(","):
         lead = len(piece) - len(piece.lstrip())
         s, e = pos + lead, pos + len(piece.rstrip())
-        if not _NUMBER_FULL.match(text[s:e]):
+        if not NUMBER_FULL.match(text[s:e]):
             return None, m.end()
         values.append(float(text[s:e]))
         spans.append((s, e))
