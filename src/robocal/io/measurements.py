@@ -329,6 +329,12 @@ def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
     lines = text.splitlines()
     # ---- header block
     md, key_line, i = read_header_block(lines, fail)
+    if not md:  # no header block at all: a plain export given as a measurement file
+        start = lines[i].strip()[:60] if i < len(lines) else ""
+        fail(f"no '# format: {FORMAT}' header line" + (f" (the file starts with {start!r})" if start else "")
+             + "; this looks like a plain export: declare the format with the header lines '# format: "
+             f"{FORMAT}', '# robot: ...', '# length_unit: mm', '# angle_unit: deg' above the column row "
+             "(docs/measurement-files.md), or convert the export with 'robocal import' (docs/importers.md)", 1)
     for key in _REQUIRED_KEYS:
         if key not in md or not md[key]:
             fail(f"header is missing '# {key}: ...' (required: {', '.join(_REQUIRED_KEYS)})")
