@@ -11,6 +11,7 @@ import click
 
 from .calibrate import calibrate, correct
 from .history import history_cmd as history
+from .importing import import_cmd
 from .kinematics import fk, ik, robots
 from .simulate import simulate
 from .tcp import tcp
@@ -92,6 +93,7 @@ _SUMMARIES = {
     tcp: "Tool frame calibration: touch-up, light barriers, cross-laser.",
     thermal: "Thermal drift: system calibration, screening, compensation.",
     history: "A robot's calibration and maintenance history.",
+    import_cmd: "A tracker export and a joint log into a measurement file.",
 }
 for _command, _summary in _SUMMARIES.items():
     _command.short_help = _summary
