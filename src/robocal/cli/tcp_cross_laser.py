@@ -64,13 +64,8 @@ def _load_json(path, what):
                                                   "convention (e.g. kuka_abc, fanuc_wpr, quaternion).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, no_arc_correction, convention, as_json):
-    from ..tcp.cross_laser import (
-        CrossLaserError,
-        CrossLaserSettings,
-        evaluate_recording,
-        read_events_csv,
-        sensor_frame,
-    )
+    from ..io.barrier_events import read_events_csv
+    from ..tcp.cross_laser import CrossLaserError, CrossLaserSettings, evaluate_recording, sensor_frame
 
     try:
         records = read_events_csv(events_file)
@@ -159,11 +154,7 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     thesis_step3_no_beta.
     """
     from ..tcp.cross_laser import CrossLaserError
-    from ..workflows.tcp import (
-        DEFAULT_VARIANTS,
-        format_study_table,
-        tcp_repeatability_study,
-    )
+    from ..workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
 
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
     try:

@@ -14,9 +14,10 @@ import math
 
 import numpy as np
 
+from ..io.barrier_events import write_events_csv
 from ..robots import load_robot
 from ..sim.light_barrier import CrossLaserSensor, CylinderTool, LightBarrierCell, simulate_sensor_calibration_points
-from ..tcp.cross_laser import CrossLaserSettings, recalibrate_tool, write_events_csv
+from ..tcp.cross_laser import CrossLaserSettings, recalibrate_tool
 from ..transforms import rotation_angle, transforms_from
 
 __all__ = ["DEFAULT_VARIANTS", "tcp_repeatability_study", "format_study_table"]
