@@ -69,6 +69,7 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -216,21 +217,53 @@ def _wrap(x):
     return (np.asarray(x) + np.pi) % _TWO_PI - np.pi
 
 
-def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: float = 1e-9,
-                   verify_tol: float = 1e-9, n_verify: int = 200) -> OPWParameters:
-    """Derive the OPW parameters of ``model`` numerically from its joint axes.
+class _BaseFrame(NamedTuple):
+    """The OPW base frame in the world: origin ``o`` on axis 1, axes ``x, y, z`` (3,) each;
+    ``sign1`` = direction of the model's joint 1 about ``z``."""
 
-    The joint axes (world lines) are taken from the joint twists at ``q = 0``, so every model kind
-    (dh, dh_beta, mdh, urdf, with fixed frames, base and tool) and any invertible 6x6 coupling
-    are handled alike. Checks, each against ``tol_angle`` [rad] or ``tol_length`` [mm]:
-    axis 1 perpendicular to axis 2, axes 2 and 3 parallel, axis 3 perpendicular to axis 4,
-    axes 4-5 and 5-6 perpendicular and intersecting in one point. The result is then verified:
-    FK of the model equals FK of the OPW model at ``n_verify`` random joint vectors (and zero)
-    within ``verify_tol`` mm in position and ``verify_tol * 1e-2`` rad in rotation.
+    o: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    sign1: float
 
-    Raises :class:`NotAnalyticError` naming each failed condition and its size.
-    """
-    name = getattr(model, "name", "model")
+
+class _Arm(NamedTuple):
+    """Arm-plane geometry at ``q_model = 0``: frame axes ``x1, y1`` (arm plane), ``z4, x4``
+    (forearm), the lengths [mm], the OPW angles of joints 1-3 at zero [rad] and joint signs."""
+
+    x1: np.ndarray
+    y1: np.ndarray
+    z4: np.ndarray
+    x4: np.ndarray
+    a1: float
+    a2: float
+    b: float
+    c1: float
+    c2: float
+    c3: float
+    off1: float
+    t2_0: float
+    t23_0: float
+    sign2: float
+    sign3: float
+    sign4: float
+
+
+class _Wrist(NamedTuple):
+    """Wrist geometry at ``q_model = 0``: flange distance ``c4`` [mm], the OPW angles of joints
+    4-6 at zero [rad], signs of joints 5 and 6."""
+
+    c4: float
+    t4_0: float
+    t5_0: float
+    t6_0: float
+    sign5: float
+    sign6: float
+
+
+def _check_chain(model, name: str) -> np.ndarray:
+    """The coupling matrix (6, 6) of a serial 6R model; :class:`NotAnalyticError` otherwise."""
     if model.n_joints != 6 or model.n_model_joints != 6:
         raise NotAnalyticError(f"{name}: needs 6 joints, has {model.n_joints} controller / "
                                f"{model.n_model_joints} model joints")
@@ -244,17 +277,26 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
     cond = np.linalg.cond(C)
     if not np.isfinite(cond) or cond > 1e12:
         raise NotAnalyticError(f"{name}: coupling matrix is singular (condition number {cond:.3g})")
+    return C
 
-    q0 = np.zeros((1, 6))
-    _, jt, _ = model.twists(q0)
-    w = jt[0, :3, :].T.copy()   # (6, 3) axis directions (positive model joint rotation)
+
+def _joint_axes(model):
+    """Unit directions ``w`` (6, 3) (positive model joint rotation) and a point ``p`` (6, 3) [mm]
+    on each joint axis at ``q = 0``, from the joint twists."""
+    _, jt, _ = model.twists(np.zeros((1, 6)))
+    w = jt[0, :3, :].T.copy()
     v = jt[0, 3:, :].T
     norms = np.linalg.norm(w, axis=1)
     w /= norms[:, None]
-    p = np.cross(w, v) / norms[:, None]  # a point on each axis
-    w1, w2, w3, w4, w5, w6 = w
-    p1, p2, p3, p4, p5, p6 = p
+    p = np.cross(w, v) / norms[:, None]
+    return w, p
 
+
+def _opw_class_failures(w, p, tol_angle: float, tol_length: float):
+    """The OPW conditions on the joint axes: ``(failures, wrist centre)``, failures a list of texts
+    (each with the size of its deviation), the wrist centre (3,) [mm] or None."""
+    w1, w2, w3, w4, w5, w6 = w
+    _, _, _, p4, p5, p6 = p
     deg = 180.0 / np.pi
     failures = []
 
@@ -274,7 +316,7 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
     need(e <= tol_angle, f"axes 5 and 6 are not perpendicular (off by {e:.3g} rad = {e * deg:.3g} deg)")
     wc = None
     if abs(w4 @ w5) < 0.5 and abs(w5 @ w6) < 0.5:
-        a45, b45, t45 = _closest(p4, w4, p5, w5)
+        a45, b45, _ = _closest(p4, w4, p5, w5)
         a56, b56, _ = _closest(p6, w6, p5, w5)
         d45 = np.linalg.norm(a45 - b45)
         d56 = np.linalg.norm(a56 - b56)
@@ -286,12 +328,12 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
         wc = (a45 + b45 + a56 + b56) / 4.0
     else:
         failures.append("wrist axes 4-5-6 are far from perpendicular: no spherical wrist")
-    if failures:
-        raise NotAnalyticError(f"{name}: not an ortho-parallel arm with spherical wrist (OPW class): "
-                               + "; ".join(failures))
+    return failures, wc
 
-    T_wb_model = np.asarray(model.T_world_base, dtype=float)
-    # OPW base frame.
+
+def _base_frame(w1, p1, T_wb_model) -> _BaseFrame:
+    """OPW base frame: z along axis 1 on the side of the model base's z, origin level with the
+    model base's origin, x the model base's x (else y, world x, world y) projected."""
     z0 = w1 if w1 @ T_wb_model[:3, 2] >= 0 else -w1
     sign1 = float(np.sign(w1 @ z0))
     o0 = p1 + ((T_wb_model[:3, 3] - p1) @ z0) * z0
@@ -302,8 +344,15 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
             x0 = _unit(xp)
             break
     y0 = np.cross(z0, x0)
+    return _BaseFrame(o0, x0, y0, z0, sign1)
 
-    # Arm plane frame at q_model = 0.
+
+def _arm(name: str, w, p, wc, base: _BaseFrame, tol_length: float) -> _Arm:
+    """Shoulder (a1, c1, joint 1 offset), upper arm (c2, joint 2 offset) and forearm (a2, b, c3,
+    joint 3 offset) from the axes 1-4 and the wrist centre ``wc``."""
+    _, w2, w3, w4, _, _ = w
+    _, p2, p3, _, _, _ = p
+    o0, x0, y0, z0 = base.o, base.x, base.y, base.z
     x1 = _unit(np.cross(w2, z0))
     a1 = float((p2 - o0) @ x1)
     if a1 < 0.0:
@@ -333,12 +382,17 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
     if np.hypot(a2, c3) <= tol_length:
         raise NotAnalyticError(f"{name}: axis 3 passes through the wrist centre (distance "
                                f"{np.hypot(a2, c3):.3g} mm)")
+    return _Arm(x1, y1, z4, x4, a1, a2, b, c1, c2, c3, off1, t2_0, t23_0, sign2, sign3, sign4)
 
-    # Wrist: axis 5 is +y of the frame after Rz(t4).
+
+def _wrist(w, wc, arm: _Arm, T_ee0) -> _Wrist:
+    """Joints 4-6 from axes 5 and 6, the wrist centre and the end effector pose ``T_ee0`` (4, 4)
+    at ``q = 0``: axis 5 is +y of the frame after Rz(t4); c4 along axis 6 to the end effector."""
+    w5, w6 = w[4], w[5]
+    x4, y1, z4 = arm.x4, arm.y1, arm.z4
     t4_0 = float(np.arctan2(-(w5 @ x4), w5 @ y1))
     x4p = np.cos(t4_0) * x4 + np.sin(t4_0) * y1
     sign5 = 1.0
-    T_ee0 = model.fk(q0)[0]
     z6 = w6.copy()
     c4 = float((T_ee0[:3, 3] - wc) @ z6)
     if c4 < 0.0:
@@ -354,17 +408,24 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
             xL = xp
             break
     t6_0 = float(np.arctan2(xL @ y5, xL @ x5))
+    return _Wrist(c4, t4_0, t5_0, t6_0, sign5, sign6)
 
-    # Lengths at rounding-noise level are exactly zero (the verification below covers the snap).
-    a1, a2, b, c1, c3, c4 = (0.0 if abs(x) <= tol_length else x for x in (a1, a2, b, c1, c3, c4))
 
+def _assemble(model, name: str, C, base: _BaseFrame, arm: _Arm, wrist: _Wrist, T_ee0,
+              tol_length: float) -> OPWParameters:
+    """The read-only :class:`OPWParameters`; lengths at rounding-noise level snap to 0, and the
+    end effector frame follows from FK of the OPW model at the offsets."""
+    # Lengths at rounding-noise level are exactly zero (the verification covers the snap).
+    a1, a2, b, c1, c3, c4 = (0.0 if abs(x) <= tol_length else x
+                             for x in (arm.a1, arm.a2, arm.b, arm.c1, arm.c3, wrist.c4))
+    c2 = arm.c2
     T_world_obase = np.eye(4)
-    T_world_obase[:3, :3] = np.stack([x0, y0, z0], axis=1)
-    T_world_obase[:3, 3] = o0
-    offsets = _wrap(np.array([off1, t2_0, t23_0 - t2_0, t4_0, t5_0, t6_0]))
-    signs = np.array([sign1, sign2, sign3, sign4, sign5, sign6])
-    proto = OPWParameters(a1, a2, b, c1, c2, c3, c4, offsets, signs, T_world_obase, np.eye(4), C,
-                          np.asarray(model.limits, dtype=float), name)
+    T_world_obase[:3, :3] = np.stack([base.x, base.y, base.z], axis=1)
+    T_world_obase[:3, 3] = base.o
+    offsets = _wrap(np.array([arm.off1, arm.t2_0, arm.t23_0 - arm.t2_0, wrist.t4_0, wrist.t5_0, wrist.t6_0]))
+    signs = np.array([base.sign1, arm.sign2, arm.sign3, arm.sign4, wrist.sign5, wrist.sign6])
+    limits = np.asarray(model.limits, dtype=float)
+    proto = OPWParameters(a1, a2, b, c1, c2, c3, c4, offsets, signs, T_world_obase, np.eye(4), C, limits, name)
     T_oflange0 = opw_fk(proto, offsets)
     T_flange_ee = invert_transforms(T_world_obase @ T_oflange0) @ T_ee0
     T_flange_ee[3] = (0.0, 0.0, 0.0, 1.0)
@@ -373,8 +434,12 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
     for arr in (params.offsets, params.signs, params.T_world_base, params.T_flange_ee, params.coupling,
                 params.limits):
         arr.setflags(write=False)
+    return params
 
-    # Verification at random model joints (and zero).
+
+def _verify(model, params: OPWParameters, name: str, verify_tol: float, n_verify: int) -> None:
+    """FK of the model and of the OPW model agree at zero and ``n_verify`` seeded random model
+    joints within ``verify_tol`` [mm] and ``verify_tol * 1e-2`` [rad]; else NotAnalyticError."""
     rng = np.random.default_rng(12345)
     qm = np.vstack([np.zeros(6), rng.uniform(-np.pi, np.pi, size=(n_verify, 6))])
     q = qm @ params.coupling_inv.T
@@ -388,6 +453,35 @@ def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: f
             f"{name}: the OPW model derived from the joint axes does not reproduce the model's FK "
             f"(max position error {dp:.3g} mm, tolerance {verify_tol:.3g}; max rotation error {dr:.3g} rad, "
             f"tolerance {rot_tol:.3g})")
+
+
+def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: float = 1e-9,
+                   verify_tol: float = 1e-9, n_verify: int = 200) -> OPWParameters:
+    """Derive the OPW parameters of ``model`` numerically from its joint axes.
+
+    The joint axes (world lines) are taken from the joint twists at ``q = 0``, so every model kind
+    (dh, dh_beta, mdh, urdf, with fixed frames, base and tool) and any invertible 6x6 coupling
+    are handled alike. Checks, each against ``tol_angle`` [rad] or ``tol_length`` [mm]:
+    axis 1 perpendicular to axis 2, axes 2 and 3 parallel, axis 3 perpendicular to axis 4,
+    axes 4-5 and 5-6 perpendicular and intersecting in one point. The result is then verified:
+    FK of the model equals FK of the OPW model at ``n_verify`` random joint vectors (and zero)
+    within ``verify_tol`` mm in position and ``verify_tol * 1e-2`` rad in rotation.
+
+    Raises :class:`NotAnalyticError` naming each failed condition and its size.
+    """
+    name = getattr(model, "name", "model")
+    C = _check_chain(model, name)
+    w, p = _joint_axes(model)
+    failures, wc = _opw_class_failures(w, p, tol_angle, tol_length)
+    if failures:
+        raise NotAnalyticError(f"{name}: not an ortho-parallel arm with spherical wrist (OPW class): "
+                               + "; ".join(failures))
+    base = _base_frame(w[0], p[0], np.asarray(model.T_world_base, dtype=float))
+    arm = _arm(name, w, p, wc, base, tol_length)
+    T_ee0 = model.fk(np.zeros((1, 6)))[0]
+    wrist = _wrist(w, wc, arm, T_ee0)
+    params = _assemble(model, name, C, base, arm, wrist, T_ee0, tol_length)
+    _verify(model, params, name, verify_tol, n_verify)
     return params
 
 
@@ -427,6 +521,72 @@ def is_analytic(model: RobotModel) -> bool:
 
 
 # ---------------------------------------------------------------------- inverse kinematics
+def _shoulder(P: OPWParameters, c):
+    """Joint 1 from the wrist centres ``c`` (N, 3) in the OPW base frame: the wrist centre's y in
+    the arm plane frame must be b. Returns ``t1`` (N, 2) (shoulder front / back), ``xs`` (N, 2)
+    the wrist centre's x in the arm plane [mm], and ``ok1`` (N,) reachable."""
+    rho2 = c[:, 0] ** 2 + c[:, 1] ** 2
+    r2 = rho2 - P.b ** 2
+    ok1 = r2 >= -1e-9 * (P.b ** 2 + 1.0)
+    r = np.sqrt(np.maximum(r2, 0.0))
+    xs = np.stack([r, -r], axis=1)                             # (N, 2) shoulder front / back
+    # Shoulder singularity (b = 0 and the wrist centre on axis 1): joint 1 is free; take model q1 = 0.
+    on_axis = (rho2 <= 1e-18) & (abs(P.b) <= 1e-9)
+    psi = np.where(on_axis, P.offsets[0], np.arctan2(c[:, 1], c[:, 0]))
+    t1 = psi[:, None] - np.arctan2(P.b, xs)
+    return t1, xs, ok1
+
+
+def _elbow(P: OPWParameters, c, xs, ok1):
+    """Joints 2 and 3: a planar two-link arm from axis 2 to the wrist centre. Returns ``t2``,
+    ``t3`` (N, 2, 2) (shoulder, elbow up / down) and ``ok2`` (N, 2) reachable."""
+    k = np.hypot(P.a2, P.c3)
+    phi = np.arctan2(P.a2, P.c3)
+    u = xs - P.a1
+    vz = np.broadcast_to((c[:, 2] - P.c1)[:, None], u.shape)
+    D = (u ** 2 + vz ** 2 - P.c2 ** 2 - k ** 2) / (2.0 * P.c2 * k)
+    ok2 = ok1[:, None] & (np.abs(D) <= 1.0 + 1e-12)            # (N, 2)
+    g = np.arccos(np.clip(D, -1.0, 1.0))
+    # gamma = t3 + phi; elbow "up" is gamma > 0 in front, gamma < 0 at the back.
+    gamma = np.stack([g, -g], axis=2) * np.array([1.0, -1.0])[None, :, None]   # (N, 2, 2)
+    t3 = gamma - phi
+    A = P.c2 + k * np.cos(gamma)
+    B = k * np.sin(gamma)
+    t2 = np.arctan2(u, vz)[:, :, None] - np.arctan2(B, A)
+    return t2, t3, ok2
+
+
+def _wrist_joints(P: OPWParameters, R, t1b, t2, t3):
+    """Joints 4-6 from ``R36 = (Rz(t1) Ry(t2 + t3))^T R = Rz(t4) Ry(t5) Rz(t6)``; ``R`` (N, 3, 3)
+    the flange rotations, ``t1b, t2, t3`` (N, 2, 2). Returns ``t4, t5, t6`` (N, 2, 2, 2) (wrist
+    noflip / flip last); theta6 from the remaining rotation, exact even near the singularity."""
+    R03 = _rz(t1b) @ _ry(t2 + t3)                               # (N, 2, 2, 3, 3)
+    M = np.swapaxes(R03, -1, -2) @ R[:, None, None]
+    s5 = np.hypot(M[..., 0, 2], M[..., 1, 2])
+    t5 = np.arctan2(s5, M[..., 2, 2])
+    singular = s5 < 1e-12
+    t4 = np.where(singular, P.offsets[3], np.arctan2(M[..., 1, 2], M[..., 0, 2]))
+    t4 = np.stack([t4, t4 + np.pi], axis=-1)                   # (N, 2, 2, 2) wrist noflip / flip
+    t5 = np.stack([t5, -t5], axis=-1)
+    Nr = np.swapaxes(_rz(t4) @ _ry(t5), -1, -2) @ M[..., None, :, :]
+    t6 = np.arctan2(Nr[..., 1, 0], Nr[..., 0, 0])
+    return t4, t5, t6
+
+
+def _controller_joints(P: OPWParameters, theta, valid, within_limits: bool, limit_tol: float):
+    """OPW angles (N, 8, 6) -> controller joints (N, 8, 6) wrapped into the limits; invalid
+    branches NaN; with ``within_limits`` solutions outside the limits are marked invalid."""
+    qm = _wrap((theta - P.offsets) * P.signs)
+    q = qm @ P.coupling_inv.T
+    q = _wrap_into_limits(q, P)
+    q[~valid] = np.nan
+    if within_limits:
+        lo, hi = P.limits[:, 0], P.limits[:, 1]
+        inside = np.all((q >= lo - limit_tol) & (q <= hi + limit_tol), axis=-1)
+        valid &= inside
+    return q, valid
+
+
 def ik_analytic(model, T_world_ee, *, within_limits: bool = False, limit_tol: float = 1e-9):
     """All 8 closed-form IK solutions of an OPW-class robot.
 
@@ -450,61 +610,17 @@ def ik_analytic(model, T_world_ee, *, within_limits: bool = False, limit_tol: fl
     Tb = invert_transforms(P.T_world_base) @ T @ invert_transforms(P.T_flange_ee)
     R = Tb[:, :3, :3]
     c = Tb[:, :3, 3] - P.c4 * R[:, :, 2]                      # wrist centre (N, 3)
-
-    # Joint 1: the wrist centre's y in the arm plane frame must be b.
-    rho2 = c[:, 0] ** 2 + c[:, 1] ** 2
-    r2 = rho2 - P.b ** 2
-    ok1 = r2 >= -1e-9 * (P.b ** 2 + 1.0)
-    r = np.sqrt(np.maximum(r2, 0.0))
-    xs = np.stack([r, -r], axis=1)                             # (N, 2) shoulder front / back
-    # Shoulder singularity (b = 0 and the wrist centre on axis 1): joint 1 is free; take model q1 = 0.
-    on_axis = (rho2 <= 1e-18) & (abs(P.b) <= 1e-9)
-    psi = np.where(on_axis, P.offsets[0], np.arctan2(c[:, 1], c[:, 0]))
-    t1 = psi[:, None] - np.arctan2(P.b, xs)
-
-    # Joints 2, 3: planar two-link arm from axis 2 to the wrist centre.
-    k = np.hypot(P.a2, P.c3)
-    phi = np.arctan2(P.a2, P.c3)
-    u = xs - P.a1
-    vz = np.broadcast_to((c[:, 2] - P.c1)[:, None], u.shape)
-    D = (u ** 2 + vz ** 2 - P.c2 ** 2 - k ** 2) / (2.0 * P.c2 * k)
-    ok2 = ok1[:, None] & (np.abs(D) <= 1.0 + 1e-12)            # (N, 2)
-    g = np.arccos(np.clip(D, -1.0, 1.0))
-    # gamma = t3 + phi; elbow "up" is gamma > 0 in front, gamma < 0 at the back.
-    gamma = np.stack([g, -g], axis=2) * np.array([1.0, -1.0])[None, :, None]   # (N, 2, 2)
-    t3 = gamma - phi
-    A = P.c2 + k * np.cos(gamma)
-    B = k * np.sin(gamma)
-    t2 = np.arctan2(u, vz)[:, :, None] - np.arctan2(B, A)
+    t1, xs, ok1 = _shoulder(P, c)
+    t2, t3, ok2 = _elbow(P, c, xs, ok1)
     t1b = np.broadcast_to(t1[:, :, None], t2.shape)
-
-    # Wrist: R36 = (Rz(t1) Ry(t2 + t3))^T R = Rz(t4) Ry(t5) Rz(t6).
-    R03 = _rz(t1b) @ _ry(t2 + t3)                               # (N, 2, 2, 3, 3)
-    M = np.swapaxes(R03, -1, -2) @ R[:, None, None]
-    s5 = np.hypot(M[..., 0, 2], M[..., 1, 2])
-    t5 = np.arctan2(s5, M[..., 2, 2])
-    singular = s5 < 1e-12
-    t4 = np.where(singular, P.offsets[3], np.arctan2(M[..., 1, 2], M[..., 0, 2]))
-    t4 = np.stack([t4, t4 + np.pi], axis=-1)                   # (N, 2, 2, 2) wrist noflip / flip
-    t5 = np.stack([t5, -t5], axis=-1)
-    # theta6 from the remaining rotation, so that the product is exact even near the singularity.
-    Nr = np.swapaxes(_rz(t4) @ _ry(t5), -1, -2) @ M[..., None, :, :]
-    t6 = np.arctan2(Nr[..., 1, 0], Nr[..., 0, 0])
+    t4, t5, t6 = _wrist_joints(P, R, t1b, t2, t3)
 
     def b8(x):
         return np.broadcast_to(x[..., None] if x.ndim == 3 else x, (N, 2, 2, 2)).reshape(N, 8)
 
     theta = np.stack([b8(t1b), b8(t2), b8(t3), t4.reshape(N, 8), t5.reshape(N, 8), t6.reshape(N, 8)], axis=-1)
     valid = np.broadcast_to(ok2[:, :, None, None], (N, 2, 2, 2)).reshape(N, 8).copy()
-
-    qm = _wrap((theta - P.offsets) * P.signs)
-    q = qm @ P.coupling_inv.T
-    q = _wrap_into_limits(q, P)
-    q[~valid] = np.nan
-    if within_limits:
-        lo, hi = P.limits[:, 0], P.limits[:, 1]
-        inside = np.all((q >= lo - limit_tol) & (q <= hi + limit_tol), axis=-1)
-        valid &= inside
+    q, valid = _controller_joints(P, theta, valid, within_limits, limit_tol)
     if single:
         return q[0], valid[0]
     return q, valid
