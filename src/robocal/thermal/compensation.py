@@ -26,7 +26,7 @@ import numpy as np
 
 from ..kinematics.model import RobotModel
 from ..transforms import so3_log
-from .drift import DriftResult, identify_drift
+from .drift import DriftResult, identify_drift, joint_rows
 
 __all__ = ["CompensationResult", "OnlineCycle", "CycleRecord", "RemeasureDecision", "RemeasureRule",
            "compensate_program", "online_cycle", "predicted_drift"]
@@ -148,7 +148,7 @@ def compensate_program(model: RobotModel, warm, q_taught, *, position_only: bool
     All points are processed together: one batched FK+Jacobian kernel call and one batched solve
     per iteration.
     """
-    q0 = _taught_joints(model, q_taught)
+    q0 = joint_rows(model, q_taught, "q_taught", "n", "point(s)", ValueError)
     warm_params = _warm_parameters(model, warm)
     cold = model.params.values if cold_params is None else np.asarray(cold_params, dtype=float)
     Tft = None if T_flange_tool is None else np.asarray(T_flange_tool, dtype=float).reshape(4, 4)
@@ -181,19 +181,6 @@ def compensate_program(model: RobotModel, warm, q_taught, *, position_only: bool
     conv = _within(dp, dr, tol_mm, tol_rad, position_only)
     return CompensationResult(q, q0, pos, rot, np.linalg.norm(dp0, axis=1), np.linalg.norm(dr0, axis=1), iters, conv,
                               model.within_limits(q), position_only)
-
-
-def _taught_joints(model, q_taught) -> np.ndarray:
-    """``q_taught`` as a contiguous (n, n_joints) float array; ``ValueError`` for a wrong shape or
-    non-finite points."""
-    q0 = np.asarray(q_taught, dtype=float)
-    if q0.ndim == 1:
-        q0 = q0[None]
-    if q0.ndim != 2 or q0.shape[1] != model.n_joints:
-        raise ValueError(f"q_taught: expected shape (n, {model.n_joints}), got {q0.shape}")
-    if not np.all(np.isfinite(q0)):
-        raise ValueError(f"q_taught: point(s) {np.flatnonzero(~np.all(np.isfinite(q0), 1)).tolist()} not finite")
-    return np.ascontiguousarray(q0)
 
 
 def _warm_parameters(model, warm) -> np.ndarray:

@@ -156,15 +156,17 @@ def _sphere_and_jacobian(model, T_sensor_base, P_e, q, params, index, jacobian=T
     return P, np.einsum("ij,njk->nik", R, J[:, 0])
 
 
-def _joints(model, q):
+def joint_rows(model, q, what: str = "joints", rows: str = "m", items: str = "pose(s)",
+               error=DriftIdentificationError) -> np.ndarray:
+    """``q`` as a contiguous (rows, n_joints) float array (one vector: one row); a wrong shape or
+    non-finite rows raise ``error`` naming ``what`` and the ``items`` concerned."""
     q = np.asarray(q, dtype=float)
     if q.ndim == 1:
         q = q[None]
     if q.ndim != 2 or q.shape[1] != model.n_joints:
-        raise DriftIdentificationError(f"joints: expected shape (m, {model.n_joints}), got {q.shape}")
+        raise error(f"{what}: expected shape ({rows}, {model.n_joints}), got {q.shape}")
     if not np.all(np.isfinite(q)):
-        raise DriftIdentificationError(f"joints: pose(s) {np.flatnonzero(~np.all(np.isfinite(q), 1)).tolist()} "
-                                       f"not finite")
+        raise error(f"{what}: {items} {np.flatnonzero(~np.all(np.isfinite(q), 1)).tolist()} not finite")
     return np.ascontiguousarray(q)
 
 
@@ -179,7 +181,7 @@ def drift_coefficients(model: RobotModel, T_sensor_base, P_e, q, *, params=None,
     q: (m, n) joints [rad]; P_e (3,) sphere centre in the flange frame [mm]; params: the
     parameter vector to linearise at (default the model's, the cold state).
     """
-    q = _joints(model, q)
+    q = joint_rows(model, q)
     params = model.params.values if params is None else np.asarray(params, float)
     index = np.arange(len(model.params)) if subset is None else resolve_subset(model, subset)
     return _sphere_and_jacobian(model, T_sensor_base, P_e, q, params, index)[1]
@@ -187,7 +189,7 @@ def drift_coefficients(model: RobotModel, T_sensor_base, P_e, q, *, params=None,
 
 def predict_sphere(model: RobotModel, T_sensor_base, P_e, q, *, params=None) -> np.ndarray:
     """Sphere centres (m, 3) in the sensor frame, (3-1), with the model's (or given) parameters."""
-    q = _joints(model, q)
+    q = joint_rows(model, q)
     params = model.params.values if params is None else np.asarray(params, float)
     return _sphere_and_jacobian(model, T_sensor_base, P_e, q, params, np.zeros(0, np.int64), False)[0]
 
@@ -219,7 +221,7 @@ def identify_drift(model: RobotModel, T_sensor_base, P_e, q, P_warm, P_cold=None
         raise ValueError(f"on_rank_deficient must be 'raise' or 'drop', got {on_rank_deficient!r}")
     if iterations < 1:
         raise ValueError(f"iterations must be >= 1, got {iterations}")
-    q = _joints(model, q)
+    q = joint_rows(model, q)
     m = len(q)
     P_warm = np.asarray(P_warm, dtype=float)
     if P_warm.shape != (m, 3):

@@ -245,7 +245,8 @@ def _write_report(out, robot_name, result, run, T_nominal, err, err_after, n_pos
                                    f"{robot_name}: nominal model error over {n_poses} poses", repeatability_mm=rep_max)
     after_png = plot_accuracy_map(T_nominal[:, :3, 3], err_after, out / "accuracy_map_calibrated.png",
                                   f"{robot_name}: calibrated model error over the same poses", repeatability_mm=rep_max)
-    report = write_report(out / "report.html", run["result"], overwrite=True, extra_tables=_summary_tables(result, n_poses),
+    report = write_report(out / "report.html", run["result"], overwrite=True,
+                          extra_tables=_summary_tables(result, n_poses),
                           title=f"robocal demo: keeping a simulated {robot_name} accurate",
                           extra_plots={"Workspace accuracy of the nominal model": before_png,
                                        "Workspace accuracy after calibration": after_png, **extra})

@@ -54,51 +54,14 @@ The events file (``robocal-barrier-events/1``) is read and written by
 Units: mm, s, rad inside. ``T_a_b`` = pose of b in a.
 """
 
-from .evaluation import CircleResult, VerticalResult, evaluate_circle, evaluate_vertical
-from .events import BarrierEvent, CrossLaserError, MotionRecord
-from .formulas import (
-    angles_from_durations,
-    axis_vector_thesis,
-    center_distances,
-    circle_center,
-    euler_psi_theta,
-    minimal_rotation,
-    psi_theta_from_axis,
-    rotation_5d,
-    tcp_in_flange,
-)
-from .inputs import CrossLaserSettings, SensorFrame, sensor_frame
-from .motions import CircleMove, LinearMove
-from .planning import measuring_orientation, plan_align_circle, plan_axis_circles, plan_vertical
-from .procedure import CrossLaserResult, evaluate_recording, recalibrate_tool
+from . import evaluation, events, formulas, inputs, motions, planning, procedure
+from .evaluation import *  # noqa: F401,F403
+from .events import *  # noqa: F401,F403
+from .formulas import *  # noqa: F401,F403
+from .inputs import *  # noqa: F401,F403
+from .motions import *  # noqa: F401,F403
+from .planning import *  # noqa: F401,F403
+from .procedure import *  # noqa: F401,F403
 
-__all__ = [
-    "BarrierEvent",
-    "MotionRecord",
-    "CircleMove",
-    "LinearMove",
-    "SensorFrame",
-    "sensor_frame",
-    "CrossLaserSettings",
-    "CircleResult",
-    "VerticalResult",
-    "CrossLaserResult",
-    "CrossLaserError",
-    "angles_from_durations",
-    "center_distances",
-    "circle_center",
-    "axis_vector_thesis",
-    "euler_psi_theta",
-    "rotation_5d",
-    "psi_theta_from_axis",
-    "minimal_rotation",
-    "tcp_in_flange",
-    "measuring_orientation",
-    "plan_axis_circles",
-    "plan_align_circle",
-    "plan_vertical",
-    "evaluate_circle",
-    "evaluate_vertical",
-    "recalibrate_tool",
-    "evaluate_recording",
-]
+__all__ = [*events.__all__, *motions.__all__, *inputs.__all__, *formulas.__all__, *planning.__all__,
+           *evaluation.__all__, *procedure.__all__]

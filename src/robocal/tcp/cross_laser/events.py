@@ -15,15 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = [
-    "BarrierEvent",
-    "MotionRecord",
-    "CrossLaserError",
-    "blocked_intervals",
-    "beam_crossings",
-    "arc_durations",
-    "switch_positions",
-]
+__all__ = ["BarrierEvent", "MotionRecord", "CrossLaserError"]
 
 
 class CrossLaserError(ValueError):

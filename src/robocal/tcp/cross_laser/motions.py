@@ -16,7 +16,7 @@ import numpy as np
 
 from ...transforms import so3_exp, so3_log, transforms_from
 
-__all__ = ["CircleMove", "LinearMove", "pose_at_start", "pose_at_end"]
+__all__ = ["CircleMove", "LinearMove"]
 
 
 def _trapezoid(length: float, speed: float, accel: float):

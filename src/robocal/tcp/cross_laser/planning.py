@@ -17,14 +17,7 @@ from .formulas import minimal_rotation
 from .inputs import CrossLaserSettings, SensorFrame, sensor_frame
 from .motions import CircleMove, LinearMove
 
-__all__ = [
-    "measuring_orientation",
-    "plan_axis_circles",
-    "plan_align_circle",
-    "plan_vertical",
-    "reposition",
-    "lifted",
-]
+__all__ = ["measuring_orientation", "plan_axis_circles", "plan_align_circle", "plan_vertical"]
 
 _RX_PI = rot_x(np.pi)  # flange X_e = X_s, Y_e = -Y_s, Z_e = -Z_s (thesis figure 4-8)
 
