@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from robocal.io.barrier_events import read_events_csv, write_events_csv
 from robocal.sim.light_barrier import (CrossLaserSensor, CylinderTool, LightBarrier, LightBarrierCell,
                                        barrier_blocked)
 from robocal.tcp.cross_laser import (CrossLaserSettings, angles_from_durations, axis_vector_thesis, center_distances,
                                      circle_center, euler_psi_theta, evaluate_circle, evaluate_recording,
-                                     minimal_rotation, plan_axis_circles, psi_theta_from_axis, read_events_csv,
-                                     recalibrate_tool, rotation_5d, tcp_in_flange, write_events_csv)
+                                     minimal_rotation, plan_axis_circles, psi_theta_from_axis,
+                                     recalibrate_tool, rotation_5d, tcp_in_flange)
 from robocal.tcp.sensor import beta_error_mm
 from robocal.transforms import rot_x, rot_y, rot_z, so3_log, transforms_from
 

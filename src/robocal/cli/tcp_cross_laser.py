@@ -64,24 +64,41 @@ def _load_json(path, what):
                                                   "convention (e.g. kuka_abc, fanuc_wpr, quaternion).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, no_arc_correction, convention, as_json):
-    from ..tcp.cross_laser import (
-        CrossLaserError,
-        CrossLaserSettings,
-        evaluate_recording,
-        read_events_csv,
-        sensor_frame,
-    )
+    from ..io.barrier_events import read_events_csv
+    from ..tcp.cross_laser import CrossLaserError, CrossLaserSettings, evaluate_recording
 
     try:
         records = read_events_csv(events_file)
     except ValueError as exc:
         raise click.ClickException(str(exc)) from None
+    sensor = _load_sensor(sensor_file)
+    T_nom = _load_nominal_tool(nominal_file)
+    settings = CrossLaserSettings(beta_correction=not no_beta_correction, arc_correction=not no_arc_correction)
+    try:
+        res = evaluate_recording(records, sensor, T_nom, settings)
+    except CrossLaserError as exc:
+        raise click.ClickException(f"{events_file}: {exc}") from None
+    out = _result_dict(res, convention)
+    if as_json:
+        click.echo(json.dumps(out, indent=2))
+        return
+    _echo_result(res, out, settings, sensor, convention)
+
+
+def _load_sensor(sensor_file):
+    """The sensor frame from a ``sensor-calibrate --json`` file (click errors name the file)."""
+    from ..tcp.cross_laser import sensor_frame
+
     sd = _load_json(sensor_file, "sensor")
     try:
-        sensor = sensor_frame(sd)
+        return sensor_frame(sd)
     except (KeyError, ValueError, TypeError) as exc:
         raise click.ClickException(f"{sensor_file}: not a sensor calibration ({exc!s}); expected keys "
                                    "T_base_sensor, beta_deg, gap_mm") from None
+
+
+def _load_nominal_tool(nominal_file) -> np.ndarray:
+    """``T_flange_tool`` (4, 4) [mm] from the ``--nominal-tool`` JSON, or the identity."""
     T_nom = np.eye(4)
     if nominal_file:
         nd = _load_json(nominal_file, "nominal tool")
@@ -89,11 +106,11 @@ def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, 
             T_nom = np.array(nd["T_flange_tool"], dtype=float).reshape(4, 4)
         except (KeyError, ValueError, TypeError) as exc:
             raise click.ClickException(f"{nominal_file}: expected key T_flange_tool with a 4x4 matrix ({exc!s})") from None
-    settings = CrossLaserSettings(beta_correction=not no_beta_correction, arc_correction=not no_arc_correction)
-    try:
-        res = evaluate_recording(records, sensor, T_nom, settings)
-    except CrossLaserError as exc:
-        raise click.ClickException(f"{events_file}: {exc}") from None
+    return T_nom
+
+
+def _result_dict(res, convention) -> dict:
+    """The result summary with the per-step evaluations and, with ``convention``, the pose."""
     out = res.summary()
     steps = res.steps
     out["steps"] = {k: {"d_x_mm": steps[k].d_x_mm, "d_y_mm": steps[k].d_y_mm,
@@ -111,9 +128,11 @@ def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, 
                            "values": [float(v) for v in pose_from_transform(res.T_flange_tool, convention)]}
         except ValueError as exc:
             raise click.ClickException(str(exc)) from None
-    if as_json:
-        click.echo(json.dumps(out, indent=2))
-        return
+    return out
+
+
+def _echo_result(res, out, settings, sensor, convention) -> None:
+    """The result as text: TCP, axis, settings, cycle time, pose, frame, residuals."""
     t, a = res.tcp_flange_mm, res.axis_flange
     click.echo(f"TCP (flange frame)  : {t[0]:.4f} {t[1]:.4f} {t[2]:.4f} mm")
     click.echo(f"tool axis (flange)  : {a[0]:.6f} {a[1]:.6f} {a[2]:.6f}  (psi {math.degrees(res.psi_rad):.4f} deg, "
@@ -159,11 +178,7 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     thesis_step3_no_beta.
     """
     from ..tcp.cross_laser import CrossLaserError
-    from ..workflows.tcp import (
-        DEFAULT_VARIANTS,
-        format_study_table,
-        tcp_repeatability_study,
-    )
+    from ..workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
 
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
     try:

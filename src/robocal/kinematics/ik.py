@@ -91,17 +91,7 @@ def ik_numeric(model: RobotModel, T_target, q0, *, end_effector=None, position_o
             break
         iters[act] += 1
         J = model.jacobian(q[act], end_effector) * w[:, None]
-        J = J[:, rows]
-        dq = _dls_step(J, r[act], lam[act])
-        if respect_limits:
-            # joints resting on a limit that the step pushes outward are frozen (active set)
-            qa = q[act]
-            blocked = ((qa <= lo + 1e-12) & (dq < 0)) | ((qa >= hi - 1e-12) & (dq > 0))
-            if blocked.any():
-                dq = _dls_step(J * ~blocked[:, None, :], r[act], lam[act])
-        q_new = q[act] + dq
-        if respect_limits:
-            q_new = np.clip(q_new, lo, hi)
+        q_new = _limited_step(J[:, rows], r[act], lam[act], q[act], lo, hi, respect_limits)
         r_new, dp_new, dr_new = residual(q_new, T[act])
         c_new = np.einsum("ij,ij->i", r_new, r_new)
         better = c_new < cost[act]
@@ -113,6 +103,27 @@ def ik_numeric(model: RobotModel, T_target, q0, *, end_effector=None, position_o
         lam[bad] *= 10.0
         stalled[bad[lam[bad] > 1e6]] = True
         done = _converged(dp, dr, tol_mm, tol_rad, position_only)
+    return _result(q, done, stalled, iters, dp, dr, position_only, single)
+
+
+def _limited_step(J, r, lam, qa, lo, hi, respect_limits: bool):
+    """New joints (n, n_ctrl) after one damped least-squares step from ``qa``. With
+    ``respect_limits``, joints resting on a limit that the step pushes outward are frozen (active
+    set) and the result is clipped into ``[lo, hi]``."""
+    dq = _dls_step(J, r, lam)
+    if respect_limits:
+        blocked = ((qa <= lo + 1e-12) & (dq < 0)) | ((qa >= hi - 1e-12) & (dq > 0))
+        if blocked.any():
+            dq = _dls_step(J * ~blocked[:, None, :], r, lam)
+    q_new = qa + dq
+    if respect_limits:
+        q_new = np.clip(q_new, lo, hi)
+    return q_new
+
+
+def _result(q, done, stalled, iters, dp, dr, position_only: bool, single: bool) -> IKResult:
+    """The :class:`IKResult` (per target, or of the one target when ``single``)."""
+    N = len(q)
     pos_err = np.linalg.norm(dp, axis=-1)
     rot_err = np.zeros(N) if position_only else np.linalg.norm(dr, axis=-1)
     status = np.where(done, "converged", np.where(stalled, "stalled", "max_iterations"))

@@ -68,11 +68,12 @@ in-limit value of smallest magnitude). For joint ranges wider than 2 pi the othe
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..transforms import invert_transforms
+from ..transforms import invert_transforms, rot_y, rot_z
+from ._opw_extract import opw_from_model
+from ._opw_model import TWO_PI, NotAnalyticError, OPWParameters, opw_fk, wrap
 from .model import RobotModel
 
 __all__ = [
@@ -92,311 +93,6 @@ BRANCHES = tuple(
     for wrist in ("noflip", "flip")
 )
 """Names ``(shoulder, elbow, wrist)`` of the 8 solution branches, in the order of :func:`ik_analytic`."""
-
-_TWO_PI = 2.0 * np.pi
-
-
-class NotAnalyticError(ValueError):
-    """The robot model is not exactly of the OPW class; the message says which condition failed."""
-
-
-@dataclass(frozen=True)
-class OPWParameters:
-    """OPW parameters of a robot model (see the module docstring for the frames).
-
-    Lengths in mm, angles in rad. ``theta_opw = signs * q_model + offsets`` with
-    ``q_model = coupling @ q`` (controller joints ``q``).
-    """
-
-    a1: float
-    a2: float
-    b: float
-    c1: float
-    c2: float
-    c3: float
-    c4: float
-    offsets: np.ndarray          # (6,) OPW angle at q_model = 0
-    signs: np.ndarray            # (6,) +-1
-    T_world_base: np.ndarray     # (4, 4) OPW base frame in the world
-    T_flange_ee: np.ndarray      # (4, 4) end effector (model's first) in the OPW flange frame
-    coupling: np.ndarray         # (6, 6) q_model = coupling @ q
-    limits: np.ndarray           # (6, 2) controller joint limits
-    name: str = ""
-    coupling_inv: np.ndarray = field(init=False, repr=False)
-    integer_columns: np.ndarray = field(init=False, repr=False)  # (6,) adding 2 pi to q_j is a symmetry
-
-    def __post_init__(self):
-        C = np.asarray(self.coupling, dtype=float)
-        object.__setattr__(self, "coupling_inv", np.linalg.inv(C))
-        object.__setattr__(self, "integer_columns", np.all(np.abs(C - np.round(C)) < 1e-12, axis=0))
-
-    def opw_angles(self, q) -> np.ndarray:
-        """OPW angles (..., 6) from controller joints (..., 6)."""
-        qm = np.asarray(q, dtype=float) @ self.coupling.T
-        return self.signs * qm + self.offsets
-
-    def controller_joints(self, theta) -> np.ndarray:
-        """Controller joints (..., 6) from OPW angles (..., 6) (no wrapping)."""
-        qm = (np.asarray(theta, dtype=float) - self.offsets) * self.signs
-        return qm @ self.coupling_inv.T
-
-    def fk(self, q) -> np.ndarray:
-        """``T_world_ee`` (..., 4, 4) from controller joints (..., 6) through the OPW model."""
-        return self.T_world_base @ opw_fk(self, self.opw_angles(q)) @ self.T_flange_ee
-
-
-def _rz(t):
-    c, s = np.cos(t), np.sin(t)
-    R = np.zeros(np.shape(t) + (3, 3))
-    R[..., 0, 0] = c
-    R[..., 0, 1] = -s
-    R[..., 1, 0] = s
-    R[..., 1, 1] = c
-    R[..., 2, 2] = 1.0
-    return R
-
-
-def _ry(t):
-    c, s = np.cos(t), np.sin(t)
-    R = np.zeros(np.shape(t) + (3, 3))
-    R[..., 0, 0] = c
-    R[..., 0, 2] = s
-    R[..., 2, 0] = -s
-    R[..., 2, 2] = c
-    R[..., 1, 1] = 1.0
-    return R
-
-
-def opw_fk(params: OPWParameters, theta) -> np.ndarray:
-    """Pose of the OPW flange in the OPW base frame, (..., 4, 4), from OPW angles (..., 6)."""
-    t = np.asarray(theta, dtype=float)
-    P = params
-    R1 = _rz(t[..., 0])
-    R13 = _ry(t[..., 1] + t[..., 2])
-    R03 = R1 @ R13
-    # Points in the arm plane frame (after Rz(t1)).
-    s2, c2_ = np.sin(t[..., 1]), np.cos(t[..., 1])
-    elbow = np.stack([P.a1 + P.c2 * s2, np.zeros_like(s2), P.c1 + P.c2 * c2_], axis=-1)
-    wc1 = elbow + (R13 @ np.array([P.a2, P.b, P.c3]))
-    R36 = _rz(t[..., 3]) @ _ry(t[..., 4]) @ _rz(t[..., 5])
-    R = R03 @ R36
-    p = (R1 @ wc1[..., None])[..., 0] + P.c4 * R[..., :, 2]
-    T = np.zeros(t.shape[:-1] + (4, 4))
-    T[..., :3, :3] = R
-    T[..., :3, 3] = p
-    T[..., 3, 3] = 1.0
-    return T
-
-
-# ---------------------------------------------------------------------- parameter extraction
-def _unit(v):
-    return v / np.linalg.norm(v)
-
-
-def _closest(p1, w1, p2, w2):
-    """Closest points of two non-parallel lines (unit directions): (point on 1, point on 2, s on 2)."""
-    r = p2 - p1
-    b = w1 @ w2
-    den = 1.0 - b * b
-    s = (r @ w1 - b * (r @ w2)) / den
-    t = (b * (r @ w1) - r @ w2) / den
-    return p1 + s * w1, p2 + t * w2, t
-
-
-def _angle_off(cos_or_sin) -> float:
-    return float(np.arcsin(min(1.0, abs(cos_or_sin))))
-
-
-def _perp_in(v, n):
-    """``v`` projected onto the plane normal to unit ``n``."""
-    return v - (v @ n) * n
-
-
-def _wrap(x):
-    return (np.asarray(x) + np.pi) % _TWO_PI - np.pi
-
-
-def opw_from_model(model: RobotModel, *, tol_angle: float = 1e-12, tol_length: float = 1e-9,
-                   verify_tol: float = 1e-9, n_verify: int = 200) -> OPWParameters:
-    """Derive the OPW parameters of ``model`` numerically from its joint axes.
-
-    The joint axes (world lines) are taken from the joint twists at ``q = 0``, so every model kind
-    (dh, dh_beta, mdh, urdf, with fixed frames, base and tool) and any invertible 6x6 coupling
-    are handled alike. Checks, each against ``tol_angle`` [rad] or ``tol_length`` [mm]:
-    axis 1 perpendicular to axis 2, axes 2 and 3 parallel, axis 3 perpendicular to axis 4,
-    axes 4-5 and 5-6 perpendicular and intersecting in one point. The result is then verified:
-    FK of the model equals FK of the OPW model at ``n_verify`` random joint vectors (and zero)
-    within ``verify_tol`` mm in position and ``verify_tol * 1e-2`` rad in rotation.
-
-    Raises :class:`NotAnalyticError` naming each failed condition and its size.
-    """
-    name = getattr(model, "name", "model")
-    if model.n_joints != 6 or model.n_model_joints != 6:
-        raise NotAnalyticError(f"{name}: needs 6 joints, has {model.n_joints} controller / "
-                               f"{model.n_model_joints} model joints")
-    if not model.is_serial:
-        raise NotAnalyticError(f"{name}: not a serial chain")
-    moving = [model.links[k] for k in model.moving]
-    pris = [L.name for L in moving if L.joint_type != "revolute"]
-    if pris:
-        raise NotAnalyticError(f"{name}: joints {pris} are not revolute")
-    C = np.asarray(model.coupling, dtype=float)
-    cond = np.linalg.cond(C)
-    if not np.isfinite(cond) or cond > 1e12:
-        raise NotAnalyticError(f"{name}: coupling matrix is singular (condition number {cond:.3g})")
-
-    q0 = np.zeros((1, 6))
-    _, jt, _ = model.twists(q0)
-    w = jt[0, :3, :].T.copy()   # (6, 3) axis directions (positive model joint rotation)
-    v = jt[0, 3:, :].T
-    norms = np.linalg.norm(w, axis=1)
-    w /= norms[:, None]
-    p = np.cross(w, v) / norms[:, None]  # a point on each axis
-    w1, w2, w3, w4, w5, w6 = w
-    p1, p2, p3, p4, p5, p6 = p
-
-    deg = 180.0 / np.pi
-    failures = []
-
-    def need(cond_ok, text):
-        if not cond_ok:
-            failures.append(text)
-
-    e = _angle_off(w1 @ w2)
-    need(e <= tol_angle, f"axes 1 and 2 are not perpendicular (off by {e:.3g} rad = {e * deg:.3g} deg)")
-    e = _angle_off(np.linalg.norm(np.cross(w2, w3)))
-    need(e <= tol_angle, f"axes 2 and 3 are not parallel (angle {e:.3g} rad = {e * deg:.3g} deg)")
-    e = _angle_off(w3 @ w4)
-    need(e <= tol_angle, f"axes 3 and 4 are not perpendicular (off by {e:.3g} rad = {e * deg:.3g} deg)")
-    e = _angle_off(w4 @ w5)
-    need(e <= tol_angle, f"axes 4 and 5 are not perpendicular (off by {e:.3g} rad = {e * deg:.3g} deg)")
-    e = _angle_off(w5 @ w6)
-    need(e <= tol_angle, f"axes 5 and 6 are not perpendicular (off by {e:.3g} rad = {e * deg:.3g} deg)")
-    wc = None
-    if abs(w4 @ w5) < 0.5 and abs(w5 @ w6) < 0.5:
-        a45, b45, t45 = _closest(p4, w4, p5, w5)
-        a56, b56, _ = _closest(p6, w6, p5, w5)
-        d45 = np.linalg.norm(a45 - b45)
-        d56 = np.linalg.norm(a56 - b56)
-        d5 = np.linalg.norm(b45 - b56)
-        need(d45 <= tol_length, f"axes 4 and 5 do not intersect (distance {d45:.3g} mm)")
-        need(d56 <= tol_length, f"axes 5 and 6 do not intersect (distance {d56:.3g} mm)")
-        need(d5 <= tol_length, f"axes 4 and 6 meet axis 5 at different points ({d5:.3g} mm apart): "
-                               f"the wrist is not spherical")
-        wc = (a45 + b45 + a56 + b56) / 4.0
-    else:
-        failures.append("wrist axes 4-5-6 are far from perpendicular: no spherical wrist")
-    if failures:
-        raise NotAnalyticError(f"{name}: not an ortho-parallel arm with spherical wrist (OPW class): "
-                               + "; ".join(failures))
-
-    T_wb_model = np.asarray(model.T_world_base, dtype=float)
-    # OPW base frame.
-    z0 = w1 if w1 @ T_wb_model[:3, 2] >= 0 else -w1
-    sign1 = float(np.sign(w1 @ z0))
-    o0 = p1 + ((T_wb_model[:3, 3] - p1) @ z0) * z0
-    x0 = None
-    for cand in (T_wb_model[:3, 0], T_wb_model[:3, 1], np.eye(3)[0], np.eye(3)[1]):
-        xp = _perp_in(cand, z0)
-        if np.linalg.norm(xp) > 1e-6:
-            x0 = _unit(xp)
-            break
-    y0 = np.cross(z0, x0)
-
-    # Arm plane frame at q_model = 0.
-    x1 = _unit(np.cross(w2, z0))
-    a1 = float((p2 - o0) @ x1)
-    if a1 < 0.0:
-        x1, a1 = -x1, -a1
-    y1 = np.cross(z0, x1)
-    sign2 = float(np.sign(w2 @ y1))
-    c1 = float((p2 - o0) @ z0)
-    off1 = float(np.arctan2(x1 @ y0, x1 @ x0))
-
-    d23 = p3 - p2
-    dx, dz = float(d23 @ x1), float(d23 @ z0)
-    c2 = float(np.hypot(dx, dz))
-    if c2 <= tol_length:
-        raise NotAnalyticError(f"{name}: axes 2 and 3 coincide (distance {c2:.3g} mm)")
-    t2_0 = float(np.arctan2(dx, dz))
-    sign3 = float(np.sign(w3 @ y1))
-
-    z4 = w4.copy()
-    c3 = float((wc - p3) @ z4)
-    if c3 < 0.0:
-        z4, c3 = -z4, -c3
-    sign4 = float(np.sign(w4 @ z4))
-    t23_0 = float(np.arctan2(z4 @ x1, z4 @ z0))
-    x4 = np.cross(y1, z4)
-    a2 = float((wc - p3) @ x4)
-    b = float((wc - o0) @ y1)
-    if np.hypot(a2, c3) <= tol_length:
-        raise NotAnalyticError(f"{name}: axis 3 passes through the wrist centre (distance "
-                               f"{np.hypot(a2, c3):.3g} mm)")
-
-    # Wrist: axis 5 is +y of the frame after Rz(t4).
-    t4_0 = float(np.arctan2(-(w5 @ x4), w5 @ y1))
-    x4p = np.cos(t4_0) * x4 + np.sin(t4_0) * y1
-    sign5 = 1.0
-    T_ee0 = model.fk(q0)[0]
-    z6 = w6.copy()
-    c4 = float((T_ee0[:3, 3] - wc) @ z6)
-    if c4 < 0.0:
-        z6, c4 = -z6, -c4
-    sign6 = float(np.sign(w6 @ z6))
-    t5_0 = float(np.arctan2(z6 @ x4p, z6 @ z4))
-    x5 = np.cos(t5_0) * x4p - np.sin(t5_0) * z4
-    y5 = np.cross(z6, x5)
-    xL = None
-    for cand in (T_ee0[:3, 0], T_ee0[:3, 1], T_ee0[:3, 2], x5):
-        xp = _perp_in(cand, z6)
-        if np.linalg.norm(xp) > 1e-6:
-            xL = xp
-            break
-    t6_0 = float(np.arctan2(xL @ y5, xL @ x5))
-
-    # Lengths at rounding-noise level are exactly zero (the verification below covers the snap).
-    a1, a2, b, c1, c3, c4 = (0.0 if abs(x) <= tol_length else x for x in (a1, a2, b, c1, c3, c4))
-
-    T_world_obase = np.eye(4)
-    T_world_obase[:3, :3] = np.stack([x0, y0, z0], axis=1)
-    T_world_obase[:3, 3] = o0
-    offsets = _wrap(np.array([off1, t2_0, t23_0 - t2_0, t4_0, t5_0, t6_0]))
-    signs = np.array([sign1, sign2, sign3, sign4, sign5, sign6])
-    proto = OPWParameters(a1, a2, b, c1, c2, c3, c4, offsets, signs, T_world_obase, np.eye(4), C,
-                          np.asarray(model.limits, dtype=float), name)
-    T_oflange0 = opw_fk(proto, offsets)
-    T_flange_ee = invert_transforms(T_world_obase @ T_oflange0) @ T_ee0
-    T_flange_ee[3] = (0.0, 0.0, 0.0, 1.0)
-    params = OPWParameters(a1, a2, b, c1, c2, c3, c4, offsets, signs, T_world_obase, T_flange_ee, C,
-                           np.asarray(model.limits, dtype=float), name)
-    for arr in (params.offsets, params.signs, params.T_world_base, params.T_flange_ee, params.coupling,
-                params.limits):
-        arr.setflags(write=False)
-
-    # Verification at random model joints (and zero).
-    rng = np.random.default_rng(12345)
-    qm = np.vstack([np.zeros(6), rng.uniform(-np.pi, np.pi, size=(n_verify, 6))])
-    q = qm @ params.coupling_inv.T
-    T_model = model.fk(q)
-    T_opw = params.fk(q)
-    dp = float(np.max(np.linalg.norm(T_model[:, :3, 3] - T_opw[:, :3, 3], axis=-1)))
-    dr = float(np.max(_rotation_error(T_model[:, :3, :3], T_opw[:, :3, :3])))
-    rot_tol = verify_tol * 1e-2
-    if not (dp <= verify_tol and dr <= rot_tol):
-        raise NotAnalyticError(
-            f"{name}: the OPW model derived from the joint axes does not reproduce the model's FK "
-            f"(max position error {dp:.3g} mm, tolerance {verify_tol:.3g}; max rotation error {dr:.3g} rad, "
-            f"tolerance {rot_tol:.3g})")
-    return params
-
-
-def _rotation_error(R1, R2):
-    """Rotation angle [rad] between rotation stacks, accurate for small angles."""
-    D = np.swapaxes(R1, -1, -2) @ R2
-    v = np.stack([D[..., 2, 1] - D[..., 1, 2], D[..., 0, 2] - D[..., 2, 0], D[..., 1, 0] - D[..., 0, 1]], -1)
-    tr = D[..., 0, 0] + D[..., 1, 1] + D[..., 2, 2]
-    return np.arctan2(0.5 * np.linalg.norm(v, axis=-1), 0.5 * (tr - 1.0))
 
 
 _CACHE: "weakref.WeakKeyDictionary[RobotModel, OPWParameters]" = weakref.WeakKeyDictionary()
@@ -427,6 +123,72 @@ def is_analytic(model: RobotModel) -> bool:
 
 
 # ---------------------------------------------------------------------- inverse kinematics
+def _shoulder(P: OPWParameters, c):
+    """Joint 1 from the wrist centres ``c`` (N, 3) in the OPW base frame: the wrist centre's y in
+    the arm plane frame must be b. Returns ``t1`` (N, 2) (shoulder front / back), ``xs`` (N, 2)
+    the wrist centre's x in the arm plane [mm], and ``ok1`` (N,) reachable."""
+    rho2 = c[:, 0] ** 2 + c[:, 1] ** 2
+    r2 = rho2 - P.b ** 2
+    ok1 = r2 >= -1e-9 * (P.b ** 2 + 1.0)
+    r = np.sqrt(np.maximum(r2, 0.0))
+    xs = np.stack([r, -r], axis=1)                             # (N, 2) shoulder front / back
+    # Shoulder singularity (b = 0 and the wrist centre on axis 1): joint 1 is free; take model q1 = 0.
+    on_axis = (rho2 <= 1e-18) & (abs(P.b) <= 1e-9)
+    psi = np.where(on_axis, P.offsets[0], np.arctan2(c[:, 1], c[:, 0]))
+    t1 = psi[:, None] - np.arctan2(P.b, xs)
+    return t1, xs, ok1
+
+
+def _elbow(P: OPWParameters, c, xs, ok1):
+    """Joints 2 and 3: a planar two-link arm from axis 2 to the wrist centre. Returns ``t2``,
+    ``t3`` (N, 2, 2) (shoulder, elbow up / down) and ``ok2`` (N, 2) reachable."""
+    k = np.hypot(P.a2, P.c3)
+    phi = np.arctan2(P.a2, P.c3)
+    u = xs - P.a1
+    vz = np.broadcast_to((c[:, 2] - P.c1)[:, None], u.shape)
+    D = (u ** 2 + vz ** 2 - P.c2 ** 2 - k ** 2) / (2.0 * P.c2 * k)
+    ok2 = ok1[:, None] & (np.abs(D) <= 1.0 + 1e-12)            # (N, 2)
+    g = np.arccos(np.clip(D, -1.0, 1.0))
+    # gamma = t3 + phi; elbow "up" is gamma > 0 in front, gamma < 0 at the back.
+    gamma = np.stack([g, -g], axis=2) * np.array([1.0, -1.0])[None, :, None]   # (N, 2, 2)
+    t3 = gamma - phi
+    A = P.c2 + k * np.cos(gamma)
+    B = k * np.sin(gamma)
+    t2 = np.arctan2(u, vz)[:, :, None] - np.arctan2(B, A)
+    return t2, t3, ok2
+
+
+def _wrist_joints(P: OPWParameters, R, t1b, t2, t3):
+    """Joints 4-6 from ``R36 = (Rz(t1) Ry(t2 + t3))^T R = Rz(t4) Ry(t5) Rz(t6)``; ``R`` (N, 3, 3)
+    the flange rotations, ``t1b, t2, t3`` (N, 2, 2). Returns ``t4, t5, t6`` (N, 2, 2, 2) (wrist
+    noflip / flip last); theta6 from the remaining rotation, exact even near the singularity."""
+    R03 = rot_z(t1b) @ rot_y(t2 + t3)                           # (N, 2, 2, 3, 3)
+    M = np.swapaxes(R03, -1, -2) @ R[:, None, None]
+    s5 = np.hypot(M[..., 0, 2], M[..., 1, 2])
+    t5 = np.arctan2(s5, M[..., 2, 2])
+    singular = s5 < 1e-12
+    t4 = np.where(singular, P.offsets[3], np.arctan2(M[..., 1, 2], M[..., 0, 2]))
+    t4 = np.stack([t4, t4 + np.pi], axis=-1)                   # (N, 2, 2, 2) wrist noflip / flip
+    t5 = np.stack([t5, -t5], axis=-1)
+    Nr = np.swapaxes(rot_z(t4) @ rot_y(t5), -1, -2) @ M[..., None, :, :]
+    t6 = np.arctan2(Nr[..., 1, 0], Nr[..., 0, 0])
+    return t4, t5, t6
+
+
+def _controller_joints(P: OPWParameters, theta, valid, within_limits: bool, limit_tol: float):
+    """OPW angles (N, 8, 6) -> controller joints (N, 8, 6) wrapped into the limits; invalid
+    branches NaN; with ``within_limits`` solutions outside the limits are marked invalid."""
+    qm = wrap((theta - P.offsets) * P.signs)
+    q = qm @ P.coupling_inv.T
+    q = _wrap_into_limits(q, P)
+    q[~valid] = np.nan
+    if within_limits:
+        lo, hi = P.limits[:, 0], P.limits[:, 1]
+        inside = np.all((q >= lo - limit_tol) & (q <= hi + limit_tol), axis=-1)
+        valid &= inside
+    return q, valid
+
+
 def ik_analytic(model, T_world_ee, *, within_limits: bool = False, limit_tol: float = 1e-9):
     """All 8 closed-form IK solutions of an OPW-class robot.
 
@@ -450,61 +212,17 @@ def ik_analytic(model, T_world_ee, *, within_limits: bool = False, limit_tol: fl
     Tb = invert_transforms(P.T_world_base) @ T @ invert_transforms(P.T_flange_ee)
     R = Tb[:, :3, :3]
     c = Tb[:, :3, 3] - P.c4 * R[:, :, 2]                      # wrist centre (N, 3)
-
-    # Joint 1: the wrist centre's y in the arm plane frame must be b.
-    rho2 = c[:, 0] ** 2 + c[:, 1] ** 2
-    r2 = rho2 - P.b ** 2
-    ok1 = r2 >= -1e-9 * (P.b ** 2 + 1.0)
-    r = np.sqrt(np.maximum(r2, 0.0))
-    xs = np.stack([r, -r], axis=1)                             # (N, 2) shoulder front / back
-    # Shoulder singularity (b = 0 and the wrist centre on axis 1): joint 1 is free; take model q1 = 0.
-    on_axis = (rho2 <= 1e-18) & (abs(P.b) <= 1e-9)
-    psi = np.where(on_axis, P.offsets[0], np.arctan2(c[:, 1], c[:, 0]))
-    t1 = psi[:, None] - np.arctan2(P.b, xs)
-
-    # Joints 2, 3: planar two-link arm from axis 2 to the wrist centre.
-    k = np.hypot(P.a2, P.c3)
-    phi = np.arctan2(P.a2, P.c3)
-    u = xs - P.a1
-    vz = np.broadcast_to((c[:, 2] - P.c1)[:, None], u.shape)
-    D = (u ** 2 + vz ** 2 - P.c2 ** 2 - k ** 2) / (2.0 * P.c2 * k)
-    ok2 = ok1[:, None] & (np.abs(D) <= 1.0 + 1e-12)            # (N, 2)
-    g = np.arccos(np.clip(D, -1.0, 1.0))
-    # gamma = t3 + phi; elbow "up" is gamma > 0 in front, gamma < 0 at the back.
-    gamma = np.stack([g, -g], axis=2) * np.array([1.0, -1.0])[None, :, None]   # (N, 2, 2)
-    t3 = gamma - phi
-    A = P.c2 + k * np.cos(gamma)
-    B = k * np.sin(gamma)
-    t2 = np.arctan2(u, vz)[:, :, None] - np.arctan2(B, A)
+    t1, xs, ok1 = _shoulder(P, c)
+    t2, t3, ok2 = _elbow(P, c, xs, ok1)
     t1b = np.broadcast_to(t1[:, :, None], t2.shape)
-
-    # Wrist: R36 = (Rz(t1) Ry(t2 + t3))^T R = Rz(t4) Ry(t5) Rz(t6).
-    R03 = _rz(t1b) @ _ry(t2 + t3)                               # (N, 2, 2, 3, 3)
-    M = np.swapaxes(R03, -1, -2) @ R[:, None, None]
-    s5 = np.hypot(M[..., 0, 2], M[..., 1, 2])
-    t5 = np.arctan2(s5, M[..., 2, 2])
-    singular = s5 < 1e-12
-    t4 = np.where(singular, P.offsets[3], np.arctan2(M[..., 1, 2], M[..., 0, 2]))
-    t4 = np.stack([t4, t4 + np.pi], axis=-1)                   # (N, 2, 2, 2) wrist noflip / flip
-    t5 = np.stack([t5, -t5], axis=-1)
-    # theta6 from the remaining rotation, so that the product is exact even near the singularity.
-    Nr = np.swapaxes(_rz(t4) @ _ry(t5), -1, -2) @ M[..., None, :, :]
-    t6 = np.arctan2(Nr[..., 1, 0], Nr[..., 0, 0])
+    t4, t5, t6 = _wrist_joints(P, R, t1b, t2, t3)
 
     def b8(x):
         return np.broadcast_to(x[..., None] if x.ndim == 3 else x, (N, 2, 2, 2)).reshape(N, 8)
 
     theta = np.stack([b8(t1b), b8(t2), b8(t3), t4.reshape(N, 8), t5.reshape(N, 8), t6.reshape(N, 8)], axis=-1)
     valid = np.broadcast_to(ok2[:, :, None, None], (N, 2, 2, 2)).reshape(N, 8).copy()
-
-    qm = _wrap((theta - P.offsets) * P.signs)
-    q = qm @ P.coupling_inv.T
-    q = _wrap_into_limits(q, P)
-    q[~valid] = np.nan
-    if within_limits:
-        lo, hi = P.limits[:, 0], P.limits[:, 1]
-        inside = np.all((q >= lo - limit_tol) & (q <= hi + limit_tol), axis=-1)
-        valid &= inside
+    q, valid = _controller_joints(P, theta, valid, within_limits, limit_tol)
     if single:
         return q[0], valid[0]
     return q, valid
@@ -513,9 +231,9 @@ def ik_analytic(model, T_world_ee, *, within_limits: bool = False, limit_tol: fl
 def _wrap_into_limits(q, P: OPWParameters):
     """Wrap controller joints with integer coupling columns to [-pi, pi), then into the limits."""
     out = q.copy()
-    ks = np.arange(-3, 4) * _TWO_PI
+    ks = np.arange(-3, 4) * TWO_PI
     for j in np.flatnonzero(P.integer_columns):
-        base = _wrap(q[..., j])
+        base = wrap(q[..., j])
         cand = base[..., None] + ks                              # (..., 7)
         lo, hi = P.limits[j]
         inside = (cand >= lo) & (cand <= hi)

@@ -83,6 +83,42 @@ def _rz_to(axis) -> np.ndarray:
     return np.stack([x, y, z], axis=1)
 
 
+def _sparse_rows(coupling):
+    """Compressed rows ``(ptr, idx, coef)`` of the coupling matrix (n_model, n_joints)."""
+    ptr, idx, coef = [0], [], []
+    for row in coupling:
+        nz = np.flatnonzero(row)
+        idx.extend(nz.tolist())
+        coef.extend(row[nz].tolist())
+        ptr.append(len(idx))
+    return np.array(ptr, dtype=np.int64), np.array(idx, dtype=np.int64), np.array(coef, dtype=float)
+
+
+def _link_pre_post(link):
+    """A link's operations as ``(pre, post, motion)``: the fixed 4x4 transforms before and after
+    its motion, with the motion canonicalized to Rz(q) or Tz(q) (``motion`` = the op code of the
+    motion, None for a fixed link): ``motion(q + offset) = [Ru] Rz|Tz(q) . Rz|Tz(offset) [Ru^T]``."""
+    pre, post, motion = np.eye(4), np.eye(4), None
+    for code, pname, moves in link_operations(link):
+        value = link.params[pname]
+        if moves:
+            motion = code
+            canon = OP_RZ if code in (OP_RZ, OP_RU) else OP_TZ
+            post = elementary_transforms(canon, value)
+            if code in (OP_RU, OP_TU):
+                Ru = np.eye(4)
+                Ru[:3, :3] = _rz_to(link.axis)
+                pre = pre @ Ru
+                post = post @ invert_transforms(Ru)
+            continue
+        E = elementary_transforms(code, value, op_axis(code, link.axis))
+        if motion is None:
+            pre = pre @ E
+        else:
+            post = post @ E
+    return pre, post, motion
+
+
 class RobotModel:
     """Kinematic model of a serial or tree-shaped robot.
 
@@ -202,9 +238,19 @@ class RobotModel:
         return self.replace(links=links)
 
     def _build_programs(self) -> None:
-        # Operation program (Jacobians, reference FK).
-        codes, axes, vals, pidx, joint, owner = [], [], [], [], [], []
+        """Compile the link tables into the arrays the numba kernels run on."""
         model_index = {int(k): m for m, k in enumerate(self.moving)}
+        self._build_operation_program(model_index)
+        self._cpl = _sparse_rows(self.coupling)
+        self._build_fused_program(model_index)
+        self._ee_ancestors = self._end_effector_ancestors()
+        self._root_affine = self.T_world_base[:3].copy()
+        self._identity_root = np.eye(4)[:3].copy()
+        self._target_cache = {}
+
+    def _build_operation_program(self, model_index: dict) -> None:
+        """Operation program (Jacobians, reference FK): one row per elementary operation."""
+        codes, axes, vals, pidx, joint, owner = [], [], [], [], [], []
         for k, link in enumerate(self.links):
             for code, pname, moves in link_operations(link):
                 codes.append(code)
@@ -221,17 +267,10 @@ class RobotModel:
         self._op_link = np.array(owner, dtype=np.int64)
         self._link_parent = np.array([L.parent for L in self.links], dtype=np.int64)
 
-        # Sparse coupling rows.
-        ptr, idx, coef = [0], [], []
-        for row in self.coupling:
-            nz = np.flatnonzero(row)
-            idx.extend(nz.tolist())
-            coef.extend(row[nz].tolist())
-            ptr.append(len(idx))
-        self._cpl = (np.array(ptr, dtype=np.int64), np.array(idx, dtype=np.int64), np.array(coef, dtype=float))
-
-        # Fused program (FK fast path): per link Pre (before motion) and Post (after motion),
-        # motion canonicalized to Rz(q) or Tz(q).
+    def _build_fused_program(self, model_index: dict) -> None:
+        """Fused program (FK fast path): per moving link the fixed transform ``K`` (3, 4) from the
+        frame it hangs from to its motion, the motion canonicalized to Rz(q) or Tz(q), and the
+        transform after it; per end effector its anchor and fixed transform."""
         n_m = len(self.moving)
         K = np.zeros((n_m, 3, 4))
         post_m = np.zeros((n_m, 3, 4))
@@ -239,25 +278,7 @@ class RobotModel:
         mtype = np.zeros(n_m, dtype=np.int64)
         ref = []  # per link: (moving index of the frame it hangs from or -1, 4x4 from that frame to the link frame)
         for k, link in enumerate(self.links):
-            pre, post, motion = np.eye(4), np.eye(4), None
-            for code, pname, moves in link_operations(link):
-                value = link.params[pname]
-                if moves:
-                    # motion(q + offset) = [Ru] Rz|Tz(q) . Rz|Tz(offset) [Ru^T]
-                    motion = code
-                    canon = OP_RZ if code in (OP_RZ, OP_RU) else OP_TZ
-                    post = elementary_transforms(canon, value)
-                    if code in (OP_RU, OP_TU):
-                        Ru = np.eye(4)
-                        Ru[:3, :3] = _rz_to(link.axis)
-                        pre = pre @ Ru
-                        post = post @ invert_transforms(Ru)
-                    continue
-                E = elementary_transforms(code, value, op_axis(code, link.axis))
-                if motion is None:
-                    pre = pre @ E
-                else:
-                    post = post @ E
+            pre, post, motion = _link_pre_post(link)
             if link.parent < 0:
                 anchor, T_from = -1, self.T_world_base
             else:
@@ -283,17 +304,16 @@ class RobotModel:
         # T_from already contains T_world_base for root-level links.
         self._fused = _kernels.pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
         self._fused_ints, self._fused_floats = self._fused
-        # Which links each end effector depends on (ancestors), for Jacobian masking.
+
+    def _end_effector_ancestors(self) -> np.ndarray:
+        """(n_ee, n_links) bool: the links each end effector depends on, for Jacobian masking."""
         anc = np.zeros((len(self.end_effectors), len(self.links)), dtype=bool)
         for e, ee in enumerate(self.end_effectors):
             k = ee.link
             while k >= 0:
                 anc[e, k] = True
                 k = self.links[k].parent
-        self._ee_ancestors = anc
-        self._root_affine = self.T_world_base[:3].copy()
-        self._identity_root = np.eye(4)[:3].copy()
-        self._target_cache = {}
+        return anc
 
     # ------------------------------------------------------------------ joints
     def _as_joints(self, q) -> tuple[np.ndarray, bool]:

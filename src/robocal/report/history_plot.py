@@ -45,32 +45,50 @@ def plot_history(parameters: dict, metrics: dict, path, title: str, *, events=()
     fig, axes = plt.subplots(n_panels, 1, figsize=(11, 2.6 * n_panels + 0.8), sharex=True, squeeze=False,
                              layout="constrained")
     axes = axes[:, 0]
-    panel = 0
     label = "Δ" if field == "delta" else "value"
-    for unit in sorted(groups, key=lambda u: (u not in ("mm", "rad"), u)):
-        ax = axes[panel]
-        panel += 1
-        k, shown = _display(unit)
-        items = groups[unit]
-        for name, s in items:
-            line, = ax.plot(s.times, s.values * k, marker="o", ms=3, lw=1.2, label=name)
-            ok = np.isfinite(s.std)
-            if ok.any():
-                ax.errorbar(s.times[ok], s.values[ok] * k, yerr=s.std[ok] * k, fmt="none", ecolor=line.get_color(),
-                            alpha=0.5, capsize=2)
-        ax.axhline(0.0, color="0.6", lw=0.8)
-        ax.set_ylabel(f"{label} [{shown}]")
-        ax.set_title(f"parameters in {shown}", loc="left", fontsize=10)
-        ax.legend(fontsize=8, ncol=min(6, max(1, (len(items) + 5) // 6)), loc="upper left", frameon=False)
-        ax.grid(alpha=0.3)
-    for name, s in mets:
-        ax = axes[panel]
-        panel += 1
-        k, shown = _display(s.unit)
-        ax.plot(s.times, s.values * k, marker="o", ms=3, lw=1.2, color="tab:purple")
-        ax.set_ylabel(f"[{shown}]")
-        ax.set_title(name, loc="left", fontsize=10)
-        ax.grid(alpha=0.3)
+    units = sorted(groups, key=lambda u: (u not in ("mm", "rad"), u))
+    for ax, unit in zip(axes, units):
+        _parameter_panel(ax, unit, groups[unit], label)
+    for ax, (name, s) in zip(axes[len(units):], mets):
+        _metric_panel(ax, name, s)
+    _event_lines(fig, axes, events)
+    axes[-1].set_xlabel("time (UTC)")
+    for lab in axes[-1].get_xticklabels():
+        lab.set_rotation(25)
+        lab.set_horizontalalignment("right")
+    fig.suptitle(title)
+    return save_figure(fig, path)
+
+
+def _parameter_panel(ax, unit: str, items, label: str) -> None:
+    """One panel: the parameters ``items`` ((name, Series) pairs) stored in ``unit``, in display
+    units, with 1-std error bars where stored."""
+    k, shown = _display(unit)
+    for name, s in items:
+        line, = ax.plot(s.times, s.values * k, marker="o", ms=3, lw=1.2, label=name)
+        ok = np.isfinite(s.std)
+        if ok.any():
+            ax.errorbar(s.times[ok], s.values[ok] * k, yerr=s.std[ok] * k, fmt="none", ecolor=line.get_color(),
+                        alpha=0.5, capsize=2)
+    ax.axhline(0.0, color="0.6", lw=0.8)
+    ax.set_ylabel(f"{label} [{shown}]")
+    ax.set_title(f"parameters in {shown}", loc="left", fontsize=10)
+    ax.legend(fontsize=8, ncol=min(6, max(1, (len(items) + 5) // 6)), loc="upper left", frameon=False)
+    ax.grid(alpha=0.3)
+
+
+def _metric_panel(ax, name: str, s) -> None:
+    """One panel: the metric ``name`` (a Series) in display units."""
+    k, shown = _display(s.unit)
+    ax.plot(s.times, s.values * k, marker="o", ms=3, lw=1.2, color="tab:purple")
+    ax.set_ylabel(f"[{shown}]")
+    ax.set_title(name, loc="left", fontsize=10)
+    ax.grid(alpha=0.3)
+
+
+def _event_lines(fig, axes, events) -> None:
+    """Vertical dashed lines at geometric and tool calibrations ((time, kind) pairs) on every
+    panel, with a figure legend of the kinds shown."""
     seen = set()
     for t, kind in events:
         if kind not in _EVENT_STYLE:
@@ -84,9 +102,3 @@ def plot_history(parameters: dict, metrics: dict, path, title: str, *, events=()
     if seen:
         handles = [plt.Line2D([], [], color=_EVENT_STYLE[k][0], ls="--", label=_EVENT_STYLE[k][1]) for k in sorted(seen)]
         fig.legend(handles=handles, loc="outside upper right", fontsize=8, frameon=False, ncol=len(handles))
-    axes[-1].set_xlabel("time (UTC)")
-    for lab in axes[-1].get_xticklabels():
-        lab.set_rotation(25)
-        lab.set_horizontalalignment("right")
-    fig.suptitle(title)
-    return save_figure(fig, path)

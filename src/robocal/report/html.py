@@ -228,24 +228,40 @@ def _stats_rows(result):
 def render_report(result: dict, *, accuracy_map: dict | None = None, title: str | None = None,
                   extra_plots: dict | None = None, extra_tables: dict | None = None) -> str:
     """The HTML text of the report (see :func:`write_report`)."""
+    title = title or f"Calibration report: {result.get('robot', '?')}"
+    out = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+           f"<style>{_CSS}</style></head><body>",
+           f"<h1>{html.escape(title)}</h1>"]
+    out += _solver_section(result)
+    out += _errors_section(result)
+    out += _accuracy_map_section(accuracy_map)
+    out += _parameters_section(result)
+    out += _frames_section(result)
+    out += _extra_sections(extra_tables, extra_plots)
+    out.append('<p class="note">Written by robocal. Every number is in result.json (lengths mm, angles rad).</p>')
+    out.append("</body></html>")
+    return "\n".join(out) + "\n"
+
+
+def _solver_section(result: dict) -> list:
+    """Convergence, rank and condition of the solve; the inputs (metadata) table."""
     e = html.escape
-    robot = result.get("robot", "?")
-    title = title or f"Calibration report: {robot}"
     solver = result.get("solver", {})
     md = result.get("metadata") or {}
-    out = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{e(title)}</title>"
-           f"<style>{_CSS}</style></head><body>",
-           f"<h1>{e(title)}</h1>"]
     conv = solver.get("converged")
     status = '<span class="ok">converged</span>' if conv else '<span class="bad">NOT CONVERGED</span>'
-    out.append(f"<p>{status} after {_f(solver.get('iterations'))} iterations ({e(str(solver.get('reason', '')))}); "
-               f"rank {_f(solver.get('rank'))} of {_f(solver.get('n_variables'))} variables, condition number "
-               f"{_f(solver.get('condition_number'), 3)}, a-posteriori sigma0 {_f(solver.get('sigma0'), 4)}.</p>")
+    out = [f"<p>{status} after {_f(solver.get('iterations'))} iterations ({e(str(solver.get('reason', '')))}); "
+           f"rank {_f(solver.get('rank'))} of {_f(solver.get('n_variables'))} variables, condition number "
+           f"{_f(solver.get('condition_number'), 3)}, a-posteriori sigma0 {_f(solver.get('sigma0'), 4)}.</p>"]
     if md:
         out.append("<h2>Inputs</h2>")
         out.append(_table(["item", "value"], [[e(str(k)), e(str(v))] for k, v in md.items()], left=(0, 1)))
+    return out
 
-    out.append("<h2>Position errors [mm]</h2>")
+
+def _errors_section(result: dict) -> list:
+    """Position error statistics before/after, per pose and as histograms."""
+    out = ["<h2>Position errors [mm]</h2>"]
     rows = _stats_rows(result)
     if rows:
         out.append(_table(["poses", "RMS", "mean", "p95", "max", "n"], rows))
@@ -254,15 +270,25 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
     for png, alt in ((_plot_errors_per_pose(result), "error per pose"), (_plot_histogram(result), "error histogram")):
         if png:
             out.append(_img(png, alt))
+    return out
 
+
+def _accuracy_map_section(accuracy_map: dict | None) -> list:
+    """The accuracy map plot with its note, if one was given."""
     amap_png = _plot_accuracy_map(accuracy_map)
-    if amap_png:
-        out.append("<h2>Accuracy map</h2>")
-        if accuracy_map.get("note"):
-            out.append(f'<p class="note">{e(accuracy_map["note"])}</p>')
-        out.append(_img(amap_png, "accuracy map"))
+    if not amap_png:
+        return []
+    out = ["<h2>Accuracy map</h2>"]
+    if accuracy_map.get("note"):
+        out.append(f'<p class="note">{html.escape(accuracy_map["note"])}</p>')
+    out.append(_img(amap_png, "accuracy map"))
+    return out
 
-    out.append("<h2>Parameters</h2>")
+
+def _parameters_section(result: dict) -> list:
+    """Parameter changes (plot and table, angles in degrees) and the parameters not identifiable."""
+    e = html.escape
+    out = ["<h2>Parameters</h2>"]
     png = _plot_parameter_changes(result)
     if png:
         out.append(_img(png, "parameter changes"))
@@ -279,13 +305,18 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
                       left=(0, 1, 2), row_class=pcls))
     out.append('<p class="note">Angles shown in degrees (result.json keeps radians). Base: rotation vector and '
                'origin of the robot base in the instrument frame.</p>')
-
     ident = result.get("identifiability", {})
     if ident.get("dropped"):
         out.append("<h2>Parameters not identifiable from these data</h2>")
         out.append("<p>Held at their initial values:</p>")
         out.append(_table(["name", "why"], [[e(d["name"]), e(d["why"] or "")] for d in ident["dropped"]], left=(0, 1)))
+    return out
 
+
+def _frames_section(result: dict) -> list:
+    """Tables of the base frame(s), the targets and the down-weighted poses, where present."""
+    e = html.escape
+    out = []
     if result.get("bases"):
         out.append("<h2>Base frame(s)</h2>")
         rows = []
@@ -309,15 +340,20 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
         out.append(_table(["pose", "weight", "reason"],
                           [[e(str(o.get("pose_id", o["pose"]))), _f(o["weight"], 3), e(o["reason"])]
                            for o in result["outliers"]], left=(0, 2)))
+    return out
+
+
+def _extra_sections(extra_tables: dict | None, extra_plots: dict | None) -> list:
+    """The caller's extra tables (preformatted cells), then its extra plots (PNG bytes or files)."""
+    e = html.escape
+    out = []
     for name, (header, rows) in (extra_tables or {}).items():
         out.append(f"<h2>{e(name)}</h2>")
         out.append(_table([e(str(h)) for h in header], [[e(str(c)) for c in row] for row in rows]))
     for name, png in (extra_plots or {}).items():
         data = png if isinstance(png, (bytes, bytearray)) else Path(png).read_bytes()
         out.append(f"<h2>{e(name)}</h2>" + _img(bytes(data), name))
-    out.append('<p class="note">Written by robocal. Every number is in result.json (lengths mm, angles rad).</p>')
-    out.append("</body></html>")
-    return "\n".join(out) + "\n"
+    return out
 
 
 def write_report(path, result: dict, *, accuracy_map: dict | None = None, title: str | None = None,

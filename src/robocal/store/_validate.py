@@ -1,4 +1,5 @@
-"""Input checks for the history store: robot ids, names, units, finite numbers, UTC times.
+"""Input checks for the history store: robot ids, names, units, finite numbers, labels and
+indices per row, JSON metadata, UTC times.
 
 Every error is a :class:`HistoryInputError` (a ``ValueError``) whose message names the argument,
 and where it helps the row and column, that was wrong.
@@ -6,6 +7,7 @@ and where it helps the row and column, that was wrong.
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import warnings
@@ -181,6 +183,52 @@ def check_points_mm(p, what: str) -> np.ndarray:
         warnings.warn(f"{what}: every coordinate is below 10 mm; are these metres? (the history keeps millimetres)",
                       UserWarning, stacklevel=4)
     return arr
+
+
+def check_labels(x, n: int, what: str) -> list:
+    """``None``, one string for all rows, or one string (or None) per row."""
+    if x is None or isinstance(x, str):
+        out = [x] * n
+    else:
+        out = list(x)
+        if len(out) != n:
+            raise HistoryInputError(f"{what}: {len(out)} labels for {n} rows")
+    for i, s in enumerate(out):
+        if s is not None and (not isinstance(s, str) or len(s) > 255):
+            raise HistoryInputError(f"{what} row {i}: expected a string of at most 255 characters, got {s!r}")
+    return out
+
+
+def check_indices(x, n: int, what: str) -> list:
+    """``None`` (then 0..n-1) or ``n`` non-negative integers, as a list of ints."""
+    if x is None:
+        return list(range(n))
+    arr = np.asarray(x)
+    if arr.shape != (n,) or not (np.issubdtype(arr.dtype, np.integer) or arr.size == 0):
+        raise HistoryInputError(f"{what} must be {n} integers, got {arr.dtype} array of shape {arr.shape}")
+    if arr.size and arr.min() < 0:
+        raise HistoryInputError(f"{what} row {int(np.argmin(arr))} is negative")
+    return [int(v) for v in arr]
+
+
+def to_json(obj, what: str) -> str:
+    """``obj`` as sorted-key JSON text; finite numbers only."""
+    try:
+        return json.dumps(obj, allow_nan=False, sort_keys=True)
+    except (TypeError, ValueError) as exc:
+        raise HistoryInputError(f"{what} must be JSON data (numbers finite): {exc}") from None
+
+
+def check_units_list(units, n: int, what: str) -> list:
+    """One unit for all ``n`` values or one per value (required), as a list."""
+    if units is None:
+        raise HistoryInputError(f"{what}: units are required (mm, rad, ...)")
+    if isinstance(units, str):
+        units = [units] * n
+    units = list(units)
+    if len(units) != n:
+        raise HistoryInputError(f"{what}: {len(units)} units for {n} values")
+    return units
 
 
 def utc_now() -> datetime:

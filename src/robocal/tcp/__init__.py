@@ -5,8 +5,9 @@
 - :mod:`.sensor`: cross-laser sensor calibration (4-15 ... 4-27) and the beta correction
   (4-28 ... 4-30);
 - :mod:`.tool_data`: a tool frame as KUKA / FANUC / ABB / UR / Kawasaki tool data;
-- :mod:`.cross_laser`: the cross-laser method (4-8 ... 4-14): motion planning, event evaluation,
-  the full recalibration cycle.
+- :mod:`.cross_laser`: the cross-laser method (4-8 ... 4-14), a package: formulas, motions and
+  their planning, event extraction and evaluation, the full recalibration cycle (its events file
+  is read and written by :mod:`robocal.io.barrier_events`).
 
 Frames: ``T_a_b`` is the pose of b in a; lengths in mm, angles in rad unless a name says ``_deg``.
 """

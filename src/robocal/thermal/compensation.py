@@ -26,7 +26,7 @@ import numpy as np
 
 from ..kinematics.model import RobotModel
 from ..transforms import so3_log
-from .drift import DriftResult, identify_drift
+from .drift import DriftResult, identify_drift, joint_rows
 
 __all__ = ["CompensationResult", "OnlineCycle", "CycleRecord", "RemeasureDecision", "RemeasureRule",
            "compensate_program", "online_cycle", "predicted_drift"]
@@ -148,17 +148,8 @@ def compensate_program(model: RobotModel, warm, q_taught, *, position_only: bool
     All points are processed together: one batched FK+Jacobian kernel call and one batched solve
     per iteration.
     """
-    q0 = np.asarray(q_taught, dtype=float)
-    if q0.ndim == 1:
-        q0 = q0[None]
-    if q0.ndim != 2 or q0.shape[1] != model.n_joints:
-        raise ValueError(f"q_taught: expected shape (n, {model.n_joints}), got {q0.shape}")
-    if not np.all(np.isfinite(q0)):
-        raise ValueError(f"q_taught: point(s) {np.flatnonzero(~np.all(np.isfinite(q0), 1)).tolist()} not finite")
-    q0 = np.ascontiguousarray(q0)
-    warm_params = warm.warm_params(model) if isinstance(warm, DriftResult) else np.asarray(warm, dtype=float)
-    if warm_params.shape != model.params.values.shape:
-        raise ValueError(f"warm parameters: expected shape {model.params.values.shape}, got {warm_params.shape}")
+    q0 = joint_rows(model, q_taught, "q_taught", "n", "point(s)", ValueError)
+    warm_params = _warm_parameters(model, warm)
     cold = model.params.values if cold_params is None else np.asarray(cold_params, dtype=float)
     Tft = None if T_flange_tool is None else np.asarray(T_flange_tool, dtype=float).reshape(4, 4)
     jmask = _joint_mask(model)
@@ -176,17 +167,10 @@ def compensate_program(model: RobotModel, warm, q_taught, *, position_only: bool
     dp, dr = _pose_error(T, T_target)
     dp0, dr0 = dp, dr
     for _ in range(max_iterations):
-        done = np.linalg.norm(dp, axis=1) <= tol_mm
-        if not position_only:
-            done &= np.linalg.norm(dr, axis=1) <= tol_rad
+        done = _within(dp, dr, tol_mm, tol_rad, position_only)
         if done.all():
             break
-        r = np.concatenate([dp, dr], axis=1)[:, rows] * wrow
-        Jw = J[:, rows] * wrow[:, None]
-        JJt = Jw @ np.swapaxes(Jw, 1, 2)
-        lam = damping * np.trace(JJt, axis1=1, axis2=2) / JJt.shape[1]
-        A = JJt + lam[:, None, None] * np.eye(JJt.shape[1])
-        dq = (np.swapaxes(Jw, 1, 2) @ np.linalg.solve(A, r[..., None]))[..., 0]
+        dq = _newton_step(J[:, rows], np.concatenate([dp, dr], axis=1)[:, rows], wrow, damping)
         dq[done] = 0.0
         iters += ~done
         q = q + dq
@@ -194,11 +178,37 @@ def compensate_program(model: RobotModel, warm, q_taught, *, position_only: bool
         dp, dr = _pose_error(T, T_target)
     pos = np.linalg.norm(dp, axis=1)
     rot = np.zeros(n) if position_only else np.linalg.norm(dr, axis=1)
-    conv = pos <= tol_mm
-    if not position_only:
-        conv &= rot <= tol_rad
+    conv = _within(dp, dr, tol_mm, tol_rad, position_only)
     return CompensationResult(q, q0, pos, rot, np.linalg.norm(dp0, axis=1), np.linalg.norm(dr0, axis=1), iters, conv,
                               model.within_limits(q), position_only)
+
+
+def _warm_parameters(model, warm) -> np.ndarray:
+    """The warm parameter vector (P,) from a vector or a :class:`DriftResult`."""
+    warm_params = warm.warm_params(model) if isinstance(warm, DriftResult) else np.asarray(warm, dtype=float)
+    if warm_params.shape != model.params.values.shape:
+        raise ValueError(f"warm parameters: expected shape {model.params.values.shape}, got {warm_params.shape}")
+    return warm_params
+
+
+def _within(dp, dr, tol_mm: float, tol_rad: float, position_only: bool) -> np.ndarray:
+    """(n,) bool: position error within ``tol_mm`` (and rotation within ``tol_rad``)."""
+    ok = np.linalg.norm(dp, axis=1) <= tol_mm
+    if not position_only:
+        ok &= np.linalg.norm(dr, axis=1) <= tol_rad
+    return ok
+
+
+def _newton_step(J, r, wrow, damping: float) -> np.ndarray:
+    """Damped Gauss-Newton joint steps (n, n_joints) for Jacobians ``J`` (n, rows, n_joints) and
+    pose errors ``r`` (n, rows), rows weighted by ``wrow``; Tikhonov damping relative to the mean
+    squared singular value."""
+    r = r * wrow
+    Jw = J * wrow[:, None]
+    JJt = Jw @ np.swapaxes(Jw, 1, 2)
+    lam = damping * np.trace(JJt, axis1=1, axis2=2) / JJt.shape[1]
+    A = JJt + lam[:, None, None] * np.eye(JJt.shape[1])
+    return (np.swapaxes(Jw, 1, 2) @ np.linalg.solve(A, r[..., None]))[..., 0]
 
 
 def predicted_drift(model: RobotModel, delta_full, q, *, T_flange_tool=None) -> np.ndarray:

@@ -28,6 +28,7 @@ rad columns compare; the raw condition number of a mixed-unit matrix means nothi
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -155,15 +156,17 @@ def _sphere_and_jacobian(model, T_sensor_base, P_e, q, params, index, jacobian=T
     return P, np.einsum("ij,njk->nik", R, J[:, 0])
 
 
-def _joints(model, q):
+def joint_rows(model, q, what: str = "joints", rows: str = "m", items: str = "pose(s)",
+               error=DriftIdentificationError) -> np.ndarray:
+    """``q`` as a contiguous (rows, n_joints) float array (one vector: one row); a wrong shape or
+    non-finite rows raise ``error`` naming ``what`` and the ``items`` concerned."""
     q = np.asarray(q, dtype=float)
     if q.ndim == 1:
         q = q[None]
     if q.ndim != 2 or q.shape[1] != model.n_joints:
-        raise DriftIdentificationError(f"joints: expected shape (m, {model.n_joints}), got {q.shape}")
+        raise error(f"{what}: expected shape ({rows}, {model.n_joints}), got {q.shape}")
     if not np.all(np.isfinite(q)):
-        raise DriftIdentificationError(f"joints: pose(s) {np.flatnonzero(~np.all(np.isfinite(q), 1)).tolist()} "
-                                       f"not finite")
+        raise error(f"{what}: {items} {np.flatnonzero(~np.all(np.isfinite(q), 1)).tolist()} not finite")
     return np.ascontiguousarray(q)
 
 
@@ -178,7 +181,7 @@ def drift_coefficients(model: RobotModel, T_sensor_base, P_e, q, *, params=None,
     q: (m, n) joints [rad]; P_e (3,) sphere centre in the flange frame [mm]; params: the
     parameter vector to linearise at (default the model's, the cold state).
     """
-    q = _joints(model, q)
+    q = joint_rows(model, q)
     params = model.params.values if params is None else np.asarray(params, float)
     index = np.arange(len(model.params)) if subset is None else resolve_subset(model, subset)
     return _sphere_and_jacobian(model, T_sensor_base, P_e, q, params, index)[1]
@@ -186,7 +189,7 @@ def drift_coefficients(model: RobotModel, T_sensor_base, P_e, q, *, params=None,
 
 def predict_sphere(model: RobotModel, T_sensor_base, P_e, q, *, params=None) -> np.ndarray:
     """Sphere centres (m, 3) in the sensor frame, (3-1), with the model's (or given) parameters."""
-    q = _joints(model, q)
+    q = joint_rows(model, q)
     params = model.params.values if params is None else np.asarray(params, float)
     return _sphere_and_jacobian(model, T_sensor_base, P_e, q, params, np.zeros(0, np.int64), False)[0]
 
@@ -218,7 +221,7 @@ def identify_drift(model: RobotModel, T_sensor_base, P_e, q, P_warm, P_cold=None
         raise ValueError(f"on_rank_deficient must be 'raise' or 'drop', got {on_rank_deficient!r}")
     if iterations < 1:
         raise ValueError(f"iterations must be >= 1, got {iterations}")
-    q = _joints(model, q)
+    q = joint_rows(model, q)
     m = len(q)
     P_warm = np.asarray(P_warm, dtype=float)
     if P_warm.shape != (m, 3):
@@ -232,6 +235,27 @@ def identify_drift(model: RobotModel, T_sensor_base, P_e, q, P_warm, P_cold=None
             f"{-(-k // 3)} poses or choose fewer parameters (the thesis uses 2-3 equations per parameter)")
     X = model.params.values
     P0, A = _sphere_and_jacobian(model, T_sensor_base, P_e, q, X, index)
+    Y = P_warm - _cold_reference(P_cold, P0, P_warm)          # (m, 3), (3-8) left side
+    A2 = A.reshape(3 * m, k)
+    ident, active = _identifiable_columns(A2, names, m, tol, on_rank_deficient)
+    ia = np.flatnonzero(active)
+
+    def relinearise(delta, jacobian=True):
+        return _sphere_and_jacobian(model, T_sensor_base, P_e, q, X + _full(len(X), index, delta), index, jacobian)
+
+    delta, resid, svd = _solve(relinearise, Y, P0, A2, ia, iterations, rcond)
+    rank, cond, std = _statistics(svd, resid, k, ia, point_sigma_mm)
+    full = _full(len(X), index, delta)
+    dropped = [n for n, a in zip(names, active) if not a]
+    units = tuple(model.params.units[i] for i in index)
+    return DriftResult(names, delta, std, model.params.names, full, rank, cond, svd.s, Y, resid, ident, dropped,
+                       iterations, units)
+
+
+def _cold_reference(P_cold, P0, P_warm) -> np.ndarray:
+    """The cold sphere centres (m, 3): measured ``P_cold`` or, if None, the model's ``P0``;
+    checked for shape and (with ``P_warm``) for finite values."""
+    m = len(P0)
     if P_cold is None:
         P_cold = P0
     else:
@@ -240,8 +264,13 @@ def identify_drift(model: RobotModel, T_sensor_base, P_e, q, P_warm, P_cold=None
             raise DriftIdentificationError(f"P_cold: expected shape ({m}, 3), got {P_cold.shape}")
     if not (np.all(np.isfinite(P_warm)) and np.all(np.isfinite(P_cold))):
         raise DriftIdentificationError("sphere centres contain NaN or infinite values")
-    Y = P_warm - P_cold                                      # (m, 3), (3-8) left side
-    A2 = A.reshape(3 * m, k)
+    return P_cold
+
+
+def _identifiable_columns(A2, names, m: int, tol: float, on_rank_deficient: str):
+    """The identifiability report of ``A2`` (3m, k) and the mask (k,) of the columns to solve;
+    non-identifiable ones raise :class:`RankDeficientError` or (``"drop"``) are masked out."""
+    k = len(names)
     ident = analyse_identifiability(A2, names, tol=tol)
     active = np.ones(k, dtype=bool)
     if ident.dropped:
@@ -250,42 +279,66 @@ def identify_drift(model: RobotModel, T_sensor_base, P_e, q, P_warm, P_cold=None
                 f"the parameter subset is not identifiable from these {m} poses (rank {ident.rank} of {k}):\n"
                 + ident.explain() + "\nchoose other parameters or add poses that separate them", ident)
         active = np.array([n not in set(ident.dropped_names) for n in names])
-    ia = np.flatnonzero(active)
+    return ident, active
 
+
+class _SVD(NamedTuple):
+    """The last (3-9) decomposition: singular values ``s``, ``Vt``, the kept mask, column scales."""
+
+    s: np.ndarray
+    Vt: np.ndarray
+    keep: np.ndarray
+    scale: np.ndarray
+
+
+def _svd_step(Aa, r, rcond: float):
+    """(3-9), (3-10) on unit-norm columns of ``Aa`` (3m, ka): the step (ka,) for residual ``r``
+    (3m,), singular values below ``rcond * s_max`` dropped."""
+    scale = np.linalg.norm(Aa, axis=0)
+    scale[scale == 0] = 1.0
+    U, s, Vt = np.linalg.svd(Aa / scale, full_matrices=False)     # (3-9)
+    keep = s > rcond * s[0]
+    step = Vt.T @ np.where(keep, (U.T @ r) / np.where(keep, s, 1.0), 0.0)   # (3-10)
+    return step / scale, _SVD(s, Vt, keep, scale)
+
+
+def _solve(relinearise, Y, P0, A2, ia, iterations: int, rcond: float):
+    """``iterations`` linear solves of ``Y = A dX`` over the columns ``ia`` (the first at the cold
+    parameters, the others re-linearised by ``relinearise(delta)``). Returns ``(delta (k,),
+    residuals (m, 3) [mm], the last SVD)``."""
+    n_eq, k = A2.shape
     delta = np.zeros(k)
     y = Y.reshape(-1)
     r = y
     for it in range(iterations):
         if it > 0:
-            Pw, A = _sphere_and_jacobian(model, T_sensor_base, P_e, q, X + _full(len(X), index, delta), index)
-            A2 = A.reshape(3 * m, k)
+            Pw, A = relinearise(delta)
+            A2 = A.reshape(n_eq, k)
             r = y - (Pw - P0).reshape(-1)
-        Aa = A2[:, ia]
-        scale = np.linalg.norm(Aa, axis=0)
-        scale[scale == 0] = 1.0
-        U, s, Vt = np.linalg.svd(Aa / scale, full_matrices=False)     # (3-9)
-        keep = s > rcond * s[0]
-        step = Vt.T @ np.where(keep, (U.T @ r) / np.where(keep, s, 1.0), 0.0)   # (3-10)
-        delta[ia] += step / scale
+        step, svd = _svd_step(A2[:, ia], r, rcond)
+        delta[ia] += step
     if iterations > 1:
-        Pw = _sphere_and_jacobian(model, T_sensor_base, P_e, q, X + _full(len(X), index, delta), index, False)[0]
+        Pw = relinearise(delta, False)[0]
         resid = Y - (Pw - P0)
     else:
-        resid = (y - A2 @ delta).reshape(m, 3)
+        resid = (y - A2 @ delta).reshape(-1, 3)
+    return delta, resid, svd
+
+
+def _statistics(svd: _SVD, resid, k: int, ia, point_sigma_mm):
+    """Rank, condition number (unit-norm columns) and standard deviations (k,) of the solution
+    (NaN for columns not solved); the noise is ``point_sigma_mm`` or estimated from ``resid``."""
+    s, Vt, keep, scale = svd
     rank = int(keep.sum())
     cond = float(s[0] / s[rank - 1]) if rank else float("inf")
-    dof = 3 * m - rank
+    dof = resid.size - rank
     sigma = point_sigma_mm if point_sigma_mm is not None else (
         float(np.sqrt(np.sum(resid**2) / dof)) if dof > 0 else float("nan"))
     inv = np.where(keep, 1.0 / np.where(keep, s, 1.0) ** 2, 0.0)
     var = ((Vt.T**2) @ inv) / scale**2 * sigma**2
     std = np.full(k, np.nan)
     std[ia] = np.sqrt(var)
-    full = _full(len(X), index, delta)
-    dropped = [n for n, a in zip(names, active) if not a]
-    units = tuple(model.params.units[i] for i in index)
-    return DriftResult(names, delta, std, model.params.names, full, rank, cond, s, Y, resid, ident, dropped,
-                       iterations, units)
+    return rank, cond, std
 
 
 def _full(P, index, delta):

@@ -61,6 +61,7 @@ predicted noise at the monitored points for a given parameter set.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass, field
@@ -470,29 +471,43 @@ def select_online_poses(problem: ScreeningProblem, names, n: int = 6, *, max_com
     info = np.einsum("pik,pil->pkl", A, A)                              # per-pose information (m, k, k)
     Js = problem._Jn[:, cols]
     G = Js.T @ Js                                                       # (k, k): trace(J N^-1 J^T) = trace(N^-1 G)
-
-    def cost(subsets):
-        N = info[subsets].sum(axis=1)
-        ev = np.linalg.eigvalsh(N)
-        ok = ev[:, 0] > 1e-10 * ev[:, -1]
-        out = np.full(len(subsets), np.inf)
-        if ok.any():
-            inv = np.linalg.inv(N[ok])
-            out[ok] = np.einsum("bkl,lk->b", inv, G)
-        return out
-
+    cost = functools.partial(_i_optimal_cost, info, G)
     if math.comb(m, n) <= max_combinations:
-        combos = np.array(list(itertools.combinations(range(m), n)), dtype=np.int64)
-        best, best_c = None, np.inf
-        for i in range(0, len(combos), 20000):
-            c = cost(combos[i:i + 20000])
-            j = int(np.argmin(c))
-            if c[j] < best_c:
-                best, best_c = combos[i + j], c[j]
-        if best is None:
-            raise ValueError(f"no {n}-pose subset identifies {list(names)}")
-        return np.sort(best)
-    chosen: list = []                                                   # greedy D-optimal start, then exchange
+        return _best_subset(cost, m, n, names)
+    return _greedy_exchange(cost, info, m, n, names)
+
+
+def _i_optimal_cost(info, G, subsets) -> np.ndarray:
+    """``trace(N^-1 G)`` (B,) for pose subsets (B, n), ``N`` = summed per-pose information
+    ``info`` (m, k, k); ``inf`` where ``N`` is (numerically) singular."""
+    N = info[subsets].sum(axis=1)
+    ev = np.linalg.eigvalsh(N)
+    ok = ev[:, 0] > 1e-10 * ev[:, -1]
+    out = np.full(len(subsets), np.inf)
+    if ok.any():
+        inv = np.linalg.inv(N[ok])
+        out[ok] = np.einsum("bkl,lk->b", inv, G)
+    return out
+
+
+def _best_subset(cost, m: int, n: int, names) -> np.ndarray:
+    """The cheapest of all ``C(m, n)`` subsets (sorted indices), evaluated in batches."""
+    combos = np.array(list(itertools.combinations(range(m), n)), dtype=np.int64)
+    best, best_c = None, np.inf
+    for i in range(0, len(combos), 20000):
+        c = cost(combos[i:i + 20000])
+        j = int(np.argmin(c))
+        if c[j] < best_c:
+            best, best_c = combos[i + j], c[j]
+    if best is None:
+        raise ValueError(f"no {n}-pose subset identifies {list(names)}")
+    return np.sort(best)
+
+
+def _greedy_exchange(cost, info, m: int, n: int, names) -> np.ndarray:
+    """A greedy D-optimal start, then single-pose exchanges while the cost drops (sorted indices)."""
+    k = info.shape[1]
+    chosen: list = []
     for _ in range(n):
         rest = [p for p in range(m) if p not in chosen]
         N = info[chosen].sum(axis=0) if chosen else np.zeros((k, k))

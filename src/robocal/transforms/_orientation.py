@@ -1,4 +1,7 @@
-"""Orientation conventions: Euler angles, quaternions and rotation vectors, by explicit name.
+"""Orientation conventions by explicit name: Euler angles, and pose vectors at the boundary.
+
+Quaternions and the rotation-vector logarithm live in ``_quaternion``; pose vectors here use them
+(``"quaternion"``, ``"rotvec"``) beside every Euler convention.
 
 Every function is batched over leading ``...`` dimensions and works on rotation matrices shaped
 ``(..., 3, 3)``. Angles are radians here; only :func:`pose_from_transform` and
@@ -26,7 +29,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._basic import check_transforms, so3_exp, transforms_from
+from ._basic import so3_exp, transforms_from
+from ._checks import as_matrices, as_vectors, check_transforms
+from ._quaternion import matrix_from_quaternion_named, quaternion_from_matrix, rotvec_from_matrix
 
 __all__ = [
     "EULER_CONVENTIONS",
@@ -35,10 +40,7 @@ __all__ = [
     "ANGLE_UNITS",
     "matrix_from_euler",
     "euler_from_matrix",
-    "quaternion_from_matrix",
-    "matrix_from_quaternion",
     "matrix_from_rotvec",
-    "rotvec_from_matrix",
     "pose_from_transform",
     "transform_from_pose",
 ]
@@ -123,24 +125,6 @@ def _euler(convention) -> _Euler:
     return _EULER[key]
 
 
-def _as_vectors(x, n: int, name: str) -> np.ndarray:
-    x = np.asarray(x, dtype=float)
-    if x.ndim < 1 or x.shape[-1] != n:
-        raise ValueError(f"{name}: expected shape (..., {n}), got {x.shape}")
-    if not np.all(np.isfinite(x)):
-        raise ValueError(f"{name}: contains NaN or infinite values")
-    return x
-
-
-def _as_matrices(R, name: str) -> np.ndarray:
-    R = np.asarray(R, dtype=float)
-    if R.ndim < 2 or R.shape[-2:] != (3, 3):
-        raise ValueError(f"{name}: expected shape (..., 3, 3), got {R.shape}")
-    if not np.all(np.isfinite(R)):
-        raise ValueError(f"{name}: contains NaN or infinite values")
-    return R
-
-
 def _elementary(axis: int, angle: np.ndarray) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
     R = np.zeros(angle.shape + (3, 3))
@@ -161,7 +145,7 @@ def matrix_from_euler(angles, convention: str) -> np.ndarray:
     (KUKA (A, B, C), FANUC (W, P, R), URDF (roll, pitch, yaw), ...).
     """
     conv = _euler(convention)
-    angles = _as_vectors(angles, 3, "angles")
+    angles = as_vectors(angles, 3, "angles")
     u = angles[..., list(conv.perm)]
     a0, a1, a2 = (_AXIS[ch] for ch in conv.seq)
     return _elementary(a0, u[..., 0]) @ _elementary(a1, u[..., 1]) @ _elementary(a2, u[..., 2])
@@ -176,7 +160,7 @@ def euler_from_matrix(R, convention: str) -> np.ndarray:
     (see the module docstring); the matrix round trip always holds.
     """
     conv = _euler(convention)
-    R = _as_matrices(R, "R")
+    R = as_matrices(R, "R")
     i, j, last = (_AXIS[ch] for ch in conv.seq)
     proper = i == last
     k = 3 - i - j  # the axis not among the first two
@@ -215,96 +199,12 @@ def _wrap(x: np.ndarray) -> np.ndarray:
     return np.where(y <= -np.pi, y + 2.0 * np.pi, y)
 
 
-# --- quaternions (w, x, y, z) ----------------------------------------------------------------
-
-
-def quaternion_from_matrix(R) -> np.ndarray:
-    """Unit quaternions ``(..., 4)`` as (w, x, y, z) from rotations ``(..., 3, 3)``.
-
-    Shepperd's method, vectorized: of the four algebraically equivalent formulas, each item uses
-    the one whose pivot (4w^2, 4x^2, 4y^2 or 4z^2) is largest, so no division by a small number.
-    The sign is chosen so that ``w >= 0`` (q and -q are the same rotation); for a 180 degree
-    rotation (w = 0) the sign of the vector part is whatever the pivot formula gives.
-    """
-    R = _as_matrices(R, "R")
-    r00, r11, r22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
-    tr = r00 + r11 + r22
-    d21, d02, d10 = R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]
-    s01, s02, s12 = R[..., 0, 1] + R[..., 1, 0], R[..., 0, 2] + R[..., 2, 0], R[..., 1, 2] + R[..., 2, 1]
-    cand = np.stack(
-        [
-            np.stack([1.0 + tr, d21, d02, d10], axis=-1),  # 4w * q
-            np.stack([d21, 1.0 + 2.0 * r00 - tr, s01, s02], axis=-1),  # 4x * q
-            np.stack([d02, s01, 1.0 + 2.0 * r11 - tr, s12], axis=-1),  # 4y * q
-            np.stack([d10, s02, s12, 1.0 + 2.0 * r22 - tr], axis=-1),  # 4z * q
-        ],
-        axis=-2,
-    )
-    pivot = np.argmax(np.stack([tr, r00, r11, r22], axis=-1), axis=-1)
-    q = np.take_along_axis(cand, pivot[..., None, None], axis=-2)[..., 0, :]
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., :1] < 0.0, -q, q)
-
-
-def matrix_from_quaternion(q, tol: float | None = 1e-3) -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` from quaternions ``(..., 4)`` ordered (w, x, y, z).
-
-    The quaternion is always normalized. ``ValueError`` (naming ``q``) if its norm is ~0, or, when
-    ``tol`` is not None, if the norm differs from 1 by more than ``tol``: a norm far from 1 usually
-    means the components are in the wrong order, scaled, or not a quaternion at all. Pass
-    ``tol=None`` to accept any non-zero norm.
-    """
-    return _matrix_from_quaternion(q, tol, "q")
-
-
-def _matrix_from_quaternion(q, tol, name: str) -> np.ndarray:
-    q = _as_vectors(q, 4, name)
-    norm = np.linalg.norm(q, axis=-1)
-    if np.any(norm < 1e-12):
-        raise ValueError(f"{name}: quaternion (w, x, y, z) with zero norm is not a rotation")
-    if tol is not None:
-        dev = np.abs(norm - 1.0).max(initial=0.0)
-        if dev > tol:
-            raise ValueError(
-                f"{name}: quaternion (w, x, y, z) norm deviates from 1 by {dev:.3g} > tol={tol:g}; "
-                "check the component order (w first) or pass tol=None to normalize anyway"
-            )
-    w, x, y, z = np.moveaxis(q / norm[..., None], -1, 0)
-    R = np.empty(q.shape[:-1] + (3, 3))
-    R[..., 0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    R[..., 0, 1] = 2.0 * (x * y - w * z)
-    R[..., 0, 2] = 2.0 * (x * z + w * y)
-    R[..., 1, 0] = 2.0 * (x * y + w * z)
-    R[..., 1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    R[..., 1, 2] = 2.0 * (y * z - w * x)
-    R[..., 2, 0] = 2.0 * (x * z - w * y)
-    R[..., 2, 1] = 2.0 * (y * z + w * x)
-    R[..., 2, 2] = 1.0 - 2.0 * (x * x + y * y)
-    return R
-
-
 # --- rotation vectors (axis * angle) -----------------------------------------------------------
 
 
 def matrix_from_rotvec(rotvec) -> np.ndarray:
     """Rotation matrices ``(..., 3, 3)`` from rotation vectors ``(..., 3)`` = axis * angle [rad]."""
-    return so3_exp(_as_vectors(rotvec, 3, "rotvec"))
-
-
-def rotvec_from_matrix(R) -> np.ndarray:
-    """Rotation vectors ``(..., 3)`` [rad], angle in [0, pi], from rotations ``(..., 3, 3)``.
-
-    Computed through the Shepperd quaternion, ``angle = 2 atan2(|v|, w)``, which stays accurate to
-    rounding right up to pi (an angle taken from the trace with ``arccos`` loses about half the
-    digits there). At exactly pi, ``v`` and ``-v`` are the same rotation; either may be returned.
-    """
-    q = quaternion_from_matrix(_as_matrices(R, "R"))
-    w, v = q[..., 0], q[..., 1:]
-    n = np.linalg.norm(v, axis=-1)
-    small = n < 1e-8
-    # 2 atan2(n, w) / n, with its series 2/w (1 - n^2 / (3 w^2)) for tiny n (w ~ 1 there)
-    scale = np.where(small, 2.0 / w * (1.0 - n**2 / (3.0 * w**2)), 2.0 * np.arctan2(n, w) / np.where(small, 1.0, n))
-    return v * scale[..., None]
+    return so3_exp(as_vectors(rotvec, 3, "rotvec"))
 
 
 # --- poses at the boundary (declared units) ----------------------------------------------------
@@ -372,7 +272,7 @@ def transform_from_pose(values, convention: str, length_unit: str = "mm", angle_
         raise ValueError("values: contains NaN or infinite values")
     p = values[..., :3] * lf
     if conv == "quaternion":
-        R = _matrix_from_quaternion(values[..., 3:], 1e-3, "values[..., 3:7] (quaternion w, x, y, z)")
+        R = matrix_from_quaternion_named(values[..., 3:], 1e-3, "values[..., 3:7] (quaternion w, x, y, z)")
     elif conv == "rotvec":
         R = so3_exp(values[..., 3:] * af)
     else:

@@ -188,32 +188,35 @@ def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses
         result["history"] = _record_history(out / "history.sqlite", nominal.name, result)
 
     step(6, total, "writing the report")
-    from ..report.html import write_report
-    from ..report.plots import plot_accuracy_map
+    report, before_png, after_png = _write_report(out, nominal.name, result, run, T_nominal, err, err_after, n_poses,
+                                                  history)
+    result["files"] = {"report": str(report), "accuracy_map": str(before_png),
+                       "accuracy_map_calibrated": str(after_png), "result": str(out / "demo_result.json"),
+                       "calibration": result["geometric_calibration"]["files"]}
+    write_json(out / "demo_result.json", result)
+    return result
 
-    extra = {}
-    if history:
-        from ..report.history_plot import plot_history
-        from ..store import HistoryStore
 
-        with HistoryStore.open(result["history"], create=False) as store:
-            cycles = store.cycles(nominal.name)
-            params = store.parameter_history(nominal.name)
-            metrics = {m: store.metric_history(nominal.name, m) for m in store.metric_names(nominal.name)}
-        events = [(c.started_at, c.kind) for c in cycles if c.status == "committed"]
-        extra["Maintenance history: thermal parameter drift and cycle metrics"] = plot_history(
-            params, metrics, out / "history.png", f"{nominal.name}: drift over time", events=events)
+def _history_plot(out, robot_name, store_path):
+    """The drift-over-time plot of the demo's history database: ``{section title: PNG path}``."""
+    from ..report.history_plot import plot_history
+    from ..store import HistoryStore
 
-    before_png = plot_accuracy_map(T_nominal[:, :3, 3], err, out / "accuracy_map.png",
-                                   f"{nominal.name}: nominal model error over {n_poses} poses",
-                                   repeatability_mm=result["repeatability_mm"]["max_deviation"])
-    after_png = plot_accuracy_map(T_nominal[:, :3, 3], err_after, out / "accuracy_map_calibrated.png",
-                                  f"{nominal.name}: calibrated model error over the same poses",
-                                  repeatability_mm=result["repeatability_mm"]["max_deviation"])
+    with HistoryStore.open(store_path, create=False) as store:
+        cycles = store.cycles(robot_name)
+        params = store.parameter_history(robot_name)
+        metrics = {m: store.metric_history(robot_name, m) for m in store.metric_names(robot_name)}
+    events = [(c.started_at, c.kind) for c in cycles if c.status == "committed"]
+    return {"Maintenance history: thermal parameter drift and cycle metrics": plot_history(
+        params, metrics, out / "history.png", f"{robot_name}: drift over time", events=events)}
+
+
+def _summary_tables(result, n_poses):
+    """The report's tables: the cycle in numbers, and the thermal lambda per run."""
     acc, rep = result["accuracy_mm"], result["repeatability_mm"]
     after = result["geometric_calibration"]["workspace_accuracy_mm"]["after"]
     tool = result["tool_recalibration"]
-    tables = {
+    return {
         "The maintenance cycle in numbers": (["step", "figure", "value"], [
             ["1 the problem", f"nominal model error over {n_poses} poses (RMS / max)",
              f"{acc['rms']:.3f} / {acc['max']:.3f} mm"],
@@ -228,12 +231,23 @@ def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses
             [[r_["run"], r_["role"], f"{r_['tcp_drift_3h_mm']:.3f}", f"{r_['before']:.1f}", f"{r_['traditional']:.1f}",
               f"{r_['screened']:.1f}"] for r_ in result["thermal"]["rows"]]),
     }
-    report = write_report(out / "report.html", run["result"], overwrite=True, extra_tables=tables,
-                          title=f"robocal demo: keeping a simulated {nominal.name} accurate",
+
+
+def _write_report(out, robot_name, result, run, T_nominal, err, err_after, n_poses, history):
+    """``report.html`` with the accuracy maps before/after calibration (and the history plot);
+    returns the paths of the report and the two maps."""
+    from ..report.html import write_report
+    from ..report.plots import plot_accuracy_map
+
+    extra = _history_plot(out, robot_name, result["history"]) if history else {}
+    rep_max = result["repeatability_mm"]["max_deviation"]
+    before_png = plot_accuracy_map(T_nominal[:, :3, 3], err, out / "accuracy_map.png",
+                                   f"{robot_name}: nominal model error over {n_poses} poses", repeatability_mm=rep_max)
+    after_png = plot_accuracy_map(T_nominal[:, :3, 3], err_after, out / "accuracy_map_calibrated.png",
+                                  f"{robot_name}: calibrated model error over the same poses", repeatability_mm=rep_max)
+    report = write_report(out / "report.html", run["result"], overwrite=True,
+                          extra_tables=_summary_tables(result, n_poses),
+                          title=f"robocal demo: keeping a simulated {robot_name} accurate",
                           extra_plots={"Workspace accuracy of the nominal model": before_png,
                                        "Workspace accuracy after calibration": after_png, **extra})
-    result["files"] = {"report": str(report), "accuracy_map": str(before_png),
-                       "accuracy_map_calibrated": str(after_png), "result": str(out / "demo_result.json"),
-                       "calibration": result["geometric_calibration"]["files"]}
-    write_json(out / "demo_result.json", result)
-    return result
+    return report, before_png, after_png

@@ -14,9 +14,10 @@ import math
 
 import numpy as np
 
+from ..io.barrier_events import write_events_csv
 from ..robots import load_robot
 from ..sim.light_barrier import CrossLaserSensor, CylinderTool, LightBarrierCell, simulate_sensor_calibration_points
-from ..tcp.cross_laser import CrossLaserSettings, recalibrate_tool, write_events_csv
+from ..tcp.cross_laser import CrossLaserSettings, recalibrate_tool
 from ..transforms import rotation_angle, transforms_from
 
 __all__ = ["DEFAULT_VARIANTS", "tcp_repeatability_study", "format_study_table"]
@@ -82,40 +83,15 @@ def tcp_repeatability_study(*, collisions: int = 10, seed: int = 0, robot: str |
     ss = np.random.SeedSequence(seed)
     s_cal, s_col, s_runs = ss.spawn(3)
     run_seeds = s_runs.spawn(collisions)
+    cell_kw = dict(io_rate_hz=io_rate_hz, latency_s=latency_s, repeatability_mm=repeatability_mm)
 
     T_nom_sensor = transforms_from(np.eye(3), np.asarray(sensor_origin_mm, float))
     sensor = CrossLaserSensor.build(T_nom_sensor, beta_deg=beta_deg, gap_mm=gap_mm, tilt_deg=tilt_deg,
                                     tilt_axis_deg=30.0, yaw_deg=yaw_deg)
     truth = sensor.true_frame()
-    if sensor_calibration == "simulated":
-        from ..tcp.sensor import calibrate_sensor
-
-        pts, cal_time = simulate_sensor_calibration_points(sensor, T_nom_sensor, np.random.default_rng(s_cal),
-                                                           io_rate_hz=io_rate_hz, latency_s=latency_s,
-                                                           repeatability_mm=repeatability_mm)
-        cal = calibrate_sensor(pts)
-        cal_d = cal.to_dict()
-    elif sensor_calibration == "truth":
-        cal, cal_time = truth, 0.0
-        cal_d = {k: np.asarray(v).tolist() if not np.isscalar(v) else float(v) for k, v in truth.items()}
-    else:
-        raise ValueError("sensor_calibration must be 'simulated' or 'truth'")
+    cal, cal_d, cal_time = _calibrate_sensor(sensor, T_nom_sensor, truth, sensor_calibration, s_cal, cell_kw)
     if sensor_path is not None:
-        import json
-
-        from ..io.atomic import atomic_write_text
-
-        atomic_write_text(sensor_path, json.dumps(cal_d, indent=2) + "\n", overwrite=True)
-    cal_T = np.asarray(cal_d["T_base_sensor"], float)
-    sensor_report = {
-        "calibration": sensor_calibration,
-        "calibration_time_s": float(cal_time),
-        "origin_error_mm": float(np.linalg.norm(cal_T[:3, 3] - truth["origin_mm"])),
-        "x_axis_error_deg": math.degrees(math.acos(min(1.0, float(cal_T[:3, 0] @ truth["x_axis"])))),
-        "z_axis_error_deg": math.degrees(math.acos(min(1.0, float(cal_T[:3, 2] @ truth["z_axis"])))),
-        "beta_deg": float(cal_d["beta_deg"]), "beta_true_deg": float(truth["beta_deg"]),
-        "gap_mm": float(cal_d["gap_mm"]), "gap_true_mm": float(truth["gap_mm"]),
-    }
+        _write_sensor_json(sensor_path, cal_d)
 
     model = load_robot(robot) if robot else None
     tool0 = CylinderTool(transforms_from(np.eye(3), [0.0, 0.0, tool_length_mm]), tool_radius_mm, tool_length_mm, tip)
@@ -126,27 +102,11 @@ def tcp_repeatability_study(*, collisions: int = 10, seed: int = 0, robot: str |
     out_variants = {}
     reach = []
     for vname, over in variants.items():
-        vs = _replace(settings, over)
-        runs = []
-        for i, (bent, info) in enumerate(damage):
-            cell = LightBarrierCell(sensor, bent, np.random.default_rng(run_seeds[i]), io_rate_hz=io_rate_hz,
-                                    latency_s=latency_s, repeatability_mm=repeatability_mm, robot_model=model,
-                                    q_seed=UR10_Q_SEED if model is not None and model.n_joints == 6 else None)
-            res = recalibrate_tool(cell, cal, tool0.T_flange_tool, vs)
-            if events_path is not None and i == 0 and not out_variants:
-                write_events_csv(events_path, res.records,
-                                 note=f"simulated cross-laser recalibration, seed {seed}, variant {vname}")
-            reach += cell.reach_errors_mm
-            T_true = bent.T_flange_tool
-            runs.append({
-                "tcp_error_mm": float(np.linalg.norm(res.tcp_flange_mm - T_true[:3, 3])),
-                "tcp_error_vec_mm": (res.tcp_flange_mm - T_true[:3, 3]).tolist(),
-                "axis_error_deg": math.degrees(math.acos(min(1.0, float(res.axis_flange @ T_true[:3, 2])))),
-                "rotation_error_deg": math.degrees(float(rotation_angle(res.T_flange_tool[:3, :3].T @ T_true[:3, :3]))),
-                "cycle_time_s": res.cycle_time_s,
-                "psi_deg": math.degrees(res.psi_rad), "theta_deg": math.degrees(res.theta_rad),
-                "residuals": res.residuals,
-            })
+        events_note = None
+        if events_path is not None and not out_variants:
+            events_note = f"simulated cross-laser recalibration, seed {seed}, variant {vname}"
+        runs = _run_variant(sensor, cal, tool0, damage, _replace(settings, over), model, run_seeds, cell_kw,
+                            reach, events_path, events_note)
         out_variants[vname] = {"settings": over, "runs": runs, "summary": _summary(runs)}
 
     return {
@@ -155,12 +115,81 @@ def tcp_repeatability_study(*, collisions: int = 10, seed: int = 0, robot: str |
                    "tool_length_mm": tool_length_mm, "tip": tip, "beta_deg": beta_deg, "tilt_deg": tilt_deg,
                    "gap_mm": gap_mm, "yaw_deg": yaw_deg, "radius_mm": settings.radius_mm,
                    "delta_z_mm": settings.delta_z_mm, "circle_speed_mm_s": settings.circle_speed_mm_s},
-        "sensor": sensor_report,
+        "sensor": _sensor_report(sensor_calibration, cal_time, cal_d, truth),
         "collisions": [{"tilt_deg": info["tilt_deg"], "offset_mm": np.asarray(info["offset_mm"]).tolist(),
                         "T_flange_tool_true": bent.T_flange_tool.tolist()} for bent, info in damage],
         "variants": out_variants,
         "reachability": {"checked": model is not None,
                          "worst_position_error_mm": float(max(reach)) if reach else None},
+    }
+
+
+def _calibrate_sensor(sensor, T_nom_sensor, truth, mode: str, seed, cell_kw: dict):
+    """The sensor calibration the recalibrations use: ``"simulated"`` (pin procedure +
+    ``calibrate_sensor``) or ``"truth"``. Returns ``(calibration, its JSON dict, time [s])``."""
+    if mode == "simulated":
+        from ..tcp.sensor import calibrate_sensor
+
+        pts, cal_time = simulate_sensor_calibration_points(sensor, T_nom_sensor, np.random.default_rng(seed),
+                                                           **cell_kw)
+        cal = calibrate_sensor(pts)
+        return cal, cal.to_dict(), cal_time
+    if mode == "truth":
+        cal_d = {k: np.asarray(v).tolist() if not np.isscalar(v) else float(v) for k, v in truth.items()}
+        return truth, cal_d, 0.0
+    raise ValueError("sensor_calibration must be 'simulated' or 'truth'")
+
+
+def _write_sensor_json(path, cal_d: dict) -> None:
+    """The sensor calibration as JSON (the keys of ``robocal tcp sensor-calibrate --json``)."""
+    import json
+
+    from ..io.atomic import atomic_write_text
+
+    atomic_write_text(path, json.dumps(cal_d, indent=2) + "\n", overwrite=True)
+
+
+def _sensor_report(mode: str, cal_time, cal_d: dict, truth: dict) -> dict:
+    """The sensor calibration against the truth: origin [mm], axis [deg], beta and gap errors."""
+    cal_T = np.asarray(cal_d["T_base_sensor"], float)
+    return {
+        "calibration": mode,
+        "calibration_time_s": float(cal_time),
+        "origin_error_mm": float(np.linalg.norm(cal_T[:3, 3] - truth["origin_mm"])),
+        "x_axis_error_deg": math.degrees(math.acos(min(1.0, float(cal_T[:3, 0] @ truth["x_axis"])))),
+        "z_axis_error_deg": math.degrees(math.acos(min(1.0, float(cal_T[:3, 2] @ truth["z_axis"])))),
+        "beta_deg": float(cal_d["beta_deg"]), "beta_true_deg": float(truth["beta_deg"]),
+        "gap_mm": float(cal_d["gap_mm"]), "gap_true_mm": float(truth["gap_mm"]),
+    }
+
+
+def _run_variant(sensor, cal, tool0, damage, settings, model, run_seeds, cell_kw: dict, reach: list,
+                 events_path, events_note):
+    """Recalibrate every bent tool of ``damage`` with ``settings``, each on its own robot-noise
+    stream; worst IK errors are appended to ``reach``; with ``events_note`` the first
+    recalibration's events are written to ``events_path``. Returns the per-collision runs."""
+    runs = []
+    for i, (bent, _) in enumerate(damage):
+        cell = LightBarrierCell(sensor, bent, np.random.default_rng(run_seeds[i]), robot_model=model,
+                                q_seed=UR10_Q_SEED if model is not None and model.n_joints == 6 else None, **cell_kw)
+        res = recalibrate_tool(cell, cal, tool0.T_flange_tool, settings)
+        if events_note is not None and i == 0:
+            write_events_csv(events_path, res.records, note=events_note)
+        reach.extend(cell.reach_errors_mm)
+        runs.append(_run_summary(res, bent.T_flange_tool))
+    return runs
+
+
+def _run_summary(res, T_true) -> dict:
+    """One recalibration against the true tool frame: TCP [mm] and axis/rotation [deg] errors."""
+    return {
+        "tcp_error_mm": float(np.linalg.norm(res.tcp_flange_mm - T_true[:3, 3])),
+        "tcp_error_vec_mm": (res.tcp_flange_mm - T_true[:3, 3]).tolist(),
+        "axis_error_deg": math.degrees(math.acos(min(1.0, float(res.axis_flange @ T_true[:3, 2])))),
+        "rotation_error_deg": math.degrees(float(rotation_angle(res.T_flange_tool[:3, :3].T @ T_true[:3, :3]))),
+        "cycle_time_s": res.cycle_time_s,
+        "psi_deg": math.degrees(res.psi_rad), "theta_deg": math.degrees(res.theta_rad),
+        "residuals": res.residuals,
     }
 
 
