@@ -70,12 +70,16 @@ def compare_cores(sc, geom, rev: str, *, repeat: int, budget: float, sigma: floa
         for label, fo, fn, *_ in rows:
             t_old[label].append(_time(fo, loops[label]))
             t_new[label].append(_time(fn, loops[label]))
-    hdr = f"{'':44s}{'old median':>13s}{'new median':>13s}{'old best':>13s}{'new best':>13s}{'new/old':>9s}"
+    hdr = (f"{'':44s}{'old median':>13s}{'new median':>13s}{'old best':>13s}{'new best':>13s}{'new/old':>9s}"
+           f"{'paired':>8s}")
     lines += ["", hdr, "-" * len(hdr)]
     for label, *_ in rows:
         mo, mn = float(np.median(t_old[label])), float(np.median(t_new[label]))
         unit, k = ("ms", 1.0) if mo >= 0.5 else ("us", 1e3)
         cells = [mo, mn, min(t_old[label]), min(t_new[label])]
-        lines.append(f"{label:44s}" + "".join(f"{c * k:10.3f} {unit}" for c in cells) + f"{mn / mo:9.3f}")
+        paired = float(np.median(np.array(t_new[label]) / np.array(t_old[label])))
+        lines.append(f"{label:44s}" + "".join(f"{c * k:10.3f} {unit}" for c in cells) + f"{mn / mo:9.3f}"
+                     f"{paired:8.3f}")
+    lines.append("new/old: ratio of the medians; paired: median over the repeats of new / old timed back to back")
     lines += ["", "solutions (old / new):"] + agree
     return lines

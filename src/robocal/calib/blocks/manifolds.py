@@ -45,7 +45,7 @@ class VectorBlock(ParameterBlock):
             raise ProblemError(f"{self.name}: initial value has {self.initial.size} numbers for {self.size} names")
 
     def retract(self, value, delta):
-        return value + np.reshape(delta, np.shape(value))
+        return value + np.asarray(delta).reshape(value.shape)
 
     def local(self, value):
         return np.ravel(value)
@@ -78,7 +78,7 @@ class FramesBlock(ParameterBlock):
         return len(self.labels)
 
     def retract(self, value, delta):
-        d = np.reshape(delta, (-1, 6))
+        d = np.asarray(delta).reshape(-1, 6)
         R = so3_exp(d[:, :3])
         out = value.copy()
         out[:, :3, :3] = R @ value[:, :3, :3]
