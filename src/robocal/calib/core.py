@@ -103,7 +103,10 @@ class Problem:
                            np.concatenate(codes or [np.zeros(0, int)])], axis=1).astype(int)
         labels.flags.writeable = False
         self.labels = labels
-        self.n_poses = int(labels[:, 0].max(initial=-1)) + 1 if n_poses is None else int(n_poses)
+        needed = int(labels[:, 0].max(initial=-1)) + 1
+        if n_poses is not None and n_poses < needed:
+            raise ProblemError(f"n_poses = {n_poses}, but residual rows refer to pose {needed - 1}")
+        self.n_poses = needed if n_poses is None else int(n_poses)
 
     def row_label(self, i: int) -> tuple:
         """(pose index or -1, kind name, residual block) of row ``i``."""
