@@ -187,3 +187,23 @@ def test_frames_and_unit_vectors_retract_on_their_manifolds():
     # pole: the tangent basis stays defined
     pole = UnitVectorsBlock("n", [0.0, 0.0, 1.0])
     assert np.allclose(np.linalg.norm(pole.retract(pole.initial, [0.1, -0.2]), axis=1), 1.0)
+
+
+def test_the_robot_chain_runs_once_per_evaluation_for_all_kinds_that_share_it(monkeypatch):
+    nominal, robot, tracker, q, pts = _campaign(n=12)
+    prob = CalibrationProblem(nominal, q, [Target("r1", None, (0.0, 0.0, 50.0))], pts, point_sigma_mm=0.02,
+                              base_initial="fit", distances=[(0, 1, 0, 700.0)], on_plane=[(3, 0, 0)],
+                              planes_initial=[[0.1, 1.3, 500.0]])
+    calls = []
+    original = type(nominal).target_points
+
+    def counted(self, *a, **k):
+        calls.append(1)
+        return original(self, *a, **k)
+
+    monkeypatch.setattr(type(nominal), "target_points", counted)
+    state = prob.initial_state()
+    prob.evaluate(state)
+    assert len(calls) == 1  # points, distances and the plane contact read one chain evaluation
+    prob.evaluate(state, jacobian=False)
+    assert len(calls) == 2
