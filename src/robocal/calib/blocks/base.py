@@ -52,7 +52,7 @@ class GaussianPrior:
 def free_mask(free, names, block: str) -> np.ndarray:
     """(size,) bool from ``True`` / ``False``, a (size,) bool sequence or an iterable of variable names."""
     n = len(names)
-    if free is True or free is False:
+    if isinstance(free, (bool, np.bool_)):
         return np.full(n, bool(free))
     if isinstance(free, np.ndarray) and free.dtype == bool:
         if free.shape != (n,):

@@ -30,7 +30,7 @@ class TargetPoints(VectorBlock):
         self.end_effectors = (None,) * K if end_effectors is None else tuple(end_effectors)
         if len(self.end_effectors) != K:
             raise ProblemError(f"{name}: {len(self.end_effectors)} end effectors for {K} points")
-        if not isinstance(free, bool):
+        if not isinstance(free, (bool, np.bool_)):
             free = list(free)
             if K and len(free) == K and all(isinstance(f, (bool, np.bool_)) for f in free):
                 free = np.repeat(np.array(free, dtype=bool), 3)  # one flag per point
