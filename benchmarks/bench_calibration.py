@@ -12,6 +12,8 @@ Run from the repository root (robocal installed in the environment)::
     python benchmarks/bench_calibration.py --quick    # 3 repeats, slow rows once or skipped (~15 s)
     python benchmarks/bench_calibration.py --robot ur10
     python benchmarks/bench_calibration.py --peers-path /tmp/peers   # pybotics installed there
+    python benchmarks/bench_calibration.py --old-core 8135766 --core-only --repeat 15
+                                          # the calibration core of an older commit vs this one
     /tmp/figaroh_venv/bin/python benchmarks/bench_calibration.py     # + figaroh rows (its own venv)
 
 This is a script, not a test: it prints machine information, the problem, one table (median and
@@ -544,6 +546,10 @@ def main(argv=None) -> int:
                     help="directory put first on sys.path for pybotics (env ROBOCAL_BENCH_PEERS)")
     ap.add_argument("--no-peers", action="store_true", help="skip pybotics and figaroh")
     ap.add_argument("--profile", action="store_true", help="print robocal's profile split even if it meets its target")
+    ap.add_argument("--old-core", metavar="REV", default=None,
+                    help="also time the calibration core (calib/problem.py, solve.py, ...) of git revision REV "
+                         "against this one, side by side (e.g. 8135766, the last monolithic CalibrationProblem)")
+    ap.add_argument("--core-only", action="store_true", help="with --old-core: only the old-vs-new table")
     args = ap.parse_args(argv)
     repeat = args.repeat or (3 if args.quick else 7)
     slow_repeat = 1 if args.quick else max(3, repeat // 2)
@@ -589,6 +595,10 @@ def main(argv=None) -> int:
               "parallel axes, e.g. abb_irb140; a UR has three, which leaves 16 DH parameters)")
     print(f"  solved problem: free = those {len(geom)} parameters -> {prob.n_variables} variables, "
           f"{3 * args.poses} residuals")
+
+    if args.old_core and args.core_only:
+        _print_core_comparison(sc, geom, args, repeat, budget)
+        return 0
 
     # ---------------------------------------------------------------- rows
     ref_res = solve(prob)  # warm-up (numba compiled/loaded) and the reference solution
@@ -767,11 +777,25 @@ def main(argv=None) -> int:
         print("  cProfile, solve(problem), top functions by own time (cProfile slows small calls; use for ranking):")
         for ln in prof0[:16]:
             print("    " + ln)
+    if args.old_core:
+        _print_core_comparison(sc, geom, args, repeat, budget)
     try:
         print(f"load avg at end: {'%.2f %.2f %.2f' % os.getloadavg()}")
     except OSError:
         pass
     return 0
+
+
+def _print_core_comparison(sc, geom, args, repeat, budget):
+    from _core_compare import compare_cores  # noqa: E402  (benchmarks/_core_compare.py)
+
+    print()
+    for line in compare_cores(sc, geom, args.old_core, repeat=repeat, budget=budget, sigma=SIGMA_MM):
+        print(line)
+    try:
+        print(f"load avg: {'%.2f %.2f %.2f' % os.getloadavg()}")
+    except OSError:
+        pass
 
 
 if __name__ == "__main__":

@@ -8,6 +8,10 @@ set (a basis of the column space): every dropped column is a combination of kept
 identifiable column is dropped unless it is exactly such a combination. Each dropped parameter
 is explained by the kept parameters it trades off against (least-squares coefficients).
 
+With ``column_blocks`` (the parameter block of each column, ``Problem.column_blocks``) every
+dropped entry names its block and :meth:`IdentifiabilityReport.by_block` groups the verdicts per
+parameter block.
+
 Observability indices of a pose set (Sun & Hollerbach's review): O1 = (prod s_i)^(1/n) / sqrt(m),
 O2 = s_min / s_max, O3 = s_min, O4 = s_min^2 / s_max, on the scaled Jacobian.
 """
@@ -27,14 +31,16 @@ DEFAULT_PRIORITY = ("base", "targets", "planes", "geometry")
 
 @dataclass
 class IdentifiabilityReport:
-    """identifiable: names kept; dropped: list of dicts (name, why, trades_off_with);
-    rank, condition_number (of the scaled Jacobian of all candidates), singular_values."""
+    """identifiable: names kept; dropped: list of dicts (name, why, trades_off_with, and block when
+    known); rank, condition_number (of the scaled Jacobian of all candidates), singular_values;
+    block_of: {name: parameter block} when the analysis was given the columns' blocks."""
 
     identifiable: list
     dropped: list = field(default_factory=list)
     rank: int = 0
     condition_number: float = float("nan")
     singular_values: np.ndarray | None = None
+    block_of: dict | None = None
 
     @classmethod
     def trivial(cls, names):
@@ -44,6 +50,19 @@ class IdentifiabilityReport:
     def dropped_names(self) -> list:
         return [d["name"] for d in self.dropped]
 
+    def by_block(self) -> dict:
+        """``{block: {"identifiable": [names], "dropped": [{name, why, ...}]}}`` in column order
+        (one pseudo-block ``""`` when the blocks are unknown)."""
+        block_of = self.block_of or {}
+        out: dict = {}
+        for nm in list(self.identifiable) + [d["name"] for d in self.dropped]:
+            out.setdefault(block_of.get(nm, ""), {"identifiable": [], "dropped": []})
+        for nm in self.identifiable:
+            out[block_of.get(nm, "")]["identifiable"].append(nm)
+        for d in self.dropped:
+            out[block_of.get(d["name"], "")]["dropped"].append(d)
+        return out
+
     def explain(self) -> str:
         if not self.dropped:
             return f"all {len(self.identifiable)} parameters identifiable (condition {self.condition_number:.3g})"
@@ -51,8 +70,10 @@ class IdentifiabilityReport:
 
 
 def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priority=DEFAULT_PRIORITY,
-                            explain: bool = True) -> IdentifiabilityReport:
-    """Analyse the columns of ``J`` (M, n) named ``names``; ``blocks`` (n,) gives each column's block.
+                            explain: bool = True, column_blocks=None) -> IdentifiabilityReport:
+    """Analyse the columns of ``J`` (M, n) named ``names``; ``blocks`` (n,) gives each column's
+    identifiability group (priority order ``priority``, other groups after them);
+    ``column_blocks`` (n,) optionally the parameter block of each column (reported per block).
 
     ``explain=False`` skips the least-squares explanation of each dropped parameter (and the
     singular values): a quick check of which set is identifiable.
@@ -94,14 +115,17 @@ def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priorit
             d["trades_off_with"] = partners
             terms = " ".join(f"{'+' if c >= 0 else '-'} {abs(c):.3g}*{nm}" for nm, c in partners)
             d["why"] = f"trades off against other parameters (its effect = {terms.lstrip('+ ')} in scaled units)"
+    block_of = None if column_blocks is None else {nm: str(b) for nm, b in zip(names, column_blocks)}
     for d in dropped:
         d.pop("column", None)
+        if block_of is not None:
+            d["block"] = block_of[d["name"]]
     Js = J / np.where(norms > 0, norms, 1.0)
     s = np.sqrt(np.maximum(np.linalg.eigvalsh(Js.T @ Js)[::-1], 0.0)) if n and explain else np.zeros(0)
     rank = len(kept)
     cond = float(s[0] / s[rank - 1]) if rank and len(s) else float("inf")
     kept_sorted = [names[i] for i in sorted(kept)]
-    return IdentifiabilityReport(kept_sorted, dropped, rank, cond, s)
+    return IdentifiabilityReport(kept_sorted, dropped, rank, cond, s, block_of)
 
 
 def observability_indices(J) -> dict:

@@ -1,4 +1,5 @@
-"""Solvers over a :class:`~robocal.calib.problem.CalibrationProblem`, and the result object.
+"""Solvers over any :class:`~robocal.calib.core.Problem` (parameter blocks + residual blocks, e.g.
+a :class:`~robocal.calib.problem.CalibrationProblem`), and the result object.
 
 * :func:`solve_lm` -- Levenberg-Marquardt with the analytic Jacobian, Jacobian column scaling
   (so millimetres and radians are comparable, like ``x_scale='jac'``), optional robust loss
@@ -18,8 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
+from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
-from .problem import CalibrationProblem, State
 
 __all__ = ["CalibrationResult", "solve", "NotConvergedWarning"]
 
@@ -32,11 +33,13 @@ class NotConvergedWarning(UserWarning):
 class CalibrationResult:
     """Outcome of a calibration.
 
-    names, units: of the state variables (free model parameters, base, targets, planes);
-    values (n,) final values in those units (base: the final frame as rotation vector and
-    origin, targets: the points); initial (n,) the same at the start; std (n,) standard
-    deviations (NaN where not identifiable); covariance (n, n).
-    state: final :class:`State`; problem: the problem solved; model: the calibrated :class:`RobotModel`.
+    names, units: of the state variables (the free variables of the parameter blocks, e.g. free
+    model parameters, base, targets, planes); values (n,) final values in those units (each block's
+    ``local``: a frame as rotation vector and origin, targets the points); initial (n,) the same
+    at the start; std (n,) standard deviations (NaN where not identifiable); covariance (n, n).
+    state: final state (a :class:`~robocal.calib.problem.State` for a ``CalibrationProblem``, a
+    tuple of block values otherwise; ``value(block)`` picks one); problem: the problem solved;
+    model: the calibrated :class:`RobotModel` (problems with a robot geometry block).
     residuals_before / residuals_after: (M,) weighted residual vectors; rms_before / rms_after
     per measured point (mm, unweighted) where point measurements exist.
     iterations, converged, reason, rank, condition_number, identifiability, outliers (list of
@@ -49,7 +52,7 @@ class CalibrationResult:
     initial: np.ndarray
     std: np.ndarray
     covariance: np.ndarray
-    state: State
+    state: object
     problem: object
     residuals_before: np.ndarray
     residuals_after: np.ndarray
@@ -69,6 +72,10 @@ class CalibrationResult:
     def model(self):
         """The calibrated :class:`RobotModel` (base = the first station's frame), built on demand."""
         return self.problem.model_at(self.state)
+
+    def value(self, block):
+        """The final value of a parameter block (object or name)."""
+        return self.problem.value(self.state, block)
 
     @property
     def rms_before(self) -> float:
@@ -103,10 +110,10 @@ class CalibrationResult:
         return "\n".join(lines)
 
 
-def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
+def solve(problem: Problem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
-          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0: State | None = None,
+          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0=None,
           progress=None) -> CalibrationResult:
     """Identify the problem's free variables (see :func:`_solve_once` for the arguments).
 
@@ -129,7 +136,8 @@ def solve(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linea
         quick = analyse_identifiability(res.jacobian, problem.names, problem.blocks, explain=False)
         if set(quick.identifiable) == set(res.identifiability.identifiable):
             break
-        ident = analyse_identifiability(res.jacobian, problem.names, problem.blocks)
+        ident = analyse_identifiability(res.jacobian, problem.names, problem.blocks,
+                                        column_blocks=problem.column_blocks)
         iters = res.iterations
         before, err_before = res.residuals_before, res.point_errors_before
         res = _solve_once(problem, state0=res.state, ident=ident, **kw)
@@ -166,19 +174,8 @@ def _dropped_may_have_become_identifiable(J, names, ident, screen: float = 1e-4)
     return bool(np.any(independent2 > screen**2))
 
 
-def _state_values(problem: CalibrationProblem, state: State) -> np.ndarray:
-    from ..transforms import so3_log
-
-    out = np.empty(problem.n_variables)
-    out[problem._sl_geom] = state.params[problem.free_index]
-    if problem.estimate_base:
-        b = np.concatenate([so3_log(state.bases[:, :3, :3]), state.bases[:, :3, 3]], axis=1)
-        out[problem._sl_base] = b.ravel()
-    for k, sl in problem._target_cols.items():
-        out[sl] = state.targets[k]
-    if len(state.planes):
-        out[problem._sl_planes] = state.planes.ravel()
-    return out
+def _state_values(problem: Problem, state) -> np.ndarray:
+    return problem.variable_values(state)
 
 
 def _robust_weights(r_pose, loss, f_scale):
@@ -193,18 +190,15 @@ def _robust_weights(r_pose, loss, f_scale):
     raise ValueError(f"loss must be 'linear', 'huber' or 'cauchy', got {loss!r}")
 
 
-def _point_errors(problem, r, labels):
-    if problem.points is None:
-        return None
-    sel = labels[:, 1] == 0
-    w = 1.0 if problem.point_sigma is None else problem.point_sigma
-    return np.linalg.norm((r[sel] * w).reshape(-1, 3), axis=1)
+def _pose_norms(pose_of_row, r, n_slots):
+    """Norm of each pose's residual rows (n_slots,); rows of no pose are counted in the last slot."""
+    return np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_slots))
 
 
-def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
+def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
-          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0: State | None = None, progress=None, ident=None) -> CalibrationResult:
+          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0=None, progress=None, ident=None) -> CalibrationResult:
     """Identify the problem's free variables.
 
     method: ``"lm"`` (Levenberg-Marquardt) or ``"svd"`` (truncated-SVD Gauss-Newton, (3-9, 3-10)).
@@ -234,23 +228,25 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
         raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
                          f"add poses or fix parameters")
     if ident is None:
-        ident = analyse_identifiability(J, problem.names, problem.blocks) if auto_identifiable else \
-            IdentifiabilityReport.trivial(problem.names)
+        ident = analyse_identifiability(J, problem.names, problem.blocks, column_blocks=problem.column_blocks) \
+            if auto_identifiable else IdentifiabilityReport.trivial(problem.names)
     active = np.array([nm in set(ident.identifiable) for nm in problem.names])
     r0 = r.copy()
-    pose_of_row = labels[:, 0]
     n_poses = problem.n_poses
+    # robust weights act per pose; rows of no pose (priors, label -1) share one extra slot of weight 1
+    pose_of_row = np.where(labels[:, 0] < 0, n_poses, labels[:, 0])
+    n_slots = n_poses + 1
     col_scale = np.linalg.norm(J, axis=0)
     col_scale[col_scale == 0] = 1.0
     geom = problem.blocks == "geometry"
-    p_start = start_state.params[problem.free_index]
+    p_start = problem.variable_values(start_state, "geometry") if prior_weight else None
 
     def augmented(st, with_jac=True):
         """Residuals (and Jacobian) with the optional prior rows on the model parameters."""
         rr, JJ, _ = problem.evaluate(st, jacobian=with_jac)
         if not prior_weight:
             return rr, JJ
-        pr = prior_weight * col_scale[geom] * (p_start - st.params[problem.free_index])
+        pr = prior_weight * col_scale[geom] * (p_start - problem.variable_values(st, "geometry"))
         rr = np.concatenate([rr, pr])
         if with_jac:
             Jp = np.zeros((int(geom.sum()), n))
@@ -258,13 +254,13 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
             JJ = np.vstack([JJ, Jp])
         return rr, JJ
 
-    weights = np.ones(n_poses)
+    weights = np.ones(n_slots)
     if loss != "linear":
-        pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_poses))
+        pose_norm = _pose_norms(pose_of_row, r, n_slots)[:n_poses]
         if f_scale is None:
             med = np.median(pose_norm)
             f_scale = med + 3.0 * max(1.4826 * np.median(np.abs(pose_norm - med)), 1e-12)
-        weights = _robust_weights(pose_norm, loss, f_scale)
+        weights[:n_poses] = _robust_weights(pose_norm, loss, f_scale)
 
     def row_weights():
         w = weights[pose_of_row]
@@ -279,7 +275,7 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     robust = loss != "linear"
     weighted = robust or bool(prior_weight)
     all_active = bool(active.all())
-    rejected = np.zeros(n_poses, dtype=bool)
+    rejected = np.zeros(n_slots, dtype=bool)
     total_it = 0
     for phase in range(2):
         for it in range(total_it + 1, total_it + max_iterations + 1):
@@ -330,8 +326,8 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
                 break
             state, r, J = trial, r_t, J_t
             if robust:
-                pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r[:len(pose_of_row)] ** 2, minlength=n_poses))
-                weights = _robust_weights(pose_norm, loss, f_scale)
+                pose_norm = _pose_norms(pose_of_row, r[:len(pose_of_row)], n_slots)[:n_poses]
+                weights[:n_poses] = _robust_weights(pose_norm, loss, f_scale)
                 w_rows = row_weights()
             new_cost = 0.5 * float(np.sum(w_rows * r**2))
             lam = max(lam / 10.0, 1e-12)
@@ -387,7 +383,7 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
         ev, V = np.linalg.eigh(G)
         ev, V = ev[::-1], V[:, ::-1]
         cov_s = (V * np.where(keep, 1.0 / np.where(ev > 0, ev, 1.0), 0.0)) @ V.T
-    scale_for_cov = 1.0 if problem.point_sigma is not None else sigma0**2
+    scale_for_cov = 1.0 if problem.sigma_known else sigma0**2
     cov_a = cov_s / np.outer(col_scale[active], col_scale[active]) * scale_for_cov
     cov = np.full((n, n), np.nan)
     cov[np.ix_(active, active)] = cov_a
@@ -396,14 +392,14 @@ def _solve_once(problem: CalibrationProblem, *, method: str = "lm", loss: str = 
     if loss != "linear":
         if rejected.any():
             weights = np.where(rejected, robust_weights, 1.0)
-        pose_norm = np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_poses))
-        unit = 1.0 if problem.point_sigma is None else problem.point_sigma
-        for p in np.flatnonzero(weights < outlier_threshold):
+        pose_norm = _pose_norms(pose_of_row, r, n_slots)
+        unit = problem.residual_scale
+        for p in np.flatnonzero(weights[:n_poses] < outlier_threshold):
             outliers.append({"pose": int(p), "residual": float(pose_norm[p] * unit), "weight": float(weights[p]),
                              "reason": f"residual {pose_norm[p] * unit:.4g} is {pose_norm[p] / f_scale:.1f} x the "
                                        f"robust scale {f_scale * unit:.4g} ({loss} loss)"})
-    r_before_pts = _point_errors(problem, r0, labels)
-    r_after_pts = _point_errors(problem, r, labels)
+    r_before_pts = problem.point_errors(r0)
+    r_after_pts = problem.point_errors(r)
     return CalibrationResult(
         names=problem.names, units=problem.units, values=_state_values(problem, state),
         initial=_state_values(problem, start_state), std=std,

@@ -11,7 +11,9 @@ Flange poses are ``T_base_flange`` (pose of the flange in the robot base frame, 
   pose 1 instead of the mean; same solution for exact data). Reported for reference only;
   undefined when the flange origins are coplanar.
 - TCP (4-4): ``R_i t + p_i = P_ref`` for all poses, solved jointly for ``t`` and ``P_ref`` by
-  linear least squares. Eliminating ``P_ref = mean(R) t + mean(p)`` leaves
+  least squares on the calibration core (:mod:`robocal.tcp.touchup_fit`: a tool-point block, a
+  fixed-point block and a fixed-point residual block), which also gives their covariance and an
+  identifiability report. Eliminating ``P_ref = mean(R) t + mean(p)`` leaves
   ``(R_i - mean R) t = mean p - p_i``; the smallest singular value ``s_min`` of the stacked
   ``R_i - mean R`` (3N x 3) is the conditioning: the TCP's standard deviation is at most
   ``sigma_pose / s_min``. ``orientation_spread_deg = 2 asin(s_min / sqrt(N))`` (for 2 poses it is
@@ -113,6 +115,9 @@ class TouchUpResult:
     sphere_center_mm: np.ndarray | None  # (3,) sphere fit (4-2), None if the flange origins are coplanar
     sphere_radius_mm: float | None
     labels: tuple = field(default=())
+    covariance_mm2: np.ndarray | None = None  # (6, 6) of (tcp x, y, z, P_ref x, y, z), from the core's fit
+    identifiability: object = None     # the core's IdentifiabilityReport of the fit
+    fit: object = field(default=None, repr=False)  # the core's CalibrationResult
 
     @property
     def n_poses(self) -> int:
@@ -144,6 +149,10 @@ class TouchUpResult:
             "sphere_center_mm": lst(self.sphere_center_mm),
             "sphere_radius_mm": None if self.sphere_radius_mm is None else float(self.sphere_radius_mm),
             "n_poses": self.n_poses,
+            "reference_point_std_mm": None if self.covariance_mm2 is None else
+            [None if not np.isfinite(v) else float(math.sqrt(v)) for v in np.diag(self.covariance_mm2)[3:]],
+            "not_identifiable": [] if self.identifiability is None else
+            [{"name": d["name"], "why": d["why"]} for d in self.identifiability.dropped],
         }
 
 
@@ -162,9 +171,7 @@ def four_point_tcp(T_base_flange, min_spread_deg: float = DEFAULT_MIN_SPREAD_DEG
         if len(labels) != n:
             raise ValueError(f"labels: expected {n}, got {len(labels)}")
     R, p = T[:, :3, :3], T[:, :3, 3]
-    Rm, pm = R.mean(axis=0), p.mean(axis=0)
-    D = (R - Rm).reshape(-1, 3)
-    b = (pm - p).reshape(-1)
+    D = (R - R.mean(axis=0)).reshape(-1, 3)  # conditioning of (4-4) with P_ref eliminated (closed form)
     _, s, Vt = np.linalg.svd(D, full_matrices=False)
     s_min = float(s[-1])
     spread = math.degrees(2.0 * math.asin(min(1.0, s_min / math.sqrt(n))))
@@ -176,21 +183,19 @@ def four_point_tcp(T_base_flange, min_spread_deg: float = DEFAULT_MIN_SPREAD_DEG
             f"R_i - mean R), TCP undetermined along {_f3(weakest)} in the flange frame; need "
             f">= {min_spread_deg:g} deg: touch the point from orientations tilted by >= {min_spread_deg:g} deg "
             f"about at least two different axes")
-    t = np.linalg.lstsq(D, b, rcond=None)[0]
-    P = Rm @ t + pm
+    from .touchup_fit import fit_touchup
+
+    fit = fit_touchup(T)  # (4-4) on the calibration core: 3N residuals, 6 unknowns, 3N - 6 dof
+    t, P = fit.value("tcp").copy(), fit.value("P_ref").copy()
     r = np.einsum("nij,j->ni", R, t) + p - P
     res = np.linalg.norm(r, axis=1)
     rms = float(math.sqrt(np.mean(res**2)))
-    dof = 3 * n - 6
-    std = None
-    if dof > 0:
-        sigma2 = float(np.sum(r**2)) / dof
-        std = np.sqrt(np.diag(sigma2 * (Vt.T @ np.diag(1.0 / s**2) @ Vt)))
     c, rad = sphere_center(p)
     return TouchUpResult(tcp_mm=t, reference_point_mm=P, residual_vectors_mm=r, residuals_mm=res, rms_mm=rms,
                          orientation_spread_deg=spread, singular_values=s, weakest_direction_flange=weakest,
-                         noise_gain=1.0 / s_min, tcp_std_mm=std, sphere_center_mm=c, sphere_radius_mm=rad,
-                         labels=labels or ())
+                         noise_gain=1.0 / s_min, tcp_std_mm=fit.std[:3].copy(), sphere_center_mm=c,
+                         sphere_radius_mm=rad, labels=labels or (), covariance_mm2=fit.covariance,
+                         identifiability=fit.identifiability, fit=fit)
 
 
 def four_point_tcp_from_poses(values, convention: str, length_unit: str = "mm", angle_unit: str = "deg",

@@ -1,0 +1,12 @@
+"""Parameter blocks: the unknowns of a calibration, each on its manifold (see :mod:`.base`)."""
+
+from .base import GaussianPrior, ParameterBlock, free_mask
+from .frames import StationFrames
+from .manifolds import FramesBlock, UnitVectorsBlock, VectorBlock, so3_right_jacobian_inverse, tangent_basis
+from .planes import Planes, plane_normal_derivatives, plane_normals
+from .points import TargetPoints
+from .robot import RobotGeometry
+
+__all__ = ["GaussianPrior", "ParameterBlock", "free_mask", "VectorBlock", "FramesBlock", "UnitVectorsBlock",
+           "StationFrames", "TargetPoints", "Planes", "RobotGeometry", "plane_normals", "plane_normal_derivatives",
+           "so3_right_jacobian_inverse", "tangent_basis"]

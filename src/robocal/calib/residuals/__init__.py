@@ -1,0 +1,15 @@
+"""Residual blocks: the measurement kinds of the calibration core (see :mod:`.base`)."""
+
+from .base import RESIDUAL_BLOCKS, Evaluation, ResidualBlock
+from .chain import ChainPoints, TargetChain
+from .check import jacobian_errors, perturbed_values
+from .distance import DistanceResidual
+from .fixed_point import FixedPointResidual
+from .plane import PointOnPlaneResidual
+from .points import PointResidual
+from .prior import PriorResidual
+from .rotation import RotationResidual
+
+__all__ = ["RESIDUAL_BLOCKS", "Evaluation", "ResidualBlock", "TargetChain", "ChainPoints", "PointResidual",
+           "RotationResidual", "DistanceResidual", "PointOnPlaneResidual", "PriorResidual", "FixedPointResidual",
+           "jacobian_errors", "perturbed_values"]

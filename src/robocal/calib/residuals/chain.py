@@ -1,0 +1,125 @@
+"""The robot chain shared by residual blocks: target points in the instrument frame and their
+Jacobians, computed once per evaluation.
+
+``p_inst(n, k) = T_inst_base(station(n)) . T_base_ee(q_n; params) . P_k`` (METHODS.md (3-1)),
+with its derivatives ((3-6), the identification Jacobian with ``k_qi``) w.r.t.
+
+* the robot geometry block: from the compiled kernel (``RobotModel.target_points``);
+* the station frames block (left perturbation): ``d p = w x p + v`` -> ``[-skew(p) | I]``;
+* the target points block: ``R_inst_ee`` (a point moves with its end effector's orientation).
+
+Point, distance and point-on-plane residuals read the same :class:`TargetChain`; each asks the
+evaluation for it (``chain.evaluate(ev)``), so the kernel runs once however many kinds use it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ProblemError
+
+__all__ = ["TargetChain", "ChainPoints"]
+
+
+@dataclass(frozen=True)
+class ChainPoints:
+    """points (N, K, 3) [mm] in the instrument frame; jac: {parameter block: (N, K, 3, size)}
+    for the blocks whose Jacobian was wanted."""
+
+    points: np.ndarray
+    jac: dict
+
+
+def _frame_jacobian(pts):
+    """(..., 3, 6) derivative of points ``pts`` (..., 3) under a left perturbation (w, v) of their frame."""
+    J = np.zeros(pts.shape + (6,))
+    x, y, z = pts[..., 0], pts[..., 1], pts[..., 2]
+    J[..., 0, 1], J[..., 0, 2] = z, -y
+    J[..., 1, 0], J[..., 1, 2] = -z, x
+    J[..., 2, 0], J[..., 2, 1] = y, -x
+    J[..., 0, 3] = J[..., 1, 4] = J[..., 2, 5] = 1.0
+    return J
+
+
+class TargetChain:
+    """Target points carried by a robot, seen from one instrument, at the poses ``q``.
+
+    model: the :class:`~robocal.kinematics.model.RobotModel` (its parameter values come from
+    ``geometry``); q (N, n_ctrl) [rad | mm]; stations (N,) station index per pose (default 0);
+    geometry: a :class:`~robocal.calib.blocks.RobotGeometry`; frames: a
+    :class:`~robocal.calib.blocks.StationFrames` (one frame per station); targets: a
+    :class:`~robocal.calib.blocks.TargetPoints` (its end effectors resolved on ``model``).
+    """
+
+    def __init__(self, model, q, geometry, frames, targets, stations=None):
+        self.model = model
+        self.q = np.asarray(q, dtype=float)
+        N = len(self.q)
+        self.stations = np.zeros(N, dtype=int) if stations is None else np.asarray(stations, dtype=int)
+        if self.stations.shape != (N,):
+            raise ProblemError(f"stations: expected shape ({N},), got {self.stations.shape}")
+        if frames.n_frames <= self.stations.max(initial=0):
+            raise ProblemError(f"stations: index {self.stations.max()} but only {frames.n_frames} frame(s)")
+        self.geometry, self.frames, self.targets = geometry, frames, targets
+        self.ee_of_target = np.array([model.end_effector_index(e) for e in targets.end_effectors], dtype=int)
+        self._no_columns = np.zeros(0, dtype=int)
+
+    @property
+    def parameter_blocks(self) -> tuple:
+        return (self.geometry, self.frames, self.targets)
+
+    @property
+    def n_points(self) -> int:
+        return len(self.ee_of_target)
+
+    def evaluate(self, ev) -> ChainPoints:
+        """The chain at the evaluation's values, computed once per evaluation."""
+        return ev.shared(self, self._evaluate)
+
+    def _evaluate(self, ev) -> ChainPoints:
+        wants = (ev.wants(self.geometry), ev.wants(self.frames), ev.wants(self.targets))
+        return self.predict(ev[self.geometry], ev[self.frames], ev[self.targets], self.q, self.stations,
+                            wants if ev.jacobian else None)
+
+    def predict(self, params, bases, points_ee, q, stations, wants=None) -> ChainPoints:
+        """Target points (N, K, 3) at joints ``q`` (N, n_ctrl) and ``stations`` (N,), for block values
+        ``params`` (P,), ``bases`` (G, 4, 4), ``points_ee`` (K, 3); ``wants``: None (no Jacobians)
+        or three bools (geometry, frames, targets)."""
+        jacobian = wants is not None
+        want_g, want_b, want_t = wants if jacobian else (False, False, False)
+        index = self.geometry.index if want_g else self._no_columns
+        model, ee = self.model, self.ee_of_target
+        jac = {}
+        if self.frames.n_frames == 1:  # one base frame: the kernel works in the instrument frame directly
+            pts, R_inst_ee, Jg = model.target_points(q, params, points_ee, ee, index, jacobian, root=bases[0])
+            if want_g:
+                jac[self.geometry] = Jg
+        else:
+            p_base, R_base_ee, Jg = model.target_points(q, params, points_ee, ee, index, jacobian)
+            Rb = bases[stations, :3, :3]
+            pts = np.einsum("nij,nkj->nki", Rb, p_base) + bases[stations, :3, 3][:, None]
+            if want_g:
+                jac[self.geometry] = np.einsum("nij,nkjf->nkif", Rb, Jg)
+            if want_t:
+                R_inst_ee = np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
+        if want_b:
+            jac[self.frames] = self._frames_jacobian(pts, stations)
+        if want_t:
+            K = len(ee)
+            Jt = np.zeros(pts.shape + (3 * K,))
+            for k in range(K):
+                Jt[:, k, :, 3 * k:3 * k + 3] = R_inst_ee[:, k]
+            jac[self.targets] = Jt
+        return ChainPoints(pts, jac)
+
+    def _frames_jacobian(self, pts, stations):
+        G = self.frames.n_frames
+        Jf = _frame_jacobian(pts)
+        if G == 1:
+            return Jf
+        N, K = pts.shape[:2]
+        J = np.zeros((N, K, 3, G, 6))
+        J[np.arange(N), :, :, stations] = Jf
+        return J.reshape(N, K, 3, 6 * G)
