@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from ..kinematics.convert import to_urdf_kind
-from .atomic import atomic_write_text
-from ..kinematics.links import Link
+from ..kinematics.links import OP_RU, OP_TU, Link, elementary_transforms, frame_from_xyz_rpy
 from ..kinematics.model import EndEffector, RobotModel
 from ..transforms import euler_from_matrix
+from .atomic import atomic_write_text
 
 __all__ = ["read_urdf", "write_urdf", "UrdfError"]
 
@@ -199,8 +199,6 @@ def write_urdf(model: RobotModel, path, overwrite: bool = False) -> Path:
         ET.SubElement(j, "parent", link="base_link" if L.parent < 0 else f"{m.links[L.parent].name}_link")
         ET.SubElement(j, "child", link=f"{L.name}_link")
         p = L.params
-        from ..robots.loader import frame_from_xyz_rpy
-
         T = frame_from_xyz_rpy([p["x"], p["y"], p["z"]], [p["roll"], p["pitch"], p["yaw"]])
         if jt == "fixed":
             _origin(j, T[:3, 3], T[:3, :3])
@@ -215,8 +213,6 @@ def write_urdf(model: RobotModel, path, overwrite: bool = False) -> Path:
         leader, coef = m.controller_joints[nz[0]], float(row[nz[0]])
         if off != 0.0:
             # fold the constant offset into the origin (the motion about the axis commutes with it)
-            from ..kinematics.links import OP_RU, OP_TU, elementary_transforms
-
             T = T @ elementary_transforms(OP_RU if jt == "revolute" else OP_TU, off, axis)
         _origin(j, T[:3, 3], T[:3, :3])
         if leader == L.name or (abs(coef) == 1.0 and leader not in {x.name for x in m.links}):
