@@ -17,16 +17,21 @@ KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
 
 
 class FileFormatError(ValueError):
-    """A file is malformed or implausible.
+    """A file is malformed or implausible; the base of every reader's error in :mod:`robocal.io`.
 
     The message names the file, the 1-based line number and the column where known; the same are
-    available as ``path``, ``line`` and ``column`` (``None`` when not applicable).
+    available as ``path``, ``line`` and ``column`` (``None`` when not applicable). With ``path``
+    ``None`` the message is taken as it is: it names the place itself (a YAML key path, an XML
+    element), as :class:`~robocal.io.datasets.DatasetError` and :class:`~robocal.io.urdf.UrdfError` do.
     """
 
     def __init__(self, path, message: str, line: int | None = None, column: str | None = None):
-        self.path = str(path)
+        self.path = None if path is None else str(path)
         self.line = line
         self.column = column
+        if path is None:
+            super().__init__(message)
+            return
         where = self.path if line is None else f"{self.path}, line {line}"
         if column is not None:
             where += f", column {column!r}"

@@ -20,8 +20,7 @@ class DatasetError(FileFormatError):
     YAML key path (built by the reader, so ``path``, ``line`` and ``column`` are ``None``)."""
 
     def __init__(self, message: str):
-        ValueError.__init__(self, message)
-        self.path = self.line = self.column = None
+        super().__init__(None, message)
 
 
 @dataclass
