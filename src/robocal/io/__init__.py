@@ -7,8 +7,10 @@ the files and converted here (inside robocal: mm, rad).
 - :mod:`.table`: the CSV table under the header (column row, data rows, numeric cells);
 - :mod:`.atomic`: writing through a temporary file and a rename;
 - :mod:`.measurements`: measurement files ``robocal-measurements/1`` (docs/measurement-files.md);
-- :mod:`.programs`, :mod:`.targets`: robot programs ``robocal-program/1``, Cartesian targets
-  ``robocal-targets/1`` and the corrected targets ``robocal-corrected-targets/1``;
+- :mod:`.programs`, :mod:`.targets`: robot programs (KRL, RAPID, FANUC TP, UR script and
+  robocal's joint table ``robocal-program/1``), Cartesian targets ``robocal-targets/1`` and the
+  corrected targets ``robocal-corrected-targets/1``;
+- :mod:`.importers`: other software's exports (tracker CSV, SpatialAnalyzer text, joint logs);
 - :mod:`.tcp_files`: tool-calibration inputs (sensor points, flange poses, parallel barriers);
 - :mod:`.thermal_files`: thermal run directories, sphere files, sensor and set-up JSON;
 - :mod:`.urdf`: URDF import and export;
