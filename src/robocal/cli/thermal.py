@@ -127,9 +127,8 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
       setup.json (robot-held sensor on the flange), truth.json (the cell and the true drifts);
     OUT/program.csv: a taught program (the 34 monitored poses, robocal-program/1).
     """
-    from ..io.atomic import atomic_write_text
     from ..io.programs.joint_table import JointProgram, write_joint_program
-    from ..io.thermal_files import setup_json
+    from ..io.thermal_files import write_setup_json
     from ..sim.robot import as_rng
     from ..sim.thermal import SPHERE_DIAMETER_MM, ThermalCell, standard_schedules, write_run
 
@@ -158,8 +157,8 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
             run = cell.simulate(sch, int(run_seeds[1 + i]))
             d = out / f"run{i + 1}"
             write_run(d, cell, run, overwrite=overwrite)
-            setup = setup_json(cell.model.name, cell.T_flange_sensor, SPHERE_DIAMETER_MM)
-            atomic_write_text(d / "setup.json", json.dumps(setup, indent=1) + "\n", overwrite=overwrite)
+            write_setup_json(d / "setup.json", cell.model.name, cell.T_flange_sensor, SPHERE_DIAMETER_MM,
+                             overwrite=overwrite)
             hours = sch.duration_s / 3600.0
             rows.append({"run": i + 1, "role": "screening" if i == 0 else "evaluation", "cycles": run.n_cycles,
                          "hours": hours,
@@ -248,14 +247,13 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
     SPHERE_FILE: measurement file (robocal-measurements/1) of sphere centres in the sensor frame
     (columns pose, <joints>, x, y, z), e.g. a simulated run's sphere_cold.csv.
     """
-    from ..io.atomic import atomic_write_text
     from ..thermal import (
         calibrate_system,
         calibrate_system_thesis,
         compare_system_calibrations,
         frame_errors,
     )
-    from ..io.thermal_files import read_sphere_file, read_truth_json, sensor_json
+    from ..io.thermal_files import read_sphere_file, read_truth_json, write_sensor_json
     from ..workflows.thermal_inputs import select_poses
 
     model = _robot(robot)
@@ -291,8 +289,7 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
             errors = {c.method: frame_errors(c.T_sensor_base, truth["T"], c.P_e, truth["P_e"], at_base=centre)
                       for c in cals}
         if out_file:
-            atomic_write_text(out_file, json.dumps(sensor_json(main_cal, model, sphere_file), indent=1) + "\n",
-                              overwrite=overwrite)
+            write_sensor_json(out_file, main_cal, model, sphere_file, overwrite=overwrite)
     except _USER_ERRORS as exc:
         raise _fail(exc) from None
 

@@ -1,9 +1,9 @@
 """Files of thermal drift compensation (docs/thermal.md, "Files").
 
 * the sensor calibration, ``robocal-thermal-sensor/1`` JSON (:func:`sensor_json`,
-  :func:`read_sensor_json`): ``T_sensor_base`` (4, 4) and the sphere centre ``P_e`` (3,) [mm];
+  :func:`write_sensor_json`, :func:`read_sensor_json`): ``T_sensor_base`` (4, 4) and the sphere centre ``P_e`` (3,) [mm];
 * the thermal cell set-up of a run directory, ``robocal-thermal-setup/1`` JSON
-  (:func:`setup_json`, :func:`read_setup_json`): the robot-held sensor on the flange;
+  (:func:`setup_json`, :func:`write_setup_json`, :func:`read_setup_json`): the robot-held sensor on the flange;
 * sphere files: measurement files of sphere centres in the sensor frame (:func:`read_sphere_file`);
 * a run directory (:data:`RUN_FILES`): cold and per-cycle sphere and monitor measurement files,
   ``cycles.csv`` (:func:`write_cycles`, :func:`read_cycles`) and the set-up; read with the
@@ -31,7 +31,7 @@ from .table import data_rows
 
 __all__ = [
     "SENSOR_FORMAT", "SETUP_FORMAT", "RUN_FILES", "COLD_MATCH_TOL_RAD", "ThermalFileError", "sensor_json",
-    "read_sensor_json", "setup_json", "read_setup_json", "read_truth_json", "read_sphere_file", "write_cycles",
+    "write_sensor_json", "read_sensor_json", "setup_json", "write_setup_json", "read_setup_json", "read_truth_json", "read_sphere_file", "write_cycles",
     "read_cycles", "read_run", "run_dir_robot", "read_run_dir",
 ]
 
@@ -71,6 +71,21 @@ def sensor_json(cal, model, source: str) -> dict:
         "residual_rms_mm": float(cal.rms_mm),
         "residual_max_mm": float(np.linalg.norm(cal.residuals_mm, axis=1).max()),
     }
+
+
+def write_sensor_json(path, cal, model, source: str, *, overwrite: bool = False) -> Path:
+    """Write :func:`sensor_json` to ``path`` (atomically; an existing file only with ``overwrite``)."""
+    return _write_json(path, sensor_json(cal, model, source), overwrite)
+
+
+def write_setup_json(path, robot: str, T_flange_sensor, sphere_diameter_mm: float, *,
+                     overwrite: bool = False) -> Path:
+    """Write :func:`setup_json` to ``path`` (atomically; an existing file only with ``overwrite``)."""
+    return _write_json(path, setup_json(robot, T_flange_sensor, sphere_diameter_mm), overwrite)
+
+
+def _write_json(path, data: dict, overwrite: bool) -> Path:
+    return atomic_write_text(path, json.dumps(data, indent=1) + "\n", overwrite=overwrite)
 
 
 def _load_json(path, what: str) -> dict:
