@@ -13,15 +13,12 @@ import pytest
 from robocal.io.datasets import (
     HILTI_SETS,
     DatasetError,
-    calibrate_boby_seeds,
-    calibrate_hilti,
-    calibrate_justin,
     datasets_root,
-    error_stats,
     read_boby_fanuc,
     read_dlr_justin,
     read_hilti_trailblazer,
 )
+from robocal.workflows.datasets import calibrate_boby_seeds, calibrate_hilti, calibrate_justin, error_stats
 
 ROOT = datasets_root()
 
@@ -195,3 +192,12 @@ def test_hilti_trailblazer_station_protocol():
         assert cal["n"] == n, s
         assert nom["rms"] == pytest.approx(HILTI_NOMINAL[s], abs=0.06), s
         assert cal["rms"] <= ref, (s, cal["rms"], ref)
+
+
+def test_justin_reader_joint_names_are_the_robot_models():
+    """The reader names the file's 19 joint columns itself (io does not load robots): they must be
+    the controller joints of the robot model the protocol uses."""
+    from robocal.io.datasets import DLR_JUSTIN_JOINTS
+    from robocal.robots import load_robot
+
+    assert DLR_JUSTIN_JOINTS == load_robot("dlr_justin19").controller_joints

@@ -11,12 +11,12 @@ import pytest
 from click.testing import CliRunner
 
 from robocal.cli.tcp import tcp as tcp_cli
+from robocal.io.tcp_files import TcpFileError, read_flange_poses_csv, read_sensor_points_csv, write_sensor_points_csv
 from robocal.tcp import (
     DegenerateToolPosesError,
     R_FLANGE_STEP3,
     R_FLANGE_STEP12,
     SENSOR_POINT_LABELS,
-    TcpFileError,
     beam_distances_from_center,
     beam_point,
     beta_error_mm,
@@ -29,8 +29,6 @@ from robocal.tcp import (
     four_point_tcp_from_poses,
     orthogonal_to_skew,
     parallel_barriers_tool,
-    read_flange_poses_csv,
-    read_sensor_points_csv,
     seven_point_tool_frame,
     skew_to_orthogonal,
     sphere_center,
@@ -38,7 +36,6 @@ from robocal.tcp import (
     tool_data,
     tool_data_all,
     tool_rotation_5d,
-    write_sensor_points_csv,
 )
 from robocal.tcp.tool_data import CONTROLLERS
 from robocal.transforms import pose_from_transform, rot_axis, rot_x, rot_y, rot_z, transform_from_pose

@@ -10,10 +10,11 @@ import pytest
 from click.testing import CliRunner
 
 from robocal.cli.thermal import thermal
+from robocal.io.programs.joint_table import JointProgram as Program, read_joint_program as read_program, \
+    write_joint_program as write_program
 from robocal.robots import load_robot
 from robocal.robots.writer import save_robot
 from robocal.thermal import frame_errors
-from robocal.workflows.thermal_files import Program, read_program, write_program
 
 ROBOT = "kuka_kr150_r3100"
 CYCLES = 20

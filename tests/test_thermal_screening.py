@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
+from robocal.io.thermal_files import read_run
 from robocal.robots import load_robot
 from robocal.sim.thermal import (
     ProductionSchedule,
     ThermalCell,
-    read_run,
     standard_schedules,
     write_run,
 )

@@ -11,15 +11,11 @@ import json
 import click
 import numpy as np
 
-from ..tcp.parallel_barriers import parallel_barriers_tool, read_parallel_barriers_file
-from ..tcp.sensor import calibrate_sensor, read_sensor_points_csv
+from ..io.tcp_files import read_flange_poses_csv, read_parallel_barriers_file, read_sensor_points_csv
+from ..tcp.parallel_barriers import parallel_barriers_tool
+from ..tcp.sensor import calibrate_sensor
 from ..tcp.tool_data import tool_data_all
-from ..tcp.touchup import (
-    DEFAULT_MIN_SPREAD_DEG,
-    four_point_tcp,
-    read_flange_poses_csv,
-    seven_point_tool_frame,
-)
+from ..tcp.touchup import DEFAULT_MIN_SPREAD_DEG, four_point_tcp, seven_point_tool_frame
 
 tcp = click.Group(
     "tcp",

@@ -127,10 +127,10 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
       setup.json (robot-held sensor on the flange), truth.json (the cell and the true drifts);
     OUT/program.csv: a taught program (the 34 monitored poses, robocal-program/1).
     """
-    from ..io.atomic import atomic_write_text
+    from ..io.programs.joint_table import JointProgram, write_joint_program
+    from ..io.thermal_files import write_setup_json
     from ..sim.robot import as_rng
-    from ..sim.thermal import ThermalCell, standard_schedules, write_run
-    from ..workflows.thermal_files import Program, setup_json, write_program
+    from ..sim.thermal import SPHERE_DIAMETER_MM, ThermalCell, standard_schedules, write_run
 
     if n_cycles < 2:
         raise click.ClickException(f"--cycles must be at least 2, got {n_cycles}")
@@ -157,7 +157,8 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
             run = cell.simulate(sch, int(run_seeds[1 + i]))
             d = out / f"run{i + 1}"
             write_run(d, cell, run, overwrite=overwrite)
-            atomic_write_text(d / "setup.json", json.dumps(setup_json(cell), indent=1) + "\n", overwrite=overwrite)
+            write_setup_json(d / "setup.json", cell.model.name, cell.T_flange_sensor, SPHERE_DIAMETER_MM,
+                             overwrite=overwrite)
             hours = sch.duration_s / 3600.0
             rows.append({"run": i + 1, "role": "screening" if i == 0 else "evaluation", "cycles": run.n_cycles,
                          "hours": hours,
@@ -165,11 +166,11 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
                          if hours >= 3.0 else None,
                          "tcp_drift_end_mm": float(run.tcp_drift_mm[-1]),
                          "tcp_drift_max_mm": float(run.tcp_drift_mm.max()), "dir": str(d)})
-        prog = Program(cell.q_monitor, tuple(f"P{k + 1:02d}" for k in range(len(cell.q_monitor))),
+        prog = JointProgram(cell.q_monitor, tuple(f"P{k + 1:02d}" for k in range(len(cell.q_monitor))),
                        cell.model.controller_joints,
                        {"robot": cell.model.name, "angle_unit": "deg", "program": "car_body",
                         "note": "taught on the cold robot: the 34 monitored car-body poses of the simulated cell"})
-        write_program(out / "program.csv", prog, cell.model, overwrite=overwrite)
+        write_joint_program(out / "program.csv", prog, cell.model, overwrite=overwrite)
     except _USER_ERRORS as exc:
         raise _fail(exc) from None
     res = {"seed": seed, "schedule_seed": schedule_seed, "robot": cell.model.name, "cycles": n_cycles,
@@ -246,20 +247,14 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
     SPHERE_FILE: measurement file (robocal-measurements/1) of sphere centres in the sensor frame
     (columns pose, <joints>, x, y, z), e.g. a simulated run's sphere_cold.csv.
     """
-    from ..io.atomic import atomic_write_text
     from ..thermal import (
         calibrate_system,
         calibrate_system_thesis,
         compare_system_calibrations,
         frame_errors,
     )
-    from ..workflows.thermal_files import (
-        _load_json,
-        _transform,
-        read_sphere_file,
-        select_poses,
-        sensor_json,
-    )
+    from ..io.thermal_files import read_sphere_file, read_truth_json, write_sensor_json
+    from ..workflows.thermal_inputs import select_poses
 
     model = _robot(robot)
     if sigma_mm is not None and not (sigma_mm > 0 and math.isfinite(sigma_mm)):
@@ -271,10 +266,8 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
         q, P = meas.joints, meas.points[:, 0]
         truth = None
         if truth_file:
-            t = _load_json(truth_file, "truth")
-            truth = {"T": _transform(truth_file, t, "T_sensor_base"), "P_e": np.asarray(t.get("P_e_mm"), float)}
-            if truth["P_e"].shape != (3,):
-                raise ValueError(f"{truth_file}: 'P_e_mm' must be 3 numbers [mm]")
+            t = read_truth_json(truth_file)
+            truth = {"T": t["T_sensor_base"], "P_e": t["P_e"]}
         comp = None
         if method == "both":
             comp = compare_system_calibrations(model, q, P, point_sigma_mm=sigma_mm,
@@ -296,8 +289,7 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
             errors = {c.method: frame_errors(c.T_sensor_base, truth["T"], c.P_e, truth["P_e"], at_base=centre)
                       for c in cals}
         if out_file:
-            atomic_write_text(out_file, json.dumps(sensor_json(main_cal, model, sphere_file), indent=1) + "\n",
-                              overwrite=overwrite)
+            write_sensor_json(out_file, main_cal, model, sphere_file, overwrite=overwrite)
     except _USER_ERRORS as exc:
         raise _fail(exc) from None
 
@@ -382,7 +374,8 @@ def screen_cmd(run_dir, n_keep, threshold_mm, statistic, n_online, params, senso
         select_online_poses,
         traditional_parameters,
     )
-    from ..workflows.thermal_files import read_run_dir, read_sensor_json
+    from ..io.thermal_files import read_sensor_json
+    from ..workflows.thermal_inputs import load_run_dir
 
     if not (threshold_mm > 0 and math.isfinite(threshold_mm)):
         raise click.ClickException(f"--threshold-mm must be a positive number, got {threshold_mm}")
@@ -390,7 +383,7 @@ def screen_cmd(run_dir, n_keep, threshold_mm, statistic, n_online, params, senso
     try:
         model = None if robot is None else _robot(robot)
         _progress(1, 3, f"reading {run_dir}")
-        run = read_run_dir(run_dir, model, setup=setup_file)
+        run = load_run_dir(run_dir, model, setup=setup_file)
         model = run["model"]
         if sensor_file:
             s = read_sensor_json(sensor_file, model)
@@ -514,15 +507,9 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
     import time
 
     from ..thermal import compensate_program, identify_drift
-    from ..workflows.thermal_files import (
-        Program,
-        match_cold_reference,
-        read_program,
-        read_sensor_json,
-        read_sphere_file,
-        select_poses,
-        write_program,
-    )
+    from ..io.programs.joint_table import JointProgram, read_joint_program, write_joint_program
+    from ..io.thermal_files import read_sensor_json, read_sphere_file
+    from ..workflows.thermal_inputs import match_cold_reference, select_poses
 
     t_start = time.perf_counter()
     model = _robot(robot)
@@ -541,7 +528,7 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
         else:
             click.echo("note: no --cold reference: the cold sphere positions are predicted by the model and the sensor "
                        "calibration (their errors enter the identified deltas)", err=True)
-        program = read_program(program_file, model)
+        program = read_joint_program(program_file, model)
         drift = identify_drift(model, sensor["T_sensor_base"], sensor["P_e"], q_s, P_w, P_c, names,
                                point_sigma_mm=sigma_mm)
         comp = compensate_program(model, drift, program.joints, position_only=position_only)
@@ -550,7 +537,8 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
         md["note"] = ((md.get("note", "") + "\n") if md.get("note") else "") + (
             f"corrected for thermal drift by robocal thermal compensate from {Path(program_file).name}: "
             f"{', '.join(f'{n} {_fmt_delta(n, u, d)}' for n, u, d in zip(drift.names, drift.units, drift.delta))}")
-        write_program(out_file, Program(comp.q, program.names, program.joint_names, md), model, overwrite=overwrite)
+        write_joint_program(out_file, JointProgram(comp.q, program.names, program.joint_names, md), model,
+                            overwrite=overwrite)
     except _USER_ERRORS as exc:
         raise _fail(exc) from None
 

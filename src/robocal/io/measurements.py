@@ -32,7 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_text
-from .header import KEY_RE, FileFormatError, read_header_block
+from .header import KEY_RE, FileFormatError, declared_unit, read_header_block, read_text
+from .table import check_field_counts, csv_cells, data_rows, number_columns
 from ..transforms import (
     ANGLE_UNITS,
     LENGTH_UNITS,
@@ -121,15 +122,7 @@ class Measurements:
         for name, arr in (("joints", q), ("points", p)):
             if not np.all(np.isfinite(arr)):
                 raise ValueError(f"Measurements.{name}: contains NaN or infinite values")
-        targets = tuple(str(t) for t in self.targets)
-        if len(targets) != p.shape[1]:
-            raise ValueError(f"Measurements.targets: {len(targets)} names for {p.shape[1]} targets")
-        if len(set(targets)) != len(targets):
-            raise ValueError(f"Measurements.targets: duplicate names in {targets}")
-        for t in targets:
-            if not _TARGET_RE.match(t):
-                raise ValueError(f"Measurements.targets: {t!r} is not a valid target name (letters and digits, "
-                                 "starting with a letter)")
+        targets = _checked_targets(self.targets, p.shape[1])
         names = tuple(str(j) for j in self.joint_names) or tuple(f"J{i + 1}" for i in range(n))
         if len(names) != n:
             raise ValueError(f"Measurements.joint_names: {len(names)} names for {n} joint columns")
@@ -189,9 +182,18 @@ class Measurements:
         )
 
 
-# ---------------------------------------------------------------------------------------------
-# atomic writing
-# ---------------------------------------------------------------------------------------------
+def _checked_targets(targets, k: int) -> tuple:
+    """The ``k`` target names as strings: unique, letters and digits starting with a letter."""
+    targets = tuple(str(t) for t in targets)
+    if len(targets) != k:
+        raise ValueError(f"Measurements.targets: {len(targets)} names for {k} targets")
+    if len(set(targets)) != len(targets):
+        raise ValueError(f"Measurements.targets: duplicate names in {targets}")
+    for t in targets:
+        if not _TARGET_RE.match(t):
+            raise ValueError(f"Measurements.targets: {t!r} is not a valid target name (letters and digits, "
+                             "starting with a letter)")
+    return targets
 
 
 # ---------------------------------------------------------------------------------------------
@@ -233,6 +235,21 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
         shortest text that reads back to the identical float (exact round trip).
     metadata: extra or replacing header entries (``instrument``, ``frame``, ``note``, ...).
     """
+    md, lu, au, conv = _header_values(meas, metadata, length_unit, angle_unit, orientation)
+    columns, data = _data_block(meas, conv, LENGTH_UNITS[lu], ANGLE_UNITS[au])
+    fmt = repr if float_format is None else (lambda v: format(v, float_format))
+    buf = io.StringIO()
+    buf.write("\n".join(_header_lines(md)) + "\n")
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
+    for pid, row in zip(meas.pose_ids, data.tolist()):
+        writer.writerow([pid, *(fmt(v) for v in row)])
+    return atomic_write_text(path, buf.getvalue(), overwrite=overwrite)
+
+
+def _header_values(meas: Measurements, metadata, length_unit, angle_unit, orientation) -> tuple:
+    """``(header values, length_unit, angle_unit, orientation convention or None)`` of the file
+    :func:`write_measurements` writes: ``meas.metadata`` updated by ``metadata`` and the units."""
     md = dict(meas.metadata)
     md.update({str(k): str(v) for k, v in (metadata or {}).items()})
     lu = length_unit or md.get("length_unit", "mm")
@@ -241,10 +258,8 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
         raise ValueError(f"unknown length_unit {lu!r}; valid: {', '.join(LENGTH_UNITS)}")
     if au not in ANGLE_UNITS:
         raise ValueError(f"unknown angle_unit {au!r}; valid: {', '.join(ANGLE_UNITS)}")
-    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
     if "robot" not in md or not md["robot"].strip():
         raise ValueError("write_measurements: metadata must name the robot (metadata={'robot': ...})")
-
     md["format"] = FORMAT
     md["length_unit"], md["angle_unit"] = lu, au
     md.pop("prismatic", None)
@@ -256,11 +271,16 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
         md["orientation"] = conv
     else:
         md.pop("orientation", None)
-
     clash = {"pose"} & set(meas.joint_names) | set(_point_columns(meas.targets)) & set(meas.joint_names)
     if clash:
         raise ValueError(f"write_measurements: joint names {sorted(clash)} clash with other column names")
+    return md, lu, au, conv
 
+
+def _header_lines(md: dict) -> list:
+    """The ``# key: value`` lines of ``md``: :data:`_KEY_ORDER` first, then the other keys sorted,
+    then the ``note`` lines."""
+    md = dict(md)
     lines = []
     notes = md.pop("note", None)
     for key in list(_KEY_ORDER) + sorted(k for k in md if k not in _KEY_ORDER):
@@ -274,8 +294,11 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
         lines.append(f"# {key}: {value}")
     if notes:
         lines.extend(f"# note: {line}".rstrip() for line in notes.splitlines())
+    return lines
 
-    # data block in file units
+
+def _data_block(meas: Measurements, conv, lf: float, af: float) -> tuple:
+    """``(column names, values (N, n_columns - 1) in file units)`` of the data rows (pose ids aside)."""
     q = np.where(meas.prismatic, meas.joints / lf, meas.joints / af)
     blocks = [q, meas.points.reshape(meas.n_poses, -1) / lf]
     columns = ["pose", *meas.joint_names, *_point_columns(meas.targets)]
@@ -287,16 +310,7 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
             blocks.append(rotvec_from_matrix(meas.rotations) / af)
         else:
             blocks.append(euler_from_matrix(meas.rotations, conv) / af)
-    data = np.concatenate(blocks, axis=1)
-    fmt = repr if float_format is None else (lambda v: format(v, float_format))
-
-    buf = io.StringIO()
-    buf.write("\n".join(lines) + "\n")
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(columns)
-    for pid, row in zip(meas.pose_ids, data.tolist()):
-        writer.writerow([pid, *(fmt(v) for v in row)])
-    return atomic_write_text(path, buf.getvalue(), overwrite=overwrite)
+    return columns, np.concatenate(blocks, axis=1)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -313,39 +327,60 @@ def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
         unless the file names a path.
     min_rows: fewer data rows than this is an error.
 
-    Raises :class:`MeasurementFileError` (a ``ValueError``) naming file, line and column.
+    Steps: header block (:func:`_check_header`; none at all: :func:`_fail_plain_export`), column
+    row (:func:`_read_columns`), data rows, numbers in file units converted to mm / rad
+    (:func:`_joints_and_points`), plausibility of the declared units (:func:`_check_units_plausible`),
+    orientations (:func:`_rotations`).
+    Raises :class:`MeasurementFileError` (a ``ValueError``) naming file, line and column; a
+    missing file raises ``FileNotFoundError``.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: no such measurement file") from None
-    except UnicodeDecodeError as exc:
-        raise MeasurementFileError(path, f"not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
+    lines = read_text(path, MeasurementFileError, what="measurement").splitlines()
 
     def fail(message, line=None, column=None):
         raise MeasurementFileError(path, message, line, column)
 
-    lines = text.splitlines()
-    # ---- header block
     md, key_line, i = read_header_block(lines, fail)
-    if not md:  # no header block at all: a plain export given as a measurement file
-        start = lines[i].strip()[:60] if i < len(lines) else ""
-        fail(f"no '# format: {FORMAT}' header line" + (f" (the file starts with {start!r})" if start else "")
-             + "; this looks like a plain export: declare the format with the header lines '# format: "
-             f"{FORMAT}', '# robot: ...', '# length_unit: mm', '# angle_unit: deg' above the column row "
-             "(docs/measurement-files.md), or convert the export with 'robocal import' (docs/importers.md)", 1)
+    if not md:
+        _fail_plain_export(lines, i, fail)
+    lu, au, conv = _check_header(md, key_line, robot, fail)
+    if i >= len(lines):
+        fail("no column header row after the '#' header block")
+    layout = _read_columns(lines[i], i + 1, md, key_line, conv, robot, fail)
+    rows = data_rows(lines, i + 1)
+    check_field_counts(rows, len(layout.columns), i + 1, fail)
+    if len(rows) < max(min_rows, 1):
+        fail(f"{len(rows)} data row(s); at least {max(min_rows, 1)} required")
+    for line, cells in rows:
+        if not cells[0]:
+            fail("empty pose id", line, "pose")
+    q_file, q, points = _joints_and_points(rows, layout, LENGTH_UNITS[lu], ANGLE_UNITS[au], fail)
+    _check_units_plausible(q_file, q, points, rows, layout, lu, au, key_line, fail)
+    rotations = None if conv is None else _rotations(rows, layout, conv, ANGLE_UNITS[au], fail)
+    return Measurements(joints=q, points=points, targets=layout.targets, joint_names=layout.joint_names,
+                        pose_ids=[cells[0] for _, cells in rows], rotations=rotations, prismatic=layout.prismatic,
+                        metadata=md)
+
+
+def _fail_plain_export(lines, i: int, fail):
+    """A file without any header block: a plain export given as a measurement file."""
+    start = lines[i].strip()[:60] if i < len(lines) else ""
+    fail(f"no '# format: {FORMAT}' header line" + (f" (the file starts with {start!r})" if start else "")
+         + "; this looks like a plain export: declare the format with the header lines '# format: "
+         f"{FORMAT}', '# robot: ...', '# length_unit: mm', '# angle_unit: deg' above the column row "
+         "(docs/measurement-files.md), or convert the export with 'robocal import' (docs/importers.md)", 1)
+
+
+def _check_header(md: dict, key_line: dict, robot, fail) -> tuple:
+    """``(length_unit, angle_unit, orientation convention or None)`` of a measurement header;
+    ``md["orientation"]`` is normalised to the convention's name."""
     for key in _REQUIRED_KEYS:
         if key not in md or not md[key]:
             fail(f"header is missing '# {key}: ...' (required: {', '.join(_REQUIRED_KEYS)})")
     if md["format"] != FORMAT:
         fail(f"format {md['format']!r} is not supported; expected {FORMAT!r}", key_line["format"])
-    lu, au = md["length_unit"], md["angle_unit"]
-    if lu not in LENGTH_UNITS:
-        fail(f"unknown length_unit {lu!r}; valid: {', '.join(LENGTH_UNITS)}", key_line["length_unit"])
-    if au not in ANGLE_UNITS:
-        fail(f"unknown angle_unit {au!r}; valid: {', '.join(ANGLE_UNITS)}", key_line["angle_unit"])
-    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
+    lu = declared_unit(md, key_line, "length_unit", LENGTH_UNITS, fail)
+    au = declared_unit(md, key_line, "angle_unit", ANGLE_UNITS, fail)
     conv = None
     if "orientation" in md:
         conv = md["orientation"].strip().lower()
@@ -357,141 +392,133 @@ def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
         file_robot = md["robot"]
         if file_robot != robot.name and not (file_robot.endswith(".toml") or "/" in file_robot):
             fail(f"file is for robot {file_robot!r} but robot model {robot.name!r} was given", key_line["robot"])
+    return lu, au, conv
 
-    # ---- column header row
-    if i >= len(lines):
-        fail("no column header row after the '#' header block")
-    header_line = i + 1
-    columns = [c.strip() for c in next(csv.reader([lines[i]]))]
+
+@dataclass(frozen=True)
+class _Layout:
+    """What the column row says: ``columns`` (names in file order), ``index`` (name -> position),
+    the joint columns (file order) and names (returned order), the targets with their
+    ``(x, y, z)`` columns, the orientation columns and which joints are prismatic."""
+
+    columns: list
+    index: dict
+    joint_cols: list
+    joint_names: list
+    targets: list
+    point_cols: list
+    ori_cols: list
+    prismatic: np.ndarray
+
+
+def _read_columns(line: str, line_no: int, md: dict, key_line: dict, conv, robot, fail) -> _Layout:
+    """The column row: pose, joint, point and orientation columns, checked (robot: its joints)."""
+    columns = csv_cells(line)
     seen: dict[str, int] = {}
     for j, c in enumerate(columns):
         if not c:
-            fail(f"column {j + 1} has an empty name", header_line)
+            fail(f"column {j + 1} has an empty name", line_no)
         if c in seen:
-            fail(f"column name given twice (columns {seen[c] + 1} and {j + 1})", header_line, c)
+            fail(f"column name given twice (columns {seen[c] + 1} and {j + 1})", line_no, c)
         seen[c] = j
     if "pose" not in seen:
-        fail("missing column 'pose' (pose identifiers)", header_line)
+        fail("missing column 'pose' (pose identifiers)", line_no)
     if seen["pose"] != 0:
-        fail("'pose' must be the first column", header_line, "pose")
-
-    # orientation columns
-    ori_cols: list[str] = []
-    has_euler = any(c in seen for c in _EULER_COLUMNS)
-    has_quat = any(c in seen for c in _QUAT_COLUMNS)
-    if conv is None:
-        if has_euler or has_quat:
-            found = [c for c in (*_EULER_COLUMNS, *_QUAT_COLUMNS) if c in seen]
-            fail(f"orientation columns {found} but no '# orientation: <convention>' in the header", header_line, found[0])
-    else:
-        ori_cols = list(_orientation_columns(conv))
-        missing = [c for c in ori_cols if c not in seen]
-        if missing:
-            fail(f"orientation {conv!r} needs columns {ori_cols}; missing {missing}", header_line, missing[0])
-        wrong = [c for c in (_QUAT_COLUMNS if conv != "quaternion" else _EULER_COLUMNS) if c in seen]
-        if wrong:
-            fail(f"column does not belong to orientation {conv!r} (expected {ori_cols})", header_line, wrong[0])
-
-    # joint columns (known from the model) and point columns
-    joint_cols: list[str]
+        fail("'pose' must be the first column", line_no, "pose")
+    ori_cols = _check_orientation_columns(seen, conv, line_no, fail)
     rest = [c for c in columns[1:] if c not in ori_cols]
+    joint_cols, targets, point_cols = _joint_and_point_columns(rest, seen, robot, line_no, fail)
+    joint_names = joint_cols if robot is None else list(robot.controller_joints)
+    prismatic = _prismatic_joints(md, key_line, joint_names, robot, fail)
+    return _Layout(columns, seen, joint_cols, joint_names, targets, point_cols, ori_cols, prismatic)
+
+
+def _check_orientation_columns(seen: dict, conv, line_no: int, fail) -> list:
+    """The orientation columns the convention ``conv`` needs (none without one), all present."""
+    if conv is None:
+        found = [c for c in (*_EULER_COLUMNS, *_QUAT_COLUMNS) if c in seen]
+        if found:
+            fail(f"orientation columns {found} but no '# orientation: <convention>' in the header", line_no, found[0])
+        return []
+    ori_cols = list(_orientation_columns(conv))
+    missing = [c for c in ori_cols if c not in seen]
+    if missing:
+        fail(f"orientation {conv!r} needs columns {ori_cols}; missing {missing}", line_no, missing[0])
+    wrong = [c for c in (_QUAT_COLUMNS if conv != "quaternion" else _EULER_COLUMNS) if c in seen]
+    if wrong:
+        fail(f"column does not belong to orientation {conv!r} (expected {ori_cols})", line_no, wrong[0])
+    return ori_cols
+
+
+def _joint_and_point_columns(rest: list, seen: dict, robot, line_no: int, fail) -> tuple:
+    """``(joint columns, targets, point columns per target)`` of the columns ``rest`` (neither
+    pose nor orientation). With ``robot`` the joint columns are its controller joints and any
+    other non-point column is an error; without, every non-point column is a joint."""
+    joint_cols: list[str] = []
     if robot is not None:
         expected = list(robot.controller_joints)
         joint_cols = [c for c in rest if c in expected]
         missing = [c for c in expected if c not in seen]
         if missing:
-            hint = ""
             unknown = [c for c in rest if c not in expected and not _is_point_column(c)]
-            if unknown:
-                hint = f"; the file has {unknown}"
+            hint = f"; the file has {unknown}" if unknown else ""
             fail(f"missing joint column(s) {missing} of robot {robot.name!r} "
-                 f"(its controller joints are {expected}){hint}", header_line, missing[0])
-    else:
-        joint_cols = []
-    point_cols = [c for c in rest if c not in joint_cols]
+                 f"(its controller joints are {expected}){hint}", line_no, missing[0])
     try:
-        targets, point_idx, leftovers = _classify_point_columns(point_cols)
+        targets, point_cols, leftovers = _classify_point_columns([c for c in rest if c not in joint_cols])
     except _ColumnProblem as exc:
-        fail(exc.message, header_line, exc.column)
+        fail(exc.message, line_no, exc.column)
     if robot is None:
-        joint_cols = leftovers
-        leftovers = []
+        joint_cols, leftovers = leftovers, []
     if leftovers:
         c = leftovers[0]
         close = difflib.get_close_matches(c, list(robot.controller_joints), n=2)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         fail(f"unknown column: not a joint of robot {robot.name!r} ({', '.join(robot.controller_joints)}), "
-             f"a point column (x, y, z or <target>_x ...) or an orientation column{hint}", header_line, c)
+             f"a point column (x, y, z or <target>_x ...) or an orientation column{hint}", line_no, c)
     if not targets:
-        fail("no point columns: expected x, y, z or <target>_x, <target>_y, <target>_z", header_line)
+        fail("no point columns: expected x, y, z or <target>_x, <target>_y, <target>_z", line_no)
     if not joint_cols:
-        fail("no joint columns", header_line)
-    if robot is None:
-        joint_names = joint_cols
-    else:
-        joint_names = list(robot.controller_joints)
+        fail("no joint columns", line_no)
+    return joint_cols, targets, point_cols
 
-    # prismatic joints
+
+def _prismatic_joints(md: dict, key_line: dict, joint_names: list, robot, fail) -> np.ndarray:
+    """(n,) bool: the joints the header's ``prismatic`` key names, or the robot's (which the key,
+    if given, must agree with)."""
     declared = [s.strip() for s in md.get("prismatic", "").split(",") if s.strip()]
     for name in declared:
         if name not in joint_names:
             fail(f"'prismatic' names {name!r}, which is not a joint column ({', '.join(joint_names)})",
                  key_line["prismatic"])
-    if robot is not None:
-        prismatic = robot.prismatic_joints
-        model_set = {n for n, p in zip(joint_names, prismatic) if p}
-        if "prismatic" in md and set(declared) != model_set:
-            fail(f"'prismatic: {md['prismatic']}' disagrees with robot {robot.name!r}, whose prismatic "
-                 f"joints are {sorted(model_set) or 'none'}", key_line["prismatic"])
-    else:
-        prismatic = np.array([n in declared for n in joint_names], dtype=bool)
+    if robot is None:
+        return np.array([n in declared for n in joint_names], dtype=bool)
+    prismatic = robot.prismatic_joints
+    model_set = {n for n, p in zip(joint_names, prismatic) if p}
+    if "prismatic" in md and set(declared) != model_set:
+        fail(f"'prismatic: {md['prismatic']}' disagrees with robot {robot.name!r}, whose prismatic "
+             f"joints are {sorted(model_set) or 'none'}", key_line["prismatic"])
+    return prismatic
 
-    # ---- data rows
-    rows: list[list[str]] = []
-    row_lines: list[int] = []
-    ncol = len(columns)
-    for k in range(i + 1, len(lines)):
-        raw = lines[k]
-        if not raw.strip() or raw.lstrip().startswith("#"):
-            continue
-        fields = next(csv.reader([raw]))
-        if len(fields) != ncol:
-            fail(f"{len(fields)} fields, expected {ncol} (one per column of line {header_line})", k + 1)
-        rows.append([f.strip() for f in fields])
-        row_lines.append(k + 1)
-    if len(rows) < max(min_rows, 1):
-        fail(f"{len(rows)} data row(s); at least {max(min_rows, 1)} required")
 
-    pose_ids = [r[0] for r in rows]
-    for pid, ln in zip(pose_ids, row_lines):
-        if not pid:
-            fail("empty pose id", ln, "pose")
+def _numbers(rows, layout: _Layout, names, fail) -> np.ndarray:
+    """The columns ``names`` of the data rows as floats (file units), shape (N, len(names))."""
+    return number_columns(rows, [layout.index[c] for c in names],
+                          lambda problem, line, j: fail(f"{problem} (column {j + 1})", line, layout.columns[j]))
 
-    def numbers(col_names) -> np.ndarray:
-        idx = [seen[c] for c in col_names]
-        out = np.empty((len(rows), len(idx)))
-        for r, (row, ln) in enumerate(zip(rows, row_lines)):
-            for c, j in enumerate(idx):
-                cell = row[j]
-                try:
-                    v = float(cell)
-                except ValueError:
-                    what = "empty cell" if not cell else f"{cell!r} is not a number"
-                    fail(f"{what} (column {j + 1})", ln, columns[j])
-                if not math.isfinite(v):
-                    fail(f"{cell!r} is not a finite number (column {j + 1})", ln, columns[j])
-                out[r, c] = v
-        return out
 
-    q_file = numbers(joint_cols)
-    if robot is not None:  # reorder to the model's controller joints
-        order = [joint_cols.index(n) for n in joint_names]
-        q_file = q_file[:, order]
-    pts_file = numbers([c for cols in point_idx for c in cols]).reshape(len(rows), len(targets), 3)
-    q = np.where(prismatic, q_file * lf, q_file * af)
-    points = pts_file * lf
+def _joints_and_points(rows, layout: _Layout, lf: float, af: float, fail) -> tuple:
+    """``(joints in file units (N, n), joints [rad | mm] (N, n), points [mm] (N, K, 3))``, joints
+    in the returned (model's) order."""
+    q_file = _numbers(rows, layout, layout.joint_cols, fail)
+    q_file = q_file[:, [layout.joint_cols.index(n) for n in layout.joint_names]]
+    pts_file = _numbers(rows, layout, [c for cols in layout.point_cols for c in cols], fail)
+    q = np.where(layout.prismatic, q_file * lf, q_file * af)
+    return q_file, q, pts_file.reshape(len(rows), len(layout.targets), 3) * lf
 
-    # ---- plausibility of units
+
+def _check_units_plausible(q_file, q, points, rows, layout: _Layout, lu: str, au: str, key_line: dict, fail):
+    """Numbers that look like another unit than the declared one are an error (module docstring)."""
     dist = np.linalg.norm(points, axis=-1)
     if lu == "mm" and dist.max() < _MM_LOOKS_LIKE_M:
         fail(f"every point is within {_MM_LOOKS_LIKE_M:g} mm of the origin (largest {dist.max():.4g} mm): "
@@ -499,34 +526,30 @@ def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
     if lu == "m" and dist.max() > _M_LOOKS_LIKE_MM:
         r, t = np.unravel_index(np.argmax(dist), dist.shape)
         fail(f"a point {dist.max() / 1000.0:.4g} m from the origin: the values look like millimetres; "
-             "declare '# length_unit: mm'", row_lines[r], point_idx[t][0])
+             "declare '# length_unit: mm'", rows[r][0], layout.point_cols[t][0])
     if au == "rad":
         big = np.abs(q) > _RAD_LOOKS_LIKE_DEG
-        big[:, prismatic] = False
+        big[:, layout.prismatic] = False
         if big.any():
             r, j = np.argwhere(big)[0]
             fail(f"revolute joint value {q_file[r, j]:g} rad is more than two turns: the values look like "
-                 "degrees; declare '# angle_unit: deg'", row_lines[r], joint_names[j])
+                 "degrees; declare '# angle_unit: deg'", rows[r][0], layout.joint_names[j])
 
-    # ---- orientation
-    rotations = None
-    if conv is not None:
-        o = numbers(ori_cols)
-        if conv == "quaternion":
-            norm = np.linalg.norm(o, axis=1)
-            bad = np.flatnonzero(np.abs(norm - 1.0) > 1e-3)
-            if bad.size:
-                r = bad[0]
-                fail(f"quaternion (qw, qx, qy, qz) has norm {norm[r]:.6g}, expected 1 (check the component "
-                     "order: w first)", row_lines[r], "qw")
-            rotations = matrix_from_quaternion(o)
-        elif conv == "rotvec":
-            rotations = matrix_from_rotvec(o * af)
-        else:
-            rotations = matrix_from_euler(o * af, conv)
 
-    return Measurements(joints=q, points=points, targets=targets, joint_names=joint_names,
-                        pose_ids=pose_ids, rotations=rotations, prismatic=prismatic, metadata=md)
+def _rotations(rows, layout: _Layout, conv: str, af: float, fail) -> np.ndarray:
+    """The measured orientations (N, 3, 3) from the orientation columns of convention ``conv``."""
+    o = _numbers(rows, layout, layout.ori_cols, fail)
+    if conv == "quaternion":
+        norm = np.linalg.norm(o, axis=1)
+        bad = np.flatnonzero(np.abs(norm - 1.0) > 1e-3)
+        if bad.size:
+            r = bad[0]
+            fail(f"quaternion (qw, qx, qy, qz) has norm {norm[r]:.6g}, expected 1 (check the component "
+                 "order: w first)", rows[r][0], "qw")
+        return matrix_from_quaternion(o)
+    if conv == "rotvec":
+        return matrix_from_rotvec(o * af)
+    return matrix_from_euler(o * af, conv)
 
 
 def _is_point_column(c: str) -> bool:

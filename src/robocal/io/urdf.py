@@ -15,18 +15,23 @@ from pathlib import Path
 import numpy as np
 
 from ..kinematics.convert import to_urdf_kind
-from .atomic import atomic_write_text
-from ..kinematics.links import Link
+from ..kinematics.links import OP_RU, OP_TU, Link, elementary_transforms, frame_from_xyz_rpy
 from ..kinematics.model import EndEffector, RobotModel
 from ..transforms import euler_from_matrix
+from .atomic import atomic_write_text
+from .header import FileFormatError
 
 __all__ = ["read_urdf", "write_urdf", "UrdfError"]
 
 _M_TO_MM = 1000.0
 
 
-class UrdfError(ValueError):
-    """A URDF file cannot be read or a model cannot be written as URDF (message says why)."""
+class UrdfError(FileFormatError):
+    """A URDF file cannot be read or a model cannot be written as URDF; the message names the file
+    (or the model) and the element, so ``path``, ``line`` and ``column`` are ``None``."""
+
+    def __init__(self, message: str):
+        super().__init__(None, message)
 
 
 def _floats(where, text, n, default):
@@ -42,7 +47,7 @@ def _floats(where, text, n, default):
 
 
 def read_urdf(source, tips=None, name=None) -> RobotModel:
-    """Read a URDF file (path or XML text) into a ``urdf``-kind :class:`RobotModel`.
+    """Read a URDF file (path or XML text) into a ``urdf``-kind :class:`RobotModel` [mm, rad].
 
     tips: names of the links that carry end effectors (default: every leaf link reached through
     at least one moving joint). Controller joints are the moving joints that are not mimics,
@@ -56,8 +61,21 @@ def read_urdf(source, tips=None, name=None) -> RobotModel:
         raise UrdfError(f"{origin}: not valid XML: {exc}") from None
     if root.tag != "robot":
         raise UrdfError(f"{origin}: root element is <{root.tag}>, expected <robot>")
-    joints = {}
-    child_of = {}
+    joints, child_of = _parse_joints(root, origin)
+    tips, order = _kept_joints(root, joints, child_of, tips, origin)
+    index = {jn: k for k, jn in enumerate(order)}
+    ctrl, limits = _controller_joints(joints, order, origin)
+    links = [_link(jn, joints[jn], index.get(child_of.get(joints[jn]["parent"]), -1), origin) for jn in order]
+    ees = [EndEffector(t, index[child_of[t]], np.eye(4)) for t in tips]
+    return RobotModel(name=name or root.get("name", "urdf_robot"), kind="urdf", links=links,
+                      controller_joints=ctrl, coupling=_coupling(joints, order, ctrl, links), limits=limits,
+                      T_world_base=np.eye(4), end_effectors=ees, title=root.get("name", ""),
+                      source=f"imported from {origin}", extra={"length_unit": "m", "angle_unit": "rad"})
+
+
+def _parse_joints(root, origin: str) -> tuple:
+    """``(joints, child_of)``: joint name -> its fields (file units: m, rad), child link -> joint."""
+    joints, child_of = {}, {}
     for j in root.findall("joint"):
         jname = j.get("name")
         where = f"{origin}: joint {jname!r}"
@@ -83,7 +101,13 @@ def read_urdf(source, tips=None, name=None) -> RobotModel:
         child_of[child] = jname
     if not joints:
         raise UrdfError(f"{origin}: no joints")
-    links_all = {l.get("name") for l in root.findall("link")}
+    return joints, child_of
+
+
+def _kept_joints(root, joints: dict, child_of: dict, tips, origin: str) -> tuple:
+    """``(tips, order)``: the tip links and the joints on the paths from the root link to them,
+    parents first (stable in file order)."""
+    links_all = {link.get("name") for link in root.findall("link")}
     roots = sorted({j["parent"] for j in joints.values()} - set(child_of))
     if len(roots) != 1:
         raise UrdfError(f"{origin}: expected one root link, found {roots}")
@@ -91,27 +115,31 @@ def read_urdf(source, tips=None, name=None) -> RobotModel:
     for jn, j in joints.items():
         children.setdefault(j["parent"], []).append(jn)
     if tips is None:
-        leaves = [l for l in links_all | set(child_of) if l not in children and l in child_of]
-        tips = [l for l in sorted(leaves) if _has_moving_ancestor(l, child_of, joints)]
+        leaves = [link for link in links_all | set(child_of) if link not in children and link in child_of]
+        tips = [link for link in sorted(leaves) if _has_moving_ancestor(link, child_of, joints)]
     keep, order = set(), []
     for tip in tips:
         if tip not in child_of:
             raise UrdfError(f"{origin}: tip link {tip!r} is not the child of any joint")
-        l = tip
-        while l in child_of:
-            keep.add(child_of[l])
-            l = joints[child_of[l]]["parent"]
-    # Topological order (parents first), stable in file order.
+        link = tip
+        while link in child_of:
+            keep.add(child_of[link])
+            link = joints[child_of[link]]["parent"]
     stack = [roots[0]]
     while stack:
-        l = stack.pop(0)
-        for jn in children.get(l, []):
+        link = stack.pop(0)
+        for jn in children.get(link, []):
             if jn in keep:
                 order.append(jn)
                 stack.append(joints[jn]["child"])
-    index = {jn: k for k, jn in enumerate(order)}
+    return tips, order
+
+
+def _controller_joints(joints: dict, order: list, origin: str) -> tuple:
+    """``(controller joint names, limits (n, 2) [rad | mm])``: the kept non-mimic moving joints and
+    the leaders of kept mimics, in file order; ``continuous`` joints without limits."""
+    keep = set(order)
     leaders = {joints[jn]["mimic"][0] for jn in order if joints[jn]["mimic"] is not None}
-    # controller joints: kept non-mimic moving joints and the leaders of kept mimics, in file order
     ctrl = [jn for jn, j in joints.items()
             if j["type"] != "fixed" and j["mimic"] is None and (jn in keep or jn in leaders)]
     missing = leaders - set(ctrl)
@@ -124,23 +152,26 @@ def read_urdf(source, tips=None, name=None) -> RobotModel:
         lo = -np.inf if j["lower"] is None or j["type"] == "continuous" else j["lower"] * scale
         hi = np.inf if j["upper"] is None or j["type"] == "continuous" else j["upper"] * scale
         limits.append((lo, hi))
-    links = []
-    for jn in order:
-        j = joints[jn]
-        jtype = "revolute" if j["type"] == "continuous" else j["type"]
-        parent_joint = child_of.get(j["parent"])
-        params = dict(zip(("x", "y", "z"), (v * _M_TO_MM for v in j["xyz"])))
-        params.update(zip(("roll", "pitch", "yaw"), j["rpy"]))
-        if jtype != "fixed":
-            n = np.linalg.norm(j["axis"])
-            if n == 0:
-                raise UrdfError(f"{origin}: joint {jn!r}: axis has zero length")
-            axis = tuple(np.asarray(j["axis"]) / n)
-            off = 0.0 if j["mimic"] is None else j["mimic"][2]
-            params["theta" if jtype == "revolute" else "d"] = off * (1.0 if jtype == "revolute" else _M_TO_MM)
-        else:
-            axis = (0.0, 0.0, 1.0)
-        links.append(Link(jn, jtype, "urdf", params, index.get(parent_joint, -1), axis))
+    return ctrl, np.array(limits).reshape(-1, 2)
+
+
+def _link(jn: str, j: dict, parent: int, origin: str) -> Link:
+    """The ``urdf`` link of joint ``jn`` (origin in mm; a mimic offset becomes the joint offset)."""
+    jtype = "revolute" if j["type"] == "continuous" else j["type"]
+    params = dict(zip(("x", "y", "z"), (v * _M_TO_MM for v in j["xyz"])))
+    params.update(zip(("roll", "pitch", "yaw"), j["rpy"]))
+    if jtype == "fixed":
+        return Link(jn, jtype, "urdf", params, parent, (0.0, 0.0, 1.0))
+    n = np.linalg.norm(j["axis"])
+    if n == 0:
+        raise UrdfError(f"{origin}: joint {jn!r}: axis has zero length")
+    off = 0.0 if j["mimic"] is None else j["mimic"][2]
+    params["theta" if jtype == "revolute" else "d"] = off * (1.0 if jtype == "revolute" else _M_TO_MM)
+    return Link(jn, jtype, "urdf", params, parent, tuple(np.asarray(j["axis"]) / n))
+
+
+def _coupling(joints: dict, order: list, ctrl: list, links: list) -> np.ndarray:
+    """(n_moving, n_controller): 1 for a joint driven by itself, the multiplier for a mimic."""
     coupling = np.zeros((sum(L.moves for L in links), len(ctrl)))
     m = 0
     for jn in order:
@@ -153,11 +184,7 @@ def read_urdf(source, tips=None, name=None) -> RobotModel:
             leader, mult, _ = j["mimic"]
             coupling[m, ctrl.index(leader)] = mult
         m += 1
-    ees = [EndEffector(t, index[child_of[t]], np.eye(4)) for t in tips]
-    return RobotModel(name=name or root.get("name", "urdf_robot"), kind="urdf", links=links,
-                      controller_joints=ctrl, coupling=coupling, limits=np.array(limits).reshape(-1, 2),
-                      T_world_base=np.eye(4), end_effectors=ees, title=root.get("name", ""),
-                      source=f"imported from {origin}", extra={"length_unit": "m", "angle_unit": "rad"})
+    return coupling
 
 
 def _has_moving_ancestor(link, child_of, joints) -> bool:
@@ -194,47 +221,15 @@ def write_urdf(model: RobotModel, path, overwrite: bool = False) -> Path:
     moving = {int(k): i for i, k in enumerate(m.moving)}
     for k, L in enumerate(m.links):
         ET.SubElement(robot, "link", name=f"{L.name}_link")
-        jt = L.joint_type
-        j = ET.SubElement(robot, "joint", name=L.name, type=jt)
+        j = ET.SubElement(robot, "joint", name=L.name, type=L.joint_type)
         ET.SubElement(j, "parent", link="base_link" if L.parent < 0 else f"{m.links[L.parent].name}_link")
         ET.SubElement(j, "child", link=f"{L.name}_link")
         p = L.params
-        from ..robots.loader import frame_from_xyz_rpy
-
         T = frame_from_xyz_rpy([p["x"], p["y"], p["z"]], [p["roll"], p["pitch"], p["yaw"]])
-        if jt == "fixed":
+        if L.joint_type == "fixed":
             _origin(j, T[:3, 3], T[:3, :3])
-            continue
-        off = p.get("theta", 0.0) if jt == "revolute" else p.get("d", 0.0)
-        axis = np.asarray(L.axis, dtype=float)
-        row = m.coupling[moving[k]]
-        nz = np.flatnonzero(row)
-        if len(nz) != 1:
-            raise UrdfError(f"{m.name}: joint {L.name!r} is driven by {len(nz)} controller joints "
-                            f"({[m.controller_joints[i] for i in nz]}); URDF cannot express this coupling")
-        leader, coef = m.controller_joints[nz[0]], float(row[nz[0]])
-        if off != 0.0:
-            # fold the constant offset into the origin (the motion about the axis commutes with it)
-            from ..kinematics.links import OP_RU, OP_TU, elementary_transforms
-
-            T = T @ elementary_transforms(OP_RU if jt == "revolute" else OP_TU, off, axis)
-        _origin(j, T[:3, 3], T[:3, :3])
-        if leader == L.name or (abs(coef) == 1.0 and leader not in {x.name for x in m.links}):
-            if coef < 0:
-                axis = -axis
-            ET.SubElement(j, "axis", xyz=_fmt(axis))
-            c = m.controller_joints.index(leader)
-            lo, hi = m.limits[c] * (1.0 if jt == "revolute" else 1.0 / _M_TO_MM)
-            if coef < 0:
-                lo, hi = -hi, -lo
-            if np.isfinite(lo) and np.isfinite(hi):
-                ET.SubElement(j, "limit", lower=repr(float(lo)), upper=repr(float(hi)), effort="0", velocity="0")
-            elif jt == "revolute":
-                j.set("type", "continuous")
         else:
-            ET.SubElement(j, "axis", xyz=_fmt(axis))
-            ET.SubElement(j, "limit", lower="-1e9", upper="1e9", effort="0", velocity="0")
-            ET.SubElement(j, "mimic", joint=leader, multiplier=repr(coef), offset="0")
+            _moving_joint(j, m, L, T, m.coupling[moving[k]])
     for e in m.end_effectors:
         ET.SubElement(robot, "link", name=e.name)
         j = ET.SubElement(robot, "joint", name=f"{e.name}_fixed", type="fixed")
@@ -246,6 +241,39 @@ def write_urdf(model: RobotModel, path, overwrite: bool = False) -> Path:
     atomic_write_text(path, '<?xml version="1.0"?>\n<!-- written by robocal; lengths in metres -->\n' + data + "\n",
                       overwrite=overwrite)
     return path
+
+
+def _moving_joint(j, m: RobotModel, L: Link, T, row) -> None:
+    """Origin, axis, limits or ``<mimic>`` of the URDF joint ``j`` for the moving link ``L`` of the
+    ``urdf``-kind model ``m`` (``T``: its origin (4, 4) [mm]; ``row``: its coupling row)."""
+    jt = L.joint_type
+    off = L.params.get("theta", 0.0) if jt == "revolute" else L.params.get("d", 0.0)
+    axis = np.asarray(L.axis, dtype=float)
+    nz = np.flatnonzero(row)
+    if len(nz) != 1:
+        raise UrdfError(f"{m.name}: joint {L.name!r} is driven by {len(nz)} controller joints "
+                        f"({[m.controller_joints[i] for i in nz]}); URDF cannot express this coupling")
+    leader, coef = m.controller_joints[nz[0]], float(row[nz[0]])
+    if off != 0.0:
+        # fold the constant offset into the origin (the motion about the axis commutes with it)
+        T = T @ elementary_transforms(OP_RU if jt == "revolute" else OP_TU, off, axis)
+    _origin(j, T[:3, 3], T[:3, :3])
+    if leader == L.name or (abs(coef) == 1.0 and leader not in {x.name for x in m.links}):
+        if coef < 0:
+            axis = -axis
+        ET.SubElement(j, "axis", xyz=_fmt(axis))
+        c = m.controller_joints.index(leader)
+        lo, hi = m.limits[c] * (1.0 if jt == "revolute" else 1.0 / _M_TO_MM)
+        if coef < 0:
+            lo, hi = -hi, -lo
+        if np.isfinite(lo) and np.isfinite(hi):
+            ET.SubElement(j, "limit", lower=repr(float(lo)), upper=repr(float(hi)), effort="0", velocity="0")
+        elif jt == "revolute":
+            j.set("type", "continuous")
+    else:
+        ET.SubElement(j, "axis", xyz=_fmt(axis))
+        ET.SubElement(j, "limit", lower="-1e9", upper="1e9", effort="0", velocity="0")
+        ET.SubElement(j, "mimic", joint=leader, multiplier=repr(coef), offset="0")
 
 
 def _origin(elem, xyz_mm, R):

@@ -149,6 +149,15 @@ def elementary_transforms(op: int, value, axis=(0.0, 0.0, 1.0)) -> np.ndarray:
     return T
 
 
+def frame_from_xyz_rpy(xyz, rpy) -> np.ndarray:
+    """(4, 4) of the ``frame`` convention from a translation ``xyz`` (3,) [mm] and fixed-axis roll,
+    pitch, yaw ``rpy`` (3,) [rad]: ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (robot files, URDF origins)."""
+    from ..transforms import rot_x, rot_y, rot_z, transforms_from
+
+    r, p, y = rpy
+    return transforms_from(rot_z(y) @ rot_y(p) @ rot_x(r), np.asarray(xyz, dtype=float))
+
+
 def op_axis(op: int, axis=(0.0, 0.0, 1.0)) -> np.ndarray:
     """Unit axis (3,) of an operation in the frame where it acts."""
     if op in (OP_RU, OP_TU):

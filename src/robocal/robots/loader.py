@@ -10,9 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..kinematics.links import ANGLE_PARAMS, MODEL_KINDS, Link, link_param_names
+from ..kinematics.links import ANGLE_PARAMS, MODEL_KINDS, Link, frame_from_xyz_rpy, link_param_names
 from ..kinematics.model import EndEffector, RobotModel
-from ..transforms import rot_x, rot_y, rot_z, transforms_from
 
 __all__ = ["RobotFileError", "load_robot", "list_robots", "robot_path", "parse_robot", "frame_from_xyz_rpy"]
 
@@ -58,12 +57,6 @@ def load_robot(name_or_path) -> RobotModel:
     except tomllib.TOMLDecodeError as exc:
         raise RobotFileError(f"{path}: not valid TOML: {exc}") from None
     return parse_robot(data, origin=str(path))
-
-
-def frame_from_xyz_rpy(xyz, rpy) -> np.ndarray:
-    """(4, 4) from a translation and fixed-axis roll, pitch, yaw: ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
-    r, p, y = rpy
-    return transforms_from(rot_z(y) @ rot_y(p) @ rot_x(r), np.asarray(xyz, dtype=float))
 
 
 def _vec(where, d, key, n, default=None):

@@ -35,7 +35,8 @@ elasticity, the robot's repeatability; not seen by the encoders).
 
 Files: :func:`write_run` writes a run as robocal measurement files (``docs/measurement-files.md``):
 sphere and monitored-point files (cold reference and all cycles, pose ids ``c012-p03``), a
-``cycles.csv`` with the measurement times and a ``truth.json``; :func:`read_run` reads them back.
+``cycles.csv`` with the measurement times and a ``truth.json``;
+:func:`robocal.io.thermal_files.read_run` reads them back.
 """
 
 from __future__ import annotations
@@ -48,14 +49,15 @@ from pathlib import Path
 import numpy as np
 
 from ..io.atomic import atomic_write_text
-from ..io.measurements import Measurements, read_measurements, write_measurements
+from ..io.measurements import Measurements, write_measurements
+from ..io.thermal_files import write_cycles
 from ..kinematics.model import RobotModel
 from ..transforms import invert_transforms, rot_x, so3_exp
 from .robot import VirtualRobot, as_rng, parameter_kinds
 
 __all__ = [
     "SPHERE_DIAMETER_MM", "HeatSource", "ThermalModel", "ProductionSchedule", "standard_schedules",
-    "ThermalCell", "ThermalRun", "car_body_points", "monitor_poses", "write_run", "read_run",
+    "ThermalCell", "ThermalRun", "car_body_points", "monitor_poses", "write_run",
 ]
 
 SPHERE_DIAMETER_MM = 38.1
@@ -558,28 +560,10 @@ def write_run(directory, cell: ThermalCell, run: ThermalRun, *, overwrite: bool 
     out = {}
     for role, meas in files.items():
         out[role] = write_measurements(d / f"{role}.csv", meas, overwrite=overwrite)
-    lines = ["cycle,time_s,load,idle_after_s"]
-    lines += [f"{c + 1},{float(t)!r},{float(ld)!r},{float(idle)!r}" for c, (t, ld, idle) in
-              enumerate(zip(run.times_s, run.schedule.load, run.schedule.idle_s))]
-    out["cycles"] = atomic_write_text(d / "cycles.csv", "\n".join(lines) + "\n", overwrite=overwrite)
+    out["cycles"] = write_cycles(d / "cycles.csv", run.times_s, run.schedule.load, run.schedule.idle_s,
+                                 overwrite=overwrite)
     truth = cell.truth()
     truth["delta_true"] = run.delta_true.tolist()
     truth["states_K"] = run.states.tolist()
     out["truth"] = atomic_write_text(d / "truth.json", json.dumps(truth, indent=1), overwrite=overwrite)
     return out
-
-
-def read_run(directory, robot=None) -> dict:
-    """Read the files of :func:`write_run` back: ``{"q_sphere", "sphere_cold", "sphere" (C, m, 3),
-    "q_monitor", "monitor_cold", "monitor" (C, K, 3), "times_s" (C,)}`` (arrays, mm / rad / s)."""
-    d = Path(directory)
-    sc = read_measurements(d / "sphere_cold.csv", robot=robot)
-    s = read_measurements(d / "sphere.csv", robot=robot)
-    mc = read_measurements(d / "monitor_cold.csv", robot=robot)
-    mo = read_measurements(d / "monitor.csv", robot=robot)
-    rows = [ln.split(",") for ln in (d / "cycles.csv").read_text().splitlines()[1:] if ln.strip()]
-    times = np.array([float(r[1]) for r in rows])
-    C = len(times)
-    return {"q_sphere": sc.joints, "sphere_cold": sc.points[:, 0], "sphere": s.points[:, 0].reshape(C, -1, 3),
-            "q_monitor": mc.joints, "monitor_cold": mc.points[:, 0], "monitor": mo.points[:, 0].reshape(C, -1, 3),
-            "times_s": times}

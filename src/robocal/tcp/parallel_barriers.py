@@ -32,14 +32,11 @@ tool, bent about its mount), the TCP in the flange frame is ``D * a / |a|``.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from ..transforms import rot_axis
-from .sensor import TcpFileError
 
 __all__ = [
     "R_FLANGE_STEP12",
@@ -50,7 +47,6 @@ __all__ = [
     "tool_rotation_5d",
     "flange_rotation_for_vertical_tool",
     "parallel_barriers_tool",
-    "read_parallel_barriers_file",
 ]
 
 #: flange orientation in steps 1-2: Z_e down, Y_e = Y_b, X_e = -X_b
@@ -201,52 +197,3 @@ def parallel_barriers_tool(x_up, x_down, delta_h_mm=None, *, h_up_mm=None, h_dow
         vres = math.degrees(math.atan2(abs(off), float(delta_h_mm)))
     return ParallelBarrierResult(axis=axis, axis_raw_mm=a, tilt_deg=tilt, psi_deg=psi, length_mm=D, tcp_mm=tcp,
                                  vertical_residual_deg=vres)
-
-
-_KEYS = {"length_unit", "h_up", "h_down", "delta_h", "x_up", "x_down", "x_up_vertical", "x_down_vertical", "z7",
-         "note"}
-
-
-def read_parallel_barriers_file(path) -> dict:
-    """Read the recorded values from a TOML file (``docs/tcp.md``); returns keyword arguments of
-    :func:`parallel_barriers_tool` (mm). Raises :class:`TcpFileError` naming the file and key.
-    """
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except FileNotFoundError:
-        raise TcpFileError(path, "file not found") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise TcpFileError(path, f"not valid TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TcpFileError(path, f"cannot read: {exc}") from None
-    unknown = sorted(set(data) - _KEYS)
-    if unknown:
-        raise TcpFileError(path, f"unknown key(s) {', '.join(unknown)}; valid: {', '.join(sorted(_KEYS))}")
-    unit = data.get("length_unit", "mm")
-    if unit not in ("mm", "m"):
-        raise TcpFileError(path, f"length_unit {unit!r} not supported; use mm or m", column="length_unit")
-    scale = 1000.0 if unit == "m" else 1.0
-
-    def num(key, n=None, required=False):
-        if key not in data:
-            if required:
-                raise TcpFileError(path, f"missing key {key!r}")
-            return None
-        v = data[key]
-        vals = v if n is not None else [v]
-        if not isinstance(vals, list) or (n is not None and len(vals) != n):
-            raise TcpFileError(path, f"expected a list of {n} numbers, got {v!r}", column=key)
-        out = []
-        for x in vals:
-            if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
-                raise TcpFileError(path, f"{x!r} is not a finite number", column=key)
-            out.append(float(x) * scale)
-        return out if n is not None else out[0]
-
-    kw = dict(x_up=num("x_up", 4, True), x_down=num("x_down", 4, True), delta_h_mm=num("delta_h"),
-              h_up_mm=num("h_up"), h_down_mm=num("h_down"), z7_mm=num("z7"),
-              x_up_vertical=num("x_up_vertical", 2), x_down_vertical=num("x_down_vertical", 2))
-    if kw["delta_h_mm"] is None and (kw["h_up_mm"] is None or kw["h_down_mm"] is None):
-        raise TcpFileError(path, "give delta_h, or h_up and h_down")
-    return kw

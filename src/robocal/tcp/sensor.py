@@ -31,25 +31,18 @@ along ``(cos beta, sin beta)`` in the orthogonal frame (X_s, Y_s'),
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ..io.header import FileFormatError, read_text
-
 __all__ = [
     "SENSOR_POINT_LABELS",
-    "TcpFileError",
     "SensorCalibrationError",
     "SensorCalibration",
     "beam_point",
     "common_perpendicular",
     "calibrate_sensor",
-    "read_sensor_points_csv",
-    "write_sensor_points_csv",
     "skew_to_orthogonal",
     "orthogonal_to_skew",
     "center_from_beam_distances",
@@ -60,10 +53,6 @@ __all__ = [
 
 BEAM_POINTS = ("A", "B", "C", "D")
 SENSOR_POINT_LABELS = tuple(f"{P}{i}" for P in BEAM_POINTS for i in (1, 2, 3, 4))
-
-
-class TcpFileError(FileFormatError):
-    """A tool-calibration input file is malformed (file, line and column in the message)."""
 
 
 class SensorCalibrationError(ValueError):
@@ -264,90 +253,6 @@ def calibrate_sensor(points: dict, refine_height: bool = True) -> SensorCalibrat
     return SensorCalibration(origin_mm=M, x_axis=n, y_axis=m, y_axis_orthogonal=o, z_axis=p,
                              T_base_sensor=T, beta_deg=beta, gap_mm=float(np.linalg.norm(Q - P)),
                              points=out_points)
-
-
-# ---------------------------------------------------------------------------------------------
-# the points file
-# ---------------------------------------------------------------------------------------------
-
-
-_LENGTH = {"mm": 1.0, "m": 1000.0}
-
-
-def read_sensor_points_csv(path) -> dict:
-    """Read the sensor-calibration points file: CSV ``label,x,y,z`` (mm, base frame).
-
-    Lines starting with ``#`` are comments, except an optional ``# length_unit: mm|m`` (default
-    mm); blank lines are ignored. The first other line must be the header ``label,x,y,z``; then
-    one row per label, the 16 labels A1..A4, B1..B4, C1..C4, D1..D4 (case-insensitive, any
-    order). Returns ``{label: array(3) [mm]}``. Raises :class:`TcpFileError` naming the file,
-    line and column of the first problem (missing file, bad header, wrong number of fields,
-    non-numeric or non-finite values, unknown, duplicate or missing labels).
-    """
-    path = Path(path)
-    text = read_text(path, TcpFileError)
-    scale = 1.0
-    header = None
-    found: dict = {}
-    for lineno, line in enumerate(text.splitlines(), 1):
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            body = s[1:].strip()
-            if ":" in body:
-                key, _, value = body.partition(":")
-                if key.strip().lower() == "length_unit":
-                    value = value.strip().lower()
-                    if value not in _LENGTH:
-                        raise TcpFileError(path, f"length_unit {value!r} not supported; use mm or m", lineno)
-                    scale = _LENGTH[value]
-            continue
-        fields = [f.strip() for f in next(csv.reader([line]))]
-        if header is None:
-            names = [f.lower() for f in fields]
-            if names != ["label", "x", "y", "z"]:
-                raise TcpFileError(path, f"header must be 'label,x,y,z', got {','.join(fields)!r}", lineno)
-            header = names
-            continue
-        if len(fields) != 4:
-            raise TcpFileError(path, f"expected 4 fields (label,x,y,z), got {len(fields)}", lineno)
-        label = fields[0].upper()
-        if label not in SENSOR_POINT_LABELS:
-            raise TcpFileError(path, f"unknown label {fields[0]!r}; expected A1-A4, B1-B4, C1-C4, D1-D4",
-                               lineno, "label")
-        if label in found:
-            raise TcpFileError(path, f"duplicate label {label!r} (first on line {found[label][1]})", lineno, "label")
-        xyz = []
-        for col, f in zip("xyz", fields[1:]):
-            try:
-                val = float(f)
-            except ValueError:
-                raise TcpFileError(path, f"{f!r} is not a number", lineno, col) from None
-            if not math.isfinite(val):
-                raise TcpFileError(path, f"{f!r} is not a finite number", lineno, col)
-            xyz.append(val * scale)
-        found[label] = (np.array(xyz), lineno)
-    if header is None:
-        raise TcpFileError(path, "no header line 'label,x,y,z' (empty file?)")
-    missing = [lab for lab in SENSOR_POINT_LABELS if lab not in found]
-    if missing:
-        raise TcpFileError(path, f"missing labels {', '.join(missing)}")
-    return {lab: found[lab][0] for lab in SENSOR_POINT_LABELS}
-
-
-def write_sensor_points_csv(path, points: dict, note: str | None = None) -> Path:
-    """Write ``points`` (label -> (3,) mm) in the format :func:`read_sensor_points_csv` reads."""
-    path = Path(path)
-    lines = ["# robocal cross-laser sensor calibration points (base frame)", "# length_unit: mm"]
-    if note:
-        lines += [f"# {ln}" for ln in str(note).splitlines()]
-    lines.append("label,x,y,z")
-    for lab in SENSOR_POINT_LABELS:
-        x, y, z = _vec3(points[lab], lab)
-        lines.append(f"{lab},{x:.6f},{y:.6f},{z:.6f}")
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
 
 
 # ---------------------------------------------------------------------------------------------

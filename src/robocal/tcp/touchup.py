@@ -24,27 +24,21 @@ Flange poses are ``T_base_flange`` (pose of the flange in the robot base frame, 
 
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ..io.header import read_text
-from ..transforms import POSE_CONVENTIONS, check_transforms, transform_from_pose
-from .sensor import TcpFileError
+from ..transforms import check_transforms, transform_from_pose
 
 __all__ = [
     "DegenerateToolPosesError",
     "TouchUpResult",
     "SevenPointResult",
-    "FlangePoses",
     "sphere_center",
     "four_point_tcp",
     "four_point_tcp_from_poses",
     "seven_point_tool_frame",
-    "read_flange_poses_csv",
 ]
 
 DEFAULT_MIN_SPREAD_DEG = 20.0
@@ -301,122 +295,3 @@ def seven_point_tool_frame(T_flange_5_6_7, tcp, max_orientation_change_deg: floa
                             z_measured=z, orthogonality_error_deg=ortho,
                             x_correction_deg=math.degrees(math.acos(float(np.clip(x @ X, -1.0, 1.0)))),
                             flange_orientation_change_deg=change)
-
-
-# ---------------------------------------------------------------------------------------------
-# flange-pose files
-# ---------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True, eq=False)
-class FlangePoses:
-    """Flange poses read from a file: ``T_base_flange`` (N, 4, 4) [mm] and the pose labels."""
-
-    labels: tuple
-    T_base_flange: np.ndarray
-    convention: str
-    length_unit: str
-    angle_unit: str | None
-    metadata: dict = field(default_factory=dict)
-
-
-_LENGTH_UNITS = ("mm", "m")
-_ANGLE_UNITS = ("deg", "rad")
-
-
-def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
-    """Read a flange-pose file (``docs/tcp.md``, "Flange-pose files").
-
-    ```
-    # orientation: kuka_abc        (a robocal.transforms.POSE_CONVENTIONS name; "convention" also accepted)
-    # length_unit: mm              (mm or m)
-    # angle_unit: deg              (deg or rad; not needed for quaternion)
-    pose,x,y,z,A,B,C               (7 columns; 8 for quaternion: pose,x,y,z,qw,qx,qy,qz)
-    P1,1200.5,-30.2,850.0,10.0,80.0,-170.0
-    ```
-
-    ``# key: value`` lines before the column row set keys; other ``#`` lines are comments. The
-    orientation column names are free (their number must match the convention). Raises
-    :class:`TcpFileError` naming the file, line and column of the first problem.
-    """
-    path = Path(path)
-    text = read_text(path, TcpFileError)
-    meta: dict = {}
-    header = None
-    labels, rows = [], []
-    seen: dict = {}
-    for lineno, line in enumerate(text.splitlines(), 1):
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            body = s[1:].strip()
-            if header is None and ":" in body:
-                key, _, value = body.partition(":")
-                key = key.strip().lower()
-                if key and " " not in key:
-                    if key == "convention":
-                        key = "orientation"
-                    if key in meta and key != "note":
-                        raise TcpFileError(path, f"key {key!r} given twice", lineno)
-                    meta[key] = value.strip()
-            continue
-        fields = [f.strip() for f in next(csv.reader([line]))]
-        if header is None:
-            conv = meta.get("orientation")
-            if conv is None:
-                raise TcpFileError(path, "missing '# orientation: <convention>' line before the column row "
-                                   f"(one of {', '.join(sorted(POSE_CONVENTIONS))})")
-            conv = conv.lower()
-            if conv not in POSE_CONVENTIONS:
-                raise TcpFileError(path, f"unknown orientation convention {meta['orientation']!r}; valid: "
-                                   f"{', '.join(sorted(POSE_CONVENTIONS))}")
-            lu = meta.get("length_unit")
-            if lu is None or lu.lower() not in _LENGTH_UNITS:
-                raise TcpFileError(path, "missing or invalid '# length_unit: mm|m' line" +
-                                   ("" if lu is None else f" (got {lu!r})"))
-            au = meta.get("angle_unit")
-            if conv != "quaternion" and (au is None or au.lower() not in _ANGLE_UNITS):
-                raise TcpFileError(path, "missing or invalid '# angle_unit: deg|rad' line" +
-                                   ("" if au is None else f" (got {au!r})"))
-            meta["orientation"], meta["length_unit"] = conv, lu.lower()
-            meta["angle_unit"] = au.lower() if au else None
-            ncol = 8 if conv == "quaternion" else 7
-            names = [f.lower() for f in fields]
-            if len(fields) != ncol or names[:4] != ["pose", "x", "y", "z"]:
-                layout = "pose,x,y,z,qw,qx,qy,qz" if ncol == 8 else "pose,x,y,z + 3 orientation columns"
-                raise TcpFileError(path, f"column row must have {ncol} columns ({layout}) for {conv}, "
-                                   f"got {','.join(fields)!r}", lineno)
-            header = fields
-            continue
-        if len(fields) != len(header):
-            raise TcpFileError(path, f"expected {len(header)} fields, got {len(fields)}", lineno)
-        lab = fields[0]
-        if not lab:
-            raise TcpFileError(path, "empty pose label", lineno, "pose")
-        if lab in seen:
-            raise TcpFileError(path, f"duplicate pose {lab!r} (first on line {seen[lab]})", lineno, "pose")
-        seen[lab] = lineno
-        vals = []
-        for col, f in zip(header[1:], fields[1:]):
-            try:
-                v = float(f)
-            except ValueError:
-                raise TcpFileError(path, f"{f!r} is not a number", lineno, col) from None
-            if not math.isfinite(v):
-                raise TcpFileError(path, f"{f!r} is not a finite number", lineno, col)
-            vals.append(v)
-        try:
-            T = transform_from_pose(np.array(vals), meta["orientation"], meta["length_unit"],
-                                    meta["angle_unit"] or "deg")
-        except ValueError as exc:
-            raise TcpFileError(path, str(exc), lineno) from None
-        labels.append(lab)
-        rows.append(T)
-    if header is None:
-        raise TcpFileError(path, "no column row (empty file?)")
-    if len(rows) < min_rows:
-        raise TcpFileError(path, f"need at least {min_rows} poses, got {len(rows)}")
-    return FlangePoses(labels=tuple(labels), T_base_flange=np.array(rows).reshape(-1, 4, 4),
-                       convention=meta["orientation"], length_unit=meta["length_unit"],
-                       angle_unit=meta["angle_unit"], metadata=meta)

@@ -17,31 +17,12 @@ gains, not the unknown placement of the instrument.
 
 ``run_correct`` turns Cartesian targets into corrected joint targets with a calibrated robot.
 
-Target files (``robocal-targets/1``) read by ``robocal correct``: a CSV file like the measurement
-files, a ``#`` header declaring the units, then one row per target::
-
-    # format: robocal-targets/1
-    # length_unit: mm                 (mm | m)
-    # angle_unit: deg                 (deg | rad: Euler / rotation-vector angles, seed joints)
-    # orientation: kuka_abc           (optional: a name of robocal.transforms.POSE_CONVENTIONS)
-    # frame: world                    (optional: world (default) | base)
-    name,x,y,z,rx,ry,rz,J1,J2,J3,J4,J5,J6
-    P1,1510.2,-220.0,980.5,180.0,0.0,90.0,10.0,-80.0,95.0,0.0,30.0,0.0
-
-``name`` (optional) names the target; ``x, y, z`` the position; orientation columns (optional,
-need ``orientation``) as in measurement files: ``qw, qx, qy, qz`` for ``quaternion``, otherwise
-``rx, ry, rz`` holding the convention's three numbers in its order (KUKA A, B, C) in
-``angle_unit``. Optional joint columns named as the robot's controller joints (all of them) give
-the taught joints, used to seed the solver (branch choice). ``frame: world`` means the calibrated
-robot's world frame (for ``robocal calibrate`` output: the instrument frame); ``base`` the robot
-base frame. Without orientation the targets are position-only (the orientation stays as the
-nominal solution has it).
+Target files (``robocal-targets/1``) and the corrected targets (``robocal-corrected-targets/1``) are
+read and written by :mod:`robocal.io.targets`.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
 from datetime import datetime, timezone
@@ -54,19 +35,16 @@ from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
 from ..io.atomic import atomic_write_text
-from ..io.header import FileFormatError, read_header_block
 from ..io.measurements import read_measurements
+from ..io.targets import read_targets, write_corrected_targets
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
-from ..transforms import ANGLE_UNITS, LENGTH_UNITS, POSE_CONVENTIONS, pose_from_transform, transform_from_pose
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
-           "TARGETS_FORMAT", "read_targets", "run_correct"]
+           "run_correct"]
 
 OUTPUT_FILES = {"result": "result.json", "robot": "calibrated_robot.toml", "urdf": "calibrated_robot.urdf",
                 "report": "report.html"}
-TARGETS_FORMAT = "robocal-targets/1"
-CORRECTED_FORMAT = "robocal-corrected-targets/1"
 
 
 class CalibrationInputError(ValueError):
@@ -270,113 +248,6 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
 
 
 
-class TargetFileError(FileFormatError):
-    """A targets file is malformed; the message names file, line and column."""
-
-
-def read_targets(path, robot) -> dict:
-    """Read a ``robocal-targets/1`` file (module docstring). Returns {``names`` (N,),
-    ``positions`` (N, 3) [mm], ``rotations`` (N, 3, 3) or None, ``q_seed`` (N, n) [rad | mm] or None,
-    ``frame``, ``orientation``, ``length_unit``, ``angle_unit``}."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path}: no such targets file") from None
-
-    def fail(msg, line=None, column=None):
-        raise TargetFileError(path, msg, line or None, column)
-
-    lines = text.splitlines()
-    values, key_line, i = read_header_block(lines, fail)
-    md = {k: (v, key_line[k]) for k, v in values.items()}
-    if md.get("format", ("",))[0] != TARGETS_FORMAT:
-        fail(f"header must start with '# format: {TARGETS_FORMAT}' (got {md.get('format', ('nothing',))[0]!r})")
-    for key in ("length_unit", "angle_unit"):
-        if key not in md:
-            fail(f"header is missing '# {key}: ...'")
-    lu, au = md["length_unit"][0], md["angle_unit"][0]
-    if lu not in LENGTH_UNITS:
-        fail(f"unknown length_unit {lu!r}; valid: {', '.join(LENGTH_UNITS)}", md["length_unit"][1])
-    if au not in ANGLE_UNITS:
-        fail(f"unknown angle_unit {au!r}; valid: {', '.join(ANGLE_UNITS)}", md["angle_unit"][1])
-    frame = md.get("frame", ("world", 0))[0]
-    if frame not in ("world", "base"):
-        fail(f"frame {frame!r}: expected world or base", md["frame"][1])
-    conv = md.get("orientation", (None, 0))[0]
-    if conv is not None:
-        conv = conv.lower()
-        if conv not in POSE_CONVENTIONS:
-            fail(f"unknown orientation convention {conv!r}; valid: {', '.join(sorted(POSE_CONVENTIONS))}",
-                 md["orientation"][1])
-    if i >= len(lines):
-        fail("no column row")
-    header_line = i + 1
-    cols = [c.strip() for c in next(csv.reader([lines[i]]))]
-    rows = []
-    for j in range(i + 1, len(lines)):
-        raw = lines[j].strip()
-        if raw and not raw.startswith("#"):
-            rows.append((j + 1, [c.strip() for c in next(csv.reader([lines[j]]))]))
-    if not rows:
-        fail("0 target rows; at least 1 required")
-    for c in ("x", "y", "z"):
-        if c not in cols:
-            fail(f"missing column {c!r} (columns: {', '.join(cols)})", header_line)
-    ori_cols = [] if conv is None else (["qw", "qx", "qy", "qz"] if conv == "quaternion" else ["rx", "ry", "rz"])
-    for c in ori_cols:
-        if c not in cols:
-            fail(f"orientation {conv!r} needs column {c!r}", header_line)
-    if conv is None and any(c in cols for c in ("rx", "ry", "rz", "qw", "qx", "qy", "qz")):
-        fail("orientation columns without '# orientation: <convention>' in the header", header_line)
-    joint_cols = [c for c in robot.controller_joints if c in cols]
-    if joint_cols and len(joint_cols) != robot.n_joints:
-        missing = [c for c in robot.controller_joints if c not in cols]
-        fail(f"seed joint columns must name all joints of {robot.name}; missing {missing}", header_line)
-    known = {"name", "x", "y", "z", *ori_cols, *joint_cols}
-    unknown = [c for c in cols if c not in known]
-    if unknown:
-        fail(f"unknown column(s) {unknown}; expected name, x, y, z, orientation columns, joints "
-             f"{list(robot.controller_joints)}", header_line)
-
-    def numbers(names):
-        out = np.empty((len(rows), len(names)))
-        for r, (ln, vals) in enumerate(rows):
-            if len(vals) != len(cols):
-                fail(f"{len(vals)} fields, expected {len(cols)} (one per column of line {header_line})", ln)
-            for c, name in enumerate(names):
-                v = vals[cols.index(name)]
-                try:
-                    x = float(v)
-                except ValueError:
-                    fail(f"{v!r} is not a number", ln, name)
-                if not math.isfinite(x):
-                    fail(f"{v!r} is not a finite number", ln, name)
-                out[r, c] = x
-        return out
-
-    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
-    xyz = numbers(["x", "y", "z"])
-    if lu == "mm" and np.all(np.linalg.norm(xyz, axis=1) < 10.0):
-        fail("every target lies within 10 mm of the origin: the numbers look like metres; declare '# length_unit: m'")
-    rotations = None
-    if conv is not None:
-        vals = numbers(ori_cols)
-        try:
-            T = transform_from_pose(np.concatenate([xyz, vals], axis=1), conv, length_unit=lu, angle_unit=au)
-        except ValueError as exc:
-            fail(str(exc))
-        rotations = T[:, :3, :3]
-    q_seed = None
-    if joint_cols:
-
-        q = numbers(list(robot.controller_joints))
-        q_seed = np.where(robot.prismatic_joints, q * lf, q * af)
-    names = [vals[cols.index("name")] if "name" in cols else str(r + 1) for r, (_, vals) in enumerate(rows)]
-    return {"names": names, "positions": xyz * lf, "rotations": rotations, "q_seed": q_seed, "frame": frame,
-            "orientation": conv, "length_unit": lu, "angle_unit": au}
-
-
 def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None, overwrite: bool = False) -> dict:
     """Corrected joint targets for the targets in ``targets_file`` with the calibrated robot
     ``robot_file``; writes ``out_file`` (CSV, ``robocal-corrected-targets/1``).
@@ -403,27 +274,7 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     fr = frame or tg["frame"]
     targets = tg["positions"]
     corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr)
-
-
-    lu, au = tg["length_unit"], tg["angle_unit"]
-    lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
-    conv = tg["orientation"] or "quaternion"
-    pris = calibrated.prismatic_joints
-    qf = np.where(pris, corr.q / lf, corr.q / af)
-    pose = pose_from_transform(corr.T_filtered, conv, length_unit=lu, angle_unit=au)
-    ori_cols = ["qw", "qx", "qy", "qz"] if conv == "quaternion" else ["rx", "ry", "rz"]
-    buf = io.StringIO()
-    for key, val in (("format", CORRECTED_FORMAT), ("robot", str(robot_file)), ("nominal", nominal_model.name),
-                     ("length_unit", lu), ("angle_unit", au), ("orientation", conv),
-                     ("frame", "base (filtered targets: what a controller running the nominal model needs)"),
-                     ("targets", f"{targets_file} (frame {fr})")):
-        buf.write(f"# {key}: {val}\n")
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["name", *calibrated.controller_joints, "x", "y", "z", *ori_cols, "converged", "status",
-                "position_error_mm", "rotation_error_deg"])
-    for i, name in enumerate(tg["names"]):
-        w.writerow([name, *(repr(float(v)) for v in qf[i]), *(repr(float(v)) for v in pose[i]),
-                    "yes" if corr.converged[i] else "no", corr.report[i]["status"],
-                    f"{corr.position_error_mm[i]:.3e}", f"{math.degrees(corr.rotation_error_rad[i]):.3e}"])
-    atomic_write_text(out_file, buf.getvalue(), overwrite=overwrite)
+    write_corrected_targets(out_file, corr, calibrated, tg["names"], robot=str(robot_file), nominal=nominal_model.name,
+                            targets=f"{targets_file} (frame {fr})", length_unit=tg["length_unit"],
+                            angle_unit=tg["angle_unit"], orientation=tg["orientation"], overwrite=overwrite)
     return {"corrected": corr, "file": out_file, "names": tg["names"], "frame": fr, "nominal": nominal_model.name}

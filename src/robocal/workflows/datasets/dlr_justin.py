@@ -1,0 +1,55 @@
+"""The dlr_justin protocol: a 400 / 100 random split (seed 0), three levels of identified parameters."""
+
+from __future__ import annotations
+
+from ...calib import Target
+from ...io.datasets import read_dlr_justin
+from ...robots import load_robot
+from ._fitting import fit, holdout_stats, param_names, random_split, with_state_targets
+
+__all__ = ["JUSTIN_CHAIN_LINKS", "calibrate_justin"]
+
+JUSTIN_CHAIN_LINKS = ("torso_0", "torso_1", "torso_2", "torso_3") + tuple(f"right_j{i}" for i in range(1, 8)) + \
+    tuple(f"left_j{i}" for i in range(1, 8))
+
+
+def _free_sets(model) -> dict:
+    """Parameters of each level: none; the 18 joint offsets; every modified-DH parameter of the
+    chain (beta where consecutive axes are parallel)."""
+    full = []
+    by_name = {L.name: k for k, L in enumerate(model.links)}
+    for ln in JUSTIN_CHAIN_LINKS:
+        L = model.links[by_name[ln]]
+        kinds = ("alpha", "a", "theta", "d") + (("beta",) if abs(L.params["alpha"]) < 1e-9 else ())
+        full += param_names(model, [ln], kinds)
+    return {"nominal": [], "offsets": param_names(model, JUSTIN_CHAIN_LINKS, ("theta",)), "all": full}
+
+
+def calibrate_justin(seed: int = 0, n_train: int = 400, data=None, root=None, prior: float = 1e-3,
+                     levels=("nominal", "offsets", "all")) -> dict:
+    """The dlr_justin protocol: random ``n_train`` / rest split (``seed``), both hand markers.
+
+    Levels (each starting from the previous one's solution): ``nominal`` = base + 2 marker
+    offsets; ``offsets`` = + the 18 joint offsets (torso incl. the passive joint, both arms);
+    ``all`` = + every modified-DH parameter (alpha, a, theta, d; beta where consecutive axes are
+    parallel) of the torso and both arms, weak prior. Returns ``{level: holdout stats}`` plus
+    ``results`` (per level) and the split."""
+    ds = read_dlr_justin(root) if data is None else data
+    tr, te = random_split(ds.n_poses, n_train, seed)
+    model = load_robot("dlr_justin19")
+    # initial marker offsets in the hand (TCP) frames, from the dataset site [mm]
+    targets = [Target("right", "right", (-100.0, -30.0, 100.0)), Target("left", "left", (-100.0, 30.0, 50.0))]
+    free_sets = _free_sets(model)
+    out = {"train": tr, "test": te, "results": {}}
+    base, state_targets = None, targets
+    for lev in levels:
+        p, r = fit(model, ds.joints[tr], state_targets, ds.points[tr], free=free_sets[lev], base_initial=base,
+                   prior=prior if lev == "all" else 0.0)
+        if lev != levels[-1]:
+            # next level starts from this solution
+            model = r.model.replace(T_world_base=model.T_world_base)
+            base, state_targets = r.state.bases, with_state_targets(state_targets, r.state)
+        out["results"][lev] = r
+        out[lev] = holdout_stats(p, r, ds, te)
+        out[lev]["train_rms"] = r.rms_after
+    return out
