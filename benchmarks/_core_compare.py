@@ -56,13 +56,13 @@ def compare_cores(sc, geom, rev: str, *, repeat: int, budget: float, sigma: floa
              f"same process, rows interleaved, {repeat} repeats of ~{budget:g} s each"]
     # correctness: identical solutions
     agree = []
-    for label, fo, fn, po, pn in rows[:3]:
+    for label, fo, fn, *_ in rows[:3]:
         ro, rn = fo(), fn()
         d = float(np.max(np.abs(ro.values - rn.values)))
         agree.append(f"  {label}: max |new - old| over the {len(rn.values)} variables {d:.1e} "
                      f"(iterations {ro.iterations} / {rn.iterations}, RMS {ro.rms_after:.6f} / {rn.rms_after:.6f} mm)")
     loops = {}
-    for label, fo, fn, *_ in rows:
+    for label, fo, *_ in rows:
         loops[label] = max(1, int(budget / max(_time(fo, 1) * 1e-3, 1e-9)))
     t_old = {label: [] for label, *_ in rows}
     t_new = {label: [] for label, *_ in rows}

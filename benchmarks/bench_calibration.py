@@ -672,7 +672,7 @@ def main(argv=None) -> int:
 
     # correctness first: every row once
     results = {}
-    for name, fn, st_of, kind in rows:
+    for name, fn, *_ in rows:
         out = fn()
         results[name] = out
     loops = {name: (loops_for(fn, budget) if kind == "fast" else 1) for name, fn, _, kind in rows}
@@ -693,7 +693,7 @@ def main(argv=None) -> int:
            f"{'max|dx| mm':>12s}{'max|dx| urad':>13s}{'max|dx|/sd':>11s}   target")
     print(hdr)
     print("-" * len(hdr))
-    for name, fn, st_of, kind in rows:
+    for name, _fn, st_of, _kind in rows:
         med, best = float(np.median(times[name])), float(np.min(times[name]))
         out = results[name]
         if name in external:  # figaroh: its own parametrization, no variable-by-variable comparison

@@ -180,8 +180,12 @@ def main(argv=None) -> int:
     Qk = random_q(kuka, 100, rng)
 
     # ---- warm-up (numba JIT / cache load) before any timing
-    ur.fk(Qb[:10]); ur.fk(q1); ur.fk_single(q1); ur.fk_single(q1, np.empty((4, 4)))
-    kuka.identification_jacobian(Qk, points=[0.0, 0.0, 0.0]); kuka.identification_jacobian(Qk)
+    ur.fk(Qb[:10])
+    ur.fk(q1)
+    ur.fk_single(q1)
+    ur.fk_single(q1, np.empty((4, 4)))
+    kuka.identification_jacobian(Qk, points=[0.0, 0.0, 0.0])
+    kuka.identification_jacobian(Qk)
 
     # ---- correctness checks (printed) before timing
     print("checks (max abs difference; positions mm, rotation matrix entries):")

@@ -140,7 +140,7 @@ def test_reported_standard_deviations_match_the_monte_carlo_spread():
     truth = tracker.true_points(robot, q).reshape(len(q), 1, 3)
     base = None
     estimates, stds = [], None
-    for i in range(150):
+    for _ in range(150):
         noisy = truth + rng.normal(0.0, SIGMA, truth.shape)
         prob = CalibrationProblem(nominal, q, [Target("r1", None, tuple(TOOL))], noisy, point_sigma_mm=SIGMA,
                                   base_initial="fit" if base is None else base)

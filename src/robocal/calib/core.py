@@ -151,7 +151,7 @@ class Problem:
         """(n,) reported values of the free variables (``block.local``), in column order; only the
         columns of identifiability group ``group`` if given."""
         parts = []
-        for i, blk, c0, c1, loc in self._retract_plan:
+        for i, blk, _c0, _c1, loc in self._retract_plan:
             if group is None or blk.group == group:
                 v = blk.local(state[i])
                 parts.append(v if loc is None else v[loc])

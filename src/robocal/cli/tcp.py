@@ -37,6 +37,12 @@ def _echo_json(obj) -> None:
     click.echo(json.dumps(obj, indent=2))
 
 
+def _echo_matrix(name, T) -> None:
+    click.echo(f"{name} =")
+    for row in T:
+        click.echo("  " + " ".join(f"{x:12.6f}" for x in row))
+
+
 def _print_tool_data(T) -> None:
     click.echo("tool data:")
     for td in tool_data_all(T).values():
@@ -127,9 +133,7 @@ def seven_point(file, tcp_xyz, min_spread, as_json):
     click.echo(f"orientation from {', '.join(poses.labels[-3:])} (P5, P6, P7):")
     click.echo(f"  X/Z orthogonality error before orthonormalization {res.orthogonality_error_deg:+.3f} deg")
     click.echo(f"  flange orientation change over P5..P7 {res.flange_orientation_change_deg:.3f} deg")
-    click.echo("T_flange_tool =")
-    for row in res.T_flange_tool:
-        click.echo("  " + " ".join(f"{x:12.6f}" for x in row))
+    _echo_matrix("T_flange_tool", res.T_flange_tool)
     _print_tool_data(res.T_flange_tool)
 
 
@@ -189,6 +193,4 @@ def sensor_calibrate(file, as_json):
     click.echo(f"Z_s                     {_v(cal.z_axis, '{:.6f}')}")
     click.echo(f"beta                    {cal.beta_deg:.4f} deg ({cal.beta_deg - 90.0:+.4f} from 90)")
     click.echo(f"gap between the beams   {cal.gap_mm:.4f} mm")
-    click.echo("T_base_sensor =")
-    for row in cal.T_base_sensor:
-        click.echo("  " + " ".join(f"{x:12.6f}" for x in row))
+    _echo_matrix("T_base_sensor", cal.T_base_sensor)

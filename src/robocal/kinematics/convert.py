@@ -38,7 +38,7 @@ def dh_to_mdh(model: RobotModel) -> RobotModel:
     if model.kind not in ("dh", "dh_beta"):
         raise ConversionError(f"{model.name}: dh_to_mdh needs a dh or dh_beta model, got {model.kind}")
     links = []
-    for k, L in enumerate(model.links):
+    for L in model.links:
         if L.convention not in ("dh", "dh_beta"):
             raise ConversionError(f"{model.name}: link {L.name!r} is a {L.convention} frame; only DH links convert")
         if L.parent >= 0:

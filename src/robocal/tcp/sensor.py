@@ -343,5 +343,5 @@ def beta_error_threshold_deg(limit_mm: float = 0.1, d: float = 5.0, d_to_y_beam=
             hi *= 1.5
             if hi > 89:
                 raise ValueError(f"the error never reaches {limit_mm} mm at d = {d} mm")
-        out.append(brentq(lambda x: f(sign * x), 0.0, hi, xtol=1e-12))
+        out.append(brentq(lambda x, sign=sign: f(sign * x), 0.0, hi, xtol=1e-12))
     return tuple(out)

@@ -107,7 +107,7 @@ def parse_urscript(text: str, path) -> tuple[list, list]:
         if not is_pose and name not in uses_movej:
             continue
         line = index.line(m.start(1))
-        parsed, end = _list_values(text, masked, m.end() - 1 - is_pose, name, lambda msg, off: fail(msg, line))
+        parsed, end = _list_values(text, masked, m.end() - 1 - is_pose, name, lambda msg, off, line=line: fail(msg, line))
         found.append((name, "cartesian" if is_pose else "joint", "assignment", line, parsed, text[m.start():end]))
     targets, skipped, seen = [], [], {}
     for name, kind, decl, line, parsed, source in sorted(found, key=lambda f: f[3]):

@@ -41,7 +41,7 @@ def updated_text(program, updates) -> tuple[str, dict]:
                 count += 1
         changes[target.name] = count
     edits.sort()
-    for (s0, e0, _), (s1, _, _) in zip(edits, edits[1:]):
+    for (_s0, e0, _), (s1, _, _) in zip(edits, edits[1:]):
         if s1 < e0:
             raise ValueError(f"{program.path}: two updates change the same number (offset {s1}); "
                              "a target was given twice")
