@@ -204,7 +204,10 @@ def test_killed_at_random_moments_leaves_only_whole_cycles(tmp_path, seed):
             reported.add(int(line.split()[1]))
             time.sleep(float(rng.uniform(0.0, 0.15)))
             os.kill(proc.pid, signal.SIGKILL)
-            out, _ = proc.communicate(timeout=10)
+            proc.wait(timeout=10)
+            # read through the same buffered stream as readline (communicate() reads the raw pipe
+            # and would lose the lines readline had already buffered)
+            out = proc.stdout.read()
         finally:
             watchdog.cancel()
             if proc.poll() is None:
