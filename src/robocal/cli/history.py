@@ -9,6 +9,7 @@ import json
 import math
 from datetime import datetime, timezone
 from pathlib import Path
+from types import SimpleNamespace
 
 import click
 import numpy as np
@@ -83,102 +84,121 @@ def _series_json(s) -> dict:
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
 def history_cmd(robot, db, params, kinds, since, plot_path, as_json):
     """Print (and plot) ROBOT's calibration and maintenance history and its parameter drift."""
-    target = db or default_history_target()
-    since_t = _since(since)
-    kind = list(kinds) or None
     names = None
     if params is not None:
         names = [p.strip() for p in params.split(",") if p.strip()]
         if not names:
             raise click.ClickException("--params: give one or more parameter names separated by commas")
-    if plot_path is not None:
-        pp = Path(plot_path)
-        if pp.suffix.lower() not in (".png", ".svg", ".pdf"):
-            raise click.ClickException(f"--plot {plot_path}: give a .png, .svg or .pdf file name")
-        if not pp.parent.exists():
-            raise click.ClickException(f"--plot {plot_path}: folder {pp.parent} does not exist")
+    _check_plot_path(plot_path)
     try:
-        with HistoryStore.open(target, create=False) as store:
-            cycles = store.cycles(robot, kind=kind, since=since_t)
-            stored = store.parameter_names(robot)
-            if names is None:
-                names = stored
-            series = store.parameter_history(robot, names, kind=kind, since=since_t) if names else {}
-            mcols = _metric_columns(cycles)
-            metric_series = {}
-            for m in store.metric_names(robot):
-                s = store.metric_history(robot, m, kind=kind, since=since_t)
-                if len(s):
-                    metric_series[m] = s
-            where = store.url
+        view = _read_history(db or default_history_target(), robot, names, list(kinds) or None, _since(since))
     except (HistoryError, HistoryInputError) as exc:
         raise click.ClickException(str(exc)) from None
-
     if plot_path is not None:
-        from ..report.history_plot import plot_history
-
-        plot_metrics = {m: metric_series[m] for m in mcols if m in metric_series}
-        plot_metrics |= {m: s for m, s in metric_series.items() if m not in plot_metrics}
-        events = [(c.started_at, c.kind) for c in cycles if c.status == "committed"]
-        try:
-            plot_history(series, plot_metrics, plot_path, f"{robot}: drift over time", events=events)
-        except ValueError as exc:
-            raise click.ClickException(f"--plot: {exc}") from None
-        except OSError as exc:
-            raise click.ClickException(f"--plot {plot_path}: {exc}") from None
-
+        _plot(view, robot, plot_path)
     if as_json:
-        out = {
-            "robot": robot, "database": where,
-            "cycles": [{"id": c.id, "kind": c.kind, "status": c.status, "started_at": c.started_at.isoformat(),
-                        "finished_at": c.finished_at.isoformat() if c.finished_at else None, "notes": c.notes,
-                        "metrics": {n: {"value": q.value, "unit": q.unit} for n, q in c.metrics.items()},
-                        "n_measurements": c.n_measurements, "n_parameters": c.n_parameters,
-                        "n_corrections": c.n_corrections} for c in cycles],
-            "parameters": {n: _series_json(s) for n, s in series.items()},
-            "metrics": {n: _series_json(s) for n, s in metric_series.items()},
-        }
-        if plot_path is not None:
-            out["plot"] = str(plot_path)
-        click.echo(json.dumps(out, indent=2))
+        click.echo(json.dumps(_history_json(view, robot, plot_path), indent=2))
         return
-
-    n_failed = sum(c.status == "failed" for c in cycles)
-    click.echo(f"History of robot {robot!r} in {where}: {len(cycles)} cycles"
-               + (f" ({len(cycles) - n_failed} committed, {n_failed} failed)" if n_failed else ""))
-    if not cycles:
-        click.echo("  (no cycles match)")
-    else:
-        units = {}
-        for c in cycles:
-            for n, q in c.metrics.items():
-                units.setdefault(n, q.unit)
-        headers = ["id", "started (UTC)", "kind", "status", "meas", "params", "corr"] + [f"{m} [{units[m]}]" for m in mcols]
-        rows = []
-        for c in cycles:
-            rows.append([c.id, c.started_at.strftime("%Y-%m-%d %H:%M:%S"), c.kind, c.status, c.n_measurements,
-                         c.n_parameters, c.n_corrections]
-                        + [_fmt(c.metrics[m].value) if m in c.metrics else "-" for m in mcols])
-        click.echo("")
-        click.echo("cycles")
-        for line in _table(headers, rows, [True, False, False, False, True, True, True] + [True] * len(mcols)):
-            click.echo(line)
+    _echo_cycles(view, robot)
     click.echo("")
-    if not series:
-        click.echo("parameter drift: no parameters stored" + (" for the selected cycles" if stored else ""))
-    else:
-        click.echo("parameter drift (Δ from nominal over committed cycles; mm and rad)")
-        rows = []
-        for n, s in series.items():
-            v = s.values
-            if len(v) == 0:
-                rows.append([n, s.unit, 0, "-", "-", "-", "-", "-"])
-                continue
-            rows.append([n, s.unit, len(v), _fmt(v[0], True), _fmt(v[-1], True), _fmt(v[-1] - v[0], True),
-                         _fmt(float(np.min(v)), True), _fmt(float(np.max(v)), True)])
-        for line in _table(["name", "unit", "cycles", "first", "last", "change", "min", "max"], rows,
-                           [False, False, True, True, True, True, True, True]):
-            click.echo(line)
+    _echo_drift(view)
     if plot_path is not None:
         click.echo("")
         click.echo(f"plot: {plot_path}")
+
+
+def _check_plot_path(plot_path) -> None:
+    if plot_path is None:
+        return
+    pp = Path(plot_path)
+    if pp.suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise click.ClickException(f"--plot {plot_path}: give a .png, .svg or .pdf file name")
+    if not pp.parent.exists():
+        raise click.ClickException(f"--plot {plot_path}: folder {pp.parent} does not exist")
+
+
+def _read_history(target, robot, names, kind, since_t) -> SimpleNamespace:
+    """Everything the command shows, read in one session of the store: cycles, parameter series
+    (``names`` or every stored one), metric series, metric columns, the store's URL."""
+    with HistoryStore.open(target, create=False) as store:
+        cycles = store.cycles(robot, kind=kind, since=since_t)
+        stored = store.parameter_names(robot)
+        names = stored if names is None else names
+        series = store.parameter_history(robot, names, kind=kind, since=since_t) if names else {}
+        metric_series = {}
+        for m in store.metric_names(robot):
+            s = store.metric_history(robot, m, kind=kind, since=since_t)
+            if len(s):
+                metric_series[m] = s
+        return SimpleNamespace(cycles=cycles, stored=stored, series=series, metric_series=metric_series,
+                               metric_columns=_metric_columns(cycles), where=store.url)
+
+
+def _plot(view, robot, plot_path) -> None:
+    from ..report.history_plot import plot_history
+
+    plot_metrics = {m: view.metric_series[m] for m in view.metric_columns if m in view.metric_series}
+    plot_metrics |= {m: s for m, s in view.metric_series.items() if m not in plot_metrics}
+    events = [(c.started_at, c.kind) for c in view.cycles if c.status == "committed"]
+    try:
+        plot_history(view.series, plot_metrics, plot_path, f"{robot}: drift over time", events=events)
+    except ValueError as exc:
+        raise click.ClickException(f"--plot: {exc}") from None
+    except OSError as exc:
+        raise click.ClickException(f"--plot {plot_path}: {exc}") from None
+
+
+def _history_json(view, robot, plot_path) -> dict:
+    out = {
+        "robot": robot, "database": view.where,
+        "cycles": [{"id": c.id, "kind": c.kind, "status": c.status, "started_at": c.started_at.isoformat(),
+                    "finished_at": c.finished_at.isoformat() if c.finished_at else None, "notes": c.notes,
+                    "metrics": {n: {"value": q.value, "unit": q.unit} for n, q in c.metrics.items()},
+                    "n_measurements": c.n_measurements, "n_parameters": c.n_parameters,
+                    "n_corrections": c.n_corrections} for c in view.cycles],
+        "parameters": {n: _series_json(s) for n, s in view.series.items()},
+        "metrics": {n: _series_json(s) for n, s in view.metric_series.items()},
+    }
+    if plot_path is not None:
+        out["plot"] = str(plot_path)
+    return out
+
+
+def _echo_cycles(view, robot) -> None:
+    cycles, mcols = view.cycles, view.metric_columns
+    n_failed = sum(c.status == "failed" for c in cycles)
+    click.echo(f"History of robot {robot!r} in {view.where}: {len(cycles)} cycles"
+               + (f" ({len(cycles) - n_failed} committed, {n_failed} failed)" if n_failed else ""))
+    if not cycles:
+        click.echo("  (no cycles match)")
+        return
+    units = {}
+    for c in cycles:
+        for n, q in c.metrics.items():
+            units.setdefault(n, q.unit)
+    headers = ["id", "started (UTC)", "kind", "status", "meas", "params", "corr"] + [f"{m} [{units[m]}]" for m in mcols]
+    rows = [[c.id, c.started_at.strftime("%Y-%m-%d %H:%M:%S"), c.kind, c.status, c.n_measurements,
+             c.n_parameters, c.n_corrections] + [_fmt(c.metrics[m].value) if m in c.metrics else "-" for m in mcols]
+            for c in cycles]
+    click.echo("")
+    click.echo("cycles")
+    for line in _table(headers, rows, [True, False, False, False, True, True, True] + [True] * len(mcols)):
+        click.echo(line)
+
+
+def _echo_drift(view) -> None:
+    if not view.series:
+        click.echo("parameter drift: no parameters stored" + (" for the selected cycles" if view.stored else ""))
+        return
+    click.echo("parameter drift (Δ from nominal over committed cycles; mm and rad)")
+    rows = []
+    for n, s in view.series.items():
+        v = s.values
+        if len(v) == 0:
+            rows.append([n, s.unit, 0, "-", "-", "-", "-", "-"])
+            continue
+        rows.append([n, s.unit, len(v), _fmt(v[0], True), _fmt(v[-1], True), _fmt(v[-1] - v[0], True),
+                     _fmt(float(np.min(v)), True), _fmt(float(np.max(v)), True)])
+    for line in _table(["name", "unit", "cycles", "first", "last", "change", "min", "max"], rows,
+                       [False, False, True, True, True, True, True, True]):
+        click.echo(line)

@@ -100,15 +100,20 @@ def robot_to_toml(model: RobotModel, *, length_unit: str | None = None, angle_un
     if au not in _ANGLE:
         raise ValueError(f"angle_unit {au!r}: expected 'deg' or 'rad'")
     ls, as_ = _LENGTH[lu], _ANGLE[au]
-    links = model.links
-    names = [L.name for L in links]
-    ctrl = list(model.controller_joints)
-    moving_index = {int(k): m for m, k in enumerate(model.moving)}
+    out = [f"# {line}".rstrip() for line in str(comment).splitlines()] if comment else []
+    out += _header_lines(model, lu, au)
+    entry_limits, ctrl_limits = _split_limits(model)
+    for k in range(len(model.links)):
+        out += _joint_lines(model, k, entry_limits, ls, as_)
+    out += _controller_limit_lines(model, ctrl_limits, ls, as_)
+    if not np.array_equal(model.T_world_base, np.eye(4)):
+        out += ["", "[base]"] + _frame_lines(model.T_world_base, ls, as_)
+    out += _end_effector_lines(model, ls, as_)
+    return "\n".join(out) + "\n"
 
-    out = []
-    if comment:
-        out += [f"# {line}".rstrip() for line in str(comment).splitlines()]
-    out += [
+
+def _header_lines(model: RobotModel, lu: str, au: str) -> list:
+    return [
         f"format = {_str(FORMAT)}",
         f"name = {_str(model.name)}",
         f"title = {_str(model.title)}",
@@ -116,71 +121,93 @@ def robot_to_toml(model: RobotModel, *, length_unit: str | None = None, angle_un
         f"length_unit = {_str(lu)}",
         f"angle_unit = {_str(au)}",
         f"source = {_str(model.source)}",
-        "controller_joints = [" + ", ".join(_str(c) for c in ctrl) + "]",
+        "controller_joints = [" + ", ".join(_str(c) for c in model.controller_joints) + "]",
     ]
 
-    # limits: on the joint entry of the same name when one moves, else in [controller_limits]
+
+def _split_limits(model: RobotModel):
+    """Finite joint limits: on the joint entry of the same name when one moves (first dict), else in
+    ``[controller_limits]`` (second dict); controller joint name -> (lo, hi) [rad | mm]."""
+    names = [L.name for L in model.links]
     entry_limits, ctrl_limits = {}, {}
-    for c, cname in enumerate(ctrl):
+    for c, cname in enumerate(model.controller_joints):
         lo, hi = (float(v) for v in model.limits[c])
         if not (math.isfinite(lo) or math.isfinite(hi)):
             continue
-        if cname in names and links[names.index(cname)].moves:
+        if cname in names and model.links[names.index(cname)].moves:
             entry_limits[cname] = (lo, hi)
         else:
             ctrl_limits[cname] = (lo, hi)
+    return entry_limits, ctrl_limits
 
-    for k, L in enumerate(links):
-        out += ["", "[[joints]]", f"name = {_str(L.name)}", f"type = {_str(L.joint_type)}"]
-        if L.parent != k - 1:
-            out.append(f"parent = {_str('base' if L.parent < 0 else names[L.parent])}")
-        p = L.params
-        if L.convention in ("urdf", "frame"):
-            out.append(f"xyz = {_list(_in_unit(p[c], ls) for c in ('x', 'y', 'z'))}")
-            out.append(f"rpy = {_list(_in_unit(p[c], as_) for c in ('roll', 'pitch', 'yaw'))}")
-            if L.convention == "urdf" and L.moves:
-                out.append(f"axis = {_list(L.axis)}")
-                off = "theta" if L.joint_type == "revolute" else "d"
-                out.append(f"{off} = {_num(_in_unit(p[off], as_ if off == 'theta' else ls))}")
-        else:
-            if L.convention != model.kind:
-                raise ValueError(f"link {L.name!r}: convention {L.convention!r} differs from the model kind "
-                                 f"{model.kind!r}; the robot file format cannot mix them")
-            for pname, v in p.items():
-                out.append(f"{pname} = {_num(_in_unit(v, as_ if pname in ANGLE_PARAMS else ls))}")
-        if L.fixed:
-            out.append("fixed = [" + ", ".join(_str(f) for f in p if f in L.fixed) + "]")
-        if L.moves:
-            row = model.coupling[moving_index[k]]
-            nz = np.flatnonzero(row)
-            own = ctrl.index(L.name) if L.name in ctrl else None
-            if own is not None and list(nz) == [own] and row[own] == 1.0:
-                pass  # the default coupling
-            elif own is not None and list(nz) == [own] and row[own] == -1.0:
-                out.append("sign = -1")
-            else:
-                out.append("coupling = { " + ", ".join(f"{_key(ctrl[i])} = {_num(row[i])}" for i in nz) + " }"
-                           if len(nz) else "coupling = {}")
-            if L.name in entry_limits:
-                scale = as_ if L.joint_type == "revolute" else ls
-                out.append(f"limits = {_list(_in_unit(v, scale) for v in entry_limits[L.name])}")
 
-    if ctrl_limits:
-        out += ["", "[controller_limits]"]
-        for cname, lim in ctrl_limits.items():
-            c = ctrl.index(cname)
-            col = model.coupling[:, c]
-            m = int(np.flatnonzero(col)[0]) if np.any(col) else None
-            pris = m is not None and links[int(model.moving[m])].joint_type == "prismatic"
-            scale = ls if pris else as_
-            out.append(f"{_key(cname)} = {_list(_in_unit(v, scale) for v in lim)}")
+def _joint_lines(model: RobotModel, k: int, entry_limits: dict, ls: float, as_: float) -> list:
+    """The ``[[joints]]`` table of link ``k``."""
+    L = model.links[k]
+    names = [link.name for link in model.links]
+    out = ["", "[[joints]]", f"name = {_str(L.name)}", f"type = {_str(L.joint_type)}"]
+    if L.parent != k - 1:
+        out.append(f"parent = {_str('base' if L.parent < 0 else names[L.parent])}")
+    p = L.params
+    if L.convention in ("urdf", "frame"):
+        out.append(f"xyz = {_list(_in_unit(p[c], ls) for c in ('x', 'y', 'z'))}")
+        out.append(f"rpy = {_list(_in_unit(p[c], as_) for c in ('roll', 'pitch', 'yaw'))}")
+        if L.convention == "urdf" and L.moves:
+            out.append(f"axis = {_list(L.axis)}")
+            off = "theta" if L.joint_type == "revolute" else "d"
+            out.append(f"{off} = {_num(_in_unit(p[off], as_ if off == 'theta' else ls))}")
+    else:
+        if L.convention != model.kind:
+            raise ValueError(f"link {L.name!r}: convention {L.convention!r} differs from the model kind "
+                             f"{model.kind!r}; the robot file format cannot mix them")
+        for pname, v in p.items():
+            out.append(f"{pname} = {_num(_in_unit(v, as_ if pname in ANGLE_PARAMS else ls))}")
+    if L.fixed:
+        out.append("fixed = [" + ", ".join(_str(f) for f in p if f in L.fixed) + "]")
+    if L.moves:
+        out += _coupling_lines(model, k)
+        if L.name in entry_limits:
+            scale = as_ if L.joint_type == "revolute" else ls
+            out.append(f"limits = {_list(_in_unit(v, scale) for v in entry_limits[L.name])}")
+    return out
 
-    if not np.array_equal(model.T_world_base, np.eye(4)):
-        out += ["", "[base]"] + _frame_lines(model.T_world_base, ls, as_)
 
+def _coupling_lines(model: RobotModel, k: int) -> list:
+    """``sign = -1`` or ``coupling = {...}`` of moving link ``k``; nothing for the default coupling."""
+    L = model.links[k]
+    ctrl = list(model.controller_joints)
+    moving_index = {int(j): m for m, j in enumerate(model.moving)}
+    row = model.coupling[moving_index[k]]
+    nz = np.flatnonzero(row)
+    own = ctrl.index(L.name) if L.name in ctrl else None
+    if own is not None and list(nz) == [own] and row[own] == 1.0:
+        return []
+    if own is not None and list(nz) == [own] and row[own] == -1.0:
+        return ["sign = -1"]
+    return ["coupling = { " + ", ".join(f"{_key(ctrl[i])} = {_num(row[i])}" for i in nz) + " }"
+            if len(nz) else "coupling = {}"]
+
+
+def _controller_limit_lines(model: RobotModel, ctrl_limits: dict, ls: float, as_: float) -> list:
+    if not ctrl_limits:
+        return []
+    out = ["", "[controller_limits]"]
+    ctrl = list(model.controller_joints)
+    for cname, lim in ctrl_limits.items():
+        col = model.coupling[:, ctrl.index(cname)]
+        m = int(np.flatnonzero(col)[0]) if np.any(col) else None
+        pris = m is not None and model.links[int(model.moving[m])].joint_type == "prismatic"
+        scale = ls if pris else as_
+        out.append(f"{_key(cname)} = {_list(_in_unit(v, scale) for v in lim)}")
+    return out
+
+
+def _end_effector_lines(model: RobotModel, ls: float, as_: float) -> list:
+    """A ``[tool]`` table or ``[[end_effectors]]`` tables; nothing for a bare flange."""
+    names = [L.name for L in model.links]
     ees = model.end_effectors
-    last = len(links) - 1
-    if len(ees) == 1 and ees[0].link == last and ees[0].name in ("flange", "tool"):
+    out = []
+    if len(ees) == 1 and ees[0].link == len(model.links) - 1 and ees[0].name in ("flange", "tool"):
         e = ees[0]
         identity = np.array_equal(np.asarray(e.T_link_ee, dtype=float), np.eye(4))
         if not (e.name == "flange" and identity):
@@ -189,13 +216,13 @@ def robot_to_toml(model: RobotModel, *, length_unit: str | None = None, angle_un
             else:
                 out += ["", "[tool]"]
             out += _frame_lines(e.T_link_ee, ls, as_)
-    else:
-        for e in ees:
-            if e.link < 0:
-                raise ValueError(f"end effector {e.name!r} sits on the robot base; a robot file needs a joint entry")
-            out += ["", "[[end_effectors]]", f"name = {_str(e.name)}", f"link = {_str(names[e.link])}"]
-            out += _frame_lines(e.T_link_ee, ls, as_)
-    return "\n".join(out) + "\n"
+        return out
+    for e in ees:
+        if e.link < 0:
+            raise ValueError(f"end effector {e.name!r} sits on the robot base; a robot file needs a joint entry")
+        out += ["", "[[end_effectors]]", f"name = {_str(e.name)}", f"link = {_str(names[e.link])}"]
+        out += _frame_lines(e.T_link_ee, ls, as_)
+    return out
 
 
 def save_robot(model: RobotModel, path, overwrite: bool = False, *, length_unit: str | None = None,
