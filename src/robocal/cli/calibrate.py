@@ -8,6 +8,8 @@ import sys
 import click
 
 from ._common import _names, _step_printer, _user_error
+from .calibrate_table import parameter_table
+from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
 
 
 @click.command()
@@ -31,18 +33,50 @@ from ._common import _names, _step_printer, _user_error
 @click.option("--tool", nargs=3, type=float, default=None, metavar="X Y Z",
               help="Initial target point in the flange frame [mm] (default 0 0 0).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite):
-    """Calibrate ROBOT (name or robot file) from the measurement file DATA."""
+@click.option("--rotation-weight", "rotation_weight", type=float, default=None, metavar="MM_PER_RAD",
+              help="6-D files: how many mm one rad of orientation error counts (default 100 mm/rad: "
+                   "0.02 mm and 0.01 deg measurement noise weigh the same).")
+@click.option("--no-orientation", is_flag=True, help="Ignore a file's orientation columns (position-only fit).")
+@click.option("--prior", is_flag=True,
+              help="A weak Gaussian prior on the geometry around nominal (sigma: --prior-sigma).")
+@click.option("--prior-sigma", nargs=2, type=float, default=(1.0, 0.5), show_default=True, metavar="MM DEG",
+              help="Sigma of the --prior for lengths [mm] and angles [deg].")
+@click.option("--train-ids", multiple=True, metavar="IDS",
+              help="Calibrate on these pose ids (comma separated, repeatable, or @FILE); default: seeded split.")
+@click.option("--holdout-ids", multiple=True, metavar="IDS",
+              help="Validate on these pose ids (comma separated, repeatable, or @FILE).")
+@click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
+@click.option("--allow-unconverged", is_flag=True,
+              help=f"Exit 0 even when the solver does not converge (otherwise exit {EXIT_NOT_CONVERGED}).")
+@import_options
+def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite,
+              rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
+              allow_unconverged, **imp):
+    """Calibrate ROBOT (name or robot file) from the measurement file DATA.
+
+    DATA is robocal's measurement file, or with --format a tracker export paired with --joints.
+    Orientation columns (rx, ry, rz or qw..qz) are used: a 6-D fit with a tool frame. Exit codes:
+    0 done, 1 error, 3 the solver did not converge (unless --allow-unconverged).
+    """
     from ..workflows.calibrate import run_calibration
 
     try:
+        meas = read_export(robot, data, imp)
         r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
                             holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
-                            progress=_step_printer)
+                            progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
+                            prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,
+                            measurements=meas, max_iterations=max_iterations)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
-    click.echo(r["calibration_result"].summary())
+    click.echo(f"measurements: {r['description']}")
+    summary = r["calibration_result"].summary().splitlines()
+    for line in summary[:2] + [x for x in summary[2:] if "outlier" in x]:  # held parameters: in the table
+        click.echo(line)
+    click.echo("")
+    for line in parameter_table(res):
+        click.echo(line)
     click.echo("")
     click.echo(f"{'position error [mm]':<30}{'RMS':>9}{'mean':>9}{'p95':>9}{'max':>9}")
     rows = [("calibration poses, before", res["residuals"]["before"]),
@@ -55,6 +89,10 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
     for note in r["notes"]:
         click.echo(f"note: {note}")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
+    for w in r["convergence_warnings"]:
+        click.echo(f"Warning: {w}", err=True)
+    if r["convergence_warnings"] and not allow_unconverged:
+        sys.exit(EXIT_NOT_CONVERGED)
 
 
 @click.command()

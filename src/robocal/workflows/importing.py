@@ -12,7 +12,7 @@ from ..io.importers import pair_by_id, pair_by_index, pair_by_time, read_joint_l
 from ..io.measurements import write_measurements
 from ..robots import load_robot
 
-__all__ = ["POINT_FORMATS", "PAIRINGS", "import_campaign"]
+__all__ = ["POINT_FORMATS", "PAIRINGS", "read_campaign", "import_campaign"]
 
 #: Point-file formats that ``robocal import --format`` reads.
 POINT_FORMATS = {"tracker-csv": read_tracker_csv, "sa-text": read_spatialanalyzer}
@@ -42,6 +42,21 @@ def _joints_named_as_robot(meas, model, notes):
     return dataclasses.replace(meas, joint_names=expected, prismatic=model_prismatic)
 
 
+def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "tracker-csv", pair: str = "index",
+                  tolerance_s: float | None = None, offset_s: float = 0.0, id_match: str = "exact",
+                  length_unit: str | None = None, angle_unit: str | None = None) -> dict:
+    """Read a tracker export and a joint log and pair them (the arguments of :func:`import_campaign`).
+
+    Returns ``{measurements, pairing, notes}`` without writing anything (``robocal calibrate
+    --format`` calibrates from it directly).
+    """
+    r = read_campaign(points_file, joints_file, robot=robot, point_format=point_format, pair=pair,
+                      tolerance_s=tolerance_s, offset_s=offset_s, id_match=id_match, length_unit=length_unit,
+                      angle_unit=angle_unit)
+    meas = r["measurements"]
+    return {"measurements": meas, "pairing": pairing, "notes": notes}
+
+
 def import_campaign(points_file, joints_file, out_file, *, robot: str, point_format: str = "tracker-csv",
                     pair: str = "index", tolerance_s: float | None = None, offset_s: float = 0.0,
                     id_match: str = "exact", length_unit: str | None = None, angle_unit: str | None = None,
@@ -57,23 +72,9 @@ def import_campaign(points_file, joints_file, out_file, *, robot: str, point_for
     Returns a dict with ``measurements`` (the written :class:`Measurements`), ``pairing`` (the
     :class:`~robocal.io.importers.Pairing`), ``notes`` (list of str) and ``file`` (Path).
     """
-    if point_format not in POINT_FORMATS:
-        raise ValueError(f"unknown point format {point_format!r}; expected one of {', '.join(POINT_FORMATS)}")
-    if pair not in PAIRINGS:
-        raise ValueError(f"unknown pairing {pair!r}; expected one of {', '.join(PAIRINGS)}")
-    model = load_robot(robot)
-    points = POINT_FORMATS[point_format](points_file, length_unit=length_unit)
-    log = read_joint_log(joints_file, angle_unit=angle_unit)
-    if pair == "index":
-        pairing = pair_by_index(points, log, robot=model)
-    elif pair == "id":
-        pairing = pair_by_id(points, log, match=id_match, robot=model)
-    else:
-        if tolerance_s is None:
-            raise ValueError("pairing by time needs a tolerance in seconds (--tolerance)")
-        pairing = pair_by_time(points, log, tolerance=tolerance_s, offset=offset_s, robot=model)
-    notes = list(pairing.notes)
-    meas = _joints_named_as_robot(pairing.measurements, model, notes)
-    meas.metadata["robot"] = robot if Path(robot).suffix == ".toml" else model.name
+    r = read_campaign(points_file, joints_file, robot=robot, point_format=point_format, pair=pair,
+                      tolerance_s=tolerance_s, offset_s=offset_s, id_match=id_match, length_unit=length_unit,
+                      angle_unit=angle_unit)
+    meas = r["measurements"]
     path = write_measurements(out_file, meas, length_unit="mm", angle_unit="deg", overwrite=overwrite)
-    return {"measurements": meas, "pairing": pairing, "notes": notes, "file": path}
+    return {**r, "file": path}
