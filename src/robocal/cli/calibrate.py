@@ -4,6 +4,7 @@ corrected joint targets for a nominal-model controller."""
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import click
 
@@ -99,22 +100,28 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
 @click.argument("robot_file")
 @click.argument("targets", type=click.Path(dir_okay=False))
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
-              help="CSV file for the corrected joint targets.")
+              help="Corrected targets (CSV) or, for a robot program, the corrected program (a new file).")
 @click.option("--nominal", default=None,
               help="Nominal robot the controller runs (default: the robot named in ROBOT_FILE).")
 @click.option("--frame", type=click.Choice(["world", "base"]), default=None,
-              help="Frame of the targets (default: the targets file's '# frame:', else world).")
-@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+              help="Targets CSV only: frame of the targets (default: the file's '# frame:', else world).")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 def correct(robot_file, targets, out_file, nominal, frame, overwrite):
-    """Corrected joint targets: joints that put the calibrated ROBOT_FILE on the Cartesian TARGETS.
+    """Correct targets with the calibrated model ROBOT_FILE ("program filtering").
 
-    TARGETS is a CSV file (robocal-targets/1): header lines '# format: robocal-targets/1',
-    '# length_unit: mm|m', '# angle_unit: deg|rad', optional '# orientation: <convention>' and
-    '# frame: world|base', then columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>]
-    (joints: taught values that seed the solver).
+    TARGETS is a robot program (KRL .src/.dat, RAPID .mod, FANUC .ls, UR .script; decided by the
+    suffix): the same program is written to --out with corrected targets, everything else
+    unchanged, and a per-target report to <out>.report.csv. Or TARGETS is a CSV file
+    (robocal-targets/1): header lines '# format: robocal-targets/1', '# length_unit: mm|m',
+    '# angle_unit: deg|rad', optional '# orientation: <convention>' and '# frame: world|base', then
+    columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>] (joints seed the solver).
+    Exit code 2 when a target is not reached.
     """
-    from ..workflows.calibrate import run_correct
+    from ..io.programs import SUFFIXES
 
+    if Path(targets).suffix.lower() in SUFFIXES:
+        return _correct_program(robot_file, targets, out_file, nominal, frame, overwrite)
+    from ..workflows.calibrate import run_correct
     try:
         r = run_correct(robot_file, targets, out_file, nominal=nominal, frame=frame, overwrite=overwrite)
     except (ValueError, KeyError, OSError) as exc:
@@ -128,3 +135,24 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite):
     if bad:
         sys.exit(2)
 
+
+
+def _correct_program(robot_file, program, out_file, nominal, frame, overwrite):
+    from ..workflows.correct_program import run_correct_program
+
+    if frame is not None:
+        raise click.ClickException("--frame is for targets CSV files; program targets are in the robot base frame")
+    try:
+        r = run_correct_program(robot_file, program, out_file, nominal=nominal, overwrite=overwrite)
+    except (ValueError, KeyError, OSError) as exc:
+        raise _user_error(exc) from None
+    click.echo(f"{'target':<14}{'kind':<10}{'status':<16}{'corr. [mm]':>11}{'[deg]':>9}{'joints [deg]':>13}")
+    for row in r["rows"]:
+        click.echo(f"{row['target']:<14}{row['kind']:<10}{row['status']:<16}{row['cartesian_correction_mm']:>11.4f}"
+                   f"{row['orientation_correction_deg']:>9.4f}{row['max_joint_change_deg']:>13.4f}"
+                   + (f"  {row['note']}" if row["note"] else ""))
+    for s in r["skipped"]:
+        click.echo(f"not read: line {s.line}: {s.reason}")
+    click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected; wrote {r['file']} and {r['report']}")
+    if r["n_corrected"] < r["n_targets"]:
+        sys.exit(2)

@@ -50,10 +50,24 @@ def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "
     Returns ``{measurements, pairing, notes}`` without writing anything (``robocal calibrate
     --format`` calibrates from it directly).
     """
-    r = read_campaign(points_file, joints_file, robot=robot, point_format=point_format, pair=pair,
-                      tolerance_s=tolerance_s, offset_s=offset_s, id_match=id_match, length_unit=length_unit,
-                      angle_unit=angle_unit)
-    meas = r["measurements"]
+    if point_format not in POINT_FORMATS:
+        raise ValueError(f"unknown point format {point_format!r}; expected one of {', '.join(POINT_FORMATS)}")
+    if pair not in PAIRINGS:
+        raise ValueError(f"unknown pairing {pair!r}; expected one of {', '.join(PAIRINGS)}")
+    model = load_robot(robot)
+    points = POINT_FORMATS[point_format](points_file, length_unit=length_unit)
+    log = read_joint_log(joints_file, angle_unit=angle_unit)
+    if pair == "index":
+        pairing = pair_by_index(points, log, robot=model)
+    elif pair == "id":
+        pairing = pair_by_id(points, log, match=id_match, robot=model)
+    else:
+        if tolerance_s is None:
+            raise ValueError("pairing by time needs a tolerance in seconds (--tolerance)")
+        pairing = pair_by_time(points, log, tolerance=tolerance_s, offset=offset_s, robot=model)
+    notes = list(pairing.notes)
+    meas = _joints_named_as_robot(pairing.measurements, model, notes)
+    meas.metadata["robot"] = robot if Path(robot).suffix == ".toml" else model.name
     return {"measurements": meas, "pairing": pairing, "notes": notes}
 
 
