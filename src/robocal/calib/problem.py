@@ -159,6 +159,8 @@ class CalibrationProblem(Problem):
         ``rotation_end_effector``; weighted ``rotation_weight`` [mm per rad].
     distances: optional sequence of (pose_a, pose_b, target_index, distance_mm).
     on_plane: optional sequence of (pose, target_index, plane_index); ``planes_initial`` (L, 3).
+    geometry_prior: optional :class:`~robocal.calib.blocks.GaussianPrior` on the ``free``
+        parameters (e.g. :func:`robocal.calib.pose_problem.geometry_prior`, a weak prior around nominal).
 
     States are :class:`State` tuples; ``evaluate``'s label kind codes follow :data:`LEGACY_KINDS`.
     """
@@ -166,8 +168,9 @@ class CalibrationProblem(Problem):
     def __init__(self, model: RobotModel, q, targets, points=None, *, free=None, stations=None,
                  estimate_base: bool = True, base_initial=None, point_sigma_mm: float | None = None,
                  rotations=None, rotation_end_effector=None, rotation_weight: float = 1000.0,
-                 distances=None, on_plane=None, planes_initial=None):
+                 distances=None, on_plane=None, planes_initial=None, geometry_prior=None):
         self.model = model
+        self.geometry_prior = geometry_prior
         self.q = q = _checked_joints(model, q)
         N = len(q)
         self.targets = tuple(targets)
@@ -198,7 +201,7 @@ class CalibrationProblem(Problem):
 
     def _build(self, free, rotations, rotation_end_effector, rotation_weight, distances, on_plane, planes_initial):
         model, q, N = self.model, self.q, len(self.q)
-        geometry = RobotGeometry(model, free)
+        geometry = RobotGeometry(model, free, prior=self.geometry_prior)
         self.free_params = geometry.names
         self.free_index = geometry.index
         frames = StationFrames(self.base_initial, free=bool(self.estimate_base))

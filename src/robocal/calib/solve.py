@@ -14,6 +14,7 @@ Both re-linearize around the current state every iteration; frames are updated b
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,11 +23,19 @@ from scipy.linalg import cho_factor, cho_solve
 from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
 
-__all__ = ["CalibrationResult", "solve", "NotConvergedWarning"]
+__all__ = ["CalibrationResult", "solve", "NotConvergedWarning", "not_converged_message"]
 
 
 class NotConvergedWarning(UserWarning):
-    """The solver stopped without meeting its convergence criteria."""
+    """The solver stopped without meeting its convergence criteria (raised by :func:`solve`; the
+    message names the reason, the iterations and the condition number)."""
+
+
+def not_converged_message(result) -> str:
+    """One line: why a solve did not converge, with the condition number of its Jacobian."""
+    return (f"the solver did not converge: {result.reason} after {result.iterations} iterations; condition "
+            f"number {result.condition_number:.3g}, rank {result.rank}/{len(result.names)}; the result may be "
+            "far from the optimum (more iterations, better starting values or fewer free parameters)")
 
 
 @dataclass
@@ -127,8 +136,15 @@ def solve(problem: Problem, *, method: str = "lm", loss: str = "linear", f_scale
               outlier_threshold=outlier_threshold, reject_outliers=reject_outliers, chi2_tol=chi2_tol,
               progress=progress)
     res = _solve_once(problem, state0=state0, **kw)
-    if not auto_identifiable:
-        return res
+    if auto_identifiable:
+        res = _refine_identifiable(problem, res, state0, kw)
+    if not res.converged:
+        warnings.warn(NotConvergedWarning(not_converged_message(res)), stacklevel=2)
+    return res
+
+
+def _refine_identifiable(problem, res, state0, kw):
+    """Solve again from ``res`` while the identifiable set changes at the solution."""
     start = problem.initial_state() if state0 is None else state0
     for _ in range(2):
         if not _dropped_may_have_become_identifiable(res.jacobian, problem.names, res.identifiability):

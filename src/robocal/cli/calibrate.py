@@ -4,10 +4,13 @@ corrected joint targets for a nominal-model controller."""
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import click
 
 from ._common import _names, _step_printer, _user_error
+from .calibrate_table import parameter_table
+from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
 
 
 @click.command()
@@ -31,18 +34,50 @@ from ._common import _names, _step_printer, _user_error
 @click.option("--tool", nargs=3, type=float, default=None, metavar="X Y Z",
               help="Initial target point in the flange frame [mm] (default 0 0 0).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite):
-    """Calibrate ROBOT (name or robot file) from the measurement file DATA."""
+@click.option("--rotation-weight", "rotation_weight", type=float, default=None, metavar="MM_PER_RAD",
+              help="6-D files: how many mm one rad of orientation error counts (default 100 mm/rad: "
+                   "0.02 mm and 0.01 deg measurement noise weigh the same).")
+@click.option("--no-orientation", is_flag=True, help="Ignore a file's orientation columns (position-only fit).")
+@click.option("--prior", is_flag=True,
+              help="A weak Gaussian prior on the geometry around nominal (sigma: --prior-sigma).")
+@click.option("--prior-sigma", nargs=2, type=float, default=(1.0, 0.5), show_default=True, metavar="MM DEG",
+              help="Sigma of the --prior for lengths [mm] and angles [deg].")
+@click.option("--train-ids", multiple=True, metavar="IDS",
+              help="Calibrate on these pose ids (comma separated, repeatable, or @FILE); default: seeded split.")
+@click.option("--holdout-ids", multiple=True, metavar="IDS",
+              help="Validate on these pose ids (comma separated, repeatable, or @FILE).")
+@click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
+@click.option("--allow-unconverged", is_flag=True,
+              help=f"Exit 0 even when the solver does not converge (otherwise exit {EXIT_NOT_CONVERGED}).")
+@import_options
+def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite,
+              rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
+              allow_unconverged, **imp):
+    """Calibrate ROBOT (name or robot file) from the measurement file DATA.
+
+    DATA is robocal's measurement file, or with --format a tracker export paired with --joints.
+    Orientation columns (rx, ry, rz or qw..qz) are used: a 6-D fit with a tool frame. Exit codes:
+    0 done, 1 error, 3 the solver did not converge (unless --allow-unconverged).
+    """
     from ..workflows.calibrate import run_calibration
 
     try:
+        meas = read_export(robot, data, imp)
         r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
                             holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
-                            progress=_step_printer)
+                            progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
+                            prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,
+                            measurements=meas, max_iterations=max_iterations)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
-    click.echo(r["calibration_result"].summary())
+    click.echo(f"measurements: {r['description']}")
+    summary = r["calibration_result"].summary().splitlines()
+    for line in summary[:2] + [x for x in summary[2:] if "outlier" in x]:  # held parameters: in the table
+        click.echo(line)
+    click.echo("")
+    for line in parameter_table(res):
+        click.echo(line)
     click.echo("")
     click.echo(f"{'position error [mm]':<30}{'RMS':>9}{'mean':>9}{'p95':>9}{'max':>9}")
     rows = [("calibration poses, before", res["residuals"]["before"]),
@@ -55,28 +90,38 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
     for note in r["notes"]:
         click.echo(f"note: {note}")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
+    for w in r["convergence_warnings"]:
+        click.echo(f"Warning: {w}", err=True)
+    if r["convergence_warnings"] and not allow_unconverged:
+        sys.exit(EXIT_NOT_CONVERGED)
 
 
 @click.command()
 @click.argument("robot_file")
 @click.argument("targets", type=click.Path(dir_okay=False))
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
-              help="CSV file for the corrected joint targets.")
+              help="Corrected targets (CSV) or, for a robot program, the corrected program (a new file).")
 @click.option("--nominal", default=None,
               help="Nominal robot the controller runs (default: the robot named in ROBOT_FILE).")
 @click.option("--frame", type=click.Choice(["world", "base"]), default=None,
-              help="Frame of the targets (default: the targets file's '# frame:', else world).")
-@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+              help="Targets CSV only: frame of the targets (default: the file's '# frame:', else world).")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 def correct(robot_file, targets, out_file, nominal, frame, overwrite):
-    """Corrected joint targets: joints that put the calibrated ROBOT_FILE on the Cartesian TARGETS.
+    """Correct targets with the calibrated model ROBOT_FILE ("program filtering").
 
-    TARGETS is a CSV file (robocal-targets/1): header lines '# format: robocal-targets/1',
-    '# length_unit: mm|m', '# angle_unit: deg|rad', optional '# orientation: <convention>' and
-    '# frame: world|base', then columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>]
-    (joints: taught values that seed the solver).
+    TARGETS is a robot program (KRL .src/.dat, RAPID .mod, FANUC .ls, UR .script; decided by the
+    suffix): the same program is written to --out with corrected targets, everything else
+    unchanged, and a per-target report to <out>.report.csv. Or TARGETS is a CSV file
+    (robocal-targets/1): header lines '# format: robocal-targets/1', '# length_unit: mm|m',
+    '# angle_unit: deg|rad', optional '# orientation: <convention>' and '# frame: world|base', then
+    columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>] (joints seed the solver).
+    Exit code 2 when a target is not reached.
     """
-    from ..workflows.calibrate import run_correct
+    from ..io.programs import SUFFIXES
 
+    if Path(targets).suffix.lower() in SUFFIXES:
+        return _correct_program(robot_file, targets, out_file, nominal, frame, overwrite)
+    from ..workflows.calibrate import run_correct
     try:
         r = run_correct(robot_file, targets, out_file, nominal=nominal, frame=frame, overwrite=overwrite)
     except (ValueError, KeyError, OSError) as exc:
@@ -90,3 +135,24 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite):
     if bad:
         sys.exit(2)
 
+
+
+def _correct_program(robot_file, program, out_file, nominal, frame, overwrite):
+    from ..workflows.correct_program import run_correct_program
+
+    if frame is not None:
+        raise click.ClickException("--frame is for targets CSV files; program targets are in the robot base frame")
+    try:
+        r = run_correct_program(robot_file, program, out_file, nominal=nominal, overwrite=overwrite)
+    except (ValueError, KeyError, OSError) as exc:
+        raise _user_error(exc) from None
+    click.echo(f"{'target':<14}{'kind':<10}{'status':<16}{'corr. [mm]':>11}{'[deg]':>9}{'joints [deg]':>13}")
+    for row in r["rows"]:
+        click.echo(f"{row['target']:<14}{row['kind']:<10}{row['status']:<16}{row['cartesian_correction_mm']:>11.4f}"
+                   f"{row['orientation_correction_deg']:>9.4f}{row['max_joint_change_deg']:>13.4f}"
+                   + (f"  {row['note']}" if row["note"] else ""))
+    for s in r["skipped"]:
+        click.echo(f"not read: line {s.line}: {s.reason}")
+    click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected; wrote {r['file']} and {r['report']}")
+    if r["n_corrected"] < r["n_targets"]:
+        sys.exit(2)

@@ -13,6 +13,7 @@ from .calibrate import calibrate, correct
 from .history import history_cmd as history
 from .importing import import_cmd
 from .kinematics import fk, ik, robots
+from .plan import plan_poses_cmd
 from .simulate import simulate
 from .tcp import tcp
 from .tcp_cross_laser import cross_laser_cmd, simulate_cmd
@@ -94,6 +95,7 @@ _SUMMARIES = {
     thermal: "Thermal drift: system calibration, screening, compensation.",
     history: "A robot's calibration and maintenance history.",
     import_cmd: "A tracker export and a joint log into a measurement file.",
+    plan_poses_cmd: "Measurement poses for a calibration, with the predicted sigma.",
 }
 for _command, _summary in _SUMMARIES.items():
     _command.short_help = _summary

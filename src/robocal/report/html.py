@@ -253,6 +253,8 @@ def _solver_section(result: dict) -> list:
     out = [f"<p>{status} after {_f(solver.get('iterations'))} iterations ({e(str(solver.get('reason', '')))}); "
            f"rank {_f(solver.get('rank'))} of {_f(solver.get('n_variables'))} variables, condition number "
            f"{_f(solver.get('condition_number'), 3)}, a-posteriori sigma0 {_f(solver.get('sigma0'), 4)}.</p>"]
+    if solver.get("warning"):
+        out.append(f'<p class="bad">Warning: {e(str(solver["warning"]))}</p>')
     if md:
         out.append("<h2>Inputs</h2>")
         out.append(_table(["item", "value"], [[e(str(k)), e(str(v))] for k, v in md.items()], left=(0, 1)))

@@ -25,12 +25,14 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
-from ..calib import CalibrationProblem, Target, solve
+from ..calib import solve
+from ..calib.solve import NotConvergedWarning
 from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
@@ -39,6 +41,7 @@ from ..io.measurements import read_measurements
 from ..io.targets import read_targets, write_corrected_targets
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
+from .calibrate_setup import build_problems, split_by_ids, tool_frame_summary
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
            "run_correct"]
@@ -103,7 +106,9 @@ def _per_point(errors_before, errors_after, pose_ids, targets):
 
 def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, fix=(), holdout: float = 0.2,
                     seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
-                    overwrite: bool = False, progress=None, method: str = "lm") -> dict:
+                    overwrite: bool = False, progress=None, method: str = "lm", rotation_weight: float | None = None,
+                    prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
+                    max_iterations: int = 50) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -113,6 +118,15 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     measurement noise per coordinate [mm] (weights and absolute uncertainty; default: estimated
     from the residuals). tool: initial target point (3,) [mm] in the flange frame (default origin).
     progress(step, total, text): called between steps.
+
+    6-D (files with orientation, unless ``use_orientation`` is false): positions and orientations
+    are fitted with a 6-DoF tool frame; rotation_weight [mm per rad] (default
+    :data:`~robocal.workflows.calibrate_setup.DEFAULT_ROTATION_WEIGHT`). prior: ``(sigma_mm,
+    sigma_deg)`` of a weak Gaussian prior on the geometry around nominal. train_ids /
+    holdout_ids: a given protocol (pose ids, :func:`~robocal.workflows.calibrate_setup.split_by_ids`)
+    instead of the seeded split. measurements: an already read :class:`~robocal.io.Measurements`
+    (``data`` then only names it). max_iterations: of the solver; a solve that stops there is
+    reported (``result["solver"]["warning"]``, ``NotConvergedWarning``).
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
     naming the file, checked before any work). Returns a dict with ``result`` (the JSON dict),
@@ -134,33 +148,45 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
 
     nominal = load_robot(robot)
-    meas = read_measurements(data, robot=nominal)
+    meas = read_measurements(data, robot=nominal) if measurements is None else measurements
     free_names = select_free(nominal, free, free_all, fix)
     N, K = meas.n_poses, meas.n_targets
-    train, hold = split_poses(N, holdout, seed)
-    n_unknowns = len(free_names) + 6 + 3 * K
-    n_res = 3 * K * len(train)
+    split_notes = []
+    if train_ids or holdout_ids:
+        train, hold, split_notes = split_by_ids(meas.pose_ids, train_ids, holdout_ids)
+    else:
+        train, hold = split_poses(N, holdout, seed)
+    six_d = use_orientation and meas.rotations is not None
+    rows = 3 * K + (3 if six_d else 0)
+    n_unknowns = len(free_names) + 6 + 3 * K + (3 if six_d else 0)
+    n_res = rows * len(train)
     if n_res < n_unknowns or len(train) < 3:
-        need = max(3, math.ceil(n_unknowns / (3 * K)))
+        need = max(3, math.ceil(n_unknowns / rows))
         raise CalibrationInputError(
             f"{data}: too few poses: {len(train)} calibration pose(s) ({N} in the file, {len(hold)} held out) give "
             f"{n_res} residuals for {n_unknowns} unknowns ({len(free_names)} parameters, base frame, {K} target "
             f"point(s)); at least {need} calibration poses are needed, 3-5 times that for a useful result")
+    protocol = "given pose ids" if (train_ids or holdout_ids) else f"seed {seed}"
     step(1, total, f"read {N} poses of {nominal.name} from {data}: {len(train)} to calibrate, {len(hold)} held out "
-                   f"(seed {seed})")
+                   f"({protocol})")
     point0 = (0.0, 0.0, 0.0) if tool is None else tuple(float(v) for v in tool)
-    targets = [Target(t, point=point0) for t in meas.targets]
     pose_ids = list(meas.pose_ids)
-    q_tr, p_tr = meas.joints[train], meas.points[train]
+    setup = build_problems(nominal, meas, train, free_names=free_names, sigma_mm=sigma_mm, tool=tool,
+                           use_orientation=use_orientation, rotation_weight=rotation_weight, prior=prior)
+    problem0, problem = setup["problem0"], setup["problem"]
+    targets = list(problem.targets)
 
-    step(2, total, f"initial base frame and target point(s) with the nominal geometry ({len(train)} poses)")
-    problem0 = CalibrationProblem(nominal, q_tr, targets, p_tr, free=[], base_initial="fit", point_sigma_mm=sigma_mm)
-    res0 = solve(problem0, loss=loss, method=method)
+    step(2, total, f"initial base frame and target point(s) with the nominal geometry ({len(train)} poses; "
+                   f"{setup['description']})")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotConvergedWarning)  # the baseline only starts the real solve
+        res0 = solve(problem0, loss=loss, method=method, max_iterations=max_iterations)
 
     step(3, total, f"identifying {len(free_names)} parameter(s) + base + {K} target point(s) ({loss} loss)")
-    problem = CalibrationProblem(nominal, q_tr, targets, p_tr, free=free_names, base_initial="fit",
-                                 point_sigma_mm=sigma_mm)
-    result = solve(problem, loss=loss, method=method, state0=res0.state)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", NotConvergedWarning)
+        result = solve(problem, loss=loss, method=method, state0=res0.state, max_iterations=max_iterations)
+    convergence_warnings = [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
 
     step(4, total, f"validating on {len(hold)} held-out pose(s)")
     validation = None
@@ -187,14 +213,17 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
 
     step(5, total, "writing result.json, calibrated robot (TOML, URDF)")
     out.mkdir(parents=True, exist_ok=True)
-    notes = []
+    notes = list(split_notes) + list(setup["notes"])
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     metadata = {
         "robot": str(robot), "measurements": str(data), "n_poses_file": N, "n_poses_calibration": int(len(train)),
         "n_poses_holdout": int(len(hold)), "holdout_fraction": holdout, "seed": seed, "loss": loss,
         "sigma_mm": sigma_mm, "method": method, "free": free_names, "fixed_by_option": list(fix),
         "initial_target_mm": list(point0), "targets": list(meas.targets), "instrument": meas.metadata.get("instrument"),
-        "frame": meas.metadata.get("frame"), "written": stamp,
+        "frame": meas.metadata.get("frame"), "written": stamp, "measurement_kind": setup["description"],
+        "rotation_weight_mm_per_rad": setup["rotation_weight"],
+        "prior_sigma_mm_deg": None if prior is None else [float(v) for v in prior],
+        "split": protocol, "max_iterations": max_iterations,
     }
     rdict = result_to_dict(result, problem, nominal=nominal, pose_ids=[pose_ids[i] for i in train],
                            validation=json_ready(validation) if validation else None, metadata=metadata)
@@ -203,6 +232,10 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         "iterations": res0.iterations, "converged": res0.converged, "reason": res0.reason,
         "rms_mm": res0.rms_after, "T_instrument_base": res0.state.bases[0], "targets_mm": res0.state.targets})
     rdict["accuracy_map"] = json_ready(accuracy)
+    rdict["six_d"] = bool(setup["six_d"])
+    rdict["tool_frame"] = json_ready(tool_frame_summary(result, problem))
+    if convergence_warnings:
+        rdict["solver"]["warning"] = convergence_warnings[-1]
 
     calibrated = result.model.replace(
         title=f"{nominal.title or nominal.name} (calibrated)",
@@ -239,7 +272,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     "(J Cov J^T over the identified variables, base frame included)."}
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap, overwrite=overwrite,
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}")
-    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem}
+    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem,
+            "six_d": bool(setup["six_d"]), "description": setup["description"],
+            "convergence_warnings": convergence_warnings}
 
 
 # ---------------------------------------------------------------------------------------------

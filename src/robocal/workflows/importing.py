@@ -12,7 +12,7 @@ from ..io.importers import pair_by_id, pair_by_index, pair_by_time, read_joint_l
 from ..io.measurements import write_measurements
 from ..robots import load_robot
 
-__all__ = ["POINT_FORMATS", "PAIRINGS", "import_campaign"]
+__all__ = ["POINT_FORMATS", "PAIRINGS", "read_campaign", "import_campaign"]
 
 #: Point-file formats that ``robocal import --format`` reads.
 POINT_FORMATS = {"tracker-csv": read_tracker_csv, "sa-text": read_spatialanalyzer}
@@ -42,20 +42,13 @@ def _joints_named_as_robot(meas, model, notes):
     return dataclasses.replace(meas, joint_names=expected, prismatic=model_prismatic)
 
 
-def import_campaign(points_file, joints_file, out_file, *, robot: str, point_format: str = "tracker-csv",
-                    pair: str = "index", tolerance_s: float | None = None, offset_s: float = 0.0,
-                    id_match: str = "exact", length_unit: str | None = None, angle_unit: str | None = None,
-                    overwrite: bool = False) -> dict:
-    """Read a tracker export and a joint log, pair them and write a robocal measurement file.
+def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "tracker-csv", pair: str = "index",
+                  tolerance_s: float | None = None, offset_s: float = 0.0, id_match: str = "exact",
+                  length_unit: str | None = None, angle_unit: str | None = None) -> dict:
+    """Read a tracker export and a joint log and pair them (the arguments of :func:`import_campaign`).
 
-    point_format: a key of :data:`POINT_FORMATS`. pair: ``index`` (row order), ``id`` (point name
-    = pose id; ``id_match="number"`` pairs ``P017`` with ``17``) or ``time`` (nearest time stamp
-    within ``tolerance_s`` [s], joint clock + ``offset_s``). length_unit: of the point file
-    (``mm``/``m``/``in``; default declared by the file or detected and said). angle_unit: of the
-    joint log (``deg``/``rad``; required unless its header names it).
-
-    Returns a dict with ``measurements`` (the written :class:`Measurements`), ``pairing`` (the
-    :class:`~robocal.io.importers.Pairing`), ``notes`` (list of str) and ``file`` (Path).
+    Returns ``{measurements, pairing, notes}`` without writing anything (``robocal calibrate
+    --format`` calibrates from it directly).
     """
     if point_format not in POINT_FORMATS:
         raise ValueError(f"unknown point format {point_format!r}; expected one of {', '.join(POINT_FORMATS)}")
@@ -75,5 +68,27 @@ def import_campaign(points_file, joints_file, out_file, *, robot: str, point_for
     notes = list(pairing.notes)
     meas = _joints_named_as_robot(pairing.measurements, model, notes)
     meas.metadata["robot"] = robot if Path(robot).suffix == ".toml" else model.name
+    return {"measurements": meas, "pairing": pairing, "notes": notes}
+
+
+def import_campaign(points_file, joints_file, out_file, *, robot: str, point_format: str = "tracker-csv",
+                    pair: str = "index", tolerance_s: float | None = None, offset_s: float = 0.0,
+                    id_match: str = "exact", length_unit: str | None = None, angle_unit: str | None = None,
+                    overwrite: bool = False) -> dict:
+    """Read a tracker export and a joint log, pair them and write a robocal measurement file.
+
+    point_format: a key of :data:`POINT_FORMATS`. pair: ``index`` (row order), ``id`` (point name
+    = pose id; ``id_match="number"`` pairs ``P017`` with ``17``) or ``time`` (nearest time stamp
+    within ``tolerance_s`` [s], joint clock + ``offset_s``). length_unit: of the point file
+    (``mm``/``m``/``in``; default declared by the file or detected and said). angle_unit: of the
+    joint log (``deg``/``rad``; required unless its header names it).
+
+    Returns a dict with ``measurements`` (the written :class:`Measurements`), ``pairing`` (the
+    :class:`~robocal.io.importers.Pairing`), ``notes`` (list of str) and ``file`` (Path).
+    """
+    r = read_campaign(points_file, joints_file, robot=robot, point_format=point_format, pair=pair,
+                      tolerance_s=tolerance_s, offset_s=offset_s, id_match=id_match, length_unit=length_unit,
+                      angle_unit=angle_unit)
+    meas = r["measurements"]
     path = write_measurements(out_file, meas, length_unit="mm", angle_unit="deg", overwrite=overwrite)
-    return {"measurements": meas, "pairing": pairing, "notes": notes, "file": path}
+    return {**r, "file": path}

@@ -6,7 +6,8 @@ from .manifolds import FramesBlock, UnitVectorsBlock, VectorBlock, so3_right_jac
 from .planes import Planes, plane_normal_derivatives, plane_normals
 from .points import TargetPoints
 from .robot import RobotGeometry
+from .tool import ToolFrame
 
 __all__ = ["GaussianPrior", "ParameterBlock", "free_mask", "VectorBlock", "FramesBlock", "UnitVectorsBlock",
-           "StationFrames", "TargetPoints", "Planes", "RobotGeometry", "plane_normals", "plane_normal_derivatives",
+           "StationFrames", "TargetPoints", "Planes", "RobotGeometry", "ToolFrame", "plane_normals", "plane_normal_derivatives",
            "so3_right_jacobian_inverse", "tangent_basis"]

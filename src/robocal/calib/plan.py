@@ -1,0 +1,64 @@
+"""Planning a measurement campaign: which poses to measure, and what the plan will deliver.
+
+:func:`visible_candidates` keeps candidate poses an instrument can see (range and incidence on the
+reflector); :func:`plan_campaign` picks ``count`` of them by greedy D-optimal selection
+(:func:`robocal.calib.poses.select_poses`) and predicts, to first order, the standard deviation of
+every identifiable variable and the accuracy on the other candidates (the held-out error to expect).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .identifiability import analyse_identifiability
+from .poses import pose_jacobians, select_poses
+from .problem import CalibrationProblem, Target
+
+__all__ = ["visible_candidates", "plan_campaign", "predicted_covariance"]
+
+
+def visible_candidates(points, z_axes, tracker_at, *, range_mm=(1000.0, 15000.0), max_incidence_deg=60.0):
+    """(N,) bool: reflector ``points`` (N, 3) [mm] within ``range_mm`` of the instrument at
+    ``tracker_at`` (3,) [mm] and facing it: the angle between the reflector axis ``z_axes`` (N, 3)
+    (unit) and the line of sight at most ``max_incidence_deg``. (Occlusion by the robot itself is
+    not modelled.)"""
+    d = np.asarray(tracker_at, dtype=float) - points
+    dist = np.linalg.norm(d, axis=1)
+    cos = np.einsum("ij,ij->i", d, z_axes) / np.maximum(dist, 1e-9)
+    return (dist >= range_mm[0]) & (dist <= range_mm[1]) & (cos >= np.cos(np.radians(max_incidence_deg)))
+
+
+def predicted_covariance(J_blocks, idx, cols, sigma_mm):
+    """Covariance (c, c) of the columns ``cols`` from the rows of poses ``idx``: sigma^2 (J^T J)^-1."""
+    J = J_blocks[idx][..., cols].reshape(-1, len(cols))
+    return sigma_mm**2 * np.linalg.inv(J.T @ J)
+
+
+def plan_campaign(model, q_candidates, count: int, *, tool=(0.0, 0.0, 100.0), free=None, sigma_mm: float = 0.02):
+    """Choose ``count`` of ``q_candidates`` (N, n) for a point-measurement calibration of ``model``
+    (base frame and the tool point estimated too) and predict its outcome.
+
+    Returns ``{indices, names, std (identifiable variables, first order), covariance,
+    identifiable, dropped, holdout_model_std_mm (RMS predicted model error at the candidates not
+    chosen), holdout_rms_mm (expected held-out error: model error and noise), problem}``.
+    """
+    problem = CalibrationProblem(model.replace(T_world_base=np.eye(4)), q_candidates,
+                                 [Target("reflector", point=tuple(tool))], free=free, base_initial=np.eye(4),
+                                 point_sigma_mm=sigma_mm)
+    Jb = pose_jacobians(problem)  # (N, 3, n): prediction derivatives, mm per unit
+    sel = select_poses(Jb, count, names=problem.names, blocks=problem.blocks)
+    idx = np.asarray(sel["indices"])
+    ident = analyse_identifiability(Jb[idx].reshape(-1, Jb.shape[-1]), problem.names, problem.blocks)
+    cols = [problem.names.index(n) for n in ident.identifiable]
+    cov = predicted_covariance(Jb, idx, cols, sigma_mm)
+    rest = np.setdiff1d(np.arange(len(Jb)), idx)
+    holdout = float("nan")
+    if len(rest):
+        Jr = Jb[rest][..., cols]  # (R, 3, c)
+        var = np.einsum("rij,jk,rik->r", Jr, cov, Jr)  # trace of J C J^T per pose
+        holdout = float(np.sqrt(np.mean(var)))
+    return {"indices": idx, "names": list(ident.identifiable), "std": np.sqrt(np.diag(cov)), "covariance": cov,
+            "units": [problem.units[c] for c in cols], "identifiable": list(ident.identifiable),
+            "dropped": [(d["name"], d["why"]) for d in ident.dropped], "holdout_model_std_mm": holdout,
+            "holdout_rms_mm": float(np.sqrt(holdout**2 + 3 * sigma_mm**2)) if len(rest) else float("nan"),
+            "problem": problem}

@@ -1,0 +1,53 @@
+"""``robocal plan-poses``: which poses to measure for a calibration, with the predicted outcome."""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+from ._common import _user_error
+
+
+@click.command("plan-poses")
+@click.argument("robot")
+@click.option("--count", required=True, type=int, help="Number of poses to plan.")
+@click.option("--candidates", default=1000, show_default=True, help="Random candidate poses within the joint limits.")
+@click.option("--workspace", default=None, metavar="BOX",
+              help="Flange box in the robot base frame: xmin,xmax,ymin,ymax,zmin,zmax [mm].")
+@click.option("--tracker-at", default=None, metavar="X,Y,Z",
+              help="Tracker position in the robot base frame [mm]: poses out of range or not facing it are left out.")
+@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
+              help="Reflector in the flange frame [mm].")
+@click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
+@click.option("--seed", default=0, show_default=True, help="Seed of the candidate poses.")
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
+              help="Joint program to write (robocal-program/1, degrees).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+def plan_poses_cmd(robot, count, candidates, workspace, tracker_at, tool, sigma_mm, seed, out_file, overwrite):
+    """Plan COUNT measurement poses of ROBOT (D-optimal), print the predicted parameter sigma and
+    held-out accuracy, and write the poses as a joint program."""
+    from ..workflows.plan_poses import parse_box, plan_poses
+
+    try:
+        box = parse_box(workspace) if workspace else None
+        at = None
+        if tracker_at:
+            at = [float(v) for v in tracker_at.split(",")]
+            if len(at) != 3:
+                raise ValueError(f"--tracker-at: expected x,y,z [mm], got {tracker_at!r}")
+        p = plan_poses(robot, out_file, count=count, candidates=candidates, workspace=box, tracker_at=at, tool=tool,
+                       sigma_mm=sigma_mm, seed=seed, overwrite=overwrite)
+    except (ValueError, KeyError, OSError) as exc:
+        raise _user_error(exc) from None
+    click.echo(f"{count} poses of {p['model'].name} chosen from {p['n_candidates']} usable candidates (D-optimal)")
+    click.echo(f"predicted 1-sigma at {sigma_mm} mm noise ({len(p['names'])} identifiable variables):")
+    for name, unit, s in zip(p["names"], p["units"], p["std"]):
+        if not (name.startswith("base.") or name.startswith("reflector.")):
+            shown, u = (math.degrees(s), "deg") if unit == "rad" else (s, unit)
+            click.echo(f"  {name:<12}{shown:>12.5f} {u}")
+    if p["dropped"]:
+        click.echo("not identifiable with these poses: " + ", ".join(n for n, _ in p["dropped"]))
+    click.echo(f"predicted held-out RMS error {p['holdout_rms_mm']:.4f} mm (model {p['holdout_model_std_mm']:.4f} mm "
+               f"+ noise) at the other candidates")
+    click.echo(f"wrote {p['file']}")
