@@ -1,6 +1,7 @@
 """Compiled (numba) kernels for forward kinematics and Jacobians, looping over poses.
 
-Two program forms, both built by :mod:`robocal.kinematics.model` from the link operations:
+Two program forms, both built by :mod:`robocal.kinematics.model` from the link operations (the
+fused one packed by :func:`robocal.kinematics._packing.pack_fused`):
 
 * the *fused* program for forward kinematics: per moving joint ``m`` a constant affine ``K[m]``
   (3x4) from its parent joint's frame, then the joint motion ``Rz(q)`` or ``Tz(q)``; end effectors
@@ -79,14 +80,6 @@ def sincos_array(x):
     for i in range(flat.size):
         s[i], c[i] = _sincos(flat[i])
     return s.reshape(x.shape), c.reshape(x.shape)
-
-
-def pack_fused(K, mparent, mtype, cpl_ptr, cpl_idx, cpl_coef, ee_anchor, E, post):
-    """Pack the fused FK program into one int and one float array (cheap kernel dispatch)."""
-    n_m, n_e = len(K), len(E)
-    ints = np.concatenate([[n_m, n_e, len(cpl_idx)], mparent, mtype, cpl_ptr, cpl_idx, ee_anchor]).astype(np.int64)
-    floats = np.concatenate([np.ravel(K), np.ravel(E), np.ravel(post), cpl_coef]).astype(float)
-    return ints, floats
 
 
 @njit(cache=_CACHE, inline="always")
@@ -221,7 +214,7 @@ def fk_fused_single(q, ints, floats, out):
     _write_pose(G, ee_anchor[0], E[0], out, tmp)
 
 
-@njit(cache=_CACHE, inline="always")
+@njit(cache=_CACHE)
 def _apply_op(M, code, value, ax):
     """Right-multiply the affine frame M (3x4) in place by one elementary operation."""
     if code == OP_TX or code == OP_TY or code == OP_TZ:
@@ -264,7 +257,7 @@ def _apply_op(M, code, value, ax):
             M[i, k] = c * mk - s * mj
 
 
-@njit(cache=_CACHE, inline="always")
+@njit(cache=_CACHE)
 def _op_twist(M, code, ax):
     """Spatial twist (omega, v) of an elementary operation acting at frame M (3x4)."""
     w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..transforms import invert_transforms
-from . import _kernels
+from ._kernel_loader import kernels as _kernels
+from ._packing import pack_fused
 from .links import (
     ANGLE_PARAMS,
     OP_RU,
@@ -34,7 +35,6 @@ from .links import (
 __all__ = ["RobotModel", "EndEffector", "ParameterTable"]
 
 _empty44 = np.empty  # module-level aliases: fewer lookups on the single-call path
-_fk_single_kernel = _kernels.fk_fused_single
 
 
 @dataclass(frozen=True)
@@ -302,7 +302,7 @@ class RobotModel:
             anchor_ee[e] = anchor
             E_ee[e] = (T_from @ np.asarray(ee.T_link_ee, dtype=float))[:3]
         # T_from already contains T_world_base for root-level links.
-        self._fused = _kernels.pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
+        self._fused = pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
         self._fused_ints, self._fused_floats = self._fused
 
     def _end_effector_ancestors(self) -> np.ndarray:
@@ -370,7 +370,7 @@ class RobotModel:
         """
         if out is None:
             out = _empty44((4, 4))
-        _fk_single_kernel(q, self._fused_ints, self._fused_floats, out)
+        _kernels.fk_fused_single(q, self._fused_ints, self._fused_floats, out)
         return out
 
     def fk_reference(self, q, end_effector=None) -> np.ndarray:
