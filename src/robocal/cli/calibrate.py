@@ -31,14 +31,15 @@ from ._common import _names, _step_printer, _user_error
 @click.option("--tool", nargs=3, type=float, default=None, metavar="X Y Z",
               help="Initial target point in the flange frame [mm] (default 0 0 0).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite):
+@click.option("--no-report", is_flag=True, help="Do not write report.html (batch runs: the plots take longer than the solve).")
+def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite, no_report):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA."""
     from ..workflows.calibrate import run_calibration
 
     try:
         r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
                             holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
-                            progress=_step_printer)
+                            progress=_step_printer, report=not no_report)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
