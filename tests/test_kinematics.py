@@ -339,3 +339,22 @@ def test_non_finite_joints_are_refused_with_pose_and_joint():
 def test_unknown_robot_suggests_close_names():
     with pytest.raises(RobotFileError, match="Did you mean: ur10"):
         load_robot("ur01")
+
+
+def test_fk_out_and_threaded_batches_match_the_single_thread_kernel(monkeypatch):
+    from robocal.kinematics import _threads
+
+    m = load_robot("ur10")
+    q = np.random.default_rng(3).uniform(-3, 3, (5000, 6))
+    ref = m.fk(q)
+    monkeypatch.setattr(_threads, "PARALLEL_MIN", 100)
+    monkeypatch.setattr(_threads, "n_threads", lambda: 3)
+    out = np.empty((5000, 4, 4))
+    assert m.fk(q, out=out) is out
+    assert np.array_equal(out, ref)
+    assert np.array_equal(m.fk(q[7]), ref[7])
+    assert np.array_equal(m.fk(q[7]), m.fk_single(q[7]))
+    with pytest.raises(ValueError, match="out must be"):
+        m.fk(q, out=np.empty((5000, 4, 3)))
+    with pytest.raises(ValueError, match="not a finite number"):
+        m.fk(np.array([0.0, np.nan, 0, 0, 0, 0]))

@@ -49,10 +49,11 @@ from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
 @click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
 @click.option("--allow-unconverged", is_flag=True,
               help=f"Exit 0 even when the solver does not converge (otherwise exit {EXIT_NOT_CONVERGED}).")
+@click.option("--no-report", is_flag=True, help="Do not write report.html (batch runs: the plots take longer than the solve).")
 @import_options
 def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite,
               rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
-              allow_unconverged, **imp):
+              allow_unconverged, no_report, **imp):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA.
 
     DATA is robocal's measurement file, or with --format a tracker export paired with --joints.
@@ -67,7 +68,8 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
                             holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
                             progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
                             prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,
-                            measurements=meas, max_iterations=max_iterations)
+                            measurements=meas, max_iterations=max_iterations,
+                            report=not no_report)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]

@@ -9,18 +9,37 @@ import sys
 
 import click
 
-from .calibrate import calibrate, correct
-from .history import history_cmd as history
-from .importing import import_cmd
-from .kinematics import fk, ik, robots
-from .plan import plan_poses_cmd
-from .simulate import simulate
-from .tcp import tcp
-from .tcp_cross_laser import cross_laser_cmd, simulate_cmd
-from .thermal import thermal
+from ._lazy import LazyGroup
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+def _attach_cross_laser(tcp):
+    """The cross-laser commands live in their own module but belong to ``robocal tcp``."""
+    from .tcp_cross_laser import cross_laser_cmd, simulate_cmd
+
+    tcp.add_command(cross_laser_cmd)
+    tcp.add_command(simulate_cmd)
+
+
+# Every command: (module in robocal.cli, attribute, one line in `robocal --help`, hook after loading).
+# The modules are imported only when their command runs (or its help is asked for), so that
+# `robocal --help` and `robocal robots` start without numba, scipy or matplotlib. The summaries are
+# kept here because click would cut the docstrings' first sentences.
+_COMMANDS = {
+    "robots": ("kinematics", "robots", "List the robots shipped with robocal.", None),
+    "fk": ("kinematics", "fk", "Forward kinematics: flange pose at given joints.", None),
+    "ik": ("kinematics", "ik", "Inverse kinematics: joints for a flange pose.", None),
+    "calibrate": ("calibrate", "calibrate", "Calibrate a robot's kinematics from a measurement file.", None),
+    "correct": ("calibrate", "correct", "Corrected joint targets for a nominal-model controller.", None),
+    "simulate": ("simulate", "simulate", "Simulated measurement campaigns with the hidden truth.", None),
+    "tcp": ("tcp", "tcp", "Tool frame calibration: touch-up, light barriers, cross-laser.", _attach_cross_laser),
+    "thermal": ("thermal", "thermal", "Thermal drift: system calibration, screening, compensation.", None),
+    "history": ("history", "history_cmd", "A robot's calibration and maintenance history.", None),
+    "import": ("importing", "import_cmd", "A tracker export and a joint log into a measurement file.", None),
+    "plan-poses": ("plan", "plan_poses_cmd", "Measurement poses for a calibration, with the predicted sigma.", None),
+}
+
+
+@click.group(cls=LazyGroup, lazy_commands=_COMMANDS, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="robocal")
 def main():
     """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames)."""
@@ -81,27 +100,6 @@ def demo(out_dir, seed, poses):
                f"{t['cycle_time_s']:.1f} s, TCP error {t['tcp_error_mm']:.3f} mm, axis error {t['axis_error_deg']:.3f} deg")
     click.echo("")
     click.echo(f"wrote {r['files']['report']}, {r['files']['result']}" + (f", history {r['history']}" if r.get("history") else ""))
-
-
-# One line per command in `robocal --help` (click would cut the docstrings' first sentences).
-_SUMMARIES = {
-    robots: "List the robots shipped with robocal.",
-    fk: "Forward kinematics: flange pose at given joints.",
-    ik: "Inverse kinematics: joints for a flange pose.",
-    calibrate: "Calibrate a robot's kinematics from a measurement file.",
-    correct: "Corrected joint targets for a nominal-model controller.",
-    simulate: "Simulated measurement campaigns with the hidden truth.",
-    tcp: "Tool frame calibration: touch-up, light barriers, cross-laser.",
-    thermal: "Thermal drift: system calibration, screening, compensation.",
-    history: "A robot's calibration and maintenance history.",
-    import_cmd: "A tracker export and a joint log into a measurement file.",
-    plan_poses_cmd: "Measurement poses for a calibration, with the predicted sigma.",
-}
-for _command, _summary in _SUMMARIES.items():
-    _command.short_help = _summary
-    main.add_command(_command)
-tcp.add_command(cross_laser_cmd)
-tcp.add_command(simulate_cmd)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,6 +1,7 @@
 """Compiled (numba) kernels for forward kinematics and Jacobians, looping over poses.
 
-Two program forms, both built by :mod:`robocal.kinematics.model` from the link operations:
+Two program forms, both built by :mod:`robocal.kinematics.model` from the link operations (the
+fused one packed by :func:`robocal.kinematics._packing.pack_fused`):
 
 * the *fused* program for forward kinematics: per moving joint ``m`` a constant affine ``K[m]``
   (3x4) from its parent joint's frame, then the joint motion ``Rz(q)`` or ``Tz(q)``; end effectors
@@ -79,14 +80,6 @@ def sincos_array(x):
     for i in range(flat.size):
         s[i], c[i] = _sincos(flat[i])
     return s.reshape(x.shape), c.reshape(x.shape)
-
-
-def pack_fused(K, mparent, mtype, cpl_ptr, cpl_idx, cpl_coef, ee_anchor, E, post):
-    """Pack the fused FK program into one int and one float array (cheap kernel dispatch)."""
-    n_m, n_e = len(K), len(E)
-    ints = np.concatenate([[n_m, n_e, len(cpl_idx)], mparent, mtype, cpl_ptr, cpl_idx, ee_anchor]).astype(np.int64)
-    floats = np.concatenate([np.ravel(K), np.ravel(E), np.ravel(post), cpl_coef]).astype(float)
-    return ints, floats
 
 
 @njit(cache=_CACHE, inline="always")
@@ -201,6 +194,50 @@ def fk_fused(q, ints, floats, want_links):
     return out, links
 
 
+@njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
+def fk_fused_into(q, ints, floats, e, out, start, stop):
+    """Poses of end effector ``e`` for the configurations ``q[start:stop]``, into ``out[start:stop]``.
+
+    q (N, n_ctrl) controller joints [rad | mm]; out (N, 4, 4) [mm], written in place. The same
+    arithmetic as :func:`fk_fused` in cache-sized blocks of 512 poses (joint values, then their
+    sines and cosines as one vectorized loop, then the chain pose by pose); releases the GIL so
+    that threads can share a batch (disjoint ranges).
+    """
+    n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
+    G = np.empty((n_m, 3, 4))
+    tmp = np.empty((3, 4))
+    B = 512
+    qm = np.empty((B, n_m))
+    s = np.empty((B, n_m))
+    c = np.empty((B, n_m))
+    anchor = ee_anchor[e]
+    Ee = E[e]
+    for first in range(start, stop, B):
+        last = min(first + B, stop)
+        nb = last - first
+        for n in range(nb):
+            for m in range(n_m):
+                qm[n, m] = _model_joint(q[first + n], m, cpl_ptr, cpl_idx, cpl_coef)
+        qf = qm.ravel()
+        sf = s.ravel()
+        cf = c.ravel()
+        for i in range(nb * n_m):
+            sf[i], cf[i] = _sincos(qf[i])
+        for n in range(nb):
+            _chain(n_m, qm[n], c[n], s[n], K, mparent, mtype, G, tmp)
+            _write_pose(G, anchor, Ee, out[first + n], tmp)
+
+
+@njit(cache=_CACHE, fastmath={"contract"})
+def fk_fused_single_checked(q, ints, floats, out):
+    """:func:`fk_fused_single` that first checks ``q`` is finite; False (nothing written) if not."""
+    for i in range(q.shape[0]):
+        if not math.isfinite(q[i]):
+            return False
+    fk_fused_single(q, ints, floats, out)
+    return True
+
+
 @njit(cache=_CACHE, fastmath={"contract"})
 def fk_fused_single(q, ints, floats, out):
     """One configuration ``q`` (n_ctrl,), first end effector, written into ``out`` (4, 4).
@@ -221,7 +258,7 @@ def fk_fused_single(q, ints, floats, out):
     _write_pose(G, ee_anchor[0], E[0], out, tmp)
 
 
-@njit(cache=_CACHE, inline="always")
+@njit(cache=_CACHE)
 def _apply_op(M, code, value, ax):
     """Right-multiply the affine frame M (3x4) in place by one elementary operation."""
     if code == OP_TX or code == OP_TY or code == OP_TZ:
@@ -264,7 +301,7 @@ def _apply_op(M, code, value, ax):
             M[i, k] = c * mk - s * mj
 
 
-@njit(cache=_CACHE, inline="always")
+@njit(cache=_CACHE)
 def _op_twist(M, code, ax):
     """Spatial twist (omega, v) of an elementary operation acting at frame M (3x4)."""
     w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]

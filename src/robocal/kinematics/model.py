@@ -18,7 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..transforms import invert_transforms
-from . import _kernels
+from ._kernel_loader import kernels as _kernels
+from ._packing import pack_fused
+from ._threads import run_ranges
 from .links import (
     ANGLE_PARAMS,
     OP_RU,
@@ -34,7 +36,7 @@ from .links import (
 __all__ = ["RobotModel", "EndEffector", "ParameterTable"]
 
 _empty44 = np.empty  # module-level aliases: fewer lookups on the single-call path
-_fk_single_kernel = _kernels.fk_fused_single
+_F64 = np.dtype(np.float64)
 
 
 @dataclass(frozen=True)
@@ -302,8 +304,9 @@ class RobotModel:
             anchor_ee[e] = anchor
             E_ee[e] = (T_from @ np.asarray(ee.T_link_ee, dtype=float))[:3]
         # T_from already contains T_world_base for root-level links.
-        self._fused = _kernels.pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
+        self._fused = pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
         self._fused_ints, self._fused_floats = self._fused
+        self._one_q = (self.n_joints,)  # shape of one configuration (the single-pose fast path of fk)
 
     def _end_effector_ancestors(self) -> np.ndarray:
         """(n_ee, n_links) bool: the links each end effector depends on, for Jacobian masking."""
@@ -337,18 +340,32 @@ class RobotModel:
         return np.all((q >= self.limits[:, 0] - tol) & (q <= self.limits[:, 1] + tol), axis=-1)
 
     # ------------------------------------------------------------------ forward kinematics
-    def fk(self, q, end_effector=None) -> np.ndarray:
+    def fk(self, q, end_effector=None, out=None) -> np.ndarray:
         """End-effector poses ``T_world_ee``.
 
         q: (N, n_ctrl) or (n_ctrl,) controller joints [rad | mm].
         Returns (N, 4, 4) [mm] (or (4, 4) for a single configuration) for the named end effector
-        (default: the first, the flange of a single-chain robot).
+        (default: the first, the flange of a single-chain robot). out: optional float64
+        C-contiguous array of that shape to write into (returned); saves the allocation of a
+        large batch. Batches of :data:`~robocal.kinematics._threads.PARALLEL_MIN` poses or more
+        are shared between the cores.
         """
+        if (out is None and end_effector is None and type(q) is np.ndarray and q.shape == self._one_q
+                and q.dtype == _F64):
+            pose = _empty44((4, 4))
+            if _kernels.fk_fused_single_checked(q, self._fused_ints, self._fused_floats, pose):
+                return pose
         q2, single = self._as_joints(q)
         e = self.end_effector_index(end_effector)
-        out, _ = _kernels.fk_fused(q2, *self._fused, False)
-        out = out[:, e]
-        return out[0] if single else out
+        shape = (4, 4) if single else (len(q2), 4, 4)
+        if out is None:
+            out = np.empty(shape)
+        elif (not isinstance(out, np.ndarray) or out.shape != shape or out.dtype != _F64
+              or not out.flags.c_contiguous or not out.flags.writeable):
+            raise ValueError(f"{self.name}: out must be a writeable C-contiguous float64 array of shape {shape}")
+        run_ranges(_kernels.fk_fused_into, len(q2), q2, self._fused_ints, self._fused_floats, e,
+                   out.reshape(len(q2), 4, 4))
+        return out
 
     def fk_all(self, q) -> np.ndarray:
         """Poses of every end effector: (N, n_ee, 4, 4) [mm]."""
@@ -370,7 +387,7 @@ class RobotModel:
         """
         if out is None:
             out = _empty44((4, 4))
-        _fk_single_kernel(q, self._fused_ints, self._fused_floats, out)
+        _kernels.fk_fused_single(q, self._fused_ints, self._fused_floats, out)
         return out
 
     def fk_reference(self, q, end_effector=None) -> np.ndarray:

@@ -1,5 +1,7 @@
 """A self-contained HTML report of a calibration (one file, plots embedded as base64 PNG).
 
+The figures are drawn by :mod:`robocal.report._figures`.
+
 The report only draws and formats what it is given: the dict of
 :func:`robocal.calib.outputs.result_to_dict` (with an optional ``validation`` entry) and,
 optionally, an accuracy map computed by the caller (no numerics here).
@@ -9,17 +11,19 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import math
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..io.atomic import atomic_write_text  # noqa: E402
+from ..io.atomic import atomic_write_text
+from ._figures import (
+    figure_png,
+    plot_accuracy_map,
+    plot_errors_per_pose,
+    plot_histogram,
+    plot_parameter_changes,
+)
 
 __all__ = ["write_report", "render_report", "figure_png"]
 
@@ -32,16 +36,6 @@ th { background: #f0f0f0; } td.l, th.l { text-align: left; }
 tr.dropped td { color: #888; } .bad { color: #b00; font-weight: bold; } .ok { color: #070; }
 img { max-width: 100%; } .note { color: #555; font-size: 0.9em; }
 """
-
-
-def figure_png(fig) -> bytes:
-    """PNG bytes of a matplotlib figure (the figure is closed)."""
-    buf = io.BytesIO()
-    try:
-        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    finally:
-        plt.close(fig)
-    return buf.getvalue()
 
 
 def _img(png: bytes, alt: str) -> str:
@@ -78,131 +72,6 @@ def _display(value, unit):
     if value is None:
         return None, unit
     return (math.degrees(value), "deg") if unit == "rad" else (value, unit)
-
-
-# ---------------------------------------------------------------------------------------------
-# plots
-# ---------------------------------------------------------------------------------------------
-
-
-def _per_pose(per):
-    """Per-pose error magnitudes (RMS over the pose's targets) in first-seen pose order."""
-    order, idx = [], {}
-    for p in per["pose"]:
-        if p not in idx:
-            idx[p] = len(order)
-            order.append(p)
-    out = {}
-    for key in ("before", "after"):
-        vals = np.zeros(len(order))
-        cnt = np.zeros(len(order))
-        for p, v in zip(per["pose"], per[key]):
-            vals[idx[p]] += float(v) ** 2
-            cnt[idx[p]] += 1
-        out[key] = np.sqrt(vals / np.maximum(cnt, 1))
-    return order, out
-
-
-def _plot_errors_per_pose(result) -> bytes | None:
-    panels = []
-    per = result.get("residuals", {}).get("per_point")
-    if per:
-        panels.append(("calibration poses", per))
-    val = result.get("validation") or {}
-    if val.get("per_point"):
-        panels.append(("held-out poses", val["per_point"]))
-    if not panels:
-        return None
-    fig, axes = plt.subplots(len(panels), 1, figsize=(11, 3.3 * len(panels)), squeeze=False)
-    for ax, (title, per) in zip(axes[:, 0], panels):
-        poses, e = _per_pose(per)
-        x = np.arange(len(poses))
-        ax.bar(x - 0.2, e["before"], width=0.4, color="tab:red", alpha=0.75, label="before (nominal model)")
-        ax.bar(x + 0.2, e["after"], width=0.4, color="tab:green", alpha=0.9, label="after (calibrated)")
-        ax.set_yscale("log")
-        ax.set_ylabel("position error [mm]")
-        ax.set_title(f"{title}: error per pose")
-        if len(poses) <= 40:
-            ax.set_xticks(x, poses, rotation=90, fontsize=7)
-        else:
-            ax.set_xlabel("pose (index in this set, file order)")
-        ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
-    return figure_png(fig)
-
-
-def _plot_histogram(result) -> bytes | None:
-    sets = []
-    per = result.get("residuals", {}).get("per_point")
-    if per:
-        sets.append(("calibration poses", per))
-    val = result.get("validation") or {}
-    if val.get("per_point"):
-        sets.append(("held-out poses", val["per_point"]))
-    if not sets:
-        return None
-    fig, axes = plt.subplots(1, len(sets), figsize=(5.5 * len(sets), 3.6), squeeze=False)
-    for ax, (title, per) in zip(axes[0], sets):
-        b = np.asarray(per["before"], dtype=float)
-        a = np.asarray(per["after"], dtype=float)
-        allv = np.concatenate([a, b])
-        allv = allv[allv > 0]
-        lo, hi = (allv.min(), allv.max()) if allv.size else (1e-3, 1.0)
-        bins = np.geomspace(lo * 0.9, hi * 1.1, 40)
-        ax.hist(b, bins=bins, color="tab:red", alpha=0.6, label="before")
-        ax.hist(a, bins=bins, color="tab:green", alpha=0.7, label="after")
-        ax.set_xscale("log")
-        ax.set_xlabel("position error [mm]")
-        ax.set_ylabel("points")
-        ax.set_title(title)
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    return figure_png(fig)
-
-
-def _plot_parameter_changes(result) -> bytes | None:
-    rows = [p for p in result.get("parameters", []) if p.get("block") == "geometry" and p.get("identifiable")]
-    if not rows:
-        return None
-    groups = [("lengths [mm]", [p for p in rows if p["unit"] == "mm"], 1.0),
-              ("angles [deg]", [p for p in rows if p["unit"] == "rad"], 180.0 / math.pi)]
-    groups = [g for g in groups if g[1]]
-    fig, axes = plt.subplots(len(groups), 1, figsize=(11, 3.4 * len(groups)), squeeze=False)
-    for ax, (label, ps, scale) in zip(axes[:, 0], groups):
-        x = np.arange(len(ps))
-        ch = np.array([p["change"] for p in ps]) * scale
-        sd = np.array([p["std"] if p["std"] is not None else np.nan for p in ps]) * scale
-        ax.bar(x, ch, color="tab:blue", alpha=0.8)
-        ax.errorbar(x, ch, yerr=np.nan_to_num(sd), fmt="none", ecolor="k", capsize=3, label="± 1 std")
-        ax.axhline(0.0, color="k", lw=0.6)
-        ax.set_xticks(x, [p["name"] for p in ps], rotation=90, fontsize=8)
-        ax.set_ylabel(f"change {label}")
-        ax.legend(fontsize=8)
-    axes[0, 0].set_title("identified parameter changes (calibrated - nominal)")
-    fig.tight_layout()
-    return figure_png(fig)
-
-
-def _plot_accuracy_map(amap) -> bytes | None:
-    if not amap:
-        return None
-    p = np.asarray(amap["positions_mm"], dtype=float)
-    v = np.asarray(amap["values_mm"], dtype=float)
-    if p.size == 0:
-        return None
-    label = amap.get("label", "value [mm]")
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
-    vmax = float(np.nanpercentile(v, 99)) or 1.0
-    for ax, (i, j, lab, title) in zip(axes, [(0, 1, ("x [mm]", "y [mm]"), "top view"),
-                                             (0, 2, ("x [mm]", "z [mm]"), "side view")]):
-        sc = ax.scatter(p[:, i], p[:, j], c=v, s=14, cmap="viridis", vmin=0.0, vmax=vmax)
-        ax.set_xlabel(lab[0])
-        ax.set_ylabel(lab[1])
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_title(title)
-    fig.colorbar(sc, ax=list(axes), label=label, shrink=0.85)
-    fig.suptitle(amap.get("title", "accuracy over the workspace"))
-    return figure_png(fig)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -269,7 +138,7 @@ def _errors_section(result: dict) -> list:
         out.append(_table(["poses", "RMS", "mean", "p95", "max", "n"], rows))
     out.append('<p class="note">"before": nominal kinematics with the best-fit base frame and target points; '
                '"after": the calibrated model. Held-out poses were not used in the fit.</p>')
-    for png, alt in ((_plot_errors_per_pose(result), "error per pose"), (_plot_histogram(result), "error histogram")):
+    for png, alt in ((plot_errors_per_pose(result), "error per pose"), (plot_histogram(result), "error histogram")):
         if png:
             out.append(_img(png, alt))
     return out
@@ -277,7 +146,7 @@ def _errors_section(result: dict) -> list:
 
 def _accuracy_map_section(accuracy_map: dict | None) -> list:
     """The accuracy map plot with its note, if one was given."""
-    amap_png = _plot_accuracy_map(accuracy_map)
+    amap_png = plot_accuracy_map(accuracy_map)
     if not amap_png:
         return []
     out = ["<h2>Accuracy map</h2>"]
@@ -291,7 +160,7 @@ def _parameters_section(result: dict) -> list:
     """Parameter changes (plot and table, angles in degrees) and the parameters not identifiable."""
     e = html.escape
     out = ["<h2>Parameters</h2>"]
-    png = _plot_parameter_changes(result)
+    png = plot_parameter_changes(result)
     if png:
         out.append(_img(png, "parameter changes"))
     prow, pcls = [], []

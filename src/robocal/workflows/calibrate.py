@@ -108,7 +108,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
                     overwrite: bool = False, progress=None, method: str = "lm", rotation_weight: float | None = None,
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
-                    max_iterations: int = 50) -> dict:
+                    max_iterations: int = 50, report: bool = True) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -117,7 +117,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     of the split. loss: ``linear``, ``huber`` or ``cauchy`` (robust, per pose). sigma_mm:
     measurement noise per coordinate [mm] (weights and absolute uncertainty; default: estimated
     from the residuals). tool: initial target point (3,) [mm] in the flange frame (default origin).
-    progress(step, total, text): called between steps.
+    progress(step, total, text): called between steps. report: write ``report.html`` (False for
+    batch runs: the plots cost more than the solve).
 
     6-D (files with orientation, unless ``use_orientation`` is false): positions and orientations
     are fitted with a 6-DoF tool frame; rotation_weight [mm per rad] (default
@@ -133,9 +134,11 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     ``files`` and ``notes``.
     """
     step = progress or (lambda i, n, text: None)
-    total = 6
+    total = 6 if report else 5
     out = Path(out_dir)
     paths = output_paths(out)
+    if not report:
+        del paths["report"]
     if not overwrite:
         for p in paths.values():
             if p.exists():
@@ -261,6 +264,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     rdict["notes"] = notes
     text = json.dumps(rdict, indent=2, allow_nan=False) + "\n"
     files["result"] = atomic_write_text(paths["result"], text, overwrite=overwrite)
+    if not report:
+        return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem}
 
     step(6, total, "writing report.html")
     from ..report.html import write_report
