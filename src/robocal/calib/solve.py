@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
+from ._iterate import DampedGaussNewton, pose_norms
 from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
 
@@ -194,23 +195,6 @@ def _state_values(problem: Problem, state) -> np.ndarray:
     return problem.variable_values(state)
 
 
-def _robust_weights(r_pose, loss, f_scale):
-    """IRLS weights per pose from residual norms r_pose (n,) [same units as f_scale]."""
-    z = r_pose / f_scale
-    if loss == "linear":
-        return np.ones_like(z)
-    if loss == "huber":
-        return np.where(z <= 1.0, 1.0, 1.0 / np.maximum(z, 1e-300))
-    if loss == "cauchy":
-        return 1.0 / (1.0 + z**2)
-    raise ValueError(f"loss must be 'linear', 'huber' or 'cauchy', got {loss!r}")
-
-
-def _pose_norms(pose_of_row, r, n_slots):
-    """Norm of each pose's residual rows (n_slots,); rows of no pose are counted in the last slot."""
-    return np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_slots))
-
-
 def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
@@ -248,140 +232,34 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
             if auto_identifiable else IdentifiabilityReport.trivial(problem.names)
     active = np.array([nm in set(ident.identifiable) for nm in problem.names])
     r0 = r.copy()
-    n_poses = problem.n_poses
-    # robust weights act per pose; rows of no pose (priors, label -1) share one extra slot of weight 1
-    pose_of_row = np.where(labels[:, 0] < 0, n_poses, labels[:, 0])
-    n_slots = n_poses + 1
-    col_scale = np.linalg.norm(J, axis=0)
-    col_scale[col_scale == 0] = 1.0
-    geom = problem.blocks == "geometry"
-    p_start = problem.variable_values(start_state, "geometry") if prior_weight else None
+    gn = DampedGaussNewton(problem, state, r, J, labels, active, method=method, loss=loss, f_scale=f_scale,
+                           prior_weight=prior_weight, rcond=rcond, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol,
+                           progress=progress)
+    gn.run_phase(1, max_iterations)
+    if gn.robust and reject_outliers and gn.drop_outliers(outlier_threshold):
+        # robust phase done: the down-weighted poses dropped, finish by plain least squares
+        gn.run_phase(gn.it + 1, max_iterations)
+    n_rows = len(gn.pose_of_row)
+    state, r, J = gn.state, gn.r[:n_rows], gn.J[:n_rows]
+    weights = gn.weights if not gn.rejected.any() else np.where(gn.rejected, gn.robust_weights, 1.0)
+    cov, std, rank, cond, sigma0 = _covariance(problem, J, r, gn.weights[gn.pose_of_row], active, gn.col_scale, rcond)
+    outliers = _outlier_report(problem, gn, r, weights, outlier_threshold) if loss != "linear" else []
+    r_before_pts = problem.point_errors(r0)
+    r_after_pts = problem.point_errors(r)
+    return CalibrationResult(
+        names=problem.names, units=problem.units, values=_state_values(problem, state),
+        initial=_state_values(problem, start_state), std=std,
+        covariance=cov, state=state, problem=problem, residuals_before=r0, residuals_after=r,
+        iterations=gn.it, converged=gn.converged, reason=gn.reason, rank=rank, condition_number=cond, sigma0=sigma0,
+        identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts,
+        jacobian=J)
 
-    def augmented(st, with_jac=True):
-        """Residuals (and Jacobian) with the optional prior rows on the model parameters."""
-        rr, JJ, _ = problem.evaluate(st, jacobian=with_jac)
-        if not prior_weight:
-            return rr, JJ
-        pr = prior_weight * col_scale[geom] * (p_start - problem.variable_values(st, "geometry"))
-        rr = np.concatenate([rr, pr])
-        if with_jac:
-            Jp = np.zeros((int(geom.sum()), n))
-            Jp[:, np.flatnonzero(geom)] = np.diag(prior_weight * col_scale[geom])
-            JJ = np.vstack([JJ, Jp])
-        return rr, JJ
 
-    weights = np.ones(n_slots)
-    if loss != "linear":
-        pose_norm = _pose_norms(pose_of_row, r, n_slots)[:n_poses]
-        if f_scale is None:
-            med = np.median(pose_norm)
-            f_scale = med + 3.0 * max(1.4826 * np.median(np.abs(pose_norm - med)), 1e-12)
-        weights[:n_poses] = _robust_weights(pose_norm, loss, f_scale)
-
-    def row_weights():
-        w = weights[pose_of_row]
-        return np.concatenate([w, np.ones(int(geom.sum()))]) if prior_weight else w
-
-    if prior_weight:
-        r, J = augmented(state)
-    w_rows = row_weights()
-    cost = 0.5 * float(np.sum(w_rows * r**2))
-    lam = 1e-3
-    reason, converged, it = "maximum iterations reached", False, 0
-    robust = loss != "linear"
-    weighted = robust or bool(prior_weight)
-    all_active = bool(active.all())
-    rejected = np.zeros(n_slots, dtype=bool)
-    total_it = 0
-    for phase in range(2):
-        for it in range(total_it + 1, total_it + max_iterations + 1):
-            if weighted:
-                sw = np.sqrt(w_rows)
-                Ja = (J[:, active] * sw[:, None]) / col_scale[active]
-                ra = r * sw
-            else:
-                Ja = (J[:, active] if not all_active else J) / col_scale[active]
-                ra = r
-            g = Ja.T @ ra
-            if method == "svd":
-                U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
-                keep = s > rcond * s[0]
-                step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
-                s_max = s[0]
-            else:
-                # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky
-                G = Ja.T @ Ja
-                g_max = float(np.max(np.diag(G)))
-                s_max = math.sqrt(g_max)
-            if np.max(np.abs(g), initial=0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * cost)):
-                reason, converged = "gradient is zero", True
-                break
-            accepted = False
-            for _ in range(30):
-                if method == "lm":
-                    try:
-                        step_s = cho_solve(cho_factor(G + (lam * g_max) * np.eye(len(G)), check_finite=False), g,
-                                           check_finite=False)
-                    except np.linalg.LinAlgError:
-                        lam *= 10.0
-                        continue
-                step = np.zeros(n)
-                step[active] = step_s / col_scale[active]
-                trial = problem.retract(state, step)
-                r_t, J_t = augmented(trial)  # with the Jacobian: an accepted step needs it next
-                c_t = 0.5 * float(np.sum(w_rows * r_t**2))
-                if c_t <= cost:
-                    accepted = True
-                    break
-                if method == "svd":
-                    step_s = 0.5 * step_s  # backtracking
-                else:
-                    lam *= 10.0
-            if not accepted:
-                reason, converged = "no step reduces the cost further (numerical precision reached)", True
-                break
-            state, r, J = trial, r_t, J_t
-            if robust:
-                pose_norm = _pose_norms(pose_of_row, r[:len(pose_of_row)], n_slots)[:n_poses]
-                weights[:n_poses] = _robust_weights(pose_norm, loss, f_scale)
-                w_rows = row_weights()
-            new_cost = 0.5 * float(np.sum(w_rows * r**2))
-            lam = max(lam / 10.0, 1e-12)
-            if progress:
-                progress(it, new_cost)
-            dcost, cost = cost - new_cost, new_cost
-            if abs(dcost) <= ftol * max(cost, 1e-300):
-                reason, converged = "relative cost reduction below ftol", True
-                break
-            # statistical criterion: the last step changed chi^2 by less than chi2_tol residual
-            # variances, so the estimate is within a small fraction of a standard deviation of
-            # the optimum (Gauss-Newton converges quadratically: the next change is smaller still)
-            s2 = 2.0 * cost / max(len(r) - int(active.sum()), 1)
-            if 2.0 * abs(dcost) <= chi2_tol * max(s2, 1e-300) and lam <= 1e-3:
-                reason, converged = f"chi-square change below {chi2_tol:g} residual variances", True
-                break
-            if np.linalg.norm(step_s) <= xtol * (1.0 + math.sqrt(2.0 * cost)):
-                reason, converged = "step below xtol", True
-                break
-        total_it = it
-        if not (robust and reject_outliers) or phase == 1:
-            break
-        # Robust phase done: drop the poses it down-weighted and finish by plain least squares.
-        rejected = weights < outlier_threshold
-        if not rejected.any():
-            break
-        robust_weights, robust, weighted = weights.copy(), False, True
-        weights = (~rejected).astype(float)
-        w_rows = row_weights()
-        cost = 0.5 * float(np.sum(w_rows * r**2))
-        lam = 1e-3
-        reason, converged = "maximum iterations reached", False
-    r = r[:len(pose_of_row)]
-    J = J[:len(pose_of_row)]
-
-    # Covariance from the final (weighted) Jacobian on the identifiable set.
-    robust_weights = weights if not rejected.any() else robust_weights
-    sw = np.sqrt(weights[pose_of_row])
+def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
+    """Covariance (n, n) [NaN outside the identifiable set], std (n,), rank, condition number and
+    the residual standard deviation sigma0, from the final weighted Jacobian J (M, n)."""
+    n = J.shape[1]
+    sw = np.sqrt(row_weights)
     Ja = J[:, active] * sw[:, None]
     ra = r * sw
     dof = max(Ja.shape[0] - Ja.shape[1], 1)
@@ -403,24 +281,16 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     cov_a = cov_s / np.outer(col_scale[active], col_scale[active]) * scale_for_cov
     cov = np.full((n, n), np.nan)
     cov[np.ix_(active, active)] = cov_a
-    std = np.sqrt(np.diag(cov))
-    outliers = []
-    if loss != "linear":
-        if rejected.any():
-            weights = np.where(rejected, robust_weights, 1.0)
-        pose_norm = _pose_norms(pose_of_row, r, n_slots)
-        unit = problem.residual_scale
-        for p in np.flatnonzero(weights[:n_poses] < outlier_threshold):
-            outliers.append({"pose": int(p), "residual": float(pose_norm[p] * unit), "weight": float(weights[p]),
-                             "reason": f"residual {pose_norm[p] * unit:.4g} is {pose_norm[p] / f_scale:.1f} x the "
-                                       f"robust scale {f_scale * unit:.4g} ({loss} loss)"})
-    r_before_pts = problem.point_errors(r0)
-    r_after_pts = problem.point_errors(r)
-    return CalibrationResult(
-        names=problem.names, units=problem.units, values=_state_values(problem, state),
-        initial=_state_values(problem, start_state), std=std,
-        covariance=cov, state=state, problem=problem, residuals_before=r0, residuals_after=r,
-        iterations=it, converged=converged, reason=reason, rank=rank, condition_number=cond, sigma0=sigma0,
-        identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts,
-        jacobian=J)
+    return cov, np.sqrt(np.diag(cov)), rank, cond, sigma0
 
+
+def _outlier_report(problem: Problem, gn: DampedGaussNewton, r, weights, threshold) -> list:
+    """One dict per pose whose robust weight ended below ``threshold``: pose, residual, weight, reason."""
+    pose_norm = pose_norms(gn.pose_of_row, r, gn.n_slots)
+    unit = problem.residual_scale
+    out = []
+    for p in np.flatnonzero(weights[:gn.n_poses] < threshold):
+        out.append({"pose": int(p), "residual": float(pose_norm[p] * unit), "weight": float(weights[p]),
+                    "reason": f"residual {pose_norm[p] * unit:.4g} is {pose_norm[p] / gn.f_scale:.1f} x the "
+                              f"robust scale {gn.f_scale * unit:.4g} ({gn.loss} loss)"})
+    return out

@@ -264,8 +264,11 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     rdict["notes"] = notes
     text = json.dumps(rdict, indent=2, allow_nan=False) + "\n"
     files["result"] = atomic_write_text(paths["result"], text, overwrite=overwrite)
+    out = {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem,
+           "six_d": bool(setup["six_d"]), "description": setup["description"],
+           "convergence_warnings": convergence_warnings}
     if not report:
-        return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem}
+        return out
 
     step(6, total, "writing report.html")
     from ..report.html import write_report
@@ -277,9 +280,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     "(J Cov J^T over the identified variables, base frame included)."}
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap, overwrite=overwrite,
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}")
-    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem,
-            "six_d": bool(setup["six_d"]), "description": setup["description"],
-            "convergence_warnings": convergence_warnings}
+    return out
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,0 +1,201 @@
+"""The damped Gauss-Newton iteration behind :func:`robocal.calib.solve` (Levenberg-Marquardt or
+truncated SVD, METHODS.md (3-9, 3-10)), with per-pose robust weights, an optional Tikhonov prior
+on the geometry and a second, plain phase after dropping outliers.
+
+Columns are scaled by the norms of the initial Jacobian's columns; the step is solved on the
+identifiable (``active``) columns only. Internal module: the public entry is ``solve``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve
+
+MAX_ITERATIONS_REASON = "maximum iterations reached"
+
+
+def robust_weights(r_pose, loss, f_scale):
+    """Per-pose IRLS weights (N,) for ``huber`` / ``cauchy`` from pose residual norms (N,)."""
+    z = r_pose / f_scale
+    if loss == "linear":
+        return np.ones_like(z)
+    if loss == "huber":
+        return np.where(z <= 1.0, 1.0, 1.0 / np.maximum(z, 1e-300))
+    if loss == "cauchy":
+        return 1.0 / (1.0 + z**2)
+    raise ValueError(f"loss must be 'linear', 'huber' or 'cauchy', got {loss!r}")
+
+
+def pose_norms(pose_of_row, r, n_slots):
+    """Norm of each pose's residual rows (n_slots,); rows of no pose are counted in the last slot."""
+    return np.sqrt(np.bincount(pose_of_row, weights=r**2, minlength=n_slots))
+
+
+class DampedGaussNewton:
+    """One solve's iteration state: the current estimate, residuals r (M,), Jacobian J (M, n),
+    weights per pose slot, cost, damping ``lam``, iteration count and stop reason."""
+
+    def __init__(self, problem, state, r, J, labels, active, *, method, loss, f_scale, prior_weight, rcond,
+                 ftol, xtol, chi2_tol, progress):
+        self.problem, self.method, self.loss, self.rcond = problem, method, loss, rcond
+        self.ftol, self.xtol, self.chi2_tol, self.progress = ftol, xtol, chi2_tol, progress
+        self.prior_weight = prior_weight
+        self.active = active
+        self.n = J.shape[1]
+        self.n_poses = problem.n_poses
+        # robust weights act per pose; rows of no pose (priors, label -1) share one extra slot of weight 1
+        self.pose_of_row = np.where(labels[:, 0] < 0, self.n_poses, labels[:, 0])
+        self.n_slots = self.n_poses + 1
+        self.col_scale = np.linalg.norm(J, axis=0)
+        self.col_scale[self.col_scale == 0] = 1.0
+        self.geom = problem.blocks == "geometry"
+        self.p_start = problem.variable_values(state, "geometry") if prior_weight else None
+        self.weights = np.ones(self.n_slots)
+        self.f_scale = f_scale
+        if loss != "linear":
+            self._initial_robust_weights(r)
+        if prior_weight:
+            r, J = self.augmented(state)
+        self.state, self.r, self.J = state, r, J
+        self.w_rows = self.row_weights()
+        self.cost = 0.5 * float(np.sum(self.w_rows * r**2))
+        self.lam = 1e-3
+        self.reason, self.converged, self.it = MAX_ITERATIONS_REASON, False, 0
+        self.robust = loss != "linear"
+        self.weighted = self.robust or bool(prior_weight)
+        self.all_active = bool(active.all())
+        self.rejected = np.zeros(self.n_slots, dtype=bool)
+        self.robust_weights = None
+
+    # ------------------------------------------------------------------ pieces
+    def _initial_robust_weights(self, r):
+        pose_norm = pose_norms(self.pose_of_row, r, self.n_slots)[:self.n_poses]
+        if self.f_scale is None:
+            med = np.median(pose_norm)
+            self.f_scale = med + 3.0 * max(1.4826 * np.median(np.abs(pose_norm - med)), 1e-12)
+        self.weights[:self.n_poses] = robust_weights(pose_norm, self.loss, self.f_scale)
+
+    def augmented(self, st, with_jac=True):
+        """Residuals (and Jacobian) with the optional prior rows on the model parameters."""
+        rr, JJ, _ = self.problem.evaluate(st, jacobian=with_jac)
+        if not self.prior_weight:
+            return rr, JJ
+        geom, cs = self.geom, self.col_scale
+        pr = self.prior_weight * cs[geom] * (self.p_start - self.problem.variable_values(st, "geometry"))
+        rr = np.concatenate([rr, pr])
+        if with_jac:
+            Jp = np.zeros((int(geom.sum()), self.n))
+            Jp[:, np.flatnonzero(geom)] = np.diag(self.prior_weight * cs[geom])
+            JJ = np.vstack([JJ, Jp])
+        return rr, JJ
+
+    def row_weights(self):
+        w = self.weights[self.pose_of_row]
+        return np.concatenate([w, np.ones(int(self.geom.sum()))]) if self.prior_weight else w
+
+    def _scaled_system(self):
+        """Scaled, weighted active Jacobian Ja and residuals ra."""
+        active, cs = self.active, self.col_scale
+        if self.weighted:
+            sw = np.sqrt(self.w_rows)
+            return (self.J[:, active] * sw[:, None]) / cs[active], self.r * sw
+        return (self.J[:, active] if not self.all_active else self.J) / cs[active], self.r
+
+    # ------------------------------------------------------------------ iteration
+    def run_phase(self, first_iteration: int, max_iterations: int) -> None:
+        """Iterate until a stop rule fires or ``max_iterations`` steps are taken."""
+        for it in range(first_iteration, first_iteration + max_iterations):
+            self.it = it
+            if self._iteration(it):
+                break
+
+    def _iteration(self, it) -> bool:
+        """One accepted step (True when a stop rule fired)."""
+        Ja, ra = self._scaled_system()
+        g = Ja.T @ ra
+        G = g_max = step_s = None
+        if self.method == "svd":
+            U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
+            keep = s > self.rcond * s[0]
+            step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
+            s_max = s[0]
+        else:
+            # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky
+            G = Ja.T @ Ja
+            g_max = float(np.max(np.diag(G)))
+            s_max = math.sqrt(g_max)
+        if np.max(np.abs(g), initial=0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
+            return self._stop("gradient is zero")
+        found = self._line_search(G, g, g_max, step_s)
+        if found is None:
+            return self._stop("no step reduces the cost further (numerical precision reached)")
+        trial, r_t, J_t, step_s = found
+        self.state, self.r, self.J = trial, r_t, J_t
+        if self.robust:
+            pose_norm = pose_norms(self.pose_of_row, self.r[:len(self.pose_of_row)], self.n_slots)[:self.n_poses]
+            self.weights[:self.n_poses] = robust_weights(pose_norm, self.loss, self.f_scale)
+            self.w_rows = self.row_weights()
+        new_cost = 0.5 * float(np.sum(self.w_rows * self.r**2))
+        self.lam = max(self.lam / 10.0, 1e-12)
+        if self.progress:
+            self.progress(it, new_cost)
+        dcost, self.cost = self.cost - new_cost, new_cost
+        return self._converged_after_step(dcost, step_s)
+
+    def _line_search(self, G, g, g_max, step_s):
+        """A step that does not raise the cost: LM raises the damping, SVD halves the step (30 tries).
+        Returns (trial state, its r, its J, scaled step) or None."""
+        for _ in range(30):
+            if self.method == "lm":
+                try:
+                    step_s = cho_solve(cho_factor(G + (self.lam * g_max) * np.eye(len(G)), check_finite=False), g,
+                                       check_finite=False)
+                except np.linalg.LinAlgError:
+                    self.lam *= 10.0
+                    continue
+            step = np.zeros(self.n)
+            step[self.active] = step_s / self.col_scale[self.active]
+            trial = self.problem.retract(self.state, step)
+            r_t, J_t = self.augmented(trial)  # with the Jacobian: an accepted step needs it next
+            c_t = 0.5 * float(np.sum(self.w_rows * r_t**2))
+            if c_t <= self.cost:
+                return trial, r_t, J_t, step_s
+            if self.method == "svd":
+                step_s = 0.5 * step_s  # backtracking
+            else:
+                self.lam *= 10.0
+        return None
+
+    def _converged_after_step(self, dcost, step_s) -> bool:
+        cost = self.cost
+        if abs(dcost) <= self.ftol * max(cost, 1e-300):
+            return self._stop("relative cost reduction below ftol")
+        # statistical criterion: the last step changed chi^2 by less than chi2_tol residual
+        # variances, so the estimate is within a small fraction of a standard deviation of
+        # the optimum (Gauss-Newton converges quadratically: the next change is smaller still)
+        s2 = 2.0 * cost / max(len(self.r) - int(self.active.sum()), 1)
+        if 2.0 * abs(dcost) <= self.chi2_tol * max(s2, 1e-300) and self.lam <= 1e-3:
+            return self._stop(f"chi-square change below {self.chi2_tol:g} residual variances")
+        if np.linalg.norm(step_s) <= self.xtol * (1.0 + math.sqrt(2.0 * cost)):
+            return self._stop("step below xtol")
+        return False
+
+    def _stop(self, reason) -> bool:
+        self.reason, self.converged = reason, True
+        return True
+
+    def drop_outliers(self, threshold) -> bool:
+        """After a robust phase: give the poses weighted below ``threshold`` weight 0 and the rest 1
+        (plain least squares follows). False when there is none to drop."""
+        self.rejected = self.weights < threshold
+        if not self.rejected.any():
+            return False
+        self.robust_weights, self.robust, self.weighted = self.weights.copy(), False, True
+        self.weights = (~self.rejected).astype(float)
+        self.w_rows = self.row_weights()
+        self.cost = 0.5 * float(np.sum(self.w_rows * self.r**2))
+        self.lam = 1e-3
+        self.reason, self.converged = MAX_ITERATIONS_REASON, False
+        return True
