@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from ._common import _names, _step_printer, _user_error
+from ._common import EXIT_FAILED_RESULT, _names, _report_verdict, _step_printer, _user_error
 
 
 @click.command()
@@ -31,14 +31,16 @@ from ._common import _names, _step_printer, _user_error
 @click.option("--tool", nargs=3, type=float, default=None, metavar="X Y Z",
               help="Initial target point in the flange frame [mm] (default 0 0 0).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite):
+@click.option("--force", is_flag=True,
+              help="Write the calibrated robot files even when the result fails the sanity gates (exit code 3).")
+def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite, force):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA."""
     from ..workflows.calibrate import run_calibration
 
     try:
         r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
                             holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
-                            progress=_step_printer)
+                            progress=_step_printer, force=force)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
@@ -55,6 +57,9 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
     for note in r["notes"]:
         click.echo(f"note: {note}")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
+    if not r["verdict"].ok:
+        _report_verdict(r["verdict"])
+        sys.exit(EXIT_FAILED_RESULT)
 
 
 @click.command()

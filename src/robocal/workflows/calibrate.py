@@ -32,6 +32,7 @@ import numpy as np
 
 from ..calib import CalibrationProblem, Target, solve
 from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
+from ..calib.sanity import calibration_verdict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
 from ..io.atomic import atomic_write_text
@@ -39,6 +40,8 @@ from ..io.measurements import read_measurements
 from ..io.targets import read_targets, write_corrected_targets
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
+from .outputs import check_outputs_free, staged_outputs
+from .progress import solver_progress
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
            "run_correct"]
@@ -103,7 +106,7 @@ def _per_point(errors_before, errors_after, pose_ids, targets):
 
 def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, fix=(), holdout: float = 0.2,
                     seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
-                    overwrite: bool = False, progress=None, method: str = "lm") -> dict:
+                    overwrite: bool = False, progress=None, method: str = "lm", force: bool = False) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -115,19 +118,19 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     progress(step, total, text): called between steps.
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
-    naming the file, checked before any work). Returns a dict with ``result`` (the JSON dict),
-    ``files`` and ``notes``.
+    naming the file, checked before any work); the files are written into a temporary folder and
+    moved into place together (:mod:`robocal.workflows.outputs`). The sanity gates
+    (:mod:`robocal.calib.sanity`) give ``status`` and ``reasons`` in result.json; a failed result
+    writes no calibrated robot files unless ``force``. Returns a dict with ``result`` (the JSON
+    dict), ``files``, ``notes`` and ``verdict``.
     """
     step = progress or (lambda i, n, text: None)
     total = 6
     out = Path(out_dir)
     paths = output_paths(out)
-    if not overwrite:
-        for p in paths.values():
-            if p.exists():
-                raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
     if out.exists() and not out.is_dir():
         raise CalibrationInputError(f"{out}: exists and is not a folder")
+    check_outputs_free(out, OUTPUT_FILES.values(), overwrite)
     if loss not in ("linear", "huber", "cauchy"):
         raise CalibrationInputError(f"--loss must be linear, huber or cauchy, got {loss!r}")
     if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
@@ -155,12 +158,12 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
 
     step(2, total, f"initial base frame and target point(s) with the nominal geometry ({len(train)} poses)")
     problem0 = CalibrationProblem(nominal, q_tr, targets, p_tr, free=[], base_initial="fit", point_sigma_mm=sigma_mm)
-    res0 = solve(problem0, loss=loss, method=method)
+    res0 = solve(problem0, loss=loss, method=method, progress=solver_progress(step, 2, total))
 
     step(3, total, f"identifying {len(free_names)} parameter(s) + base + {K} target point(s) ({loss} loss)")
     problem = CalibrationProblem(nominal, q_tr, targets, p_tr, free=free_names, base_initial="fit",
                                  point_sigma_mm=sigma_mm)
-    result = solve(problem, loss=loss, method=method, state0=res0.state)
+    result = solve(problem, loss=loss, method=method, state0=res0.state, progress=solver_progress(step, 3, total))
 
     step(4, total, f"validating on {len(hold)} held-out pose(s)")
     validation = None
@@ -185,8 +188,14 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         "statistics": error_statistics(std_pts.max(axis=1)),
     }
 
-    step(5, total, "writing result.json, calibrated robot (TOML, URDF)")
-    out.mkdir(parents=True, exist_ok=True)
+    verdict = calibration_verdict(
+        robot=nominal.name, rms_before_mm=res0.rms_after, rms_after_mm=result.rms_after, sigma_mm=sigma_mm,
+        holdout_before_mm=validation["before"]["rms"] if validation else None,
+        holdout_after_mm=validation["after"]["rms"] if validation else None,
+        parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    write_robot = verdict.ok or force
+    step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
+                                            " (FAILED the sanity gates: no calibrated robot file)"))
     notes = []
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     metadata = {
@@ -203,6 +212,23 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         "iterations": res0.iterations, "converged": res0.converged, "reason": res0.reason,
         "rms_mm": res0.rms_after, "T_instrument_base": res0.state.bases[0], "targets_mm": res0.state.targets})
     rdict["accuracy_map"] = json_ready(accuracy)
+    rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
+    step(6, total, "writing report.html; moving the outputs into place together")
+    with staged_outputs(out, OUTPUT_FILES.values(), overwrite) as stage:
+        files = _write_outputs(output_paths(stage), rdict, result, nominal, meas, data, train, N, validation, stamp,
+                               targets, positions, accuracy, write_robot, notes)
+    files = {k: out / p.name for k, p in files.items()}
+    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem,
+            "verdict": verdict}
+
+
+def _write_outputs(paths, rdict, result, nominal, meas, data, train, N, validation, stamp, targets, positions,
+                   accuracy, write_robot, notes) -> dict:
+    """Write result.json, the calibrated robot (TOML, URDF; only with ``write_robot``) and the
+    report into ``paths`` (a staging folder); returns {kind: path}."""
+    if not write_robot:
+        notes.append("calibrated_robot.toml/.urdf not written: the result FAILED the sanity gates "
+                     "(pass --force to write them anyway)")
 
     calibrated = result.model.replace(
         title=f"{nominal.title or nominal.name} (calibrated)",
@@ -216,20 +242,18 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                            for k, t in enumerate(targets))
                + ".\nAll numbers with uncertainties: result.json.")
     files = {}
-    files["robot"] = save_robot(calibrated, paths["robot"], overwrite=overwrite, comment=comment)
     from ..io.urdf import UrdfError, write_urdf
 
-    try:
-        files["urdf"] = write_urdf(calibrated, paths["urdf"], overwrite=overwrite)
-    except UrdfError as exc:
-        notes.append(f"calibrated_robot.urdf not written: {exc}")
-        if overwrite and paths["urdf"].exists():
-            paths["urdf"].unlink()  # a stale URDF from an earlier run must not sit next to new results
+    if write_robot:
+        files["robot"] = save_robot(calibrated, paths["robot"], comment=comment)
+        try:
+            files["urdf"] = write_urdf(calibrated, paths["urdf"])
+        except UrdfError as exc:  # a stale URDF of an earlier run is removed by staged_outputs
+            notes.append(f"calibrated_robot.urdf not written: {exc}")
     rdict["notes"] = notes
     text = json.dumps(rdict, indent=2, allow_nan=False) + "\n"
-    files["result"] = atomic_write_text(paths["result"], text, overwrite=overwrite)
+    files["result"] = atomic_write_text(paths["result"], text)
 
-    step(6, total, "writing report.html")
     from ..report.html import write_report
 
     amap = {"positions_mm": positions, "values_mm": accuracy["predicted_std_mm"],
@@ -237,9 +261,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
             "title": f"{nominal.name}: predicted uncertainty of the calibrated model at the measured poses",
             "note": "Flange positions in the robot base frame, coloured by the predicted 1-std position uncertainty "
                     "(J Cov J^T over the identified variables, base frame included)."}
-    files["report"] = write_report(paths["report"], rdict, accuracy_map=amap, overwrite=overwrite,
+    files["report"] = write_report(paths["report"], rdict, accuracy_map=amap,
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}")
-    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem}
+    return files
 
 
 # ---------------------------------------------------------------------------------------------
