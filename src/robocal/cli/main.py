@@ -9,6 +9,7 @@ import sys
 
 import click
 
+from ._errors import GuardedGroup
 from .calibrate import calibrate, correct
 from .history import history_cmd as history
 from .importing import import_cmd
@@ -19,7 +20,7 @@ from .tcp_cross_laser import cross_laser_cmd, simulate_cmd
 from .thermal import thermal
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=GuardedGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="robocal")
 def main():
     """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames)."""
@@ -27,10 +28,11 @@ def main():
 
 @main.command(short_help="The maintenance cycle on a simulated robot, with a report.")
 @click.option("--out", "out_dir", default="robocal-demo", show_default=True, type=click.Path(file_okay=False),
-              help="Folder for the results (created if needed; files are replaced atomically).")
+              help="Folder for the results (created if needed; existing results need --overwrite).")
 @click.option("--seed", default=7, show_default=True, help="Seed of the simulated robot and poses.")
 @click.option("--poses", default=500, show_default=True, help="Number of workspace poses for the accuracy maps.")
-def demo(out_dir, seed, poses):
+@click.option("--overwrite", is_flag=True, help="Replace the files of an earlier demo in the folder.")
+def demo(out_dir, seed, poses, overwrite):
     """The accuracy-maintenance cycle on a simulated robot: the problem, geometric calibration,
     a collision and tool recalibration, with a report and a history database."""
     from ..workflows.demo import run_demo
@@ -40,7 +42,7 @@ def demo(out_dir, seed, poses):
 
     if poses < 10:
         raise click.ClickException(f"--poses must be at least 10, got {poses}")
-    r = run_demo(out_dir, seed=seed, n_poses=poses, progress=progress)
+    r = run_demo(out_dir, seed=seed, n_poses=poses, progress=progress, overwrite=overwrite)
     acc, rep = r["accuracy_mm"], r["repeatability_mm"]
     g = r["geometric_calibration"]
     t = r["tool_recalibration"]

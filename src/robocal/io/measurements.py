@@ -24,7 +24,6 @@ from __future__ import annotations
 import csv
 import difflib
 import io
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_text
+from .plausibility import angle_unit_problem, length_unit_problem
 from .header import KEY_RE, FileFormatError, declared_unit, read_header_block, read_text
 from .table import check_field_counts, csv_cells, data_rows, number_columns
 from ..transforms import (
@@ -68,10 +68,6 @@ _EULER_COLUMNS = ("rx", "ry", "rz")
 _QUAT_COLUMNS = ("qw", "qx", "qy", "qz")
 _AXES = ("x", "y", "z")
 
-# Plausibility limits (internal mm / rad).
-_MM_LOOKS_LIKE_M = 10.0  # every point closer than 10 mm to the origin: the numbers are metres
-_M_LOOKS_LIKE_MM = 1.0e6  # a point farther than 1 km: the numbers are millimetres
-_RAD_LOOKS_LIKE_DEG = 4.0 * math.pi  # a revolute joint beyond two turns: the numbers are degrees
 
 
 class MeasurementFileError(FileFormatError):
@@ -518,22 +514,22 @@ def _joints_and_points(rows, layout: _Layout, lf: float, af: float, fail) -> tup
 
 
 def _check_units_plausible(q_file, q, points, rows, layout: _Layout, lu: str, au: str, key_line: dict, fail):
-    """Numbers that look like another unit than the declared one are an error (module docstring)."""
+    """Numbers that look like another unit than the declared one are an error
+    (:mod:`robocal.io.plausibility`), located at the largest value (or the unit's header line)."""
     dist = np.linalg.norm(points, axis=-1)
-    if lu == "mm" and dist.max() < _MM_LOOKS_LIKE_M:
-        fail(f"every point is within {_MM_LOOKS_LIKE_M:g} mm of the origin (largest {dist.max():.4g} mm): "
-             "the values look like metres; declare '# length_unit: m'", key_line["length_unit"])
-    if lu == "m" and dist.max() > _M_LOOKS_LIKE_MM:
+    problem = length_unit_problem(dist, lu, what="point distances from the origin")
+    if problem:
         r, t = np.unravel_index(np.argmax(dist), dist.shape)
-        fail(f"a point {dist.max() / 1000.0:.4g} m from the origin: the values look like millimetres; "
-             "declare '# length_unit: mm'", rows[r][0], layout.point_cols[t][0])
-    if au == "rad":
-        big = np.abs(q) > _RAD_LOOKS_LIKE_DEG
-        big[:, layout.prismatic] = False
-        if big.any():
-            r, j = np.argwhere(big)[0]
-            fail(f"revolute joint value {q_file[r, j]:g} rad is more than two turns: the values look like "
-                 "degrees; declare '# angle_unit: deg'", rows[r][0], layout.joint_names[j])
+        if lu == "mm":
+            fail(problem, key_line["length_unit"])
+        fail(problem, rows[r][0], layout.point_cols[t][0])
+    revolute = np.abs(q[:, ~layout.prismatic])
+    problem = angle_unit_problem(revolute, au, what="revolute joint values")
+    if problem:
+        r, j = np.unravel_index(np.argmax(revolute), revolute.shape)
+        if au == "deg":
+            fail(problem, key_line["angle_unit"])
+        fail(problem, rows[r][0], [n for n, p in zip(layout.joint_names, layout.prismatic) if not p][j])
 
 
 def _rotations(rows, layout: _Layout, conv: str, af: float, fail) -> np.ndarray:

@@ -40,7 +40,7 @@ from ..io.measurements import read_measurements
 from ..io.targets import read_targets, write_corrected_targets
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
-from .outputs import check_outputs_free, staged_outputs
+from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .progress import solver_progress
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
@@ -127,7 +127,6 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     step = progress or (lambda i, n, text: None)
     total = 6
     out = Path(out_dir)
-    paths = output_paths(out)
     if out.exists() and not out.is_dir():
         raise CalibrationInputError(f"{out}: exists and is not a folder")
     check_outputs_free(out, OUTPUT_FILES.values(), overwrite)
@@ -138,6 +137,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
 
     nominal = load_robot(robot)
     meas = read_measurements(data, robot=nominal)
+    ensure_writable_dir(out)
     free_names = select_free(nominal, free, free_all, fix)
     N, K = meas.n_poses, meas.n_targets
     train, hold = split_poses(N, holdout, seed)

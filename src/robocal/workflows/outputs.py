@@ -19,7 +19,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-__all__ = ["OutputError", "check_outputs_free", "staged_outputs", "describe_os_error"]
+__all__ = ["OutputError", "check_outputs_free", "ensure_writable_dir", "staged_outputs", "describe_os_error"]
 
 
 class OutputError(OSError):
@@ -47,6 +47,21 @@ def check_outputs_free(out_dir, names, overwrite: bool) -> None:
         p = out / name
         if p.exists():
             raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
+
+
+def ensure_writable_dir(out_dir) -> Path:
+    """Create ``out_dir`` if needed and prove it writable (a temporary file), before any long work;
+    :class:`OutputError` naming the folder otherwise (read-only mount, permission, disk full)."""
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        if isinstance(exc, (FileExistsError, NotADirectoryError)):
+            raise NotADirectoryError(f"{out}: exists and is not a folder") from None
+        raise OutputError(describe_os_error(exc, out)) from None
+    return out
 
 
 @contextlib.contextmanager
