@@ -33,14 +33,18 @@ from ._common import EXIT_FAILED_RESULT, _names, _report_verdict, _step_printer,
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--force", is_flag=True,
               help="Write the calibrated robot files even when the result fails the sanity gates (exit code 3).")
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite, force):
+@click.option("--drop-duplicates", is_flag=True,
+              help="Drop repeated pose ids and repeated rows (keeping the first) instead of refusing the file.")
+def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite, force,
+              drop_duplicates):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA."""
     from ..workflows.calibrate import run_calibration
 
     try:
         r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
                             holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
-                            progress=_step_printer, force=force)
+                            progress=_step_printer, force=force,
+                            drop_duplicates=drop_duplicates)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]

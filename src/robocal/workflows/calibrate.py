@@ -106,7 +106,8 @@ def _per_point(errors_before, errors_after, pose_ids, targets):
 
 def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, fix=(), holdout: float = 0.2,
                     seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
-                    overwrite: bool = False, progress=None, method: str = "lm", force: bool = False) -> dict:
+                    overwrite: bool = False, progress=None, method: str = "lm", force: bool = False,
+                    drop_duplicates: bool = False) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -115,7 +116,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     of the split. loss: ``linear``, ``huber`` or ``cauchy`` (robust, per pose). sigma_mm:
     measurement noise per coordinate [mm] (weights and absolute uncertainty; default: estimated
     from the residuals). tool: initial target point (3,) [mm] in the flange frame (default origin).
-    progress(step, total, text): called between steps.
+    progress(step, total, text): called between steps. drop_duplicates: drop repeated poses (else an
+    error); the dropped ones are listed in the notes.
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
     naming the file, checked before any work); the files are written into a temporary folder and
@@ -136,7 +138,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
 
     nominal = load_robot(robot)
-    meas = read_measurements(data, robot=nominal)
+    meas = read_measurements(data, robot=nominal, check_limits=True, drop_duplicates=drop_duplicates)
     ensure_writable_dir(out)
     free_names = select_free(nominal, free, free_all, fix)
     N, K = meas.n_poses, meas.n_targets
@@ -196,7 +198,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     write_robot = verdict.ok or force
     step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
                                             " (FAILED the sanity gates: no calibrated robot file)"))
-    notes = []
+    notes = ([f"dropped duplicate poses: {meas.metadata['dropped_duplicates']}"]
+             if "dropped_duplicates" in meas.metadata else [])
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     metadata = {
         "robot": str(robot), "measurements": str(data), "n_poses_file": N, "n_poses_calibration": int(len(train)),
