@@ -24,7 +24,7 @@ __all__ = [
     "Verdict", "NOISE_FACTOR", "RESIDUAL_LIMIT_MM", "NOMINAL_MISFIT_MM", "HOLDOUT_WORSE_FACTOR",
     "LENGTH_CHANGE_MM", "LENGTH_CHANGE_FRACTION", "ANGLE_CHANGE_DEG", "TOOL_LENGTH_LIMIT_MM",
     "residual_reasons", "holdout_reasons", "nominal_misfit_reasons", "parameter_reasons",
-    "calibration_verdict", "touchup_verdict",
+    "calibration_verdict", "touchup_verdict", "sensor_verdict", "BEAM_ANGLE_TOLERANCE_DEG", "BEAM_GAP_LIMIT_MM",
 ]
 
 #: Residual RMS (3-D point error) above this multiple of the noise's expected RMS
@@ -44,6 +44,9 @@ LENGTH_CHANGE_FRACTION = 0.05
 ANGLE_CHANGE_DEG = 5.0
 #: A touch-up TCP farther than this from the flange [mm] is no tool a robot carries.
 TOOL_LENGTH_LIMIT_MM = 2000.0
+#: A cross-laser sensor's beams cross within this of 90 deg [deg] and pass closer than this [mm].
+BEAM_ANGLE_TOLERANCE_DEG = 10.0
+BEAM_GAP_LIMIT_MM = 20.0
 
 _CAUSE_DATA = ("likely swapped joint or x/y/z columns, angles or lengths in another unit than declared, or the "
                "measurements of another robot")
@@ -157,14 +160,31 @@ def calibration_verdict(*, robot: str, rms_before_mm: float, rms_after_mm: float
     return Verdict(tuple(reasons), checks)
 
 
-def touchup_verdict(rms_mm: float, tcp_mm, sigma_mm: float | None = None) -> Verdict:
-    """The gates of a touch-up TCP: the pose residual RMS [mm] (``residual_reasons``) and the tool
-    length ``|tcp_mm|`` against ``TOOL_LENGTH_LIMIT_MM`` (metres read as mm give a tool of a few mm
-    and residuals near zero, which the length unit checker of the reader catches instead)."""
+def touchup_verdict(rms_mm: float, tcp_mm, sigma_mm: float | None = None, what: str = "touch-up") -> Verdict:
+    """The gates of a point on the flange fitted from poses (a touch-up TCP, the sphere centre
+    ``P_e`` of a thermal system calibration): the residual RMS [mm] (:func:`residual_reasons`) and
+    the point's distance from the flange ``|tcp_mm|`` against ``TOOL_LENGTH_LIMIT_MM``. (Metres
+    read as mm give a tool of a few mm and tiny residuals; the readers' unit checker catches that.)"""
     checks: dict = {}
-    reasons = residual_reasons(rms_mm, sigma_mm, checks, what="touch-up residual")
+    reasons = residual_reasons(rms_mm, sigma_mm, checks, what=f"{what} residual")
     length = math.sqrt(sum(float(v) ** 2 for v in tcp_mm))
     if not _check(checks, "tool_length", length, TOOL_LENGTH_LIMIT_MM, "mm"):
-        reasons.append(f"TCP {length:.4g} mm from the flange (limit {TOOL_LENGTH_LIMIT_MM:g} mm): likely lengths in "
-                       "another unit than declared or poses that do not touch one point")
+        reasons.append(f"{what}: the fitted point is {length:.4g} mm from the flange (limit {TOOL_LENGTH_LIMIT_MM:g} "
+                       "mm): likely lengths in another unit than declared or poses that do not touch one point")
+    return Verdict(tuple(reasons), checks)
+
+
+def sensor_verdict(beta_deg: float, gap_mm: float) -> Verdict:
+    """The gates of a cross-laser sensor calibration: the angle between the beams within
+    ``BEAM_ANGLE_TOLERANCE_DEG`` of 90 deg and the gap between them below ``BEAM_GAP_LIMIT_MM``
+    (a mounted sensor's beams cross nearly at right angles; swapped labels or units do not)."""
+    checks: dict = {}
+    reasons = []
+    if not _check(checks, "beam_angle", abs(beta_deg - 90.0), BEAM_ANGLE_TOLERANCE_DEG, "deg"):
+        reasons.append(f"the beams cross at {beta_deg:.4g} deg, {beta_deg - 90.0:+.3g} deg from 90 (limit "
+                       f"{BEAM_ANGLE_TOLERANCE_DEG:g} deg): likely swapped point labels (A-D) or points of another "
+                       "sensor")
+    if not _check(checks, "beam_gap", gap_mm, BEAM_GAP_LIMIT_MM, "mm"):
+        reasons.append(f"the beams pass {gap_mm:.4g} mm apart (limit {BEAM_GAP_LIMIT_MM:g} mm): likely swapped point "
+                       "labels or lengths in another unit than declared")
     return Verdict(tuple(reasons), checks)
