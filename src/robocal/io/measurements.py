@@ -360,16 +360,17 @@ def read_measurements(path, robot=None, *, min_rows: int = 1, drop_duplicates: b
     table = duplicate_rows(table, drop_duplicates, md, fail)
     if len(table) < max(min_rows, 1):
         fail(f"{len(table)} data row(s); at least {max(min_rows, 1)} required")
-    for line, pid in zip(table.lines, table.ids):
-        if not pid:
-            fail("empty pose id", int(line), "pose")
-    q_file, q, points = _joints_and_points(table, layout, LENGTH_UNITS[lu], ANGLE_UNITS[au], fail)
-    _check_units_plausible(q_file, q, points, table, layout, lu, au, key_line, fail)
-    joint_ranges(q, q_file, table.lines, layout.joint_names, layout.prismatic, robot if check_limits else None, au,
+    if "" in table.ids:
+        fail("empty pose id", int(table.lines[table.ids.index("")]), "pose")
+    q, points = _joints_and_points(table, layout, LENGTH_UNITS[lu], ANGLE_UNITS[au], fail)
+    _check_units_plausible(q, points, table, layout, lu, au, key_line, fail)
+    joint_ranges(q, LENGTH_UNITS[lu], ANGLE_UNITS[au], table.lines, layout.joint_names, layout.prismatic, robot if check_limits else None, au,
                  fail)
     rotations = None if conv is None else _rotations(table, layout, conv, ANGLE_UNITS[au], fail)
+    ids = table.ids
+    del table  # memory: the file's table goes before the Measurements copies its arrays
     return Measurements(joints=q, points=points, targets=layout.targets, joint_names=layout.joint_names,
-                        pose_ids=table.ids, rotations=rotations, prismatic=layout.prismatic, metadata=md)
+                        pose_ids=ids, rotations=rotations, prismatic=layout.prismatic, metadata=md)
 
 
 def _head_lines(fh) -> list:
@@ -531,14 +532,16 @@ def _numbers(table, layout: _Layout, names, fail) -> np.ndarray:
 def _joints_and_points(table, layout: _Layout, lf: float, af: float, fail) -> tuple:
     """``(joints in file units (N, n), joints [rad | mm] (N, n), points [mm] (N, K, 3))``, joints
     in the returned (model's) order."""
-    q_file = _numbers(table, layout, layout.joint_cols, fail)
-    q_file = q_file[:, [layout.joint_cols.index(n) for n in layout.joint_names]]
+    order = [layout.joint_cols.index(n) for n in layout.joint_names]
+    q = _numbers(table, layout, [layout.joint_cols[k] for k in order], fail)  # a copy, scaled in place
     pts_file = _numbers(table, layout, [c for cols in layout.point_cols for c in cols], fail)
-    q = np.where(layout.prismatic, q_file * lf, q_file * af)
-    return q_file, q, pts_file.reshape(len(table), len(layout.targets), 3) * lf
+    q[:, ~layout.prismatic] *= af
+    q[:, layout.prismatic] *= lf
+    pts_file *= lf
+    return q, pts_file.reshape(len(table), len(layout.targets), 3)
 
 
-def _check_units_plausible(q_file, q, points, table, layout: _Layout, lu: str, au: str, key_line: dict, fail):
+def _check_units_plausible(q, points, table, layout: _Layout, lu: str, au: str, key_line: dict, fail):
     """Numbers that look like another unit than the declared one are an error
     (:mod:`robocal.io.plausibility`), located at the largest value (or the unit's header line)."""
     dist = np.linalg.norm(points, axis=-1)
@@ -548,10 +551,10 @@ def _check_units_plausible(q_file, q, points, table, layout: _Layout, lu: str, a
         if lu == "mm":
             fail(problem, key_line["length_unit"])
         fail(problem, int(table.lines[r]), layout.point_cols[t][0])
-    revolute = np.abs(q[:, ~layout.prismatic])
+    revolute = q[:, ~layout.prismatic] if layout.prismatic.any() else q
     problem = angle_unit_problem(revolute, au, what="revolute joint values")
     if problem:
-        r, j = np.unravel_index(np.argmax(revolute), revolute.shape)
+        r, j = np.unravel_index(np.argmax(np.abs(revolute)), revolute.shape)
         if au == "deg":
             fail(problem, key_line["angle_unit"])
         fail(problem, int(table.lines[r]), [n for n, p in zip(layout.joint_names, layout.prismatic) if not p][j])

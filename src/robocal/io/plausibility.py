@@ -37,6 +37,16 @@ TWO_TURNS_RAD = 4.0 * math.pi
 _UNIT_NAMES = {"mm": "millimetres", "m": "metres", "deg": "degrees", "rad": "radians"}
 
 
+def _largest_magnitude(values) -> float | None:
+    """max |values| ignoring NaN, without copying a large array; ``None`` when there is none."""
+    v = np.asarray(values, dtype=float)
+    if v.size == 0:
+        return None
+    with np.errstate(invalid="ignore"):
+        largest = max(float(np.nanmax(v)), -float(np.nanmin(v))) if not np.isnan(v).all() else None
+    return largest
+
+
 def unit_hint(key: str, unit: str, style: str = "header") -> str:
     """How to declare ``unit``: ``'# length_unit: m'`` (header files) or ``length_unit = "m"`` (TOML)."""
     return f"'# {key}: {unit}'" if style == "header" else f'{key} = "{unit}"'
@@ -52,11 +62,9 @@ def length_unit_problem(values_mm, declared: str, *, what: str = "points", small
                         style: str = "header") -> str | None:
     """``values_mm``: lengths or distances already converted to mm (any shape); ``declared``:
     ``"mm"`` or ``"m"``. Returns the problem or ``None``."""
-    v = np.abs(np.asarray(values_mm, dtype=float))
-    v = v[np.isfinite(v)]
-    if v.size == 0:
+    largest = _largest_magnitude(values_mm)
+    if largest is None:
         return None
-    largest = float(v.max())
     if declared == "mm" and largest < smallest_mm:
         return _message(what, f"the largest is {largest:.4g} mm (below {smallest_mm:g} mm)", "m", declared, key, style)
     if declared == "m" and largest > largest_mm:
@@ -69,12 +77,11 @@ def angle_unit_problem(values_rad, declared: str, *, what: str = "angles", min_r
                        key: str = "angle_unit", style: str = "header") -> str | None:
     """``values_rad``: revolute angles already converted to rad, (rows,) or (rows, columns);
     ``declared``: ``"deg"`` or ``"rad"``. Returns the problem or ``None``."""
-    v = np.abs(np.asarray(values_rad, dtype=float))
+    v = np.asarray(values_rad, dtype=float)
     n_rows = v.shape[0] if v.ndim else 1
-    v = v[np.isfinite(v)]
-    if v.size == 0:
+    largest = _largest_magnitude(v)
+    if largest is None:
         return None
-    largest = float(v.max())
     if declared == "rad" and largest > TWO_TURNS_RAD:
         return _message(what, f"a value of {largest:.4g} rad is more than two turns", "deg", declared, key, style)
     one_turn_in_deg = math.radians(2.0 * math.pi)

@@ -10,6 +10,7 @@ mm or angle in deg is that large, and converting it would overflow).
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -36,7 +37,7 @@ class NumericTable:
         return len(self.ids)
 
     def subset(self, keep) -> "NumericTable":
-        keep = np.asarray(keep)
+        keep = np.asarray(keep, dtype=np.int64)
         return NumericTable(self.lines[keep], [self.ids[i] for i in keep], self.values[keep])
 
 
@@ -44,8 +45,8 @@ def check_cell(cell: str) -> float:
     """The number in one cell, or ``ValueError`` naming the problem (module docstring)."""
     if not cell:
         raise ValueError("empty cell")
-    if "_" in cell:
-        raise ValueError(f"{cell!r} is not a number (digit separators '_' are not allowed)")
+    if "_" in cell or not cell.isascii():
+        raise ValueError(f"{cell!r} is not a number (plain decimal digits only; no '_' separators)")
     try:
         v = float(cell)
     except ValueError:
@@ -64,50 +65,77 @@ def _cells(raw: str) -> list:
 
 
 def read_numeric_table(lines, first_line_no: int, n_columns: int, fail, *, max_rows: int = MAX_ROWS,
-                       header_line: int | None = None) -> NumericTable:
+                       header_line: int | None = None, chunk_rows: int = 50_000) -> NumericTable:
     """Read the data rows of ``lines`` (an iterable of text lines, e.g. an open file, whose first
     line is line ``first_line_no`` of the file); blank and ``#`` lines are skipped.
 
     Every row has ``n_columns`` cells: an id, then numbers. Problems call ``fail(message, line,
     column_index)`` (which must raise): a wrong number of fields, a bad cell, more than
-    ``max_rows`` rows.
+    ``max_rows`` rows. Lines are parsed ``chunk_rows`` at a time (numpy's C parser; a chunk with
+    a problem is re-read cell by cell to name the line and column).
     """
-    cap = 1024
-    values = np.empty((cap, n_columns))
-    line_nos = np.empty(cap, dtype=np.int64)
-    ids: list = []
-    n = 0
-    for k, raw in enumerate(lines, first_line_no):
-        s = raw.strip()
-        if not s or s.startswith("#"):
-            continue
+    blocks: list = []
+    n, k0 = 0, first_line_no
+    it = iter(lines)
+    while True:
+        raw = [s.strip() for s in itertools.islice(it, chunk_rows)]
+        if not raw:
+            break
+        buf = [s for s in raw if s and s[0] != "#"]
+        if len(buf) == len(raw):
+            nos = np.arange(k0, k0 + len(raw), dtype=np.int64)
+        else:
+            nos = k0 + np.array([i for i, s in enumerate(raw) if s and s[0] != "#"], dtype=np.int64)
+        k0 += len(raw)
+        if n + len(buf) > max_rows:
+            fail(f"more than {max_rows:,} data rows, the limit of a measurement file: split the campaign "
+                 "into several files or thin it out", int(nos[max_rows - n]), None)
+        n += len(buf)
+        if buf:
+            blocks.append(_chunk(buf, nos, n_columns, fail, header_line))
+    if not blocks:
+        return NumericTable(np.zeros(0, np.int64), [], np.zeros((0, n_columns)))
+    line_nos = np.concatenate([b[0] for b in blocks])
+    ids = [i for b in blocks for i in b[1]]
+    values = np.empty((len(ids), n_columns))
+    values[:, 0] = np.nan
+    start = 0
+    while blocks:  # fill and free the chunks one by one
+        _, _, v = blocks.pop(0)
+        values[start:start + len(v), 1:] = v
+        start += len(v)
+    return NumericTable(line_nos, ids, values)
+
+
+def _chunk(buf, nos, n_columns: int, fail, header_line) -> tuple:
+    """``(line numbers (n,), ids (n,) str, numbers (n, n_columns - 1))`` of the stripped rows
+    ``buf``: numpy's C parser (``np.loadtxt``, which refuses ``1_000`` and non-ASCII digits) when
+    the fields add up and there are no quotes; else, or on any problem, the exact cell-by-cell
+    path that names the line and column."""
+    text = "\n".join(buf)
+    if text.count(",") == len(buf) * (n_columns - 1) and '"' not in text:
+        try:  # a row short of fields fails here, so a row with too many cannot hide in the sum
+            values = np.loadtxt(buf, delimiter=",", dtype=float, usecols=range(1, n_columns), comments=None,
+                                ndmin=2)
+        except ValueError:
+            values = None
+        if values is not None and (np.abs(values) <= MAX_MAGNITUDE).all():
+            ids = [r.partition(",")[0].rstrip() for r in buf]
+            return np.asarray(nos, dtype=np.int64), ids, values
+    return _chunk_by_cell(buf, nos, n_columns, fail, header_line)
+
+
+def _chunk_by_cell(buf, nos, n_columns: int, fail, header_line) -> tuple:
+    """The slow, exact path of :func:`_chunk`: each row split as CSV and each cell checked."""
+    ids, rows = [], []
+    for k, s in zip(nos, buf):
         cells = _cells(s)
         if len(cells) != n_columns:
             fail(f"{len(cells)} fields, expected {n_columns} (one per column of line {header_line})", k, None)
-        if n >= max_rows:
-            fail(f"more than {max_rows:,} data rows, the limit of a measurement file: split the campaign "
-                 "into several files or thin it out", k, None)
-        if n == cap:
-            cap *= 2
-            values = np.resize(values, (cap, n_columns))
-            line_nos = np.resize(line_nos, cap)
-        try:
-            values[n, 1:] = [float(c) for c in cells[1:]]
-        except ValueError:
-            values[n, 1:] = _row_numbers(cells, k, fail)
-        if "_" in s.partition(",")[2]:  # 1_000: float() takes it, a CSV reader must not
-            values[n, 1:] = _row_numbers(cells, k, fail)
+        rows.append(_row_numbers(cells, k, fail))
         ids.append(cells[0])
-        line_nos[n] = k
-        n += 1
-    values, line_nos = values[:n].copy(), line_nos[:n].copy()
-    values[:, 0] = np.nan
-    with np.errstate(invalid="ignore"):
-        bad = ~(np.abs(values[:, 1:]) <= MAX_MAGNITUDE)  # NaN, inf or too large
-    if bad.any():
-        r = int(np.argwhere(bad)[0][0])
-        _row_numbers([ids[r]] + [repr(float(v)) for v in values[r, 1:]], int(line_nos[r]), fail)
-    return NumericTable(line_nos, ids, values)
+    values = np.array(rows, dtype=float).reshape(len(rows), n_columns - 1)
+    return np.array(nos, dtype=np.int64), ids, values
 
 
 def _row_numbers(cells, line: int, fail) -> list:
