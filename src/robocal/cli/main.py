@@ -23,7 +23,10 @@ from .thermal import thermal
 @click.group(cls=GuardedGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="robocal")
 def main():
-    """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames)."""
+    """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames).
+
+    Exit codes: 0 success, 1 error (one 'Error:' line), 2 usage error, 3 a result that failed the
+    sanity gates (docs/reliability.md)."""
 
 
 @main.command(short_help="The maintenance cycle on a simulated robot, with a report.")

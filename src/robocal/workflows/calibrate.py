@@ -138,6 +138,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
 
     nominal = load_robot(robot)
+    size_mb = Path(data).stat().st_size / 1e6 if Path(data).is_file() else 0.0
+    if size_mb > 10.0:  # a large file takes seconds to read: say so (small files stay silent on errors)
+        step(1, total, f"reading {data} ({size_mb:.0f} MB)")
     meas = read_measurements(data, robot=nominal, check_limits=True, drop_duplicates=drop_duplicates)
     ensure_writable_dir(out)
     free_names = select_free(nominal, free, free_all, fix)
@@ -180,6 +183,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
             "per_point": _per_point(e_before, e_after, [pose_ids[i] for i in hold], meas.targets),
         }
     # predicted uncertainty over every pose of the file (accuracy map)
+    step(4, total, f"predicted uncertainty at the {N} measured poses")
     std_pts = predicted_point_std(problem, result, meas.joints)  # (N, K)
     base_model = result.model.replace(T_world_base=np.eye(4))
     positions = base_model.fk(meas.joints)[:, :3, 3]
