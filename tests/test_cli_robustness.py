@@ -283,3 +283,17 @@ def test_demo_refuses_to_replace_files(tmp_path):
     r = run("demo", "--out", out, "--poses", 10)
     assert r.exit_code == 1 and "report.html" in r.output and "--overwrite" in r.output
     assert (out / "report.html").read_text() == "mine"
+
+
+def test_disk_full_on_a_single_file_names_it(tmp_path, monkeypatch):
+    import robocal.io.atomic as atomic
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(atomic.os, "fsync", full)
+    out = tmp_path / "m.csv"
+    r = run("simulate", "tracker", "ur10", "--poses", 10, "--seed", 1, "--out", out)
+    _no_traceback(r)
+    assert r.exit_code == 1 and str(out) in r.output and "no space left on device" in r.output.lower()
+    assert not out.exists() and not list(tmp_path.glob(".m.csv.*"))
