@@ -159,9 +159,9 @@ def test_prior_pulls_the_geometry_towards_nominal(campaign, tmp_path):
     assert max(abs(loose[n]["change"]) for n in lengths if n in loose) > 0.1
 
 
-def test_non_convergence_warns_marks_the_report_and_exits_3(campaign, tmp_path):
+def test_non_convergence_warns_marks_the_report_and_exits_4(campaign, tmp_path):
     r = run("calibrate", ROBOT, campaign["path"], "--out", tmp_path / "c", "--max-iterations", "1")
-    assert r.exit_code == 3, r.output
+    assert r.exit_code == 4, r.output
     warning = next(line for line in r.output.splitlines() if line.startswith("Warning:"))
     assert "maximum iterations reached" in warning and "condition number" in warning
     res = json.loads((tmp_path / "c" / "result.json").read_text())

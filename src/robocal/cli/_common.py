@@ -9,6 +9,11 @@ import numpy as np
 
 from ..robots import RobotFileError, load_robot
 
+#: Exit codes of every command (docs/reliability.md): 0 success; 1 an error (one ``Error:`` line);
+#: 2 a usage error (click) or, for ``correct``, targets not reached; 3 a result that FAILED the
+#: sanity gates (written with ``status: failed``, no calibrated robot file unless ``--force``).
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_FAILED_RESULT = 0, 1, 2, 3
+
 JOINTS_ARG = dict(nargs=-1, type=str, required=True)
 NUMBERS_CONTEXT = {"ignore_unknown_options": True, "allow_interspersed_args": True}
 
@@ -69,3 +74,10 @@ def _names(values):
 
 def _step_printer(i, n, text):
     click.echo(f"[{i}/{n}] {text}", err=True)
+
+
+def _report_verdict(verdict) -> None:
+    """Print a failed :class:`~robocal.calib.sanity.Verdict` to stderr: ``FAILED:`` and its reasons."""
+    click.echo("FAILED: the result did not pass the sanity gates (exit code 3):", err=True)
+    for reason in verdict.reasons:
+        click.echo(f"  - {reason}", err=True)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from ._common import _names, _step_printer, _user_error
+from ._common import EXIT_FAILED_RESULT, _names, _report_verdict, _step_printer, _user_error
 from .calibrate_table import parameter_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
 
@@ -50,15 +50,20 @@ from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
 @click.option("--allow-unconverged", is_flag=True,
               help=f"Exit 0 even when the solver does not converge (otherwise exit {EXIT_NOT_CONVERGED}).")
 @click.option("--no-report", is_flag=True, help="Do not write report.html (batch runs: the plots take longer than the solve).")
+@click.option("--force", is_flag=True,
+              help="Write the calibrated robot files even when the result fails the sanity gates (exit code 3).")
+@click.option("--drop-duplicates", is_flag=True,
+              help="Drop repeated pose ids and repeated rows (keeping the first) instead of refusing the file.")
 @import_options
 def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite,
               rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
-              allow_unconverged, no_report, **imp):
+              allow_unconverged, no_report, force, drop_duplicates, **imp):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA.
 
     DATA is robocal's measurement file, or with --format a tracker export paired with --joints.
     Orientation columns (rx, ry, rz or qw..qz) are used: a 6-D fit with a tool frame. Exit codes:
-    0 done, 1 error, 3 the solver did not converge (unless --allow-unconverged).
+    0 done, 1 error, 3 the result failed the sanity gates (docs/reliability.md), 4 the solver did not
+    converge (unless --allow-unconverged).
     """
     from ..workflows.calibrate import run_calibration
 
@@ -69,7 +74,7 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
                             progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
                             prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,
                             measurements=meas, max_iterations=max_iterations,
-                            report=not no_report)
+                            report=not no_report, force=force, drop_duplicates=drop_duplicates)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
@@ -94,6 +99,9 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
     for w in r["convergence_warnings"]:
         click.echo(f"Warning: {w}", err=True)
+    if not r["verdict"].ok:
+        _report_verdict(r["verdict"])
+        sys.exit(EXIT_FAILED_RESULT)
     if r["convergence_warnings"] and not allow_unconverged:
         sys.exit(EXIT_NOT_CONVERGED)
 

@@ -10,7 +10,7 @@ import click
 __all__ = ["EXIT_NOT_CONVERGED", "import_options", "read_export"]
 
 #: exit code of ``robocal calibrate`` when the solver stopped without converging
-EXIT_NOT_CONVERGED = 3
+EXIT_NOT_CONVERGED = 4  # 3 is a result that failed the sanity gates (cli/_common.py)
 
 _OPTIONS = [
     click.option("--format", "point_format", type=click.Choice(["robocal", "tracker-csv", "sa-text"]),

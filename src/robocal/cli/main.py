@@ -9,6 +9,7 @@ import sys
 
 import click
 
+from ._errors import GuardedGroup
 from ._lazy import LazyGroup
 
 
@@ -39,18 +40,28 @@ _COMMANDS = {
 }
 
 
-@click.group(cls=LazyGroup, lazy_commands=_COMMANDS, context_settings={"help_option_names": ["-h", "--help"]})
+class _MainGroup(GuardedGroup, LazyGroup):
+    """Commands loaded on first use (:class:`LazyGroup`), and no traceback from any of them
+    (:class:`GuardedGroup`)."""
+
+
+@click.group(cls=_MainGroup, lazy_commands=_COMMANDS, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="robocal")
 def main():
-    """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames)."""
+    """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames).
+
+    Exit codes: 0 success, 1 error (one 'Error:' line), 2 usage error (or `correct`: targets not
+    reached), 3 a result that failed the sanity gates (docs/reliability.md), 4 `calibrate`: the
+    solver did not converge."""
 
 
 @main.command(short_help="The maintenance cycle on a simulated robot, with a report.")
 @click.option("--out", "out_dir", default="robocal-demo", show_default=True, type=click.Path(file_okay=False),
-              help="Folder for the results (created if needed; files are replaced atomically).")
+              help="Folder for the results (created if needed; existing results need --overwrite).")
 @click.option("--seed", default=7, show_default=True, help="Seed of the simulated robot and poses.")
 @click.option("--poses", default=500, show_default=True, help="Number of workspace poses for the accuracy maps.")
-def demo(out_dir, seed, poses):
+@click.option("--overwrite", is_flag=True, help="Replace the files of an earlier demo in the folder.")
+def demo(out_dir, seed, poses, overwrite):
     """The accuracy-maintenance cycle on a simulated robot: the problem, geometric calibration,
     a collision and tool recalibration, with a report and a history database."""
     from ..workflows.demo import run_demo
@@ -60,7 +71,7 @@ def demo(out_dir, seed, poses):
 
     if poses < 10:
         raise click.ClickException(f"--poses must be at least 10, got {poses}")
-    r = run_demo(out_dir, seed=seed, n_poses=poses, progress=progress)
+    r = run_demo(out_dir, seed=seed, n_poses=poses, progress=progress, overwrite=overwrite)
     acc, rep = r["accuracy_mm"], r["repeatability_mm"]
     g = r["geometric_calibration"]
     t = r["tool_recalibration"]

@@ -16,6 +16,8 @@ from ..tcp.parallel_barriers import parallel_barriers_tool
 from ..tcp.sensor import calibrate_sensor
 from ..tcp.tool_data import tool_data_all
 from ..tcp.touchup import DEFAULT_MIN_SPREAD_DEG, four_point_tcp, seven_point_tool_frame
+from ..calib.sanity import sensor_verdict, touchup_verdict
+from ._common import EXIT_FAILED_RESULT, _report_verdict
 
 tcp = click.Group(
     "tcp",
@@ -68,10 +70,12 @@ def four_point(file, min_spread, as_json):
         res = four_point_tcp(poses.T_base_flange, min_spread_deg=min_spread, labels=poses.labels)
     except ValueError as exc:
         raise _fail(exc) from None
+    verdict = touchup_verdict(res.rms_mm, res.tcp_mm)
     if as_json:
         d = res.to_dict()
-        d.update(file=file, convention=poses.convention)
+        d.update(file=file, convention=poses.convention, status=verdict.status, reasons=list(verdict.reasons))
         _echo_json(d)
+        _exit_if_failed(verdict)
         return
     click.echo(f"4-point TCP from {res.n_poses} poses ({poses.convention}, {poses.length_unit})")
     click.echo(f"TCP (flange frame)      {_v(res.tcp_mm)} mm")
@@ -85,6 +89,13 @@ def four_point(file, min_spread, as_json):
     for lab, r, rv in zip(poses.labels, res.residuals_mm, res.residual_vectors_mm):
         click.echo(f"  {lab:>10s}  {r:8.4f}  {_v(rv)}")
     click.echo(f"rms {res.rms_mm:.4f} mm, max {res.residuals_mm.max():.4f} mm")
+    _exit_if_failed(verdict)
+
+
+def _exit_if_failed(verdict) -> None:
+    if not verdict.ok:
+        _report_verdict(verdict)
+        raise SystemExit(EXIT_FAILED_RESULT)
 
 
 @tcp.command("seven-point")
@@ -183,8 +194,10 @@ def sensor_calibrate(file, as_json):
         cal = calibrate_sensor(read_sensor_points_csv(file))
     except ValueError as exc:
         raise _fail(exc) from None
+    verdict = sensor_verdict(cal.beta_deg, cal.gap_mm)
     if as_json:
-        _echo_json(cal.to_dict())
+        _echo_json({**cal.to_dict(), "status": verdict.status, "reasons": list(verdict.reasons)})
+        _exit_if_failed(verdict)
         return
     click.echo(f"origin M (base)         {_v(cal.origin_mm)} mm")
     click.echo(f"X_s (X beam, A->B)      {_v(cal.x_axis, '{:.6f}')}")
@@ -194,3 +207,4 @@ def sensor_calibrate(file, as_json):
     click.echo(f"beta                    {cal.beta_deg:.4f} deg ({cal.beta_deg - 90.0:+.4f} from 90)")
     click.echo(f"gap between the beams   {cal.gap_mm:.4f} mm")
     _echo_matrix("T_base_sensor", cal.T_base_sensor)
+    _exit_if_failed(verdict)

@@ -253,7 +253,9 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
         compare_system_calibrations,
         frame_errors,
     )
+    from ..calib.sanity import touchup_verdict
     from ..io.thermal_files import read_sphere_file, read_truth_json, write_sensor_json
+    from .tcp import _exit_if_failed
     from ..workflows.thermal_inputs import select_poses
 
     model = _robot(robot)
@@ -288,7 +290,8 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
             centre = (T[:, :3, :3] @ truth["P_e"] + T[:, :3, 3]).mean(axis=0)
             errors = {c.method: frame_errors(c.T_sensor_base, truth["T"], c.P_e, truth["P_e"], at_base=centre)
                       for c in cals}
-        if out_file:
+        verdict = touchup_verdict(main_cal.rms_mm, main_cal.P_e, sigma_mm, what="system calibration")
+        if out_file and verdict.ok:  # a failed calibration writes no sensor file (exit code 3)
             write_sensor_json(out_file, main_cal, model, sphere_file, overwrite=overwrite)
     except _USER_ERRORS as exc:
         raise _fail(exc) from None
@@ -302,8 +305,10 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
         d = {"robot": model.name, "file": sphere_file, "pose_ids": list(meas.pose_ids),
              "results": [_cal_dict(c) for c in cals], "errors": errors or None,
              "comparison": None if comp is None else {"difference": comp.difference, "table": comp.table()},
-             "out": out_file, "note": rms_note}
+             "out": out_file if verdict.ok else None, "note": rms_note, "status": verdict.status,
+             "reasons": list(verdict.reasons)}
         _echo_json(d)
+        _exit_if_failed(verdict)
         return
     click.echo(f"system calibration of {model.name} from {sphere_file} ({meas.n_poses} poses)")
     for c in cals:
@@ -326,8 +331,9 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
                    "translation of T_sensor_base, the base origin, far from the data)")
     if rms_note:
         click.echo(f"note: {rms_note}")
-    if out_file:
+    if out_file and verdict.ok:
         click.echo(f"wrote {out_file} ({main_cal.method})")
+    _exit_if_failed(verdict)
 
 
 # ---------------------------------------------------------------------------------------------- screen

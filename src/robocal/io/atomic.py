@@ -32,6 +32,15 @@ def atomic_write_bytes(path, data: bytes, overwrite: bool = False) -> Path:
         raise FileNotFoundError(f"{path}: directory {directory} does not exist")
     if not overwrite and path.exists():
         raise FileExistsError(f"{path}: file exists; pass overwrite=True to replace it")
+    try:
+        return _write_via_temporary(path, directory, data, overwrite)
+    except (FileExistsError, FileNotFoundError):
+        raise
+    except OSError as exc:  # disk full, permission, read-only: name the file being written
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+
+
+def _write_via_temporary(path: Path, directory: Path, data: bytes, overwrite: bool) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
     try:
         os.fchmod(fd, 0o666 & ~_umask())  # mkstemp creates 0600; give the file the usual mode

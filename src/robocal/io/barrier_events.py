@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..tcp.cross_laser import BarrierEvent, CircleMove, LinearMove, MotionRecord
-from .header import FileFormatError
+from .header import FileFormatError, read_text
 
 __all__ = ["EVENTS_FORMAT", "motion_to_dict", "motion_from_dict", "write_events_csv", "read_events_csv"]
 
@@ -150,10 +150,7 @@ def read_events_csv(path) -> list:
     """Read a barrier-events file into :class:`~robocal.tcp.cross_laser.MotionRecord` s, in motion
     id order. Raises :class:`FileFormatError` (a ``ValueError``) naming the file and line."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise FileFormatError(path, f"cannot read: {exc}") from None
+    text = read_text(path, FileFormatError, what="barrier-events")
     heads, events, header, fmt = {}, {}, None, None
     for ln, line in enumerate(text.splitlines(), 1):
         s = line.strip()

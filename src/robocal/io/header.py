@@ -8,9 +8,9 @@ Every reader in :mod:`robocal.io` raises a subclass of :class:`FileFormatError` 
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
-__all__ = ["FileFormatError", "KEY_RE", "read_header_block", "read_text", "declared_unit", "header_value"]
+__all__ = ["FileFormatError", "KEY_RE", "read_header_block", "read_text", "open_text", "declared_unit",
+           "header_value"]
 
 #: ``# key: value`` header lines of measurement, target, program and sensor-point files.
 KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
@@ -45,18 +45,29 @@ def read_text(path, error=FileFormatError, what: str | None = None) -> str:
     file. A missing file raises ``FileNotFoundError("<path>: no such <what> file")`` when ``what``
     names the kind of file (``"measurement"``, ``"program"``), else ``error(path, "file not found")``.
     """
+    with open_text(path, error, what) as fh:
+        try:
+            return fh.read()
+        except UnicodeDecodeError as exc:
+            raise error(path, f"not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
+        except OSError as exc:
+            raise error(path, f"cannot read: {exc}") from None
+
+
+def open_text(path, error=FileFormatError, what: str | None = None):
+    """``path`` opened for reading text line by line (UTF-8, a byte-order mark allowed), for
+    readers that stream; the same errors as :func:`read_text` for a missing file, a directory or an
+    unreadable file (a decoding error shows while reading: the caller turns it into ``error``)."""
     try:
-        return Path(path).read_text(encoding="utf-8-sig")
+        return open(path, encoding="utf-8-sig", newline=None)
     except FileNotFoundError:
         if what is not None:
             raise FileNotFoundError(f"{path}: no such {what} file") from None
         raise error(path, "file not found") from None
     except IsADirectoryError:
         raise error(path, f"is a directory, expected a {what or 'text'} file") from None
-    except UnicodeDecodeError as exc:
-        raise error(path, f"not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
     except OSError as exc:
-        raise error(path, f"cannot read: {exc}") from None
+        raise error(path, f"cannot read: {exc.strerror or exc}") from None
 
 
 def read_header_block(lines, fail):

@@ -24,7 +24,6 @@ from __future__ import annotations
 import csv
 import difflib
 import io
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,8 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_write_text
-from .header import KEY_RE, FileFormatError, declared_unit, read_header_block, read_text
-from .table import check_field_counts, csv_cells, data_rows, number_columns
+from .plausibility import angle_unit_problem, length_unit_problem
+from .header import KEY_RE, FileFormatError, declared_unit, open_text, read_header_block
+from .rows_check import duplicate_rows, joint_ranges
+from .stream import MAX_ROWS, read_numeric_table
+from .table import csv_cells
 from ..transforms import (
     ANGLE_UNITS,
     LENGTH_UNITS,
@@ -68,10 +70,6 @@ _EULER_COLUMNS = ("rx", "ry", "rz")
 _QUAT_COLUMNS = ("qw", "qx", "qy", "qz")
 _AXES = ("x", "y", "z")
 
-# Plausibility limits (internal mm / rad).
-_MM_LOOKS_LIKE_M = 10.0  # every point closer than 10 mm to the origin: the numbers are metres
-_M_LOOKS_LIKE_MM = 1.0e6  # a point farther than 1 km: the numbers are millimetres
-_RAD_LOOKS_LIKE_DEG = 4.0 * math.pi  # a revolute joint beyond two turns: the numbers are degrees
 
 
 class MeasurementFileError(FileFormatError):
@@ -318,48 +316,73 @@ def _data_block(meas: Measurements, conv, lf: float, af: float) -> tuple:
 # ---------------------------------------------------------------------------------------------
 
 
-def read_measurements(path, robot=None, *, min_rows: int = 1) -> Measurements:
+def read_measurements(path, robot=None, *, min_rows: int = 1, drop_duplicates: bool = False,
+                      max_rows: int = MAX_ROWS, check_limits: bool = False) -> Measurements:
     """Read a measurement file; arrays come back in mm / rad.
 
     robot: optional :class:`~robocal.kinematics.RobotModel`. When given, the joint columns must be
         exactly its controller joints (any order; returned in the model's order), prismatic
-        joints are taken from the model, and the file's ``robot:`` must match ``robot.name``
-        unless the file names a path.
-    min_rows: fewer data rows than this is an error.
+        joints are taken from the model, the file's ``robot:`` must match ``robot.name``
+        unless the file names a path; with ``check_limits`` joint values must lie within its limits.
+    min_rows: fewer data rows than this is an error; max_rows: more is an error (the file is
+        streamed: memory grows with the rows kept, not with the text).
+    drop_duplicates: duplicate pose ids and duplicate rows are an error unless this is true; then
+        every repeat after the first is dropped and reported in ``metadata["dropped_duplicates"]``
+        (:mod:`robocal.io.rows_check`).
 
     Steps: header block (:func:`_check_header`; none at all: :func:`_fail_plain_export`), column
-    row (:func:`_read_columns`), data rows, numbers in file units converted to mm / rad
-    (:func:`_joints_and_points`), plausibility of the declared units (:func:`_check_units_plausible`),
+    row (:func:`_read_columns`), data rows (:func:`robocal.io.stream.read_numeric_table`),
+    duplicates, numbers in file units converted to mm / rad (:func:`_joints_and_points`),
+    plausibility of the declared units (:func:`_check_units_plausible`), joint ranges,
     orientations (:func:`_rotations`).
     Raises :class:`MeasurementFileError` (a ``ValueError``) naming file, line and column; a
     missing file raises ``FileNotFoundError``.
     """
     path = Path(path)
-    lines = read_text(path, MeasurementFileError, what="measurement").splitlines()
 
     def fail(message, line=None, column=None):
         raise MeasurementFileError(path, message, line, column)
 
-    md, key_line, i = read_header_block(lines, fail)
-    if not md:
-        _fail_plain_export(lines, i, fail)
-    lu, au, conv = _check_header(md, key_line, robot, fail)
-    if i >= len(lines):
-        fail("no column header row after the '#' header block")
-    layout = _read_columns(lines[i], i + 1, md, key_line, conv, robot, fail)
-    rows = data_rows(lines, i + 1)
-    check_field_counts(rows, len(layout.columns), i + 1, fail)
-    if len(rows) < max(min_rows, 1):
-        fail(f"{len(rows)} data row(s); at least {max(min_rows, 1)} required")
-    for line, cells in rows:
-        if not cells[0]:
-            fail("empty pose id", line, "pose")
-    q_file, q, points = _joints_and_points(rows, layout, LENGTH_UNITS[lu], ANGLE_UNITS[au], fail)
-    _check_units_plausible(q_file, q, points, rows, layout, lu, au, key_line, fail)
-    rotations = None if conv is None else _rotations(rows, layout, conv, ANGLE_UNITS[au], fail)
+    with open_text(path, MeasurementFileError, what="measurement") as fh:
+        try:
+            head = _head_lines(fh)
+            md, key_line, i = read_header_block(head, fail)
+            if not md:
+                _fail_plain_export(head, i, fail)
+            lu, au, conv = _check_header(md, key_line, robot, fail)
+            if i >= len(head):
+                fail("no column header row after the '#' header block")
+            layout = _read_columns(head[i], i + 1, md, key_line, conv, robot, fail)
+            table = read_numeric_table(fh, i + 2, len(layout.columns), lambda m, ln, j: fail(
+                m, ln, None if j is None else layout.columns[j]), max_rows=max_rows, header_line=i + 1)
+        except UnicodeDecodeError as exc:
+            fail(f"not a UTF-8 text file ({exc.reason})")
+    table = duplicate_rows(table, drop_duplicates, md, fail)
+    if len(table) < max(min_rows, 1):
+        fail(f"{len(table)} data row(s); at least {max(min_rows, 1)} required")
+    if "" in table.ids:
+        fail("empty pose id", int(table.lines[table.ids.index("")]), "pose")
+    q, points = _joints_and_points(table, layout, LENGTH_UNITS[lu], ANGLE_UNITS[au], fail)
+    _check_units_plausible(q, points, table, layout, lu, au, key_line, fail)
+    joint_ranges(q, LENGTH_UNITS[lu], ANGLE_UNITS[au], table.lines, layout.joint_names, layout.prismatic, robot if check_limits else None, au,
+                 fail)
+    rotations = None if conv is None else _rotations(table, layout, conv, ANGLE_UNITS[au], fail)
+    ids = table.ids
+    del table  # memory: the file's table goes before the Measurements copies its arrays
     return Measurements(joints=q, points=points, targets=layout.targets, joint_names=layout.joint_names,
-                        pose_ids=[cells[0] for _, cells in rows], rotations=rotations, prismatic=layout.prismatic,
-                        metadata=md)
+                        pose_ids=ids, rotations=rotations, prismatic=layout.prismatic, metadata=md)
+
+
+def _head_lines(fh) -> list:
+    """The lines of ``fh`` up to and including the first that is neither blank nor ``#`` (the
+    column row); the rest of ``fh`` is the data."""
+    head = []
+    for raw in fh:
+        head.append(raw.rstrip("\r\n"))
+        s = raw.strip()
+        if s and not s.startswith("#"):
+            break
+    return head
 
 
 def _fail_plain_export(lines, i: int, fail):
@@ -501,51 +524,52 @@ def _prismatic_joints(md: dict, key_line: dict, joint_names: list, robot, fail) 
     return prismatic
 
 
-def _numbers(rows, layout: _Layout, names, fail) -> np.ndarray:
+def _numbers(table, layout: _Layout, names, fail) -> np.ndarray:
     """The columns ``names`` of the data rows as floats (file units), shape (N, len(names))."""
-    return number_columns(rows, [layout.index[c] for c in names],
-                          lambda problem, line, j: fail(f"{problem} (column {j + 1})", line, layout.columns[j]))
+    return table.values[:, [layout.index[c] for c in names]]
 
 
-def _joints_and_points(rows, layout: _Layout, lf: float, af: float, fail) -> tuple:
+def _joints_and_points(table, layout: _Layout, lf: float, af: float, fail) -> tuple:
     """``(joints in file units (N, n), joints [rad | mm] (N, n), points [mm] (N, K, 3))``, joints
     in the returned (model's) order."""
-    q_file = _numbers(rows, layout, layout.joint_cols, fail)
-    q_file = q_file[:, [layout.joint_cols.index(n) for n in layout.joint_names]]
-    pts_file = _numbers(rows, layout, [c for cols in layout.point_cols for c in cols], fail)
-    q = np.where(layout.prismatic, q_file * lf, q_file * af)
-    return q_file, q, pts_file.reshape(len(rows), len(layout.targets), 3) * lf
+    order = [layout.joint_cols.index(n) for n in layout.joint_names]
+    q = _numbers(table, layout, [layout.joint_cols[k] for k in order], fail)  # a copy, scaled in place
+    pts_file = _numbers(table, layout, [c for cols in layout.point_cols for c in cols], fail)
+    q[:, ~layout.prismatic] *= af
+    q[:, layout.prismatic] *= lf
+    pts_file *= lf
+    return q, pts_file.reshape(len(table), len(layout.targets), 3)
 
 
-def _check_units_plausible(q_file, q, points, rows, layout: _Layout, lu: str, au: str, key_line: dict, fail):
-    """Numbers that look like another unit than the declared one are an error (module docstring)."""
+def _check_units_plausible(q, points, table, layout: _Layout, lu: str, au: str, key_line: dict, fail):
+    """Numbers that look like another unit than the declared one are an error
+    (:mod:`robocal.io.plausibility`), located at the largest value (or the unit's header line)."""
     dist = np.linalg.norm(points, axis=-1)
-    if lu == "mm" and dist.max() < _MM_LOOKS_LIKE_M:
-        fail(f"every point is within {_MM_LOOKS_LIKE_M:g} mm of the origin (largest {dist.max():.4g} mm): "
-             "the values look like metres; declare '# length_unit: m'", key_line["length_unit"])
-    if lu == "m" and dist.max() > _M_LOOKS_LIKE_MM:
+    problem = length_unit_problem(dist, lu, what="point distances from the origin")
+    if problem:
         r, t = np.unravel_index(np.argmax(dist), dist.shape)
-        fail(f"a point {dist.max() / 1000.0:.4g} m from the origin: the values look like millimetres; "
-             "declare '# length_unit: mm'", rows[r][0], layout.point_cols[t][0])
-    if au == "rad":
-        big = np.abs(q) > _RAD_LOOKS_LIKE_DEG
-        big[:, layout.prismatic] = False
-        if big.any():
-            r, j = np.argwhere(big)[0]
-            fail(f"revolute joint value {q_file[r, j]:g} rad is more than two turns: the values look like "
-                 "degrees; declare '# angle_unit: deg'", rows[r][0], layout.joint_names[j])
+        if lu == "mm":
+            fail(problem, key_line["length_unit"])
+        fail(problem, int(table.lines[r]), layout.point_cols[t][0])
+    revolute = q[:, ~layout.prismatic] if layout.prismatic.any() else q
+    problem = angle_unit_problem(revolute, au, what="revolute joint values")
+    if problem:
+        r, j = np.unravel_index(np.argmax(np.abs(revolute)), revolute.shape)
+        if au == "deg":
+            fail(problem, key_line["angle_unit"])
+        fail(problem, int(table.lines[r]), [n for n, p in zip(layout.joint_names, layout.prismatic) if not p][j])
 
 
-def _rotations(rows, layout: _Layout, conv: str, af: float, fail) -> np.ndarray:
+def _rotations(table, layout: _Layout, conv: str, af: float, fail) -> np.ndarray:
     """The measured orientations (N, 3, 3) from the orientation columns of convention ``conv``."""
-    o = _numbers(rows, layout, layout.ori_cols, fail)
+    o = _numbers(table, layout, layout.ori_cols, fail)
     if conv == "quaternion":
         norm = np.linalg.norm(o, axis=1)
         bad = np.flatnonzero(np.abs(norm - 1.0) > 1e-3)
         if bad.size:
             r = bad[0]
             fail(f"quaternion (qw, qx, qy, qz) has norm {norm[r]:.6g}, expected 1 (check the component "
-                 "order: w first)", rows[r][0], "qw")
+                 "order: w first)", int(table.lines[r]), "qw")
         return matrix_from_quaternion(o)
     if conv == "rotvec":
         return matrix_from_rotvec(o * af)

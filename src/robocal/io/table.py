@@ -8,9 +8,10 @@ Line numbers are 1-based and counted in the file; problems are reported through 
 from __future__ import annotations
 
 import csv
-import math
 
 import numpy as np
+
+from .stream import check_cell
 
 __all__ = ["csv_cells", "data_rows", "check_field_counts", "parse_number", "number_columns"]
 
@@ -39,14 +40,9 @@ def check_field_counts(rows, n_columns: int, header_line: int, fail) -> None:
 
 def parse_number(cell: str) -> float:
     """The finite float in ``cell``; ``ValueError`` with ``"empty cell"``, ``"'x' is not a number"``
-    or ``"'inf' is not a finite number"`` otherwise."""
-    try:
-        value = float(cell)
-    except ValueError:
-        raise ValueError("empty cell" if not cell else f"{cell!r} is not a number") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{cell!r} is not a finite number")
-    return value
+    or ``"'inf' is not a finite number"`` otherwise (:func:`robocal.io.stream.check_cell`: plain
+    decimal numbers only, no ``1_000``, magnitudes up to 1e12)."""
+    return check_cell(cell)
 
 
 def number_columns(rows, index, fail_cell) -> np.ndarray:

@@ -36,6 +36,7 @@ import numpy as np
 from ..transforms import ANGLE_UNITS, LENGTH_UNITS, POSE_CONVENTIONS, pose_from_transform, transform_from_pose
 from .atomic import atomic_write_text
 from .header import FileFormatError, declared_unit, read_header_block, read_text
+from .plausibility import angle_unit_problem, length_unit_problem
 from .table import check_field_counts, csv_cells, data_rows, number_columns
 
 __all__ = ["TARGETS_FORMAT", "CORRECTED_FORMAT", "TargetFileError", "read_targets", "write_corrected_targets"]
@@ -126,8 +127,9 @@ def read_targets(path, robot) -> dict:
 
     lf, af = LENGTH_UNITS[lu], ANGLE_UNITS[au]
     xyz = numbers(["x", "y", "z"])
-    if lu == "mm" and np.all(np.linalg.norm(xyz, axis=1) < 10.0):
-        fail("every target lies within 10 mm of the origin: the numbers look like metres; declare '# length_unit: m'")
+    problem = length_unit_problem(np.linalg.norm(xyz, axis=1) * lf, lu, what="target distances from the origin")
+    if problem:
+        fail(problem, where.get("length_unit"))
     rotations = None
     if conv is not None:
         values = np.concatenate([xyz, numbers(ori_cols)], axis=1)
@@ -140,6 +142,9 @@ def read_targets(path, robot) -> dict:
     if joint_cols:
         q = numbers(list(robot.controller_joints))
         q_seed = np.where(robot.prismatic_joints, q * lf, q * af)
+        problem = angle_unit_problem(q_seed[:, ~robot.prismatic_joints], au, what="seed joint values")
+        if problem:
+            fail(problem, where.get("angle_unit"))
     names = [cells[cols.index("name")] if "name" in cols else str(r + 1) for r, (_, cells) in enumerate(rows)]
     return {"names": names, "positions": xyz * lf, "rotations": rotations, "q_seed": q_seed, "frame": frame,
             "orientation": conv, "length_unit": lu, "angle_unit": au}

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..tcp.sensor import SENSOR_POINT_LABELS
+from .plausibility import angle_unit_problem, length_unit_problem
 from ..transforms import ANGLE_UNITS, LENGTH_UNITS, POSE_CONVENTIONS, transform_from_pose
 from .header import FileFormatError, declared_unit, read_header_block, read_text
 from .table import check_field_counts, csv_cells, data_rows, number_columns
@@ -98,6 +99,10 @@ def read_sensor_points_csv(path) -> dict:
     missing = [lab for lab in SENSOR_POINT_LABELS if lab not in found]
     if missing:
         fail(f"missing labels {', '.join(missing)}")
+    problem = length_unit_problem([v for v, _ in found.values()], "m" if scale != 1.0 else "mm",
+                                  what="sensor points")
+    if problem:
+        fail(problem, key_line.get("length_unit"))
     return {lab: found[lab][0] for lab in SENSOR_POINT_LABELS}
 
 
@@ -170,6 +175,19 @@ def _pose_columns(line: str, line_no: int, conv: str, fail) -> list:
     return fields
 
 
+def _check_pose_units(values, conv: str, lu: str, au, key_line: dict, fail) -> None:
+    """Flange positions and orientation angles (file units, (N, 6 | 7)) fit the declared units
+    (:mod:`robocal.io.plausibility`); rotation vectors and quaternions are not judged by angle."""
+    problem = length_unit_problem(np.linalg.norm(values[:, :3], axis=1) * LENGTH_UNITS[lu], lu,
+                                  what="flange positions")
+    if problem:
+        fail(problem, key_line.get("length_unit"))
+    if conv not in ("quaternion", "rotvec") and au:
+        problem = angle_unit_problem(values[:, 3:] * ANGLE_UNITS[au], au, what="orientation angles", min_rows=4)
+        if problem:
+            fail(problem, key_line.get("angle_unit"))
+
+
 def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
     """Read a flange-pose file (``docs/tcp.md``, "Flange-pose files").
 
@@ -196,7 +214,7 @@ def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
     rows = data_rows(lines, i + 1)
     check_field_counts(rows, len(header), i + 1, fail)
     labels: dict = {}
-    poses = []
+    poses, values = [], []
     for line, cells in rows:
         if not cells[0]:
             fail("empty pose label", line, "pose")
@@ -204,12 +222,14 @@ def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
             fail(f"duplicate pose {cells[0]!r} (first on line {labels[cells[0]]})", line, "pose")
         labels[cells[0]] = line
         vals = number_columns([(line, cells)], range(1, len(header)), lambda p, ln, j: fail(p, ln, header[j]))
+        values.append(vals[0])
         try:
             poses.append(transform_from_pose(vals[0], conv, lu, au or "deg"))
         except ValueError as exc:
             fail(str(exc), line)
     if len(poses) < min_rows:
         fail(f"need at least {min_rows} poses, got {len(poses)}")
+    _check_pose_units(np.reshape(values, (len(poses), -1)), conv, lu, au, key_line, fail)
     meta.update(orientation=conv, length_unit=lu, angle_unit=au)
     return FlangePoses(labels=tuple(labels), T_base_flange=np.array(poses).reshape(-1, 4, 4), convention=conv,
                        length_unit=lu, angle_unit=au, metadata=meta)

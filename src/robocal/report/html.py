@@ -101,6 +101,7 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
     out = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
            f"<style>{_CSS}</style></head><body>",
            f"<h1>{html.escape(title)}</h1>"]
+    out += _status_banner(result)
     out += _solver_section(result)
     out += _errors_section(result)
     out += _accuracy_map_section(accuracy_map)
@@ -110,6 +111,16 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
     out.append('<p class="note">Written by robocal. Every number is in result.json (lengths mm, angles rad).</p>')
     out.append("</body></html>")
     return "\n".join(out) + "\n"
+
+
+def _status_banner(result: dict) -> list:
+    """A banner over the report when the sanity gates failed the result (``status``/``reasons``)."""
+    if result.get("status", "ok") == "ok":
+        return []
+    items = "".join(f"<li>{html.escape(str(r))}</li>" for r in result.get("reasons", []))
+    return ['<div class="banner" style="border:3px solid #b00;background:#fee;padding:0.6em 1em;margin:1em 0">'
+            '<p><b class="bad">FAILED: this result did not pass the sanity gates; do not use it to move a '
+            f'robot.</b></p><ul>{items}</ul></div>']
 
 
 def _solver_section(result: dict) -> list:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.plausibility import REACH_LARGEST_MM, REACH_SMALLEST_MM, angle_unit_problem, length_unit_problem
 from ..kinematics.links import ANGLE_PARAMS, MODEL_KINDS, Link, frame_from_xyz_rpy, link_param_names
 from ..kinematics.model import EndEffector, RobotModel
 
@@ -56,6 +57,10 @@ def load_robot(name_or_path) -> RobotModel:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise RobotFileError(f"{path}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise RobotFileError(f"{path}: not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise RobotFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
     return parse_robot(data, origin=str(path))
 
 
@@ -76,6 +81,24 @@ def _frame(where, d, lscale, ascale):
     xyz = np.array(_vec(where, d, "xyz", 3, (0, 0, 0))) * lscale
     rpy = np.array(_vec(where, d, "rpy", 3, (0, 0, 0))) * ascale
     return frame_from_xyz_rpy(xyz, rpy)
+
+
+def _check_units(origin, links, limits, lu: str, au: str) -> None:
+    """The link lengths (their sum: the robot's reach) and the angles (parameters, revolute joint
+    ``limits`` (n, 2) [rad]) fit the declared ``length_unit`` / ``angle_unit``
+    (:mod:`robocal.io.plausibility`)."""
+    lengths = [abs(v) for L in links for k, v in L.params.items() if k not in ANGLE_PARAMS]
+    angles = [v for L in links for k, v in L.params.items() if k in ANGLE_PARAMS]
+    limits = np.reshape(np.asarray(limits, dtype=float), (-1, 2))
+    finite = limits[np.isfinite(limits).all(axis=1)]
+    problem = (length_unit_problem([sum(lengths)], lu, what="the sum of the link lengths (the reach)",
+                                   smallest_mm=REACH_SMALLEST_MM, largest_mm=REACH_LARGEST_MM, style="toml")
+               or angle_unit_problem(np.concatenate([angles, finite.ravel()]), "rad" if au == "rad" else "none",
+                                     what="the angle parameters and joint limits", style="toml")
+               or (angle_unit_problem(finite, au, what="the joint limits", min_rows=3, style="toml")
+                   if au == "deg" else None))
+    if problem:
+        raise RobotFileError(f"{origin}: {problem}")
 
 
 def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
@@ -197,6 +220,8 @@ def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
         elif cname in limits_by_name:
             limits[c] = limits_by_name[cname]
 
+    _check_units(origin, links, [limits_by_name[L.name] for L in links
+                                 if L.joint_type == "revolute" and L.name in limits_by_name], lu, au)
     T_world_base = _frame(f"{origin}: [base]", data.get("base"), ls, as_)
     ees = []
     if "end_effectors" in data:

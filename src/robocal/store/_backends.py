@@ -124,6 +124,8 @@ class SqliteBackend:
             p = Path(path)
             if p.is_dir():
                 raise HistoryError(f"history database {path} is a folder, not a file")
+            if not create and p.is_file() and p.stat().st_size == 0:  # reading must not write a schema into it
+                raise HistoryError(f"history database {path} is an empty file: no history recorded yet")
             if not p.exists():
                 if not create:
                     raise HistoryError(f"no history database at {path}")

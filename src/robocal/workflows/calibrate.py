@@ -34,6 +34,7 @@ import numpy as np
 from ..calib import solve
 from ..calib.solve import NotConvergedWarning
 from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
+from ..calib.sanity import calibration_verdict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
 from ..io.atomic import atomic_write_text
@@ -42,6 +43,8 @@ from ..io.targets import read_targets, write_corrected_targets
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
 from .calibrate_setup import build_problems, split_by_ids, tool_frame_summary
+from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
+from .progress import solver_progress
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
            "run_correct"]
@@ -108,17 +111,20 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
                     overwrite: bool = False, progress=None, method: str = "lm", rotation_weight: float | None = None,
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
-                    max_iterations: int = 50, report: bool = True) -> dict:
+                    max_iterations: int = 50, report: bool = True, force: bool = False,
+                    drop_duplicates: bool = False) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
-    ``robocal-measurements/1`` file of that robot. free / free_all / fix: parameter selection
-    (:func:`select_free`). holdout, seed: fraction of poses held out for validation and the seed
-    of the split. loss: ``linear``, ``huber`` or ``cauchy`` (robust, per pose). sigma_mm:
-    measurement noise per coordinate [mm] (weights and absolute uncertainty; default: estimated
-    from the residuals). tool: initial target point (3,) [mm] in the flange frame (default origin).
-    progress(step, total, text): called between steps. report: write ``report.html`` (False for
-    batch runs: the plots cost more than the solve).
+    ``robocal-measurements/1`` CSV file. free / free_all / fix: see :func:`select_free`. holdout:
+    fraction of poses held out for validation (a seeded random split, ``seed``); 0 disables it.
+    loss: ``linear``, ``huber`` or ``cauchy`` (robust, per pose). sigma_mm: measurement noise per
+    coordinate [mm] (weights and absolute uncertainty; default: estimated from the residuals).
+    tool: initial target point (3,) [mm] in the flange frame (default origin).
+    progress(step, total, text): called between steps (and about once a second inside a long
+    solve). report: write ``report.html`` (False for batch runs: the plots cost more than the
+    solve). drop_duplicates: drop repeated poses (else an error); the dropped ones are listed in
+    the notes.
 
     6-D (files with orientation, unless ``use_orientation`` is false): positions and orientations
     are fitted with a 6-DoF tool frame; rotation_weight [mm per rad] (default
@@ -130,29 +136,87 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     reported (``result["solver"]["warning"]``, ``NotConvergedWarning``).
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
-    naming the file, checked before any work). Returns a dict with ``result`` (the JSON dict),
-    ``files`` and ``notes``.
+    naming the file, checked before any work); the files are written into a temporary folder and
+    moved into place together (:mod:`robocal.workflows.outputs`). The sanity gates
+    (:mod:`robocal.calib.sanity`) give ``status`` and ``reasons`` in result.json; a failed result
+    writes no calibrated robot files unless ``force``. Returns a dict with ``result`` (the JSON
+    dict), ``files``, ``notes``, ``verdict``, ``convergence_warnings`` and the solver objects.
     """
     step = progress or (lambda i, n, text: None)
     total = 6 if report else 5
     out = Path(out_dir)
-    paths = output_paths(out)
-    if not report:
-        del paths["report"]
-    if not overwrite:
-        for p in paths.values():
-            if p.exists():
-                raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
+    names = [n for k, n in OUTPUT_FILES.items() if report or k != "report"]
+    _check_options(out, names, overwrite, loss, sigma_mm)
+    nominal = load_robot(robot)
+    if measurements is None:
+        size_mb = Path(data).stat().st_size / 1e6 if Path(data).is_file() else 0.0
+        if size_mb > 10.0:  # a large file takes seconds to read: say so (small files stay silent on errors)
+            step(1, total, f"reading {data} ({size_mb:.0f} MB)")
+        measurements = read_measurements(data, robot=nominal, check_limits=True, drop_duplicates=drop_duplicates)
+    meas = measurements
+    ensure_writable_dir(out)
+    free_names = select_free(nominal, free, free_all, fix)
+    train, hold, split_notes, protocol = _split(meas, data, free_names, use_orientation, holdout, seed,
+                                                train_ids, holdout_ids)
+    step(1, total, f"read {meas.n_poses} poses of {nominal.name} from {data}: {len(train)} to calibrate, "
+                   f"{len(hold)} held out ({protocol})")
+    setup = build_problems(nominal, meas, train, free_names=free_names, sigma_mm=sigma_mm, tool=tool,
+                           use_orientation=use_orientation, rotation_weight=rotation_weight, prior=prior)
+    res0, result, convergence_warnings = _solve(setup, step, total, len(train), len(free_names), meas.n_targets,
+                                                loss, method, max_iterations)
+    step(4, total, f"validating on {len(hold)} held-out pose(s)")
+    validation = _validate(setup, res0, result, meas, hold)
+    step(4, total, f"predicted uncertainty at the {meas.n_poses} measured poses")
+    accuracy = _accuracy_map(setup["problem"], result, meas)
+    verdict = calibration_verdict(
+        robot=nominal.name, rms_before_mm=res0.rms_after, rms_after_mm=result.rms_after, sigma_mm=sigma_mm,
+        holdout_before_mm=validation["before"]["rms"] if validation else None,
+        holdout_after_mm=validation["after"]["rms"] if validation else None,
+        parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    write_robot = verdict.ok or force
+    step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
+                                            " (FAILED the sanity gates: no calibrated robot file)"))
+    notes = list(split_notes) + list(setup["notes"])
+    if "dropped_duplicates" in meas.metadata:
+        notes.insert(0, f"dropped duplicate poses: {meas.metadata['dropped_duplicates']}")
+    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    metadata = {
+        "robot": str(robot), "measurements": str(data), "n_poses_file": meas.n_poses,
+        "n_poses_calibration": int(len(train)), "n_poses_holdout": int(len(hold)), "holdout_fraction": holdout,
+        "seed": seed, "loss": loss, "sigma_mm": sigma_mm, "method": method, "free": free_names,
+        "fixed_by_option": list(fix), "initial_target_mm": [0.0, 0.0, 0.0] if tool is None else [float(v) for v in tool],
+        "targets": list(meas.targets), "instrument": meas.metadata.get("instrument"),
+        "frame": meas.metadata.get("frame"), "written": stamp, "measurement_kind": setup["description"],
+        "rotation_weight_mm_per_rad": setup["rotation_weight"],
+        "prior_sigma_mm_deg": None if prior is None else [float(v) for v in prior],
+        "split": protocol, "max_iterations": max_iterations,
+    }
+    rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
+    rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
+    if report:
+        step(6, total, "writing report.html; moving the outputs into place together")
+    with staged_outputs(out, names, overwrite) as stage:
+        files = _write_outputs(output_paths(stage), rdict, result, nominal, meas, data, train, validation, stamp,
+                               list(setup["problem"].targets), accuracy, write_robot, notes, report)
+    files = {k: out / p.name for k, p in files.items()}
+    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result,
+            "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
+            "description": setup["description"], "convergence_warnings": convergence_warnings}
+
+
+def _check_options(out: Path, names, overwrite, loss, sigma_mm) -> None:
     if out.exists() and not out.is_dir():
         raise CalibrationInputError(f"{out}: exists and is not a folder")
+    check_outputs_free(out, names, overwrite)
     if loss not in ("linear", "huber", "cauchy"):
         raise CalibrationInputError(f"--loss must be linear, huber or cauchy, got {loss!r}")
     if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
         raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
 
-    nominal = load_robot(robot)
-    meas = read_measurements(data, robot=nominal) if measurements is None else measurements
-    free_names = select_free(nominal, free, free_all, fix)
+
+def _split(meas, data, free_names, use_orientation, holdout, seed, train_ids, holdout_ids):
+    """Calibration and held-out pose indices, notes and the protocol's name; a clear error when the
+    calibration poses cannot determine the unknowns."""
     N, K = meas.n_poses, meas.n_targets
     split_notes = []
     if train_ids or holdout_ids:
@@ -170,64 +234,60 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
             f"{n_res} residuals for {n_unknowns} unknowns ({len(free_names)} parameters, base frame, {K} target "
             f"point(s)); at least {need} calibration poses are needed, 3-5 times that for a useful result")
     protocol = "given pose ids" if (train_ids or holdout_ids) else f"seed {seed}"
-    step(1, total, f"read {N} poses of {nominal.name} from {data}: {len(train)} to calibrate, {len(hold)} held out "
-                   f"({protocol})")
-    point0 = (0.0, 0.0, 0.0) if tool is None else tuple(float(v) for v in tool)
-    pose_ids = list(meas.pose_ids)
-    setup = build_problems(nominal, meas, train, free_names=free_names, sigma_mm=sigma_mm, tool=tool,
-                           use_orientation=use_orientation, rotation_weight=rotation_weight, prior=prior)
-    problem0, problem = setup["problem0"], setup["problem"]
-    targets = list(problem.targets)
+    return train, hold, split_notes, protocol
 
-    step(2, total, f"initial base frame and target point(s) with the nominal geometry ({len(train)} poses; "
+
+def _solve(setup, step, total, n_train, n_free, K, loss, method, max_iterations):
+    """The baseline (nominal geometry, best-fit base and targets) and the calibration; the
+    convergence warnings of the calibration (list of str)."""
+    step(2, total, f"initial base frame and target point(s) with the nominal geometry ({n_train} poses; "
                    f"{setup['description']})")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)  # the baseline only starts the real solve
-        res0 = solve(problem0, loss=loss, method=method, max_iterations=max_iterations)
-
-    step(3, total, f"identifying {len(free_names)} parameter(s) + base + {K} target point(s) ({loss} loss)")
+        res0 = solve(setup["problem0"], loss=loss, method=method, max_iterations=max_iterations,
+                     progress=solver_progress(step, 2, total))
+    step(3, total, f"identifying {n_free} parameter(s) + base + {K} target point(s) ({loss} loss)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotConvergedWarning)
-        result = solve(problem, loss=loss, method=method, state0=res0.state, max_iterations=max_iterations)
-    convergence_warnings = [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
+        result = solve(setup["problem"], loss=loss, method=method, state0=res0.state, max_iterations=max_iterations,
+                       progress=solver_progress(step, 3, total))
+    return res0, result, [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
 
-    step(4, total, f"validating on {len(hold)} held-out pose(s)")
-    validation = None
-    if len(hold):
-        q_h, p_h = meas.joints[hold], meas.points[hold]
-        e_before = _point_errors(problem0.predict_points(res0.state, q=q_h, stations=np.zeros(len(hold), int)), p_h)
-        e_after = _point_errors(problem.predict_points(result.state, q=q_h, stations=np.zeros(len(hold), int)), p_h)
-        ok = np.isfinite(e_after)
-        validation = {
-            "n_poses": int(len(hold)), "pose_ids": [pose_ids[i] for i in hold],
-            "before": error_statistics(e_before[ok]), "after": error_statistics(e_after[ok]),
-            "per_point": _per_point(e_before, e_after, [pose_ids[i] for i in hold], meas.targets),
-        }
-    # predicted uncertainty over every pose of the file (accuracy map)
+
+def _validate(setup, res0, result, meas, hold):
+    """Held-out position errors before/after (statistics and per point), or None without held-out poses."""
+    if not len(hold):
+        return None
+    pose_ids = list(meas.pose_ids)
+    q_h, p_h = meas.joints[hold], meas.points[hold]
+    stations = np.zeros(len(hold), int)
+    e_before = _point_errors(setup["problem0"].predict_points(res0.state, q=q_h, stations=stations), p_h)
+    e_after = _point_errors(setup["problem"].predict_points(result.state, q=q_h, stations=stations), p_h)
+    ok = np.isfinite(e_after)
+    return {
+        "n_poses": int(len(hold)), "pose_ids": [pose_ids[i] for i in hold],
+        "before": error_statistics(e_before[ok]), "after": error_statistics(e_after[ok]),
+        "per_point": _per_point(e_before, e_after, [pose_ids[i] for i in hold], meas.targets),
+    }
+
+
+def _accuracy_map(problem, result, meas) -> dict:
+    """Predicted uncertainty over every pose of the file (the report's accuracy map)."""
     std_pts = predicted_point_std(problem, result, meas.joints)  # (N, K)
     base_model = result.model.replace(T_world_base=np.eye(4))
     positions = base_model.fk(meas.joints)[:, :3, 3]
-    accuracy = {
+    return {
         "quantity": "predicted position uncertainty (1 std, sqrt of the trace of J Cov J^T) of the targets in the "
                     "instrument frame, largest over the targets of each pose",
-        "pose_ids": pose_ids, "flange_position_base_mm": positions, "predicted_std_mm": std_pts.max(axis=1),
-        "statistics": error_statistics(std_pts.max(axis=1)),
+        "pose_ids": list(meas.pose_ids), "flange_position_base_mm": positions,
+        "predicted_std_mm": std_pts.max(axis=1), "statistics": error_statistics(std_pts.max(axis=1)),
     }
 
-    step(5, total, "writing result.json, calibrated robot (TOML, URDF)")
-    out.mkdir(parents=True, exist_ok=True)
-    notes = list(split_notes) + list(setup["notes"])
-    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    metadata = {
-        "robot": str(robot), "measurements": str(data), "n_poses_file": N, "n_poses_calibration": int(len(train)),
-        "n_poses_holdout": int(len(hold)), "holdout_fraction": holdout, "seed": seed, "loss": loss,
-        "sigma_mm": sigma_mm, "method": method, "free": free_names, "fixed_by_option": list(fix),
-        "initial_target_mm": list(point0), "targets": list(meas.targets), "instrument": meas.metadata.get("instrument"),
-        "frame": meas.metadata.get("frame"), "written": stamp, "measurement_kind": setup["description"],
-        "rotation_weight_mm_per_rad": setup["rotation_weight"],
-        "prior_sigma_mm_deg": None if prior is None else [float(v) for v in prior],
-        "split": protocol, "max_iterations": max_iterations,
-    }
+
+def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata,
+                 convergence_warnings) -> dict:
+    pose_ids = list(meas.pose_ids)
+    problem = setup["problem"]
     rdict = result_to_dict(result, problem, nominal=nominal, pose_ids=[pose_ids[i] for i in train],
                            validation=json_ready(validation) if validation else None, metadata=metadata)
     rdict["baseline"] = json_ready({
@@ -239,7 +299,17 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     rdict["tool_frame"] = json_ready(tool_frame_summary(result, problem))
     if convergence_warnings:
         rdict["solver"]["warning"] = convergence_warnings[-1]
+    return rdict
 
+
+def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation, stamp, targets, accuracy,
+                   write_robot, notes, report) -> dict:
+    """Write result.json, the calibrated robot (TOML, URDF; only with ``write_robot``) and the
+    report (with ``report``) into ``paths`` (a staging folder); returns {kind: path}."""
+    if not write_robot:
+        notes.append("calibrated_robot.toml/.urdf not written: the result FAILED the sanity gates "
+                     "(pass --force to write them anyway)")
+    N = meas.n_poses
     calibrated = result.model.replace(
         title=f"{nominal.title or nominal.name} (calibrated)",
         source=f"robocal calibrate of {Path(str(data)).name} ({len(train)} poses, {stamp}) from nominal: "
@@ -252,35 +322,29 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                            for k, t in enumerate(targets))
                + ".\nAll numbers with uncertainties: result.json.")
     files = {}
-    files["robot"] = save_robot(calibrated, paths["robot"], overwrite=overwrite, comment=comment)
     from ..io.urdf import UrdfError, write_urdf
 
-    try:
-        files["urdf"] = write_urdf(calibrated, paths["urdf"], overwrite=overwrite)
-    except UrdfError as exc:
-        notes.append(f"calibrated_robot.urdf not written: {exc}")
-        if overwrite and paths["urdf"].exists():
-            paths["urdf"].unlink()  # a stale URDF from an earlier run must not sit next to new results
+    if write_robot:
+        files["robot"] = save_robot(calibrated, paths["robot"], comment=comment)
+        try:
+            files["urdf"] = write_urdf(calibrated, paths["urdf"])
+        except UrdfError as exc:  # a stale URDF of an earlier run is removed by staged_outputs
+            notes.append(f"calibrated_robot.urdf not written: {exc}")
     rdict["notes"] = notes
     text = json.dumps(rdict, indent=2, allow_nan=False) + "\n"
-    files["result"] = atomic_write_text(paths["result"], text, overwrite=overwrite)
-    out = {"result": rdict, "files": files, "notes": notes, "calibration_result": result, "problem": problem,
-           "six_d": bool(setup["six_d"]), "description": setup["description"],
-           "convergence_warnings": convergence_warnings}
+    files["result"] = atomic_write_text(paths["result"], text)
     if not report:
-        return out
-
-    step(6, total, "writing report.html")
+        return files
     from ..report.html import write_report
 
-    amap = {"positions_mm": positions, "values_mm": accuracy["predicted_std_mm"],
+    amap = {"positions_mm": accuracy["flange_position_base_mm"], "values_mm": accuracy["predicted_std_mm"],
             "label": "predicted position std [mm]",
             "title": f"{nominal.name}: predicted uncertainty of the calibrated model at the measured poses",
             "note": "Flange positions in the robot base frame, coloured by the predicted 1-std position uncertainty "
                     "(J Cov J^T over the identified variables, base frame included)."}
-    files["report"] = write_report(paths["report"], rdict, accuracy_map=amap, overwrite=overwrite,
+    files["report"] = write_report(paths["report"], rdict, accuracy_map=amap,
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}")
-    return out
+    return files
 
 
 # ---------------------------------------------------------------------------------------------

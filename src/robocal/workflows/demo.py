@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.atomic import atomic_write_text
+from .outputs import check_outputs_free, ensure_writable_dir
 from ..metrics import error_statistics
 from ..robots import load_robot
 from ..sim import LaserTracker, VirtualRobot
@@ -154,15 +155,23 @@ def _record_history(store_path, robot_name, result):
     return str(store_path)
 
 
+#: What the demo writes into its folder; none is replaced without ``overwrite``.
+DEMO_OUTPUTS = ("report.html", "demo_result.json", "accuracy_map.png", "accuracy_map_calibrated.png", "history.png",
+                "history.sqlite", "tracker_campaign.csv", "tracker_campaign.truth.json", "calibration")
+
+
 def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses: int = 500,
-             n_repeats: int = 30, progress=None, history: bool = True) -> dict:
+             n_repeats: int = 30, progress=None, history: bool = True, overwrite: bool = False) -> dict:
     """Run the maintenance cycle on a simulated robot; write results into ``out_dir``.
 
     Returns a dict with every number (mm, deg, s) and the paths written. ``progress(step, total,
-    text)`` is called between steps when given.
+    text)`` is called between steps when given. An existing output (:data:`DEMO_OUTPUTS`) raises
+    ``FileExistsError`` before any work unless ``overwrite``; an unwritable folder raises
+    :class:`~robocal.workflows.outputs.OutputError` naming it.
     """
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    check_outputs_free(out, DEMO_OUTPUTS, overwrite)
+    ensure_writable_dir(out)
     step = progress or (lambda i, n, text: None)
     total = 6
     nominal = load_robot(robot)

@@ -20,7 +20,6 @@ from __future__ import annotations
 import csv
 import difflib
 import io
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -29,6 +28,7 @@ import numpy as np
 from ...transforms import ANGLE_UNITS, LENGTH_UNITS
 from ..atomic import atomic_write_text
 from ..header import FileFormatError, declared_unit, read_header_block, read_text
+from ..plausibility import angle_unit_problem
 from ..table import check_field_counts, csv_cells, data_rows, number_columns
 
 __all__ = ["JOINT_PROGRAM_FORMAT", "JointProgram", "JointProgramFileError", "read_joint_program",
@@ -37,7 +37,6 @@ __all__ = ["JOINT_PROGRAM_FORMAT", "JointProgram", "JointProgramFileError", "rea
 JOINT_PROGRAM_FORMAT = "robocal-program/1"
 
 _KEY_ORDER = ("format", "robot", "angle_unit", "length_unit")
-_RAD_LOOKS_LIKE_DEG = 4.0 * math.pi
 
 
 class JointProgramFileError(FileFormatError):
@@ -118,12 +117,11 @@ def _internal_joints(vals, rows, names, au, lu, model, fail) -> np.ndarray:
     pris, expected = model.prismatic_joints, model.controller_joints
     af, lf = ANGLE_UNITS[au], LENGTH_UNITS[lu or "mm"]
     q = np.where(pris, vals * lf, vals * af)
-    if au == "rad":
-        big = (np.abs(vals) > _RAD_LOOKS_LIKE_DEG) & ~pris
-        if big.any():
-            r, j = np.argwhere(big)[0]
-            fail(f"joint {expected[j]} = {vals[r, j]:g} rad is more than two turns: the values look like degrees; "
-                 "declare '# angle_unit: deg'", rows[r][0])
+    revolute = np.abs(q[:, ~pris])
+    problem = angle_unit_problem(revolute, au, what="revolute joint values")
+    if problem:
+        r = int(np.unravel_index(np.argmax(revolute), revolute.shape)[0]) if au == "rad" else 0
+        fail(problem, rows[r][0])
     lo, hi = model.limits[:, 0], model.limits[:, 1]
     bad = (q < lo - 1e-9) | (q > hi + 1e-9)
     if bad.any():

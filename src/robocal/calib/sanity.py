@@ -1,0 +1,190 @@
+"""Sanity gates on results: is a fitted answer physically believable?
+
+A least-squares solver always returns *something*. These gates turn the silent wrong answer (a file
+with swapped joint columns, x and z exchanged, radians declared as degrees, 500 mm of noise, random
+points) into a **failed** result with reasons that name the likely cause. They compare
+
+* the residuals with the declared instrument noise (or, without one, an absolute bound),
+* the result with the uncalibrated error (held-out error must not get worse; the nominal model
+  must fit the data roughly, or the data do not describe this robot),
+* the parameter changes with physical plausibility (a link length or an angle offset a real robot
+  cannot have drifted by).
+
+Every bound is a module constant, stated in docs/reliability.md. The gates take numbers only
+(millimetres, radians); the workflows put the :class:`Verdict` into ``result.json`` (``status``,
+``reasons``), the report (a banner) and the exit code of the command line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+__all__ = [
+    "Verdict", "NOISE_FACTOR", "RESIDUAL_LIMIT_MM", "NOMINAL_MISFIT_MM", "HOLDOUT_WORSE_FACTOR",
+    "LENGTH_CHANGE_MM", "LENGTH_CHANGE_FRACTION", "ANGLE_CHANGE_DEG", "TOOL_LENGTH_LIMIT_MM",
+    "residual_reasons", "holdout_reasons", "nominal_misfit_reasons", "parameter_reasons",
+    "calibration_verdict", "touchup_verdict", "sensor_verdict", "BEAM_ANGLE_TOLERANCE_DEG", "BEAM_GAP_LIMIT_MM",
+]
+
+#: Residual RMS (3-D point error) above this multiple of the noise's expected RMS
+#: (sqrt(3) * sigma per coordinate) fails.
+NOISE_FACTOR = 10.0
+#: Without declared noise: a calibrated residual RMS above this [mm] fails.
+RESIDUAL_LIMIT_MM = 5.0
+#: The nominal robot with its best-fit instrument frame missing the data by more than this RMS [mm]:
+#: the data do not describe this robot (industrial robots are off by 1-10 mm before calibration).
+NOMINAL_MISFIT_MM = 50.0
+#: Held-out RMS after calibration above this multiple of the one before fails ("got worse").
+HOLDOUT_WORSE_FACTOR = 1.1
+#: A length parameter may change by at most max(LENGTH_CHANGE_MM, LENGTH_CHANGE_FRACTION * |nominal|).
+LENGTH_CHANGE_MM = 25.0
+LENGTH_CHANGE_FRACTION = 0.05
+#: An angle parameter (offset, twist) may change by at most this [deg].
+ANGLE_CHANGE_DEG = 5.0
+#: A touch-up TCP farther than this from the flange [mm] is no tool a robot carries.
+TOOL_LENGTH_LIMIT_MM = 2000.0
+#: A cross-laser sensor's beams cross within this of 90 deg [deg] and pass closer than this [mm].
+BEAM_ANGLE_TOLERANCE_DEG = 10.0
+BEAM_GAP_LIMIT_MM = 20.0
+
+_CAUSE_DATA = ("likely swapped joint or x/y/z columns, angles or lengths in another unit than declared, or the "
+               "measurements of another robot")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Outcome of the sanity gates: ``status`` ``"ok"`` or ``"failed"`` and the ``reasons`` of a
+    failure (one sentence each, naming the likely cause); ``checks`` records every gate tried
+    (name -> dict of value, limit, passed)."""
+
+    reasons: tuple = ()
+    checks: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return not self.reasons
+
+    @property
+    def status(self) -> str:
+        return "ok" if self.ok else "failed"
+
+    def to_dict(self) -> dict:
+        return {"status": self.status, "reasons": list(self.reasons), "checks": dict(self.checks)}
+
+    def __add__(self, other: "Verdict") -> "Verdict":
+        return Verdict(self.reasons + other.reasons, {**self.checks, **other.checks})
+
+
+def _check(checks: dict, name: str, value: float, limit: float, unit: str) -> bool:
+    passed = bool(math.isfinite(value) and value <= limit)
+    checks[name] = {"value": float(value), "limit": float(limit), "unit": unit, "passed": passed}
+    return passed
+
+
+def residual_reasons(rms_mm: float, sigma_mm: float | None, checks: dict, what: str = "residual") -> list:
+    """The residual RMS [mm] (3-D point errors) against ``NOISE_FACTOR`` x the expected noise RMS
+    (``sqrt(3) sigma_mm``), or against ``RESIDUAL_LIMIT_MM`` when no noise is declared."""
+    if sigma_mm:
+        expected = math.sqrt(3.0) * sigma_mm
+        if _check(checks, f"{what}_vs_noise", rms_mm, NOISE_FACTOR * expected, "mm"):
+            return []
+        return [f"{what} RMS {rms_mm:.4g} mm is {rms_mm / expected:.0f} x the declared instrument noise "
+                f"(sigma {sigma_mm:g} mm per coordinate, {expected:.3g} mm expected; limit {NOISE_FACTOR:g} x): "
+                "likely noise far above the declared value, outlier poses, or a wrong robot model"]
+    if _check(checks, f"{what}_absolute", rms_mm, RESIDUAL_LIMIT_MM, "mm"):
+        return []
+    return [f"{what} RMS {rms_mm:.4g} mm exceeds {RESIDUAL_LIMIT_MM:g} mm (no instrument noise declared): "
+            f"{_CAUSE_DATA}, or a very noisy instrument"]
+
+
+def nominal_misfit_reasons(rms_before_mm: float, robot: str, checks: dict) -> list:
+    """The nominal model's RMS [mm] with its best-fit instrument frame against ``NOMINAL_MISFIT_MM``."""
+    if _check(checks, "nominal_misfit", rms_before_mm, NOMINAL_MISFIT_MM, "mm"):
+        return []
+    return [f"the nominal {robot} misses the measurements by {rms_before_mm:.4g} mm RMS even with the best-fit "
+            f"instrument frame (limit {NOMINAL_MISFIT_MM:g} mm): the data do not describe this robot; {_CAUSE_DATA}"]
+
+
+def holdout_reasons(before_mm: float, after_mm: float, checks: dict) -> list:
+    """Held-out RMS [mm] after calibration against ``HOLDOUT_WORSE_FACTOR`` x the one before."""
+    if _check(checks, "holdout_worse", after_mm, HOLDOUT_WORSE_FACTOR * before_mm, "mm"):
+        return []
+    return [f"held-out error got worse: {before_mm:.4g} -> {after_mm:.4g} mm RMS (limit {HOLDOUT_WORSE_FACTOR:g} x "
+            f"before): the calibration does not generalise; {_CAUSE_DATA}, duplicate or mislabelled poses"]
+
+
+def parameter_reasons(names, units, nominal, calibrated, checks: dict) -> list:
+    """Parameter changes beyond physical plausibility, as one reason naming the worst three:
+    lengths (unit ``mm``) by more than max(``LENGTH_CHANGE_MM``, ``LENGTH_CHANGE_FRACTION``
+    |nominal|), angles (unit ``rad``) by more than ``ANGLE_CHANGE_DEG``. Other units are not judged."""
+    bad, worst = [], 0.0
+    for name, unit, v0, v1 in zip(names, units, nominal, calibrated):
+        d = float(v1) - float(v0)
+        if unit == "mm":
+            ratio, text = abs(d) / max(LENGTH_CHANGE_MM, LENGTH_CHANGE_FRACTION * abs(float(v0))), f"{d:+.4g} mm"
+        elif unit == "rad":
+            ratio, text = abs(math.degrees(d)) / ANGLE_CHANGE_DEG, f"{math.degrees(d):+.4g} deg"
+        else:
+            continue
+        worst = max(worst, ratio)
+        if ratio > 1.0:
+            bad.append((ratio, f"{name} {text}"))
+    checks["parameter_change"] = {"value": worst, "limit": 1.0, "unit": "fraction of the bound", "passed": not bad}
+    if not bad:
+        return []
+    bad.sort(reverse=True)
+    shown = ", ".join(t for _, t in bad[:3]) + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
+    return [f"{len(bad)} parameter(s) changed beyond physical plausibility ({shown}; limits: lengths "
+            f"max({LENGTH_CHANGE_MM:g} mm, {LENGTH_CHANGE_FRACTION:.0%} of nominal), angles {ANGLE_CHANGE_DEG:g} deg): "
+            "not a real robot's deviation; likely swapped joint columns, wrong units or the wrong robot model"]
+
+
+def calibration_verdict(*, robot: str, rms_before_mm: float, rms_after_mm: float, sigma_mm: float | None = None,
+                        holdout_before_mm: float | None = None, holdout_after_mm: float | None = None,
+                        parameters=None) -> Verdict:
+    """The gates of a geometric calibration.
+
+    rms_before_mm: RMS point error of the nominal model with the best-fit instrument frame and
+    targets; rms_after_mm: of the calibrated model (calibration poses). holdout_*: held-out RMS
+    before/after (omit without held-out poses). parameters: ``(names, units, nominal, calibrated)``
+    of the kinematic parameters (mm / rad).
+    """
+    checks: dict = {}
+    reasons = nominal_misfit_reasons(rms_before_mm, robot, checks)
+    reasons += residual_reasons(rms_after_mm, sigma_mm, checks)
+    if holdout_before_mm is not None and holdout_after_mm is not None:
+        reasons += holdout_reasons(holdout_before_mm, holdout_after_mm, checks)
+    if parameters is not None:
+        reasons += parameter_reasons(*parameters, checks)
+    return Verdict(tuple(reasons), checks)
+
+
+def touchup_verdict(rms_mm: float, tcp_mm, sigma_mm: float | None = None, what: str = "touch-up") -> Verdict:
+    """The gates of a point on the flange fitted from poses (a touch-up TCP, the sphere centre
+    ``P_e`` of a thermal system calibration): the residual RMS [mm] (:func:`residual_reasons`) and
+    the point's distance from the flange ``|tcp_mm|`` against ``TOOL_LENGTH_LIMIT_MM``. (Metres
+    read as mm give a tool of a few mm and tiny residuals; the readers' unit checker catches that.)"""
+    checks: dict = {}
+    reasons = residual_reasons(rms_mm, sigma_mm, checks, what=f"{what} residual")
+    length = math.sqrt(sum(float(v) ** 2 for v in tcp_mm))
+    if not _check(checks, "tool_length", length, TOOL_LENGTH_LIMIT_MM, "mm"):
+        reasons.append(f"{what}: the fitted point is {length:.4g} mm from the flange (limit {TOOL_LENGTH_LIMIT_MM:g} "
+                       "mm): likely lengths in another unit than declared or poses that do not touch one point")
+    return Verdict(tuple(reasons), checks)
+
+
+def sensor_verdict(beta_deg: float, gap_mm: float) -> Verdict:
+    """The gates of a cross-laser sensor calibration: the angle between the beams within
+    ``BEAM_ANGLE_TOLERANCE_DEG`` of 90 deg and the gap between them below ``BEAM_GAP_LIMIT_MM``
+    (a mounted sensor's beams cross nearly at right angles; swapped labels or units do not)."""
+    checks: dict = {}
+    reasons = []
+    if not _check(checks, "beam_angle", abs(beta_deg - 90.0), BEAM_ANGLE_TOLERANCE_DEG, "deg"):
+        reasons.append(f"the beams cross at {beta_deg:.4g} deg, {beta_deg - 90.0:+.3g} deg from 90 (limit "
+                       f"{BEAM_ANGLE_TOLERANCE_DEG:g} deg): likely swapped point labels (A-D) or points of another "
+                       "sensor")
+    if not _check(checks, "beam_gap", gap_mm, BEAM_GAP_LIMIT_MM, "mm"):
+        reasons.append(f"the beams pass {gap_mm:.4g} mm apart (limit {BEAM_GAP_LIMIT_MM:g} mm): likely swapped point "
+                       "labels or lengths in another unit than declared")
+    return Verdict(tuple(reasons), checks)

@@ -1,0 +1,48 @@
+"""The last line of defence of the command line: any exception a command lets through becomes one
+``Error: ...`` line (never a traceback), with the path named for file-system problems.
+
+Commands still turn the errors they expect into ``click.ClickException`` themselves, with their
+own wording; this guard catches what slips through (a binary file where text was expected, a
+read-only output folder, a full disk, a corrupted history database).
+"""
+
+from __future__ import annotations
+
+import sqlite3
+
+import click
+
+from ..workflows.outputs import describe_os_error
+
+__all__ = ["GuardedGroup", "one_line_error"]
+
+
+def one_line_error(exc: BaseException) -> click.ClickException:
+    """The ``click.ClickException`` (one line) for an exception a command did not handle."""
+    if isinstance(exc, (FileNotFoundError, FileExistsError, IsADirectoryError, NotADirectoryError)):
+        text = f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else str(exc)
+    elif isinstance(exc, OSError):
+        text = describe_os_error(exc) if exc.errno else str(exc)
+    elif isinstance(exc, sqlite3.DatabaseError):
+        text = f"history database: {exc} (the file is damaged or not a robocal history database)"
+    elif isinstance(exc, UnicodeError):
+        text = f"not a UTF-8 text file: {exc}"
+    elif isinstance(exc, (ValueError, KeyError)):
+        text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+    elif isinstance(exc, MemoryError):
+        text = "out of memory: the input is too large for this machine (see docs/reliability.md, row limit)"
+    else:
+        text = f"unexpected {type(exc).__name__}: {exc} (a bug in robocal; please report it with the command)"
+    return click.ClickException(" ".join(str(text).split()) or type(exc).__name__)
+
+
+class GuardedGroup(click.Group):
+    """A click group whose commands (and sub-groups) never end in a traceback."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except (click.ClickException, click.exceptions.Exit, click.Abort, SystemExit, KeyboardInterrupt):
+            raise
+        except Exception as exc:  # noqa: BLE001 - the guard's purpose
+            raise one_line_error(exc) from None
