@@ -127,29 +127,45 @@ def _tool_recalibration(seed):
     }
 
 
-def _record_history(store_path, robot_name, result):
+def _record_history(store_path, robot_name, result, campaign_path):
+    """Record the demo's cycles in a fresh history database at ``store_path``.
+
+    The demo's production time is simulated: the clock is laid out so that the last cycle ends
+    now (never in the future), and every cycle says so (notes and ``meta.clock = "simulated"``).
+    The geometric calibration records the tracker campaign's poses as its measurements; the
+    thermal cycles record the number of sphere poses they used in ``meta``.
+    """
+    from datetime import datetime, timedelta, timezone
+
+    from ..io.measurements import read_measurements
     from ..store import HistoryStore
 
+    Path(store_path).unlink(missing_ok=True)  # a rerun (--overwrite) starts a fresh history
+    thermal = result.get("thermal", {}).get("cycles") or []
+    production_s = (thermal[-1]["time_s"] if thermal else 0.0) + 600.0
+    now = datetime.now(timezone.utc).replace(microsecond=0)
+    t_cal = now - timedelta(seconds=production_s + 3600.0)  # the calibration an hour before production
+    meta = {"clock": "simulated", "source": "robocal demo"}
+    meas = read_measurements(campaign_path)
     with HistoryStore.open(store_path) as store:
         g = result["geometric_calibration"]
-        with store.cycle(robot_name, "geometric_calibration", notes="robocal demo: laser-tracker campaign") as c:
+        with store.cycle(robot_name, "geometric_calibration", started_at=t_cal, finished_at=t_cal, meta=meta,
+                         notes="robocal demo (simulated time): laser-tracker campaign") as c:
+            c.add_measurements(meas.joints, meas.points[:, 0], sensor="laser tracker (simulated)")
             c.add_metric("residual_rms_before", result["accuracy_mm"]["rms"], "mm")
             c.add_metric("residual_rms_after", g["workspace_accuracy_mm"]["after"]["rms"], "mm")
-        if "thermal" in result and result["thermal"].get("cycles"):
-            from datetime import datetime, timedelta, timezone
-
-            start = datetime.now(timezone.utc)  # simulated production time runs from now
-            for cyc in result["thermal"]["cycles"]:
-                t = start + timedelta(seconds=cyc["time_s"])
-                with store.cycle(robot_name, "thermal_compensation", started_at=t, finished_at=t,
-                                 notes=f"robocal demo: production cycle {cyc['cycle']}, 6 sphere poses") as c:
-                    c.add_parameters(cyc["names"], cyc["deltas"], units=cyc["units"])
-                    c.add_metric("lambda", cyc["lambda"], "")
+        start = now - timedelta(seconds=production_s)
+        for cyc in thermal:
+            t = start + timedelta(seconds=cyc["time_s"])
+            with store.cycle(robot_name, "thermal_compensation", started_at=t, finished_at=t,
+                             meta={**meta, "sphere_poses": 6},
+                             notes=f"robocal demo (simulated time): production cycle {cyc['cycle']}, "
+                                   f"6 sphere poses") as c:
+                c.add_parameters(cyc["names"], cyc["deltas"], units=cyc["units"])
+                c.add_metric("lambda", cyc["lambda"], "")
         t = result["tool_recalibration"]
-        t_end = start + timedelta(seconds=result["thermal"]["cycles"][-1]["time_s"] + 600.0) \
-            if result.get("thermal", {}).get("cycles") else None
-        with store.cycle(robot_name, "tool_recalibration", notes="robocal demo: after a collision",
-                         started_at=t_end, finished_at=t_end) as c:
+        with store.cycle(robot_name, "tool_recalibration", started_at=now, finished_at=now, meta=meta,
+                         notes="robocal demo (simulated time): after a collision") as c:
             c.add_metric("tcp_error", t["tcp_error_mm"], "mm")
             c.add_metric("cycle_time", t["cycle_time_s"], "s")
     return str(store_path)
@@ -194,7 +210,8 @@ def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses
 
     step(5, total, "recording the cycles in the history database")
     if history:
-        result["history"] = _record_history(out / "history.sqlite", nominal.name, result)
+        result["history"] = _record_history(out / "history.sqlite", nominal.name, result,
+                                            out / "tracker_campaign.csv")
 
     step(6, total, "writing the report")
     report, before_png, after_png = _write_report(out, nominal.name, result, run, T_nominal, err, err_after, n_poses,
