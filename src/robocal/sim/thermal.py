@@ -48,6 +48,7 @@ import numpy as np
 from ..kinematics.model import RobotModel
 from ..transforms import invert_transforms, rot_x, so3_exp
 from .robot import VirtualRobot, as_rng
+from .thermal_effects import ThermalEffects, thermal_effects
 from .thermal_heat import HeatSource, ThermalModel
 from .thermal_poses import car_body_points, monitor_poses
 from .thermal_run_files import SPHERE_DIAMETER_MM, read_run, write_run
@@ -56,7 +57,7 @@ from .thermal_schedule import MEASUREMENT_LOAD, PRODUCTION_LOAD, ProductionSched
 __all__ = [
     "SPHERE_DIAMETER_MM", "HeatSource", "ThermalModel", "ProductionSchedule", "standard_schedules",
     "ThermalCell", "ThermalRun", "car_body_points", "monitor_poses", "write_run", "read_run",
-    "PRODUCTION_LOAD", "MEASUREMENT_LOAD",
+    "PRODUCTION_LOAD", "MEASUREMENT_LOAD", "ThermalEffects", "thermal_effects",
 ]
 
 
@@ -88,6 +89,7 @@ class ThermalRun:
     timeline_states: np.ndarray
     tcp_drift_mm: np.ndarray
     seed: object = None
+    conditions: dict | None = None
 
     @property
     def n_cycles(self) -> int:
@@ -105,6 +107,9 @@ class ThermalCell:
     T_flange_sensor (4, 4): the robot-held sensor; body_points (K, 3): monitored points (base
     frame); monitor_noise_mm. q_sphere (m, n): the screening sphere poses; q_monitor (K, n): the
     monitored poses; q_tcp (n,): the pose whose flange drift is reported in the timeline.
+    effects: the :class:`~robocal.sim.thermal_effects.ThermalEffects` outside the model (default
+    none: the ideal cell); realism: what the cell drew for them
+    (:class:`~robocal.sim.thermal_realistic.RealismState`, None when ideal).
     """
 
     robot: VirtualRobot
@@ -120,6 +125,8 @@ class ThermalCell:
     monitor_noise_mm: float = 0.02
     sphere_centre_base: np.ndarray = field(default_factory=lambda: np.zeros(3))
     seed: object = None
+    effects: ThermalEffects = field(default_factory=ThermalEffects.ideal)
+    realism: object = None
 
     @property
     def model(self) -> RobotModel:
@@ -131,7 +138,8 @@ class ThermalCell:
                  n_monitor: int = 34, sphere_centre=(1600.0, -1250.0, 1000.0), sphere_spread_mm=(250.0, 200.0, 150.0),
                  sphere_tilt_deg: float = 60.0, P_e=(25.0, -40.0, 160.0), sphere_noise_mm: float = 0.02,
                  monitor_noise_mm: float = 0.02, joint_noise_deg: float = 0.0003, length_sigma_mm: float = 0.2,
-                 angle_sigma_deg: float = 0.02, drift_scale: float = 1.0, drift_leak: float = 1.0) -> "ThermalCell":
+                 angle_sigma_deg: float = 0.02, drift_scale: float = 1.0, drift_leak: float = 1.0,
+                 preset="ideal") -> "ThermalCell":
         """The thesis-like cell on the KR150 R3100 (every draw from ``seed``).
 
         The stereo sensor stands 700 mm below the sphere measurement volume (``sphere_centre``,
@@ -142,6 +150,9 @@ class ThermalCell:
         the robot). The true robot differs from the nominal model by ``length_sigma_mm`` /
         ``angle_sigma_deg`` (a calibrated robot's residual errors) and has joint-angle noise
         ``joint_noise_deg`` (5e-6 rad ~ 0.015 mm at 3 m, the KR150's repeatability).
+        ``preset``: ``"ideal"`` (no effect outside the model), ``"realistic"`` or a
+        :class:`~robocal.sim.thermal_effects.ThermalEffects`; the realism is drawn from the
+        seed's seventh stream, so every other draw is the same for every preset.
         """
         from ..robots import load_robot
         from ..thermal import design_sphere_poses
@@ -167,8 +178,13 @@ class ThermalCell:
         body = car_body_points(int(seeds[4]), n_monitor)
         q_mon = monitor_poses(nominal, body, T_fs, int(seeds[5]))
         q_tcp = np.radians([0.0, -90.0, 90.0, 0.0, 45.0, 0.0])
-        return cls(true, thermal, invert_transforms(T_bs), P_e, T_fs, body, q_sphere, q_mon, q_tcp,
-                   sphere_noise_mm, monitor_noise_mm, centre, seed)
+        cell = cls(true, thermal, invert_transforms(T_bs), P_e, T_fs, body, q_sphere, q_mon, q_tcp,
+                   sphere_noise_mm, monitor_noise_mm, centre, seed, thermal_effects(preset))
+        if not cell.effects.is_ideal:
+            from .thermal_realistic import realism_state
+
+            cell.realism = realism_state(cell, int(seeds[6]))
+        return cell
 
     # ------------------------------------------------------------------ measurement
     def _flange(self, q, params):
@@ -177,8 +193,11 @@ class ThermalCell:
         return T[:, 0]
 
     def measure_sphere(self, q, params, rng) -> np.ndarray:
-        """Sphere centres (m, 3) in the sensor frame for commanded ``q`` with true parameters ``params``."""
+        """Sphere centres (m, 3) in the sensor frame for commanded ``q`` with true parameters ``params``
+        (a realistic cell: cold hall, fresh approach sides, its noise and outliers)."""
         rng = as_rng(rng)
+        if not self.effects.is_ideal:
+            return self._measure_realistic("sphere", q, params, rng)
         qa = self.robot.encoder_noise(q, rng)
         T = self._flange(qa, params)
         p = T[:, :3, :3] @ self.P_e + T[:, :3, 3]
@@ -188,11 +207,23 @@ class ThermalCell:
     def measure_monitor(self, q, params, rng) -> np.ndarray:
         """Monitored points (K, 3) in the robot-held sensor frame (point k from pose ``q[k]``)."""
         rng = as_rng(rng)
+        if not self.effects.is_ideal:
+            return self._measure_realistic("monitor", q, params, rng)
         qa = self.robot.encoder_noise(q, rng)
         T = self._flange(qa, params) @ self.T_flange_sensor
         d = self.body_points - T[:, :3, 3]
         p = np.einsum("kji,kj->ki", T[:, :3, :3], d)
         return p + rng.standard_normal(p.shape) * self.monitor_noise_mm
+
+    def _measure_realistic(self, which, q, params, rng):
+        from . import thermal_realistic as tr
+
+        q = np.atleast_2d(np.asarray(q, float))
+        inst = tr.Instant(np.asarray(params, float) - self.robot.true_model.params.values, None, np.eye(4),
+                          np.eye(4), self.body_points)
+        sides = tr.approach_sides(len(q), q.shape[1], rng)
+        fn = tr.measure_sphere if which == "sphere" else tr.measure_monitor
+        return fn(self, q, inst, sides, rng)[0]
 
     def tcp_drift(self, deltas, q=None) -> np.ndarray:
         """Flange-origin drift magnitude (T,) [mm] at pose ``q`` (default ``q_tcp``) for deltas (T, P)."""
@@ -207,7 +238,13 @@ class ThermalCell:
                  timeline_extra_s: float = 0.0) -> ThermalRun:
         """Run ``schedule`` from cold: the cold reference at t = 0, then one measurement of every
         monitored point and every sphere pose (``q_sphere``, default the cell's) per cycle.
-        ``timeline_extra_s`` extends the thermal timeline past the end (idle cooling)."""
+        ``timeline_extra_s`` extends the thermal timeline past the end (idle cooling). A cell with
+        effects runs :func:`robocal.sim.thermal_realistic.simulate_realistic` instead."""
+        if not self.effects.is_ideal:
+            from .thermal_realistic import simulate_realistic
+
+            return simulate_realistic(self, schedule, rng, q_sphere=q_sphere, timeline_step_s=timeline_step_s,
+                                      timeline_extra_s=timeline_extra_s)
         seed = rng if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool) else None
         rng = as_rng(rng)
         q_s = self.q_sphere if q_sphere is None else np.asarray(q_sphere, float)
@@ -250,4 +287,5 @@ class ThermalCell:
                               "direction": dict(zip(self.thermal.names, s.direction.tolist()))}
                              for s in self.thermal.sources],
             "seed": None if self.seed is None else int(self.seed),
+            "effects": self.effects.as_dict(),
         }

@@ -5,7 +5,7 @@ runs of the thesis-like experiment. Times in s, loads relative (0..1).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -26,7 +26,8 @@ class ProductionSchedule:
     (0..1, times :data:`PRODUCTION_LOAD` per joint), then the measurement phase of
     ``measure_s`` at load :data:`MEASUREMENT_LOAD`, then ``idle_s[c]`` of idle (load 0: cooling).
     The measurement instant of cycle c is the middle of its measurement phase
-    (:attr:`measurement_times_s`).
+    (:attr:`measurement_times_s`). ``duty`` (n, 6), optional: per cycle and joint, a factor on
+    the production load (the program run in that cycle; :meth:`with_programs`); default all 1.
     """
 
     work_s: np.ndarray
@@ -34,6 +35,7 @@ class ProductionSchedule:
     idle_s: np.ndarray
     measure_s: float = 40.0
     name: str = ""
+    duty: np.ndarray | None = None
 
     def __post_init__(self):
         w = np.asarray(self.work_s, float)
@@ -46,6 +48,12 @@ class ProductionSchedule:
         for k, v in (("work_s", w), ("load", ld), ("idle_s", idle)):
             v.setflags(write=False)
             object.__setattr__(self, k, v)
+        if self.duty is not None:
+            d = np.array(self.duty, float)
+            if d.shape != (len(w), len(PRODUCTION_LOAD)) or np.any(d < 0) or not np.all(np.isfinite(d)):
+                raise ValueError(f"ProductionSchedule: duty must be ({len(w)}, {len(PRODUCTION_LOAD)}), finite, >= 0")
+            d.setflags(write=False)
+            object.__setattr__(self, "duty", d)
 
     @property
     def n_cycles(self) -> int:
@@ -70,10 +78,22 @@ class ProductionSchedule:
         """Piecewise-constant load: ``(t_start (S,), duration (S,), relative load (S, 6))``."""
         n = self.n_cycles
         dur = np.stack([self.work_s, np.full(n, self.measure_s), self.idle_s], axis=1).reshape(-1)
-        loads = np.stack([self.load[:, None] * PRODUCTION_LOAD, np.full((n, 6), MEASUREMENT_LOAD),
+        work = self.load[:, None] * PRODUCTION_LOAD
+        if self.duty is not None:
+            work = np.minimum(work * self.duty, 1.0)
+        loads = np.stack([work, np.full((n, 6), MEASUREMENT_LOAD),
                           np.zeros((n, 6))], axis=1).reshape(-1, 6)
         t0 = np.concatenate([[0.0], np.cumsum(dur)[:-1]])
         return t0, dur, loads
+
+    def with_programs(self, rng, n_programs: int = 3, spread: float = 0.3) -> "ProductionSchedule":
+        """A copy in which every cycle runs one of ``n_programs`` programs, each with a per-joint
+        duty factor uniform in ``1 +- spread`` (drawn from ``rng``, seed or Generator); the
+        program of each cycle is drawn uniformly."""
+        rng = as_rng(rng)
+        programs = rng.uniform(1.0 - spread, 1.0 + spread, (int(n_programs), len(PRODUCTION_LOAD)))
+        pick = rng.integers(0, int(n_programs), self.n_cycles)
+        return replace(self, duty=programs[pick])
 
     @classmethod
     def generate(cls, rng, n_cycles: int = 90, *, cycle_s: float = 180.0, jitter_s: float = 10.0,
