@@ -16,6 +16,18 @@ distal end turns by ``phi = alpha g L (T_p + T_d) / (2 D)`` about b and is defle
 ``w = alpha g L^2 (T_p / 3 + T_d / 6) / D`` along ``b x e``; the twist of everything beyond it,
 in frame k, is ``omega = phi b``, ``v = w (b x e) - omega x r_1``.
 
+This bending is a body-fixed change of each link, so it only moves the joint axes against each
+other -- what the kinematic parameters describe; with the 24 free DH + beta parameters of the
+KR150 almost all of it is in their span (measured in tests/test_thermal_realism.py). What is not:
+
+**Gravity sag that changes with temperature** (:func:`sag_offsets`): each joint deflects under
+the gravity torque of the arm beyond it, ``dq_j = c_j tau_j(q)``; calibrated cold, this sag is in
+the robot's model, but a warm gearbox is softer (compliance up by ``sag_change_per_K`` per kelvin
+of its motor's rise), and the change ``sag_j rate h_j tau_j(q) / tau_ref_j`` depends on the pose
+-- no constant parameter can follow it. ``tau_j`` (:func:`gravity_torques`) comes from point
+masses at the skeleton segments' midpoints (mass proportional to length) and a payload at the
+flange; ``tau_ref_j`` is its bound with every lever at full length.
+
 :func:`apply_link_twists` moves flange poses by the twists of all links, each carried to the
 world by its link frame at the pose (first order: the twists are ~1e-4, the error ~1e-5 mm).
 :func:`small_transform` builds the base and sensor-stand motions.
@@ -31,7 +43,13 @@ from ..kinematics.model import RobotModel
 from ..transforms import invert_transforms, so3_exp
 from .robot import as_rng
 
-__all__ = ["LinkGeometry", "link_geometry", "link_twists", "apply_link_twists", "small_transform"]
+#: point masses of the sag model: arm mass per mm of skeleton (~700 kg over 3.4 m for a KR150) and
+#: what the flange carries while measuring (sphere, sensor) [kg]
+KG_PER_MM = 0.2
+PAYLOAD_KG = 10.0
+
+__all__ = ["LinkGeometry", "link_geometry", "link_twists", "apply_link_twists", "small_transform", "gravity_torques",
+           "sag_offsets"]
 
 
 @dataclass(frozen=True)
@@ -39,13 +57,15 @@ class LinkGeometry:
     """The bending segments: link (B,): index of the owning moving link; start, end (B, 3): the
     segment's ends in that link's frame [mm]; axes (B, 3): bending axes (unit, perpendicular to
     the segment, link frame); source (B, 2): heat-source indices of the proximal and distal
-    joint (-1: none)."""
+    joint (-1: none); tau_ref (n_joints,): the gravity-torque bound of :func:`gravity_torques`
+    [N m] (set by :func:`link_geometry`)."""
 
     link: np.ndarray
     start: np.ndarray
     end: np.ndarray
     axes: np.ndarray
     source: np.ndarray
+    tau_ref: np.ndarray | None = None
 
 
 def _skeleton(model: RobotModel, q) -> tuple:
@@ -87,7 +107,9 @@ def link_geometry(model: RobotModel, rng, n_sources: int) -> LinkGeometry:
         axes[i] = np.cos(g) * p + np.sin(g) * np.cross(e, p)
     src = np.array([[k if k < n_sources else -1, k + 1 if k + 1 < n_sources else -1] for k in link],
                    dtype=np.int64).reshape(-1, 2)
-    return LinkGeometry(link, start, end, axes, src)
+    geom = LinkGeometry(link, start, end, axes, src)
+    _, ref = _torques(model, q0[None], geom, KG_PER_MM, PAYLOAD_KG)
+    return LinkGeometry(link, start, end, axes, src, np.maximum(ref[0], 1e-9))
 
 
 def link_twists(geom: LinkGeometry, temperatures, deformation, n_links: int) -> np.ndarray:
@@ -134,3 +156,52 @@ def small_transform(rotvec, shift_mm, about_mm=(0.0, 0.0, 0.0)) -> np.ndarray:
     T[:3, :3] = R
     T[:3, 3] = c - R @ c + np.asarray(shift_mm, float)
     return T
+
+
+def _torques(model: RobotModel, q, geom: LinkGeometry, kg_per_mm: float, payload_kg: float) -> tuple:
+    """Gravity torques (N, n) [N m] about the controller joints at ``q`` (N, n) (model-joint
+    torques through the coupling) and their bound (N, n): every point mass's weight times its
+    distance from the joint axis."""
+    Tbw = invert_transforms(model.T_world_base)
+    F = Tbw @ model.link_frames(q)                                          # (N, n, 4, 4)
+    mid = 0.5 * (geom.start + geom.end)                                     # (B, 3) link frames
+    Fl = F[:, geom.link]                                                    # (N, B, 4, 4)
+    c = np.einsum("nbij,bj->nbi", Fl[:, :, :3, :3], mid) + Fl[:, :, :3, 3]
+    c = np.concatenate([c, (Tbw @ model.fk(q))[:, None, :3, 3]], axis=1)   # (N, B + 1, 3) + flange
+    owner = np.concatenate([geom.link, [len(model.links) - 1]])
+    mass = np.concatenate([kg_per_mm * np.linalg.norm(geom.end - geom.start, axis=1), [payload_kg]])
+    force = mass[:, None] * np.array([0.0, 0.0, -9.81])                    # (B + 1, 3) [N]
+    _, jt, _ = model.twists(q)                                              # (N, 6, n) world
+    om = np.einsum("ij,njk->nik", Tbw[:3, :3], jt[:, :3])
+    v = np.einsum("ij,njk->nik", Tbw[:3, :3], jt[:, 3:]) + np.cross(Tbw[:3, 3], om, axisa=0, axisb=1, axisc=1)
+    on_axis = np.cross(om, v, axisa=1, axisb=1, axisc=1)                    # (N, 3, n): closest axis points
+    moment = np.cross(c, force[None])                                       # (N, B + 1, 3) [N mm]
+    tau = np.einsum("nbi,nij->nbj", moment, om) + np.einsum("bi,nij->nbj", force, v)
+    lever = np.linalg.norm(c[:, :, :, None] - on_axis[:, None], axis=2)    # (N, B + 1, n)
+    carried = (owner[:, None] >= np.arange(om.shape[2])[None])[None]        # mass beyond joint j
+    bound = np.sum(carried * lever * (9.81 * mass)[None, :, None], axis=1)
+    C = np.abs(model.coupling)                                              # model -> controller joints
+    return np.sum(tau * carried, axis=1) @ model.coupling / 1000.0, bound @ C / 1000.0
+
+
+def gravity_torques(model: RobotModel, q, geom: LinkGeometry) -> tuple:
+    """``(tau (N, n_joints), tau_ref (n_joints,))`` [N m]: gravity torque about every joint axis at
+    joints ``q`` (N, n_joints) from point masses :data:`KG_PER_MM` times each segment's length at
+    its midpoint and :data:`PAYLOAD_KG` at the flange; ``tau_ref``: its bound (every weight at its
+    full distance from the axis) at the middle of the joint ranges, the same for any ``q``."""
+    tau, _ = _torques(model, np.atleast_2d(q), geom, KG_PER_MM, PAYLOAD_KG)
+    return tau, geom.tau_ref
+
+
+def sag_offsets(model: RobotModel, q, geom: LinkGeometry, temperatures, deformation) -> np.ndarray:
+    """Joint offsets (N, n_joints) [rad] from the warm change of the gravity sag (module
+    docstring) at joints ``q`` (N, n_joints) for source temperatures (S,) or one row per pose
+    (N, S) [K]."""
+    tau, ref = gravity_torques(model, q, geom)
+    n = tau.shape[1]
+    T = np.atleast_2d(np.asarray(temperatures, float))
+    h = np.zeros((len(T), n))
+    h[:, :min(n, T.shape[1])] = T[:, :n]
+    sag = np.zeros(n)
+    sag[:len(deformation.sag_rad)] = deformation.sag_rad[:n]
+    return tau / ref * (sag * deformation.sag_change_per_K * h)

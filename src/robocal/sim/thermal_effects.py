@@ -87,24 +87,34 @@ class HallTemperature:
 
 @dataclass(frozen=True)
 class LinkDeformation:
-    """Heat-driven bending of the links: a smooth strain field over the arm, not a DH change.
+    """Heat-driven deformation of the arm: a bending field over the links, and a gravity sag
+    that changes with temperature (:mod:`robocal.sim.thermal_deformation`).
 
     Along link i the temperature rise runs linearly from its proximal motor (joint i) to its
     distal one (joint i+1); across the section the motor side is warmer by ``gradient_share``
     of the local rise. The non-uniform expansion (coefficient ``expansion_per_K``) of a section
     ``section_depth_mm`` deep curves the link, ``kappa(s) = expansion g T(s) / depth``, about a
     link-fixed axis drawn per cell; integrated along the link it rotates and deflects the distal
-    joint. Composed along the chain, part of it lies outside the span of the 24 free parameters
-    (the fixed beta3-beta6, d2, the flange): :func:`robocal.sim.thermal_deformation` measures it.
+    joint. Being body-fixed, this bending moves the joint axes against each other, which the
+    kinematic parameters describe: measured, almost all of it is in the span of the 24 free DH +
+    beta parameters. The part that is not a parameter change is the sag: joint j deflects under
+    the gravity torque of the arm beyond it; calibrated cold, that sag is in the model, but the
+    warm gearbox is softer -- its compliance grows by ``sag_change_per_K`` per kelvin of the
+    motor's rise --, so the pose-dependent deflection ``sag_rad[j] tau_j(q) / tau_ref_j`` grows
+    with the heat, differently in every pose.
 
     thesis: links "expand and deform" (3 intro, 2.2.4: a small tilt of Z_i moves the common
     normal far); fig. 3-1b shows the three coordinates drifting differently. assumed: motor side
-    15 % warmer, 250 mm sections (KR150 arm castings), aluminium.
+    5 % warmer than the local rise, 250 mm sections (KR150 arm castings), aluminium; cold sag
+    0.5 / 0.3 mrad at joints 2 / 3 at full lever (1.5 mm at 3 m, a heavy robot's static
+    deflection) and 0.2 %/K softer gearboxes (lubricant and bearing preload).
     """
 
     gradient_share: float = 0.05
     section_depth_mm: float = 250.0
     expansion_per_K: float = 23e-6
+    sag_rad: tuple = (0.0, 5e-4, 3e-4, 0.0, 0.0, 0.0)
+    sag_change_per_K: float = 0.002
 
 
 @dataclass(frozen=True)

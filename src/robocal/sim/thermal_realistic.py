@@ -24,7 +24,7 @@ import numpy as np
 
 from ..transforms import invert_transforms
 from .robot import as_rng, parameter_kinds
-from .thermal_deformation import apply_link_twists, link_geometry, link_twists, small_transform
+from .thermal_deformation import apply_link_twists, link_geometry, link_twists, sag_offsets, small_transform
 from .thermal_measurement import add_outliers, approach_sides, backlash_offsets, distance_noise
 from .thermal_response import hall_temperature, motor_temperatures
 
@@ -51,13 +51,14 @@ class RealismState:
 class Instant:
     """The cell at one moment: ``delta`` (P,) parameter drift [mm | rad]; ``twists`` (n, 6) link
     twists or None; ``base``, ``sensor`` (4, 4): base and sensor-stand motions (world);
-    ``body`` (K, 3): the car-body points [mm]."""
+    ``body`` (K, 3): the car-body points [mm]; ``temps`` (S,): the motors' rise [K] (for the sag)."""
 
     delta: np.ndarray
     twists: np.ndarray | None
     base: np.ndarray
     sensor: np.ndarray
     body: np.ndarray
+    temps: np.ndarray | None = None
 
 
 def _horizontal(rng) -> np.ndarray:
@@ -105,7 +106,7 @@ def instants(cell, schedule, times_s, rng) -> tuple:
             sensor = small_transform(st.sensor_axis * h.sensor_tilt_urad_per_K * 1e-6 * dT,
                                      [0.0, 0.0, h.sensor_shift_mm_per_K * dT], st.sensor_origin)
             body = st.body_centre + (1.0 + h.body_expansion_per_K * dT) * (cell.body_points - st.body_centre)
-        out.append(Instant(d, None if twists is None else twists[i], base, sensor, body))
+        out.append(Instant(d, None if twists is None else twists[i], base, sensor, body, temps[i]))
     return out, temps, hall
 
 
@@ -114,6 +115,8 @@ def _world_flange(cell, q, inst: Instant, sides, rng) -> np.ndarray:
     qa = cell.robot.encoder_noise(q, rng)
     if cell.effects.joints is not None:
         qa = qa + backlash_offsets(sides, cell.effects.joints, rng)
+    if inst.temps is not None and cell.effects.deformation is not None:
+        qa = qa + sag_offsets(cell.robot.true_model, q, cell.realism.geometry, inst.temps, cell.effects.deformation)
     T = cell._flange(qa, cell.robot.true_model.params.values + inst.delta)
     if inst.twists is not None:
         T = apply_link_twists(cell.robot.true_model, qa, T, inst.twists)
@@ -160,16 +163,18 @@ def _sides(stored, q, n_joints, rng):
 
 def _tcp_drift(cell, inst_list) -> np.ndarray:
     """Flange-origin drift (T,) [mm] at ``q_tcp`` through the instants (no noise)."""
-    q = cell.q_tcp[None]
-    X = cell.robot.true_model.params.values
-    p0 = cell._flange(q, X)[0, :3, 3]
-    out = np.empty(len(inst_list))
-    for i, inst in enumerate(inst_list):
-        T = cell._flange(q, X + inst.delta)
-        if inst.twists is not None:
-            T = apply_link_twists(cell.robot.true_model, q, T, inst.twists)
-        out[i] = np.linalg.norm((inst.base @ T)[0, :3, 3] - p0)
-    return out
+    model, fx = cell.robot.true_model, cell.effects
+    q = np.repeat(cell.q_tcp[None], len(inst_list), axis=0)
+    if fx.deformation is not None:
+        temps = np.array([i.temps for i in inst_list])
+        q = q + sag_offsets(model, q, cell.realism.geometry, temps, fx.deformation)
+    X = model.params.values
+    T = np.concatenate([cell._flange(q[i:i + 1], X + inst.delta) for i, inst in enumerate(inst_list)])
+    if fx.deformation is not None:
+        T = apply_link_twists(model, q, T, np.array([i.twists for i in inst_list]))
+    base = np.array([i.base for i in inst_list])
+    p = np.einsum("tij,tj->ti", base[:, :3, :3], T[:, :3, 3]) + base[:, :3, 3]
+    return np.linalg.norm(p - cell._flange(cell.q_tcp[None], X)[0, :3, 3], axis=1)
 
 
 def simulate_realistic(cell, schedule, rng, *, q_sphere=None, timeline_step_s: float = 60.0,

@@ -59,10 +59,10 @@ def _i_optimal_cost(info, G, subsets, tolerant: bool = False) -> np.ndarray:
     ``trace(N^+ G)`` plus :data:`_RANK_PENALTY` per missing rank."""
     N = info[subsets].sum(axis=1)
     ev = np.linalg.eigvalsh(N)
-    ok = ev[:, 0] > 1e-10 * ev[:, -1]
     if tolerant:
         deficit = np.sum(ev <= 1e-10 * ev[:, -1:], axis=1)
         return deficit * _RANK_PENALTY + np.einsum("bkl,lk->b", np.linalg.pinv(N, rcond=1e-10, hermitian=True), G)
+    ok = ev[:, 0] > 1e-10 * ev[:, -1]
     out = np.full(len(subsets), np.inf)
     if ok.any():
         inv = np.linalg.inv(N[ok])
@@ -70,9 +70,34 @@ def _i_optimal_cost(info, G, subsets, tolerant: bool = False) -> np.ndarray:
     return out
 
 
+def _fast_cost(info, G, subsets):
+    """``(trace(N^-1 G) (B,), N (B, k, k))`` without the singularity test (``None`` if a matrix
+    is exactly singular); only the winner is tested afterwards."""
+    N = info[subsets].sum(axis=1)
+    try:
+        return np.einsum("bkl,lk->b", np.linalg.inv(N), G), N
+    except np.linalg.LinAlgError:
+        return None, N
+
+
 def _best_subset(cost, info, m: int, n: int, names) -> np.ndarray:
-    """The cheapest of all ``C(m, n)`` subsets (sorted indices), evaluated in batches."""
+    """The cheapest of all ``C(m, n)`` subsets (sorted indices), evaluated in batches. The strict
+    cost is first evaluated without the singularity test and the winner tested; if it is
+    singular (or a matrix exactly so) the batches are evaluated with the test -- same result."""
     combos = np.array(list(itertools.combinations(range(m), n)), dtype=np.int64)
+    if not cost.keywords.get("tolerant", False):
+        G = cost.args[1]
+        best, best_c = None, np.inf
+        for i in range(0, len(combos), 20000):
+            c, _ = _fast_cost(info, G, combos[i:i + 20000])
+            if c is None:
+                break
+            j = int(np.argmin(np.where(np.isnan(c), np.inf, c)))
+            if c[j] < best_c:
+                best, best_c = combos[i + j], c[j]
+        else:
+            if best is not None and np.isfinite(cost(best[None])[0]):
+                return np.sort(best)
     best, best_c = None, np.inf
     for i in range(0, len(combos), 20000):
         c = cost(combos[i:i + 20000])

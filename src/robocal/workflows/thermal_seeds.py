@@ -21,19 +21,12 @@ import time
 import numpy as np
 
 from ..thermal.stability import selection_frequency
+from .stats import summarise
 from .thermal import run_thermal_experiment
 
 __all__ = ["STATISTICS", "run_thermal_seeds", "summarise", "format_seeds_table"]
 
 STATISTICS = ("rms", "max")
-
-
-def summarise(values) -> dict:
-    """median, q25, q75, min, max and n of ``values`` (n,) [%]."""
-    v = np.asarray(values, float)
-    q25, med, q75 = np.percentile(v, [25, 50, 75])
-    return {"median": float(med), "q25": float(q25), "q75": float(q75), "min": float(v.min()), "max": float(v.max()),
-            "n": int(len(v))}
 
 
 def _tables(per_seed, columns) -> dict:
