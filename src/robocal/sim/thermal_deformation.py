@@ -28,8 +28,8 @@ of its motor's rise), and the change ``sag_j rate h_j tau_j(q) / tau_ref_j`` dep
 masses at the skeleton segments' midpoints (mass proportional to length) and a payload at the
 flange; ``tau_ref_j`` is its bound with every lever at full length.
 
-:func:`apply_link_twists` moves flange poses by the twists of all links, each carried to the
-world by its link frame at the pose (first order: the twists are ~1e-4, the error ~1e-5 mm).
+:func:`apply_link_twists` moves flange poses by the small motions of all links, each carried to
+the world by its link frame at the pose (exact composition).
 :func:`small_transform` builds the base and sensor-stand motions.
 """
 
@@ -132,19 +132,22 @@ def link_twists(geom: LinkGeometry, temperatures, deformation, n_links: int) -> 
 
 
 def apply_link_twists(model: RobotModel, q, T_base_flange, twists) -> np.ndarray:
-    """Flange poses (N, 4, 4) [mm, base frame] moved by link twists (n, 6) (or (N, n, 6)) taken
-    at the actual joints ``q`` (N, n_joints) of ``model`` (first order)."""
-    F = model.link_frames(np.atleast_2d(q))                              # (N, n, 4, 4) world
-    F = invert_transforms(model.T_world_base) @ F
+    """Flange poses (N, 4, 4) [mm, base frame] of the chain with link k followed by the small
+    motion ``E_k = (exp(omega_k), v_k)`` (twists (n, 6) or (N, n, 6), link frames) at the actual
+    joints ``q`` (N, n_joints) of ``model``: exactly ``prod_k (F_k E_k F_k^-1) T`` with the
+    undeformed link frames ``F_k`` (the product telescopes into the deformed chain)."""
+    F = invert_transforms(model.T_world_base) @ model.link_frames(np.atleast_2d(q))   # (N, n, 4, 4)
     tw = np.broadcast_to(twists, (len(F),) + np.shape(twists)[-2:])
     R, p = F[..., :3, :3], F[..., :3, 3]
-    om = np.einsum("nkij,nkj->nki", R, tw[..., :3])                      # world rotation of each link
-    v = np.einsum("nkij,nkj->nki", R, tw[..., 3:]) + np.cross(p, om)
-    Om, V = om.sum(axis=1), v.sum(axis=1)
-    T = np.array(T_base_flange, float, copy=True)
-    T[:, :3, 3] += np.cross(Om, T[:, :3, 3]) + V
-    T[:, :3, :3] = so3_exp(Om) @ T[:, :3, :3]
-    return T
+    Rw = so3_exp(np.einsum("nkij,nkj->nki", R, tw[..., :3]))                # (N, n, 3, 3)
+    tw_ = np.einsum("nkij,nkj->nki", R, tw[..., 3:]) + p - np.einsum("nkij,nkj->nki", Rw, p)
+    out = np.array(T_base_flange, float, copy=True)
+    for k in range(F.shape[1] - 1, -1, -1):                                 # M_1 (M_2 (... (M_n T)))
+        if not np.any(tw[:, k]):
+            continue
+        out[:, :3, 3] = np.einsum("nij,nj->ni", Rw[:, k], out[:, :3, 3]) + tw_[:, k]
+        out[:, :3, :3] = Rw[:, k] @ out[:, :3, :3]
+    return out
 
 
 def small_transform(rotvec, shift_mm, about_mm=(0.0, 0.0, 0.0)) -> np.ndarray:
