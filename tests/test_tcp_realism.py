@@ -220,3 +220,23 @@ def test_ideal_cell_is_an_order_of_magnitude_better():
     s = ideal["summary"]["cross_laser"]
     assert s["accuracy_mm"]["max"] < 0.1 and s["check_mm"]["max"] < 0.12
     assert ideal["settings"]["effects"] == {**vars(BarrierEffects.ideal())}
+
+
+def test_cli_accuracy_prints_the_librarys_study():
+    import json
+
+    from click.testing import CliRunner
+
+    from robocal.cli.main import main
+    from robocal.workflows.tcp_accuracy import tcp_accuracy_study
+
+    r = CliRunner().invoke(main, ["tcp", "accuracy", "--seeds", "1", "--first-seed", "3", "--repeats", "2",
+                                  "--method", "cross_laser", "--json"])
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    lib = tcp_accuracy_study(preset="realistic", seeds=1, first_seed=3, repeats=2, methods=("cross_laser",))
+    assert out["summary"]["cross_laser"]["accuracy_mm"]["median"] == pytest.approx(
+        lib["summary"]["cross_laser"]["accuracy_mm"]["median"])
+    assert out["settings"]["preset"] == "realistic" and out["thesis_rms_mm"] == 0.48
+    bad = CliRunner().invoke(main, ["tcp", "accuracy", "--repeats", "1"])
+    assert bad.exit_code != 0 and "repeats" in bad.output

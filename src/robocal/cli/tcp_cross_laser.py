@@ -220,20 +220,18 @@ def accuracy_cmd(preset, n_seeds, first_seed, repeats, methods, budget, as_json)
     """
     from ..workflows.tcp_accuracy import METHODS, format_accuracy_table, tcp_accuracy_study, tcp_error_budget
 
+    from ._common import _step_printer, _user_error
+
     methods = tuple(methods) or METHODS
-
-    def progress(i, n, text):
-        click.echo(f"[{i}/{n}] {text}", err=True)
-
     try:
         if budget:
             res = tcp_error_budget(seeds=n_seeds, first_seed=first_seed, repeats=repeats, methods=methods,
-                                   progress=progress)
+                                   progress=_step_printer)
         else:
             res = tcp_accuracy_study(preset=preset, seeds=n_seeds, first_seed=first_seed, repeats=repeats,
-                                     methods=methods, progress=progress)
+                                     methods=methods, progress=_step_printer)
     except (ValueError, RuntimeError) as exc:
-        raise click.ClickException(" ".join(str(exc).split())) from None
+        raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(res, indent=1, default=float))
     elif budget:

@@ -8,6 +8,8 @@ import math
 
 import click
 
+from ._common import _step_printer, _user_error
+
 __all__ = ["experiment_cmd", "experiment_json"]
 
 
@@ -56,14 +58,11 @@ def experiment_cmd(preset, n_seeds, first_seed, n_cycles, resamples, as_json):
     """
     from ..workflows.thermal_seeds import format_seeds_table, run_thermal_seeds
 
-    def progress(i, n, text):
-        click.echo(f"[{i}/{n}] {text}", err=True)
-
     try:
         res = run_thermal_seeds(preset=preset, seeds=n_seeds, first_seed=first_seed, n_cycles=n_cycles,
-                                resamples=resamples, progress=progress)
+                                resamples=resamples, progress=_step_printer)
     except (ValueError, KeyError) as exc:
-        raise click.ClickException(" ".join(str(exc).split())) from None
+        raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(experiment_json(res), indent=1))
         return

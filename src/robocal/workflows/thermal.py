@@ -87,14 +87,9 @@ def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles
 
     T_sb, P_e, calib, ferr = cell.T_sensor_base, cell.P_e, None, None
     if system_calibration:
-        from ..thermal import calibrate_system, frame_errors
-
         t0 = time.perf_counter()
-        q_sys = cell.q_sphere[:n_system_poses]
-        P_s = cell.measure_sphere(q_sys, cell.robot.true_model.params.values, int(run_seeds[0]))
-        calib = calibrate_system(model, q_sys, P_s, point_sigma_mm=cell.sphere_noise_mm)
+        calib, ferr = _system_calibration(cell, n_system_poses, int(run_seeds[0]))
         T_sb, P_e = calib.T_sensor_base, calib.P_e
-        ferr = frame_errors(T_sb, cell.T_sensor_base, P_e, cell.P_e, at_base=cell.sphere_centre_base)
         timings["system_calibration"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -145,6 +140,18 @@ def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles
                      "n_monitored_points": len(cell.q_monitor), "preset": cell.effects.name},
         "timings_s": timings,
     }
+
+
+def _system_calibration(cell, n_poses: int, seed: int):
+    """The sensor frame and sphere centre from the first ``n_poses`` cold sphere poses (least
+    squares) and their errors against the cell's truth."""
+    from ..thermal import calibrate_system, frame_errors
+
+    q_sys = cell.q_sphere[:n_poses]
+    P_s = cell.measure_sphere(q_sys, cell.robot.true_model.params.values, seed)
+    calib = calibrate_system(cell.model, q_sys, P_s, point_sigma_mm=cell.sphere_noise_mm)
+    ferr = frame_errors(calib.T_sensor_base, cell.T_sensor_base, calib.P_e, cell.P_e, at_base=cell.sphere_centre_base)
+    return calib, ferr
 
 
 def _row(i, run, problem, sets, online, threshold_mm, statistic) -> dict:
