@@ -25,6 +25,11 @@ The pieces, all seeded and all in mm / rad / s:
   a robot-held sensor (``T_flange_sensor`` on the flange, noise ~0.02 mm) measuring 34 monitored
   points on a car body spread over ~1.5 x 1 m, each from its own robot pose.
   :meth:`ThermalCell.simulate` runs a schedule and returns a :class:`ThermalRun`.
+* Effects outside the compensation model (:mod:`robocal.sim.thermal_effects`): the ``ideal``
+  preset has none (this module's behaviour, bit for bit); ``realistic`` adds two-speed nonlinear
+  heating with program-dependent duty, the hall temperature (arm, base, sensor stand, car body),
+  link bending and a sag that softens with heat, backlash, noise growing with distance and
+  outliers; such a cell runs :func:`robocal.sim.thermal_realistic.simulate_realistic`.
 
 A run starts cold. The cold reference (sphere at every sphere pose, every monitored point) is
 measured at t = 0 before production; then after each production cycle the robot measures the 34

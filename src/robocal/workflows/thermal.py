@@ -2,8 +2,9 @@
 
 :func:`run_thermal_experiment` on the simulated KR150 R3100 (DH + beta):
 
-1. the cell (:meth:`robocal.sim.thermal.ThermalCell.standard`): 20 sphere poses for screening,
-   34 monitored car-body points, fixed stereo sensor (0.02 mm), robot-held sensor (0.02 mm);
+1. the cell (:meth:`robocal.sim.thermal.ThermalCell.standard`, ``preset`` ideal or realistic):
+   20 sphere poses for screening, 34 monitored car-body points, fixed stereo sensor (0.02 mm),
+   robot-held sensor (0.02 mm);
 2. system calibration (thesis 3.3) from 9 cold sphere poses by nonlinear least squares
    (:func:`robocal.thermal.calibrate_system`); everything afterwards uses the *estimated*
    ``T_sensor_base`` and ``P_e`` (``system_calibration=False``: the true ones);
@@ -19,7 +20,8 @@
    evaluation.
 
 :func:`format_thermal_table` renders the table; :func:`format_thermal_report` adds the screening
-table (5-1) and the settings.
+table (5-1) and the settings. One seed is one draw: :mod:`robocal.workflows.thermal_seeds` runs
+the experiment over many.
 """
 
 from __future__ import annotations
