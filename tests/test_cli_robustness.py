@@ -102,6 +102,10 @@ def test_commands_are_enumerated():
 @pytest.mark.parametrize("path,cmd", COMMANDS, ids=[" ".join(p) for p, _ in COMMANDS])
 def test_no_traceback_on_hostile_input(path, cmd, bad_inputs, tmp_path):
     binary, db, ro = bad_inputs
+    takes_input = any(isinstance(p, click.Argument) or (p.required and not _is_output(p)) or p.name == "db"
+                      for p in cmd.params)
+    if not takes_input and not any(_is_output(p) for p in cmd.params) and path != ("robots",):
+        pytest.skip(f"robocal {' '.join(path)} reads no file and writes none: a simulation study, nothing hostile to feed")
     if path in (("demo",), ("tcp", "simulate"), ("thermal", "simulate")):
         args = _args(path, cmd, binary, ro, db)
         if "--out" not in args:

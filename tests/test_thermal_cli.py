@@ -1,6 +1,7 @@
 """``robocal thermal ...`` end to end through CliRunner: simulate -> screen -> calibrate-sensor ->
-compensate on a small seeded cell (20 cycles per run), checked against the simulator's truth files;
-and one-line errors."""
+compensate on a small seeded cell (20 cycles per run, the ideal preset: its truth files hold the
+whole truth, so the compensation can be checked against them), the realistic preset's files, the
+multi-seed ``experiment`` against the library; and one-line errors."""
 
 import json
 import shutil
@@ -44,7 +45,7 @@ def true_model(truth):
 def cell(tmp_path_factory):
     """Simulate once, screen run 1, calibrate the sensor on run 1's cold sphere file."""
     d = tmp_path_factory.mktemp("thermal")
-    sim = as_json(ok("simulate", "--seed", 2024, "--cycles", CYCLES, "--out", d, "--json"))
+    sim = as_json(ok("simulate", "--seed", 2024, "--cycles", CYCLES, "--preset", "ideal", "--out", d, "--json"))
     screen = as_json(ok("screen", d / "run1", "--json"))
     sensor = d / "sensor.json"
     ok("calibrate-sensor", ROBOT, d / "run1" / "sphere_cold.csv", "--out", sensor)
@@ -64,16 +65,43 @@ def test_simulate_writes_three_runs_and_a_program(cell):
     prog = read_program(d / "program.csv", load_robot(ROBOT))
     assert len(prog) == sim["monitored_points"] == 34
     text = ok("simulate", "--cycles", 2, "--out", d / "small").output
-    assert "TCP 3h mm" in text and "run1..run3" in text
+    assert "TCP 3h mm" in text and "run1..run3" in text and "(realistic)" in text
+    truth = json.loads((d / "small" / "run1" / "truth.json").read_text())
+    assert truth["effects"]["name"] == "realistic" and truth["effects"]["hall"]["amplitude_K"] == 1.5
+    assert json.loads((d / "run1" / "truth.json").read_text())["effects"]["hall"] is None
 
 
-def test_screen_selects_n_parameters_better_than_traditional(cell):
+def _library_problem(run_dir, sensor):
+    """The screening problem of a run directory built by the library, for comparison."""
+    from robocal.thermal.screening import ScreeningProblem
+    from robocal.io.thermal_files import read_sensor_json
+    from robocal.workflows.thermal_inputs import load_run_dir
+
+    run = load_run_dir(run_dir)
+    s = read_sensor_json(sensor, run["model"])
+    return ScreeningProblem.from_measurements(run["model"], s["T_sensor_base"], s["P_e"], run["q_sphere"],
+                                              run["sphere_cold"], run["sphere"], run["q_monitor"],
+                                              run["monitor_cold"], run["monitor"], run["T_flange_sensor"])
+
+
+def test_screen_prints_the_librarys_screening(cell):
+    """The command's table and lambdas are the library's on the same files (the figures
+    themselves are a multi-seed matter: tests/test_thermal_realism.py)."""
+    from robocal.thermal.screening import screen_parameters
+
     s = cell["screen"]
     assert len(s["selected"]) == 8
     assert s["steps"][0]["n_params"] == 24 and len(s["steps"]) == 24 - 8 + 1
-    lam = s["lambda_percent"]
-    assert lam["screened"] > lam["traditional"] > lam["before"]
-    assert lam["screened"] >= 95.0
+    sensor = as_json(ok("screen", cell["dir"] / "run1", "--sensor", cell["sensor"], "--json"))
+    prob = _library_problem(cell["dir"] / "run1", cell["sensor"])
+    res = screen_parameters(prob, 8)
+    assert sensor["selected"] == list(res.selected)
+    assert [st["lambda"] for st in sensor["steps"]] == [round(st.lam, 2) for st in res.steps]
+    ids = [f"p{i + 1:02d}" for i in range(prob.n_poses)]
+    idx = [ids.index(p) for p in sensor["online_poses"]["screened"]]
+    lam = sensor["lambda_percent"]
+    assert lam["screened"] == pytest.approx(prob.with_poses(idx).evaluate(res.selected).lam)
+    assert lam["before"] == pytest.approx(prob.evaluate(()).lam)
     assert len(s["online_poses"]["screened"]) == 6
     text = ok("screen", cell["dir"] / "run1", "--sensor", cell["sensor"], "--keep", 6).output
     assert "step" in text and "remaining" in text and "selected (6):" in text
@@ -81,12 +109,13 @@ def test_screen_selects_n_parameters_better_than_traditional(cell):
 
 
 def test_screened_set_evaluated_on_the_other_runs(cell):
+    sel = cell["screen"]["selected"]
     for k in (2, 3):
-        r = as_json(ok("screen", cell["dir"] / f"run{k}", "--params", ",".join(cell["screen"]["selected"]),
-                       "--sensor", cell["sensor"], "--json"))
-        assert r["mode"] == "evaluate" and r["steps"] == []
-        lam = r["lambda_percent"]
-        assert lam["screened"] >= 95.0 and lam["screened"] > lam["traditional"] > lam["before"]
+        r = as_json(ok("screen", cell["dir"] / f"run{k}", "--params", ",".join(sel), "--sensor", cell["sensor"],
+                       "--json"))
+        assert r["mode"] == "evaluate" and r["steps"] == [] and r["selected"] == sel
+        prob = _library_problem(cell["dir"] / f"run{k}", cell["sensor"])
+        assert r["lambda_percent"]["screened_all_poses"] == pytest.approx(prob.evaluate(sel).lam)
     one_line_error(run("screen", cell["dir"] / "run2", "--params", "a1,beta1"), "beta1", "fixed")
 
 
@@ -266,3 +295,25 @@ def test_errors_existing_output_without_overwrite(cell, tmp_path):
        "--poses", "c020-*", "--cold", d / "run2" / "sphere_cold.csv", "--params", "a2,d4",
        "--program", d / "program.csv", "--out", existing, "--overwrite")
     assert existing.read_text().startswith("# format: robocal-program/1")
+
+
+def test_experiment_json_is_the_librarys_multi_seed_table():
+    from robocal.workflows.thermal_seeds import run_thermal_seeds
+
+    r = as_json(ok("experiment", "--seeds", 2, "--first-seed", 5, "--cycles", 10, "--json"))
+    lib = run_thermal_seeds(preset="realistic", seeds=2, first_seed=5, n_cycles=10)
+    assert r["settings"]["preset"] == "realistic" and r["settings"]["seeds"] == 2
+    for st in ("rms", "max"):
+        for role in ("screening", "evaluation"):
+            assert set(r["lambda"][st][role]) == {"before", "traditional", "screened"}
+            for col, v in r["lambda"][st][role].items():
+                assert v["median"] == pytest.approx(lib["tables"][st][role][col]["median"])
+                assert v["q25"] <= v["median"] <= v["q75"] and v["n"] == (2 if role == "screening" else 4)
+    assert r["selection_frequency"] == pytest.approx(lib["selection"])
+    assert sum(r["selection_frequency"].values()) == pytest.approx(8.0)       # 8 parameters per seed
+    assert [s["seed"] for s in r["per_seed"]] == [5, 6]
+    text = ok("experiment", "--seeds", 1, "--cycles", 8, "--preset", "ideal").output
+    assert "rms residual < 0.1 mm (thesis)" in text and "every cycle < 0.1 mm (strict)" in text
+    assert "selection frequency over seeds" in text
+    assert run("experiment", "--preset", "warm").exit_code != 0
+    assert run("experiment", "--seeds", 0).exit_code != 0

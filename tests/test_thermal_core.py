@@ -84,16 +84,17 @@ def test_both_methods_exact_without_noise(kuka):
 
 
 def test_system_calibration_accuracy_at_0_02_mm_noise(kuka):
-    """Acceptance: 9 poses, 0.02 mm noise; averaged over 8 seeds.
+    """Acceptance: 9 poses, 0.02 mm noise, 20 seeds.
 
-    Measured (seeds 0-7, means): least squares: rotation 0.0020 deg, frame position at the centre
-    of the measured volume 0.023 mm, sensor origin 0.029 mm, P_e 0.026 mm; thesis penalty method:
-    0.0022 deg, 0.028 mm, 0.041 mm, 0.030 mm. The base origin seen from the sensor (translation of
-    T_sensor_base, ~2 m from the data) carries the rotation error times that lever arm: 0.058 mm
-    (thesis 0.081 mm).
+    Measured (seeds 0-19, means): least squares: rotation 0.0021 deg, frame position at the centre
+    of the measured volume 0.020 mm, sensor origin 0.029 mm, base origin seen from the sensor
+    0.055 mm, P_e 0.020 mm; thesis penalty method: 0.0026 deg, 0.025, 0.039, 0.079, 0.026 mm.
+    Per seed the picture is mixed: least squares is better in 11 / 13 / 15 / 15 / 14 of the 20
+    seeds on those five measures, on all five in only 8, and in single seeds the penalty method
+    is up to 2.7 times better (P_e).
     """
     ls, th = [], []
-    for seed in range(8):
+    for seed in range(20):
         rng = np.random.default_rng(seed)
         T_sb = _sensor(rng)
         q = design_sphere_poses(kuka, CENTRE, P_E, 9, rng, spread_mm=FOV, tilt_deg=60)
@@ -106,12 +107,16 @@ def test_system_calibration_accuracy_at_0_02_mm_noise(kuka):
         assert c.thesis.orthonormality_error < 1e-5
         # the reported uncertainty is the right size: 3-sigma of P_e covers its error
         assert c.errors["least-squares"]["P_e_mm"] < 3 * np.linalg.norm(c.least_squares.std_P_e_mm)
-    ls, th = np.mean(ls, axis=0), np.mean(th, axis=0)
-    rot, at_centre, origin, t_sb, pe = ls
-    assert rot < 0.003 and at_centre < 0.03 and pe < 0.03, ls
-    assert origin < 0.035, ls
-    # the thesis's penalty method is worse or equal, on every measure, on average
-    assert np.all(th >= ls * 0.999), (th, ls)
+    ls, th = np.array(ls), np.array(th)
+    rot, at_centre, origin, t_sb, pe = ls.mean(axis=0)
+    assert rot < 0.003 and at_centre < 0.03 and pe < 0.03, ls.mean(axis=0)
+    assert origin < 0.035, ls.mean(axis=0)
+    # on average the thesis's penalty method is worse on every measure (by 20-45 %) ...
+    assert np.all(th.mean(axis=0) >= 1.15 * ls.mean(axis=0)), (th.mean(axis=0), ls.mean(axis=0))
+    # ... but not seed by seed: least squares wins 55-75 % of the seeds per measure, all five in 40 %
+    wins = (ls < th).sum(axis=0)
+    assert np.all((10 <= wins) & (wins <= 16)), wins
+    assert 5 <= np.all(ls < th, axis=1).sum() <= 11
 
 
 def test_system_calibration_uncertainty_and_summary(kuka):

@@ -1,5 +1,7 @@
 """Thermal simulator, parameter screening (thesis 3.2, fig. 3-5) and the thesis-like experiment
-(tables 5-1, 5-2). Everything seeded."""
+(tables 5-1, 5-2): table 5-2 as medians over 20 seeds of the realistic preset, the screening's
+mechanics on synthetic problems with a known answer, and its stability over resamples.
+Everything seeded."""
 
 import math
 
@@ -39,29 +41,81 @@ def cell():
     return ThermalCell.standard(2024)
 
 
-# ------------------------------------------------------------------------------------------ acceptance
-def test_thesis_like_experiment_screened_set_beats_traditional_and_before(experiment):
+# ------------------------------------------------------------------------------------------ table 5-2
+@pytest.fixture(scope="module")
+def seeds():
+    """Table 5-2 on the realistic preset over 20 seeds; 20 cycles per run to stay cheap (~12 s;
+    the full 90-cycle experiment is ``robocal thermal experiment``, docs/thermal.md)."""
+    from robocal.workflows.thermal_seeds import run_thermal_seeds
+
+    return run_thermal_seeds(preset="realistic", seeds=20, first_seed=1, n_cycles=20)
+
+
+# Medians of seeds 1-20, and the tolerance: the largest range of the same median over five
+# disjoint groups of 20 seeds (1-20, 21-40, ..., 81-100), measured per statistic -- rms: before
+# 49.5-53.9 / 58.8-63.2, traditional 79.4-82.4 / 85.3-87.3, screened 95.6-97.6 / 95.1-96.6
+# (screening / evaluation runs); max: before 16.2-19.6 / 21.6-23.0, traditional 33.8-36.8 /
+# 38.7-43.6, screened 44.6-48.5 / 44.6-49.0.
+MEDIANS = {"rms": {"screening": (52.94, 79.41, 95.59), "evaluation": (61.76, 86.27, 95.59)},
+           "max": {"screening": (16.18, 36.76, 44.61), "evaluation": (22.06, 41.18, 45.59)}}
+TOLERANCE = {"rms": 4.5, "max": 5.0}
+
+
+def test_table_5_2_medians_over_20_seeds(seeds):
+    for st, roles in MEDIANS.items():
+        for role, expected in roles.items():
+            got = [seeds["tables"][st][role][c]["median"] for c in ("before", "traditional", "screened")]
+            assert got == pytest.approx(expected, abs=TOLERANCE[st]), (st, role, got)
+
+
+def test_table_5_2_ordering_over_20_seeds(seeds):
+    """screened > traditional > before: in the medians of both statistics and both roles, and per
+    run in at least 80 % of the evaluation runs with the thesis's statistic (measured 87.5-95 %
+    over the five groups); with the strict statistic screened beats traditional less often
+    (measured 60-75 %)."""
+    for st in ("rms", "max"):
+        for role in ("screening", "evaluation"):
+            t = seeds["tables"][st][role]
+            assert t["screened"]["median"] > t["traditional"]["median"] > t["before"]["median"], (st, role)
+            for c in ("before", "traditional", "screened"):
+                assert t[c]["q25"] <= t[c]["median"] <= t[c]["q75"] and t[c]["n"] == (20 if role == "screening" else 40)
+    assert seeds["ordering"]["rms"]["evaluation"]["strict_order"] >= 0.8
+    assert 0.45 <= seeds["ordering"]["max"]["evaluation"]["strict_order"] <= 0.9
+    # a direction that never left the band has an rms below it: the strict share is never larger
+    for s in seeds["per_seed"]:
+        for r in s["rows"]:
+            assert all(r["lambda"]["max"][c] <= r["lambda"]["rms"][c] for c in ("before", "traditional", "screened"))
+
+
+def test_selection_frequency_over_seeds(seeds):
+    """Every seed selects 8 parameters, so the frequencies add up to 8; the set is not the same
+    across seeds -- one parameter is nearly always chosen, the rest vary (measured: a2 95 %,
+    next 70 %, and 12 parameters between 20 % and 80 %)."""
+    f = seeds["selection"]
+    assert sum(f.values()) == pytest.approx(8.0)
+    assert list(f.values()) == sorted(f.values(), reverse=True)
+    top = list(f.values())
+    assert top[0] >= 0.9 and top[1] <= 0.85
+    assert sum(0.2 <= v <= 0.8 for v in f.values()) >= 8
+
+
+def test_experiment_structure(experiment):
+    """The thesis's setting, both statistics per column and the schedules differing (one seed of
+    the ideal preset; the figures themselves are the multi-seed tests above)."""
     rows = experiment["rows"]
-    assert [r["run"] for r in rows] == [1, 2, 3]
-    for r in rows:
-        assert r["screened"] > r["traditional"] > r["before"], r
-    for r in rows[1:]:                                   # the evaluation runs
-        assert r["screened"] >= 95.0, r
-    # the setting of the thesis: 20 sphere poses for screening, 6 online, 34 points, 90 cycles, 24 -> 8
+    assert [r["run"] for r in rows] == [1, 2, 3] and [r["role"] for r in rows] == ["screening", "evaluation",
+                                                                                  "evaluation"]
     s = experiment["settings"]
     assert (s["n_screen_poses"], s["n_online_poses"], s["n_monitored_points"], s["n_cycles"]) == (20, 6, 34, 90)
+    assert s["preset"] == "ideal"
     assert experiment["screening"].steps[0].n_params == 24 and len(experiment["screened"]) == 8
     assert all(len(v) == 6 for v in experiment["online_poses"].values())
-    # the schedules differ between the runs
+    assert experiment["traditional"] == ("d1", "a1", "a2", "a3", "d4", "d6")
+    for r in rows:
+        assert r["lambda"]["rms"] == {k: r[k] for k in ("before", "traditional", "screened")}
+        assert all(r["lambda"]["max"][k] <= r["lambda"]["rms"][k] for k in r["lambda"]["max"])
     sch = [r.schedule for r in experiment["runs"]]
     assert not np.allclose(sch[0].idle_s, sch[1].idle_s) and not np.allclose(sch[1].load, sch[2].load)
-
-
-def test_screened_set_is_dominated_by_the_heated_joints(experiment):
-    sel = set(experiment["screened"])
-    # the simulated heat moves a1, a2, a3, d4, d6, beta2, theta3, alpha4 most: most of them must be found
-    assert len(sel & {"a1", "a2", "a3", "d4", "d6", "beta2", "theta3", "alpha4"}) >= 6
-    assert experiment["traditional"] == ("d1", "a1", "a2", "a3", "d4", "d6")
 
 
 def test_tables_render(experiment):
@@ -221,14 +275,12 @@ def test_online_pose_selection(experiment):
         prob.columns(["beta3"])
 
 
-def test_screening_of_a_full_run_is_fast(experiment):
-    import time
-
+def test_screening_is_deterministic(experiment):
+    """Screening the same problem again gives the same set (speed: benchmarks/bench_thermal.py)."""
     prob = experiment["problems"][0]
-    t = time.perf_counter()
     res = screen_parameters(prob)
-    assert time.perf_counter() - t < 2.0
     assert res.selected == experiment["screened"]
+    assert [s.lam for s in res.steps] == [s.lam for s in experiment["screening"].steps]
 
 
 # ------------------------------------------------------------------------------------------ simulator
@@ -301,3 +353,78 @@ def test_run_files_round_trip(cell, tmp_path):
                                             back["sphere_cold"], back["sphere"], back["q_monitor"],
                                             back["monitor_cold"], back["monitor"], cell.T_flange_sensor)
     np.testing.assert_allclose(p1.before, p2.before, atol=1e-9)
+
+
+# ------------------------------------------------------------------------------------------ stability
+def test_selection_frequency_hand_case():
+    from robocal.thermal.stability import selection_frequency
+
+    f = selection_frequency([("a", "b"), ("b", "c"), ("b", "a"), ("d", "b")])
+    assert f == {"b": 1.0, "a": 0.5, "c": 0.25, "d": 0.25}
+    assert selection_frequency([("a",)], names=("z", "a")) == {"z": 0.0, "a": 1.0}
+    with pytest.raises(ValueError, match="no sets"):
+        selection_frequency([])
+
+
+def test_resampled_cycles_keep_time_order():
+    from robocal.thermal.stability import resample_cycles
+
+    idx = resample_cycles(50, 3)
+    assert len(idx) == 50 and np.all(np.diff(idx) >= 0) and idx.min() >= 0 and idx.max() < 50
+    assert len(np.unique(idx)) < 50                                        # drawn with replacement
+    np.testing.assert_array_equal(idx, resample_cycles(50, 3))
+
+
+def test_stability_of_a_clear_screening():
+    """Three parameters drift, four do not: every resample keeps the three."""
+    from robocal.thermal.stability import screening_stability
+
+    prob, _ = _synthetic()
+    rep = screening_stability(prob, 20, 4, n_keep=3, threshold_mm=0.05)
+    assert rep.n_resamples == 20 and rep.agreement == 1.0
+    assert set(rep.selected) == set(rep.full) == {"p0", "p2", "p5"}
+    assert [rep.frequency[n] for n in ("p0", "p2", "p5")] == [1.0, 1.0, 1.0] and rep.unstable() == []
+    assert [r["name"] for r in rep.table()][:3] == ["p0", "p2", "p5"]
+
+
+def test_stability_exposes_interchangeable_parameters():
+    """p6 does not drift but is a near copy of p5 (columns 0.5 % apart): the full run happens to
+    keep p6, and which of the two survives depends on the cycles (measured 57 / 43 % over 30
+    resamples); p0 and p2 are kept by every resample."""
+    from robocal.thermal.stability import screening_stability
+
+    rng = np.random.default_rng(8)
+    prob, dX = _synthetic(seed=8)
+    M = prob.M.copy()
+    M[:, :, 6] = M[:, :, 5] + 0.005 * rng.normal(size=M[:, :, 5].shape)
+    J = prob.J.copy()
+    J[:, :, 6] = J[:, :, 5] + 0.005 * rng.normal(size=J[:, :, 5].shape)
+    Y = np.einsum("mif,cf->cmi", M, dX) + rng.normal(0, 0.05, prob.Y.shape)
+    before = -np.einsum("kif,cf->cki", J, dX) + rng.normal(0, 0.05, prob.before.shape)
+    p2 = ScreeningProblem(prob.names, M, Y, J, before)
+    rep = screening_stability(p2, 30, 2, n_keep=3, threshold_mm=0.08)
+    assert rep.frequency["p0"] == 1.0 and rep.frequency["p2"] == 1.0
+    assert rep.full == ("p0", "p2", "p6")
+    assert 0.2 < rep.frequency["p5"] < 0.8 and 0.2 < rep.frequency["p6"] < 0.8
+    assert rep.frequency["p5"] + rep.frequency["p6"] == pytest.approx(1.0)
+    assert 0.2 < rep.agreement < 0.8 and set(rep.unstable()) == {"p5", "p6"}
+    assert {"p0", "p2"} <= set(rep.selected) and len(rep.selected) == 3
+
+
+def test_online_poses_for_a_set_no_subset_identifies(experiment):
+    """All four parameters of the last link seen through one sphere centre: the strict design
+    finds no identifying subset and falls back to the poses of highest rank (3 of 4 combinations)
+    with the least min-norm noise."""
+    from robocal.thermal.online_poses import _i_optimal_cost
+
+    prob = experiment["problems"][0]
+    names = ("a2", "d4", "theta6", "d6", "a6", "alpha6")
+    idx = select_online_poses(prob, names, 6)
+    assert len(idx) == 6 and np.all(np.diff(idx) > 0)
+    cols = prob.columns(names)
+    A = prob._An[:, cols].reshape(prob.n_poses, 3, len(cols))
+    info = np.einsum("pik,pil->pkl", A, A)
+    N = info[idx].sum(axis=0)
+    assert np.linalg.matrix_rank(N, tol=1e-10 * np.linalg.norm(N, 2)) == len(names) - 1
+    strict = _i_optimal_cost(info, np.eye(len(cols)), idx[None])
+    assert np.isinf(strict[0])

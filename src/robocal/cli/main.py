@@ -15,10 +15,11 @@ from ._lazy import LazyGroup
 
 def _attach_cross_laser(tcp):
     """The cross-laser commands live in their own module but belong to ``robocal tcp``."""
-    from .tcp_cross_laser import cross_laser_cmd, simulate_cmd
+    from .tcp_cross_laser import accuracy_cmd, cross_laser_cmd, simulate_cmd
 
     tcp.add_command(cross_laser_cmd)
     tcp.add_command(simulate_cmd)
+    tcp.add_command(accuracy_cmd)
 
 
 # Every command: (module in robocal.cli, attribute, one line in `robocal --help`, hook after loading).

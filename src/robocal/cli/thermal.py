@@ -114,9 +114,12 @@ def _fmt_delta(name, unit, value):
               help="Sphere poses measured per cycle (the screening set).")
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=str),
               help="Folder for run1/, run2/, run3/ and program.csv (created if needed).")
+@click.option("--preset", type=click.Choice(["ideal", "realistic"]), default="realistic", show_default=True,
+              help="Effects outside the compensation model: realistic (hall, bent links, backlash, noise growing "
+                   "with distance, outliers, two-speed heating) or ideal (none); docs/thermal.md 'Realism'.")
 @click.option("--overwrite", is_flag=True, help="Replace existing files.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as_json):
+def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, preset, out_dir, overwrite, as_json):
     """Simulate the thermal cell (KR150 R3100) heating in production: three runs of N cycles
     (run 1 for screening, runs 2 and 3 with other schedules for evaluation), written as
     measurement files with the hidden truth.
@@ -147,7 +150,7 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
     except OSError as exc:
         raise _fail(exc) from None
     _progress(1, 4, f"building the cell (seed {seed}, {n_sphere} sphere poses)")
-    cell = ThermalCell.standard(seed, n_sphere_poses=n_sphere)
+    cell = ThermalCell.standard(seed, n_sphere_poses=n_sphere, preset=preset)
     run_seeds = as_rng(seed).integers(0, 2**31, 4)                     # as run_thermal_experiment
     schedules = standard_schedules(schedule_seed, n_cycles)
     rows = []
@@ -173,13 +176,13 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, out_dir, overwrite, as
         write_joint_program(out / "program.csv", prog, cell.model, overwrite=overwrite)
     except _USER_ERRORS as exc:
         raise _fail(exc) from None
-    res = {"seed": seed, "schedule_seed": schedule_seed, "robot": cell.model.name, "cycles": n_cycles,
+    res = {"seed": seed, "schedule_seed": schedule_seed, "preset": preset, "robot": cell.model.name, "cycles": n_cycles,
            "sphere_poses": n_sphere, "monitored_points": len(cell.q_monitor), "runs": rows,
            "program": str(out / "program.csv")}
     if as_json:
         _echo_json(res)
         return
-    click.echo(f"simulated thermal cell: {cell.model.name}, seed {seed}, {n_sphere} sphere poses, "
+    click.echo(f"simulated thermal cell ({preset}): {cell.model.name}, seed {seed}, {n_sphere} sphere poses, "
                f"{len(cell.q_monitor)} monitored points, sphere noise {cell.sphere_noise_mm} mm")
     click.echo(f"{'run':>3}  {'role':<10} {'cycles':>6} {'hours':>6} {'TCP 3h mm':>10} {'TCP end mm':>10} "
                f"{'TCP max mm':>10}  folder")
@@ -624,3 +627,8 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
     click.echo("  (drift: predicted by the identified deltas at the taught joints; after: left on the warm model)")
     click.echo(comp.summary())
     click.echo(f"wrote {out_file}" + ("" if cycle_id is None else f"; history cycle {cycle_id} in {db}"))
+
+
+from .thermal_experiment import experiment_cmd  # noqa: E402  (registers 'robocal thermal experiment')
+
+thermal.add_command(experiment_cmd)

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..transforms import rot_axis, rot_z, transforms_from
+from .barrier_geometry import BeamDirt, barrier_blocked
 from .robot import as_rng
 
 __all__ = [
@@ -50,6 +51,7 @@ __all__ = [
     "CylinderTool",
     "LightBarrierCell",
     "barrier_blocked",
+    "BeamDirt",
     "simulate_sensor_calibration_points",
 ]
 
@@ -141,15 +143,21 @@ class CrossLaserSensor:
 class CylinderTool:
     """A cylindrical tool: ``T_flange_tool`` (origin = tip/TCP, z = axis pointing out of the
     flange), ``radius_mm``, ``length_mm`` (tip to the cylinder's base along -z), ``tip``
-    ``"spherical"`` (ball end, apex at the TCP) or ``"flat"``."""
+    ``"spherical"`` (ball end, apex at the TCP) or ``"flat"``. ``T_tool_shank`` (4, 4), optional:
+    runout -- the physical cylinder (shank and ball) sits at this pose in the tool frame while
+    the TCP (the point that matters, e.g. the centring cone a measuring arm probes) stays the
+    tool frame's origin (:meth:`with_runout`)."""
 
     T_flange_tool: np.ndarray
     radius_mm: float = 3.0
     length_mm: float = 180.0
     tip: str = "spherical"
+    T_tool_shank: np.ndarray | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "T_flange_tool", _ro(self.T_flange_tool))
+        if self.T_tool_shank is not None:
+            object.__setattr__(self, "T_tool_shank", _ro(self.T_tool_shank))
         if self.tip not in ("spherical", "flat"):
             raise ValueError(f"tip must be 'spherical' or 'flat', got {self.tip!r}")
         if not (self.radius_mm > 0 and self.length_mm > 2 * self.radius_mm):
@@ -165,10 +173,20 @@ class CylinderTool:
 
     def segment_flange(self):
         """(base point, end point) of the tool axis segment in the flange frame; for a spherical
-        tip the end is the ball centre (r before the tip)."""
-        a, tip = self.axis_flange, self.tcp_flange_mm
+        tip the end is the ball centre (r before the tip). With runout, of the displaced shank."""
+        T = self.T_flange_tool if self.T_tool_shank is None else self.T_flange_tool @ self.T_tool_shank
+        a, tip = T[:3, 2], T[:3, 3]
         end = tip - self.radius_mm * a if self.tip == "spherical" else tip
         return tip - self.length_mm * a, end
+
+    def with_runout(self, eccentricity_mm: float, tilt_deg: float, rng) -> "CylinderTool":
+        """A copy whose cylinder is off the TCP: shifted ``eccentricity_mm`` and tilted
+        ``tilt_deg`` about the tip, both in random directions perpendicular to the tool axis."""
+        rng = as_rng(rng)
+        g, h = rng.uniform(0.0, 2.0 * np.pi, 2)
+        shift = eccentricity_mm * np.array([math.cos(g), math.sin(g), 0.0])
+        R = rot_axis(np.array([math.cos(h), math.sin(h), 0.0]), math.radians(tilt_deg))
+        return CylinderTool(self.T_flange_tool, self.radius_mm, self.length_mm, self.tip, transforms_from(R, shift))
 
     def collided(self, rng, *, tilt_deg=(1.0, 3.0), offset_mm=(0.5, 3.0), axial_mm=(-1.0, 0.5),
                  pivot_from_base_mm: float = 10.0):
@@ -197,51 +215,7 @@ class CylinderTool:
         tip_new = pivot + Rc @ (tip - pivot) + off
         T = transforms_from(Rc @ self.T_flange_tool[:3, :3], tip_new)
         info = {"tilt_deg": math.degrees(tilt), "tilt_axis_flange": k, "offset_mm": off, "pivot_flange_mm": pivot}
-        return CylinderTool(T, self.radius_mm, self.length_mm, self.tip), info
-
-
-def barrier_blocked(beam: LightBarrier, base_pts, end_pts, radius_mm: float, tip: str = "spherical") -> np.ndarray:
-    """(N,) bool: does the beam line meet the tool whose axis runs from ``base_pts`` to
-    ``end_pts`` (N, 3), base frame? ``tip="spherical"``: capsule (distance from the line to the
-    axis segment < r; ``end_pts`` = ball centres); ``"flat"``: the finite cylinder."""
-    B = np.atleast_2d(np.asarray(base_pts, float))
-    E = np.atleast_2d(np.asarray(end_pts, float))
-    d = beam.direction
-    w = B - beam.point_mm
-    u = E - B
-    if tip == "spherical":
-        w_p = w - (w @ d)[:, None] * d
-        u_p = u - (u @ d)[:, None] * d
-        uu = np.einsum("ij,ij->i", u_p, u_p)
-        s = np.where(uu > 1e-18, -np.einsum("ij,ij->i", w_p, u_p) / np.where(uu > 1e-18, uu, 1.0), 0.0)
-        s = np.clip(s, 0.0, 1.0)
-        dist = np.linalg.norm(w_p + s[:, None] * u_p, axis=1)
-        return dist < radius_mm
-    # flat: line p0 + t d against the cylinder {B + h e + r', |r'| <= r, 0 <= h <= L}
-    L = np.linalg.norm(u, axis=1)
-    e = u / L[:, None]
-    p = beam.point_mm - B                                        # line point relative to B
-    de = e @ d
-    pe = np.einsum("ij,ij->i", p, e)
-    d_perp = d - de[:, None] * e
-    p_perp = p - pe[:, None] * e
-    a2 = np.einsum("ij,ij->i", d_perp, d_perp)
-    b2 = np.einsum("ij,ij->i", p_perp, d_perp)
-    c2 = np.einsum("ij,ij->i", p_perp, p_perp) - radius_mm ** 2
-    par = a2 < 1e-15
-    disc = b2 * b2 - a2 * c2
-    sq = np.sqrt(np.maximum(disc, 0.0))
-    a_safe = np.where(par, 1.0, a2)
-    t1, t2 = (-b2 - sq) / a_safe, (-b2 + sq) / a_safe
-    radial_ok = np.where(par, c2 <= 0, disc >= 0)
-    t1 = np.where(par, -np.inf, t1)
-    t2 = np.where(par, np.inf, t2)
-    small = np.abs(de) < 1e-15
-    de_safe = np.where(small, 1.0, de)
-    h1, h2 = (0.0 - pe) / de_safe, (L - pe) / de_safe
-    lo = np.where(small, np.where((pe >= 0) & (pe <= L), -np.inf, np.inf), np.minimum(h1, h2))
-    hi = np.where(small, np.where((pe >= 0) & (pe <= L), np.inf, -np.inf), np.maximum(h1, h2))
-    return radial_ok & (np.maximum(t1, lo) <= np.minimum(t2, hi))
+        return CylinderTool(T, self.radius_mm, self.length_mm, self.tip, self.T_tool_shank), info
 
 
 class LightBarrierCell:
@@ -251,11 +225,16 @@ class LightBarrierCell:
     :class:`CylinderTool` (its true geometry); rng: seed or Generator (required, for the robot
     noise); io_rate_hz, latency_s, repeatability_mm, settle_s: see the module docstring;
     robot_model / q_seed: check each motion's poses with numerical IK (``reach_errors_mm`` keeps
-    the worst position error per motion; ``None`` if not checked).
+    the worst position error per motion; ``None`` if not checked). Realism
+    (:mod:`robocal.sim.barrier_effects`): latency_jitter_s: each event is stamped a further
+    uniform 0..jitter later (on the I/O clock); accuracy: the robot's absolute error (an object
+    with ``apply(motion, t, T) -> T``, e.g. :class:`~robocal.sim.barrier_effects.RobotAccuracy`);
+    dirt: ``{beam name: BeamDirt}``.
     """
 
     def __init__(self, sensor, tool: CylinderTool, rng, *, io_rate_hz: float = 1000.0, latency_s: float = 0.002,
-                 repeatability_mm: float = 0.1, settle_s: float = 0.1, robot_model=None, q_seed=None):
+                 repeatability_mm: float = 0.1, settle_s: float = 0.1, robot_model=None, q_seed=None,
+                 latency_jitter_s: float = 0.0, accuracy=None, dirt=None):
         self.beams = sensor.beams if isinstance(sensor, CrossLaserSensor) else dict(sensor)
         self.tool = tool
         self.rng = as_rng(rng)
@@ -270,6 +249,11 @@ class LightBarrierCell:
         self.time_s = 0.0
         self._state = None
         self.reach_errors_mm: list = []
+        if latency_jitter_s < 0:
+            raise ValueError("latency_jitter_s must be >= 0")
+        self.latency_jitter_s = float(latency_jitter_s)
+        self.accuracy = accuracy
+        self.dirt = dict(dirt or {})
 
     # -------------------------------------------------------------------------------- noise
     def _noise_fn(self):
@@ -295,7 +279,8 @@ class LightBarrierCell:
         R, p = T[:, :3, :3], T[:, :3, 3]
         B = p + R @ b0
         E = p + R @ e0
-        return {k: barrier_blocked(beam, B, E, self.tool.radius_mm, self.tool.tip) for k, beam in self.beams.items()}
+        return {k: barrier_blocked(beam, B, E, self.tool.radius_mm, self.tool.tip, self.dirt.get(k))
+                for k, beam in self.beams.items()}
 
     def _check_reach(self, motion):
         if self.robot_model is None:
@@ -311,6 +296,12 @@ class LightBarrierCell:
         err = float(np.max(res.position_error_mm)) if res.all_converged else math.inf
         self.reach_errors_mm.append(err)
         return err
+
+    def _jittered(self, i: int, n: int) -> int:
+        """The sample that reports a change first shown by sample ``i`` (latency jitter)."""
+        if self.latency_jitter_s == 0:
+            return i
+        return min(n - 1, i + math.ceil(self.rng.uniform(0.0, self.latency_jitter_s) * self.io_rate_hz - 1e-9))
 
     # -------------------------------------------------------------------------------- running
     def run(self, motion):
@@ -329,6 +320,8 @@ class LightBarrierCell:
         t_seen = np.clip(ts - self.latency_s - t0, 0.0, dur)       # the beam state the sample reflects
         T_act = motion.poses(t_seen)
         T_act[:, :3, 3] += noise(t_seen)
+        if self.accuracy is not None:
+            T_act = self.accuracy.apply(motion, t_seen, T_act)
         states = self.blocked_at(T_act)
         cmd = motion.poses(np.clip(ts - t0, 0.0, dur))[:, :3, 3]
         if self._state is None:
@@ -337,7 +330,8 @@ class LightBarrierCell:
         for name, st in states.items():
             prev = np.concatenate([[self._state[name]], st[:-1]])
             for i in np.flatnonzero(st != prev):
-                events.append(BarrierEvent(float(ts[i]), name, "blocked" if st[i] else "clear", cmd[i].copy()))
+                k = self._jittered(i, len(ts))
+                events.append(BarrierEvent(float(ts[k]), name, "blocked" if st[i] else "clear", cmd[k].copy()))
             if len(st):
                 self._state[name] = bool(st[-1])
         events.sort(key=lambda e: e.time_s)
@@ -348,7 +342,7 @@ class LightBarrierCell:
 def simulate_sensor_calibration_points(sensor: CrossLaserSensor, T_base_nominal, rng, *, pin_radius_mm: float = 3.0,
                                        pin_length_mm: float = 80.0, spacing_mm: float = 60.0, travel_mm: float = 12.0,
                                        speed_mm_s: float = 2.0, io_rate_hz: float = 1000.0, latency_s: float = 0.002,
-                                       repeatability_mm: float = 0.1, accel_mm_s2: float = 2000.0):
+                                       repeatability_mm: float = 0.1, accel_mm_s2: float = 2000.0, **cell_effects):
     """Simulate the pin procedure of thesis 4.3.1 and return ``({label: (3,)}, cycle_time_s)``.
 
     A calibration pin (flat-ended cylinder coaxial with the flange Z axis) crosses each beam at
@@ -358,6 +352,8 @@ def simulate_sensor_calibration_points(sensor: CrossLaserSensor, T_base_nominal,
     the 1 -> 2 motion, its middle at the beam) moves down. Labels A, B on the X beam, C, D on the
     Y beam, as :func:`robocal.tcp.sensor.calibrate_sensor` expects. Positions are the controller's
     (commanded) flange positions at the events, so latency x speed biases them (slow ``speed``).
+    ``cell_effects``: the realism keywords of :class:`LightBarrierCell` (latency_jitter_s,
+    accuracy, dirt) -- the same cell the tool is later measured in.
     """
     from ..tcp.cross_laser import LinearMove
 
@@ -366,7 +362,7 @@ def simulate_sensor_calibration_points(sensor: CrossLaserSensor, T_base_nominal,
     pin = CylinderTool(np.eye(4) @ transforms_from(np.eye(3), [0, 0, pin_length_mm]), pin_radius_mm,
                        pin_length_mm, "flat")
     cell = LightBarrierCell(sensor, pin, rng, io_rate_hz=io_rate_hz, latency_s=latency_s,
-                            repeatability_mm=repeatability_mm, settle_s=0.1)
+                            repeatability_mm=repeatability_mm, settle_s=0.1, **cell_effects)
     down = np.diag([1.0, -1.0, -1.0])                 # flange Z down, X along base X
     ex, ey, ez = np.eye(3)
     pts = {}

@@ -61,9 +61,6 @@ predicted noise at the monitored points for a given parameter set.
 
 from __future__ import annotations
 
-import functools
-import itertools
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -454,78 +451,4 @@ def traditional_parameters(model: RobotModel, tol_mm: float = 1e-9) -> tuple:
                                          model.params.units) if f and u == "mm" and abs(v) > tol_mm)
 
 
-def select_online_poses(problem: ScreeningProblem, names, n: int = 6, *, max_combinations: int = 250_000) -> np.ndarray:
-    """The ``n`` sphere poses (sorted indices into the problem's poses) best for identifying
-    ``names`` online: they minimise the predicted noise at the monitored points,
-    ``trace(J_s (A_s^T A_s)^-1 J_s^T)`` for independent equal sphere noise (I-optimal design),
-    over every subset (``C(m, n) <= max_combinations``) or, beyond, by greedy exchange from the
-    best D-optimal greedy start. Subsets that cannot identify the set are never chosen."""
-    cols = problem.columns(names)
-    m = problem.n_poses
-    k = len(cols)
-    if not 1 <= n <= m:
-        raise ValueError(f"n must be in [1, {m}], got {n}")
-    if 3 * n < k:
-        raise ValueError(f"{k} parameters need at least {-(-k // 3)} poses, got n = {n}")
-    A = problem._An[:, cols].reshape(m, 3, k)
-    info = np.einsum("pik,pil->pkl", A, A)                              # per-pose information (m, k, k)
-    Js = problem._Jn[:, cols]
-    G = Js.T @ Js                                                       # (k, k): trace(J N^-1 J^T) = trace(N^-1 G)
-    cost = functools.partial(_i_optimal_cost, info, G)
-    if math.comb(m, n) <= max_combinations:
-        return _best_subset(cost, m, n, names)
-    return _greedy_exchange(cost, info, m, n, names)
-
-
-def _i_optimal_cost(info, G, subsets) -> np.ndarray:
-    """``trace(N^-1 G)`` (B,) for pose subsets (B, n), ``N`` = summed per-pose information
-    ``info`` (m, k, k); ``inf`` where ``N`` is (numerically) singular."""
-    N = info[subsets].sum(axis=1)
-    ev = np.linalg.eigvalsh(N)
-    ok = ev[:, 0] > 1e-10 * ev[:, -1]
-    out = np.full(len(subsets), np.inf)
-    if ok.any():
-        inv = np.linalg.inv(N[ok])
-        out[ok] = np.einsum("bkl,lk->b", inv, G)
-    return out
-
-
-def _best_subset(cost, m: int, n: int, names) -> np.ndarray:
-    """The cheapest of all ``C(m, n)`` subsets (sorted indices), evaluated in batches."""
-    combos = np.array(list(itertools.combinations(range(m), n)), dtype=np.int64)
-    best, best_c = None, np.inf
-    for i in range(0, len(combos), 20000):
-        c = cost(combos[i:i + 20000])
-        j = int(np.argmin(c))
-        if c[j] < best_c:
-            best, best_c = combos[i + j], c[j]
-    if best is None:
-        raise ValueError(f"no {n}-pose subset identifies {list(names)}")
-    return np.sort(best)
-
-
-def _greedy_exchange(cost, info, m: int, n: int, names) -> np.ndarray:
-    """A greedy D-optimal start, then single-pose exchanges while the cost drops (sorted indices)."""
-    k = info.shape[1]
-    chosen: list = []
-    for _ in range(n):
-        rest = [p for p in range(m) if p not in chosen]
-        N = info[chosen].sum(axis=0) if chosen else np.zeros((k, k))
-        scores = [np.linalg.slogdet(N + info[p] + 1e-9 * np.eye(k))[1] for p in rest]
-        chosen.append(rest[int(np.argmax(scores))])
-    cur = cost(np.array([chosen]))[0]
-    improved = True
-    while improved:
-        improved = False
-        for i in range(n):
-            for p in range(m):
-                if p in chosen:
-                    continue
-                trial = chosen.copy()
-                trial[i] = p
-                c = cost(np.array([trial]))[0]
-                if c < cur - 1e-12:
-                    chosen, cur, improved = trial, c, True
-    if not np.isfinite(cur):
-        raise ValueError(f"no {n}-pose subset identifies {list(names)}")
-    return np.sort(np.array(chosen))
+from .online_poses import select_online_poses  # noqa: E402  (re-exported: the online pose design)

@@ -2,8 +2,9 @@
 
 :func:`run_thermal_experiment` on the simulated KR150 R3100 (DH + beta):
 
-1. the cell (:meth:`robocal.sim.thermal.ThermalCell.standard`): 20 sphere poses for screening,
-   34 monitored car-body points, fixed stereo sensor (0.02 mm), robot-held sensor (0.02 mm);
+1. the cell (:meth:`robocal.sim.thermal.ThermalCell.standard`, ``preset`` ideal or realistic):
+   20 sphere poses for screening, 34 monitored car-body points, fixed stereo sensor (0.02 mm),
+   robot-held sensor (0.02 mm);
 2. system calibration (thesis 3.3) from 9 cold sphere poses by nonlinear least squares
    (:func:`robocal.thermal.calibrate_system`); everything afterwards uses the *estimated*
    ``T_sensor_base`` and ``P_e`` (``system_calibration=False``: the true ones);
@@ -19,7 +20,8 @@
    evaluation.
 
 :func:`format_thermal_table` renders the table; :func:`format_thermal_report` adds the screening
-table (5-1) and the settings.
+table (5-1) and the settings. One seed is one draw: :mod:`robocal.workflows.thermal_seeds` runs
+the experiment over many.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from ..sim.thermal import ThermalCell, standard_schedules, write_run
 from ..thermal.screening import (
     LAMBDA_THRESHOLD_MM,
     ScreeningProblem,
+    lambda_metric,
     screen_parameters,
     select_online_poses,
     traditional_parameters,
@@ -56,8 +59,14 @@ def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles
                            n_online_poses: int = 6, n_keep: int = 8, threshold_mm: float = LAMBDA_THRESHOLD_MM,
                            statistic: str = "rms", system_calibration: bool = True, n_system_poses: int = 9,
                            out_dir=None, cell_options: dict | None = None,
-                           screening_options: dict | None = None) -> dict:
+                           screening_options: dict | None = None, preset="ideal", stability: int = 0) -> dict:
     """Run the experiment (module docstring); every draw from ``seed`` / ``schedule_seed``.
+
+    preset: the cell's effects outside the model (``"ideal"``, ``"realistic"`` or a
+    :class:`~robocal.sim.thermal_effects.ThermalEffects`; ``cell_options["preset"]`` wins).
+    stability: if > 0, that many bootstrap resamples of run 1's cycles are screened
+    (:func:`robocal.thermal.stability.screening_stability`); the report is ``stability`` and its
+    selection by frequency is evaluated as a fourth column ``stable``.
 
     out_dir: if given, every run is also written as measurement files (``run1/``, ``run2/``,
     ``run3/``; :func:`robocal.sim.thermal.write_run`).
@@ -67,26 +76,22 @@ def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles
     ``online_poses`` ({"traditional": idx, "screened": idx} into the 20 sphere poses),
     ``lambda_screening_20`` (the screened set with all 20 poses on run 1), ``system_calibration``
     (the result or None) and its ``frame_errors``, ``cell``, ``runs``, ``problems``, ``settings``,
-    ``timings_s``.
+    ``timings_s``. Each row also has ``lambda``: ``{"rms": {column: %}, "max": {column: %}}``,
+    both statistics side by side (``"max"``: a direction passes only if no cycle left the band).
     """
     t_start = time.perf_counter()
     timings = {}
     rng = as_rng(seed)
     run_seeds = rng.integers(0, 2**31, 4)
-    cell = ThermalCell.standard(seed, n_sphere_poses=n_screen_poses, **(cell_options or {}))
+    cell = ThermalCell.standard(seed, n_sphere_poses=n_screen_poses, **{"preset": preset, **(cell_options or {})})
     model = cell.model
     timings["cell"] = time.perf_counter() - t_start
 
     T_sb, P_e, calib, ferr = cell.T_sensor_base, cell.P_e, None, None
     if system_calibration:
-        from ..thermal import calibrate_system, frame_errors
-
         t0 = time.perf_counter()
-        q_sys = cell.q_sphere[:n_system_poses]
-        P_s = cell.measure_sphere(q_sys, cell.robot.true_model.params.values, int(run_seeds[0]))
-        calib = calibrate_system(model, q_sys, P_s, point_sigma_mm=cell.sphere_noise_mm)
+        calib, ferr = _system_calibration(cell, n_system_poses, int(run_seeds[0]))
         T_sb, P_e = calib.T_sensor_base, calib.P_e
-        ferr = frame_errors(T_sb, cell.T_sensor_base, P_e, cell.P_e, at_base=cell.sphere_centre_base)
         timings["system_calibration"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -106,17 +111,17 @@ def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles
     timings["screening"] = time.perf_counter() - t0
 
     sets = {"traditional": traditional_parameters(model), "screened": screening.selected}
+    report = None
+    if stability > 0:
+        from ..thermal.stability import screening_stability
+
+        t0 = time.perf_counter()
+        report = screening_stability(problems[0], stability, int(run_seeds[0]) + 1, n_keep=n_keep, full=screening,
+                                     threshold_mm=threshold_mm, statistic=statistic, **(screening_options or {}))
+        sets["stable"] = report.selected
+        timings["stability"] = time.perf_counter() - t0
     online = {k: select_online_poses(problems[0], v, n_online_poses) for k, v in sets.items()}
-    rows = []
-    for i, (r, p) in enumerate(zip(runs, problems)):
-        row = {"run": i + 1, "role": "screening" if i == 0 else "evaluation", "cycles": r.n_cycles,
-               "hours": r.schedule.duration_s / 3600.0,
-               "tcp_drift_3h_mm": float(np.interp(3 * 3600.0, r.timeline_s, r.tcp_drift_mm)),
-               "tcp_drift_max_mm": float(r.tcp_drift_mm.max()),
-               "before": p.evaluate((), threshold_mm, statistic).lam}
-        for k, names in sets.items():
-            row[k] = p.with_poses(online[k]).evaluate(names, threshold_mm, statistic).lam
-        rows.append(row)
+    rows = [_row(i, r, p, sets, online, threshold_mm, statistic) for i, (r, p) in enumerate(zip(runs, problems))]
     timings["total"] = time.perf_counter() - t_start
     return {
         "rows": rows,
@@ -125,6 +130,7 @@ def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles
         "screened": sets["screened"],
         "online_poses": online,
         "lambda_screening_20": screening.lam,
+        "stability": report,
         "system_calibration": calib,
         "frame_errors": ferr,
         "cell": cell,
@@ -133,9 +139,38 @@ def run_thermal_experiment(*, seed: int = 2024, schedule_seed: int = 7, n_cycles
         "settings": {"seed": seed, "schedule_seed": schedule_seed, "n_cycles": n_cycles,
                      "n_screen_poses": n_screen_poses, "n_online_poses": n_online_poses, "n_keep": n_keep,
                      "threshold_mm": threshold_mm, "statistic": statistic, "system_calibration": system_calibration,
-                     "n_monitored_points": len(cell.q_monitor)},
+                     "n_monitored_points": len(cell.q_monitor), "preset": cell.effects.name},
         "timings_s": timings,
     }
+
+
+def _system_calibration(cell, n_poses: int, seed: int):
+    """The sensor frame and sphere centre from the first ``n_poses`` cold sphere poses (least
+    squares) and their errors against the cell's truth."""
+    from ..thermal import calibrate_system, frame_errors
+
+    q_sys = cell.q_sphere[:n_poses]
+    P_s = cell.measure_sphere(q_sys, cell.robot.true_model.params.values, seed)
+    calib = calibrate_system(cell.model, q_sys, P_s, point_sigma_mm=cell.sphere_noise_mm)
+    ferr = frame_errors(calib.T_sensor_base, cell.T_sensor_base, calib.P_e, cell.P_e, at_base=cell.sphere_centre_base)
+    return calib, ferr
+
+
+def _row(i, run, problem, sets, online, threshold_mm, statistic) -> dict:
+    """Table 5-2's row for run ``i``: lambda of no compensation and of every set (on its online
+    poses), with ``statistic`` (the plain keys) and with both statistics (``lambda``)."""
+    row = {"run": i + 1, "role": "screening" if i == 0 else "evaluation", "cycles": run.n_cycles,
+           "hours": run.schedule.duration_s / 3600.0,
+           "tcp_drift_3h_mm": float(np.interp(3 * 3600.0, run.timeline_s, run.tcp_drift_mm)),
+           "tcp_drift_max_mm": float(run.tcp_drift_mm.max()), "lambda": {"rms": {}, "max": {}}}
+    residuals = {"before": problem.residuals(())}
+    for k, names in sets.items():
+        residuals[k] = problem.with_poses(online[k]).residuals(names)
+    for k, r in residuals.items():
+        for st in ("rms", "max"):
+            row["lambda"][st][k] = lambda_metric(r, threshold_mm, st)
+        row[k] = lambda_metric(r, threshold_mm, statistic)
+    return row
 
 
 def format_thermal_table(result: dict) -> str:
