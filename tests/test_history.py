@@ -456,15 +456,13 @@ def test_reader_sees_only_committed_cycles_while_a_writer_is_open(tmp_path):
     db = tmp_path / "h.sqlite"
     writer = HistoryStore.open(db)
     write_cycle(writer, 1)
-    reader = HistoryStore.open(db, create=False)
+    reader = HistoryStore.open(db, create=False, timeout=0.2)  # a blocked read would raise, not wait
     other_writer = HistoryStore.open(db, timeout=0.2)
     try:
         with writer.cycle("kr150-cell3", "thermal_compensation") as c:
             c.add_measurements(np.zeros((500, 6)), np.full((500, 3), 700.0))
             c.add_parameter("a2", 9.0, "mm")
-            t = time.perf_counter()
             cycles = reader.cycles("kr150-cell3")  # not blocked by the open write transaction
-            assert time.perf_counter() - t < 1.0
             assert [x.meta["i"] for x in cycles] == [1]
             assert list(reader.parameter_history("kr150-cell3", "a2")["a2"].values) == [pytest.approx(0.01)]
             with pytest.raises(HistoryBusyError, match="being written by another process"):
