@@ -41,6 +41,7 @@ from ..io.measurements import read_measurements
 from ..io.targets import read_targets, write_corrected_targets
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
+from .calibrate_swarm import check_method, convergence_plots, identify, swarm_record
 from .calibrate_setup import build_problems, split_by_ids, tool_frame_summary
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
@@ -108,7 +109,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
                     overwrite: bool = False, progress=None, method: str = "lm", rotation_weight: float | None = None,
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
-                    max_iterations: int = 50, report: bool = True) -> dict:
+                    max_iterations: int = 50, report: bool = True, particles: int = 20, generations: int = 2000,
+                    swarm_progress=None) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -127,7 +129,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     holdout_ids: a given protocol (pose ids, :func:`~robocal.workflows.calibrate_setup.split_by_ids`)
     instead of the seeded split. measurements: an already read :class:`~robocal.io.Measurements`
     (``data`` then only names it). max_iterations: of the solver; a solve that stops there is
-    reported (``result["solver"]["warning"]``, ``NotConvergedWarning``).
+    reported (``result["solver"]["warning"]``, ``NotConvergedWarning``). method: ``lm``, ``svd``,
+    ``ipso`` or ``ipso+lm`` (:mod:`robocal.workflows.calibrate_swarm`: particles, generations,
+    ``swarm_progress(generation, best_f)``; ``seed`` seeds the swarm too).
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
     naming the file, checked before any work). Returns a dict with ``result`` (the JSON dict),
@@ -147,6 +151,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         raise CalibrationInputError(f"{out}: exists and is not a folder")
     if loss not in ("linear", "huber", "cauchy"):
         raise CalibrationInputError(f"--loss must be linear, huber or cauchy, got {loss!r}")
+    check_method(method, loss)
     if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
         raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
 
@@ -183,12 +188,13 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                    f"{setup['description']})")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)  # the baseline only starts the real solve
-        res0 = solve(problem0, loss=loss, method=method, max_iterations=max_iterations)
+        res0 = solve(problem0, loss=loss, method="svd" if method == "svd" else "lm", max_iterations=max_iterations)
 
     step(3, total, f"identifying {len(free_names)} parameter(s) + base + {K} target point(s) ({loss} loss)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotConvergedWarning)
-        result = solve(problem, loss=loss, method=method, state0=res0.state, max_iterations=max_iterations)
+        result = identify(problem, res0.state, method=method, loss=loss, max_iterations=max_iterations, seed=seed,
+                          particles=particles, generations=generations, progress=swarm_progress)
     convergence_warnings = [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
 
     step(4, total, f"validating on {len(hold)} held-out pose(s)")
@@ -237,6 +243,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     rdict["accuracy_map"] = json_ready(accuracy)
     rdict["six_d"] = bool(setup["six_d"])
     rdict["tool_frame"] = json_ready(tool_frame_summary(result, problem))
+    swarm_record(rdict, result, method)
     if convergence_warnings:
         rdict["solver"]["warning"] = convergence_warnings[-1]
 
@@ -279,7 +286,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
             "note": "Flange positions in the robot base frame, coloured by the predicted 1-std position uncertainty "
                     "(J Cov J^T over the identified variables, base frame included)."}
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap, overwrite=overwrite,
-                                   title=f"Calibration of {nominal.name} from {Path(str(data)).name}")
+                                   title=f"Calibration of {nominal.name} from {Path(str(data)).name}",
+                                   extra_plots=convergence_plots(result))
     return out
 
 

@@ -14,12 +14,13 @@ per generation, f in mm^2), ``objective_before`` / ``objective`` and ``non_finit
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from ..identifiability import analyse_identifiability
-from ..solve import CalibrationResult, _solve_once, solve
+from ..solve import CalibrationResult, NotConvergedWarning, _solve_once, solve
 from .objective import SwarmObjective, objective_at
 from .pso import SwarmInputError, check_box, run_pso
 
@@ -110,6 +111,8 @@ def solve_swarm(problem, *, method: str = "ipso", particles: int = 20, generatio
         res = _solve_once(problem, state0=best, max_iterations=0, ident=ident)
         res.converged, res.reason = _swarm_convergence(out.history)
         res.iterations = out.generations
+        if not res.converged:
+            warnings.warn(NotConvergedWarning(res.reason), stacklevel=2)
     return _as_swarm_result(problem, res, start, out, method, particles, seed, names, lower, upper, f0, notes)
 
 
