@@ -11,6 +11,7 @@ import click
 from ._common import EXIT_FAILED_RESULT, _names, _report_verdict, _step_printer, _user_error
 from .calibrate_table import parameter_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
+from .swarm_progress import swarm_progress_bar
 
 
 @click.command()
@@ -26,7 +27,13 @@ from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
 @click.option("--fix", "fix", multiple=True, metavar="NAMES",
               help="Parameters to hold at nominal (comma separated, repeatable).")
 @click.option("--holdout", default=0.2, show_default=True, help="Fraction of poses held out for validation.")
-@click.option("--seed", default=0, show_default=True, help="Seed of the calibration/held-out split.")
+@click.option("--seed", default=0, show_default=True,
+              help="Seed of the calibration/held-out split and, with --method ipso|ipso+lm, of the swarm.")
+@click.option("--method", type=click.Choice(["lm", "ipso", "ipso+lm"]), default="lm", show_default=True,
+              help="Solver: Levenberg-Marquardt, the improved particle swarm (IPSO, box +-0.01 rad / +-0.5 mm "
+                   "around the start), or IPSO then LM.")
+@click.option("--particles", default=20, show_default=True, help="IPSO: swarm size.")
+@click.option("--generations", default=2000, show_default=True, help="IPSO: number of generations.")
 @click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
               help="Loss per pose (huber/cauchy down-weight outlier poses).")
 @click.option("--sigma", "sigma_mm", type=float, default=None,
@@ -55,7 +62,7 @@ from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
 @click.option("--drop-duplicates", is_flag=True,
               help="Drop repeated pose ids and repeated rows (keeping the first) instead of refusing the file.")
 @import_options
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, sigma_mm, tool, overwrite,
+def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, particles, generations, loss, sigma_mm, tool, overwrite,
               rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
               allow_unconverged, no_report, force, drop_duplicates, **imp):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA.
@@ -74,7 +81,9 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, loss, si
                             progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
                             prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,
                             measurements=meas, max_iterations=max_iterations,
-                            report=not no_report, force=force, drop_duplicates=drop_duplicates)
+                            report=not no_report, force=force, drop_duplicates=drop_duplicates,
+                            method=method, particles=particles, generations=generations,
+                            swarm_progress=swarm_progress_bar(method, generations))
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]

@@ -42,6 +42,7 @@ from ..io.measurements import read_measurements
 from ..io.targets import read_targets, write_corrected_targets
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
+from .calibrate_swarm import check_method, convergence_plots, identify, swarm_record
 from .calibrate_setup import build_problems, split_by_ids, tool_frame_summary
 from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .progress import solver_progress
@@ -112,7 +113,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     overwrite: bool = False, progress=None, method: str = "lm", rotation_weight: float | None = None,
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
                     max_iterations: int = 50, report: bool = True, force: bool = False,
-                    drop_duplicates: bool = False) -> dict:
+                    drop_duplicates: bool = False, particles: int = 20, generations: int = 2000,
+                    swarm_progress=None) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -133,7 +135,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     holdout_ids: a given protocol (pose ids, :func:`~robocal.workflows.calibrate_setup.split_by_ids`)
     instead of the seeded split. measurements: an already read :class:`~robocal.io.Measurements`
     (``data`` then only names it). max_iterations: of the solver; a solve that stops there is
-    reported (``result["solver"]["warning"]``, ``NotConvergedWarning``).
+    reported (``result["solver"]["warning"]``, ``NotConvergedWarning``). method: ``lm``, ``svd``,
+    ``ipso`` or ``ipso+lm`` (:mod:`robocal.workflows.calibrate_swarm`: particles, generations,
+    ``swarm_progress(generation, best_f)``; ``seed`` seeds the swarm too).
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
     naming the file, checked before any work); the files are written into a temporary folder and
@@ -146,7 +150,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     total = 6 if report else 5
     out = Path(out_dir)
     names = [n for k, n in OUTPUT_FILES.items() if report or k != "report"]
-    _check_options(out, names, overwrite, loss, sigma_mm)
+    _check_options(out, names, overwrite, loss, sigma_mm, method)
     nominal = load_robot(robot)
     if measurements is None:
         size_mb = Path(data).stat().st_size / 1e6 if Path(data).is_file() else 0.0
@@ -162,8 +166,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                    f"{len(hold)} held out ({protocol})")
     setup = build_problems(nominal, meas, train, free_names=free_names, sigma_mm=sigma_mm, tool=tool,
                            use_orientation=use_orientation, rotation_weight=rotation_weight, prior=prior)
+    swarm = {"seed": seed, "particles": particles, "generations": generations, "progress": swarm_progress}
     res0, result, convergence_warnings = _solve(setup, step, total, len(train), len(free_names), meas.n_targets,
-                                                loss, method, max_iterations)
+                                                loss, method, max_iterations, swarm)
     step(4, total, f"validating on {len(hold)} held-out pose(s)")
     validation = _validate(setup, res0, result, meas, hold)
     step(4, total, f"predicted uncertainty at the {meas.n_poses} measured poses")
@@ -204,12 +209,13 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
             "description": setup["description"], "convergence_warnings": convergence_warnings}
 
 
-def _check_options(out: Path, names, overwrite, loss, sigma_mm) -> None:
+def _check_options(out: Path, names, overwrite, loss, sigma_mm, method) -> None:
     if out.exists() and not out.is_dir():
         raise CalibrationInputError(f"{out}: exists and is not a folder")
     check_outputs_free(out, names, overwrite)
     if loss not in ("linear", "huber", "cauchy"):
         raise CalibrationInputError(f"--loss must be linear, huber or cauchy, got {loss!r}")
+    check_method(method, loss)
     if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
         raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
 
@@ -237,20 +243,24 @@ def _split(meas, data, free_names, use_orientation, holdout, seed, train_ids, ho
     return train, hold, split_notes, protocol
 
 
-def _solve(setup, step, total, n_train, n_free, K, loss, method, max_iterations):
+def _solve(setup, step, total, n_train, n_free, K, loss, method, max_iterations, swarm):
     """The baseline (nominal geometry, best-fit base and targets) and the calibration; the
     convergence warnings of the calibration (list of str)."""
     step(2, total, f"initial base frame and target point(s) with the nominal geometry ({n_train} poses; "
                    f"{setup['description']})")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)  # the baseline only starts the real solve
-        res0 = solve(setup["problem0"], loss=loss, method=method, max_iterations=max_iterations,
-                     progress=solver_progress(step, 2, total))
+        res0 = solve(setup["problem0"], loss=loss, method="svd" if method == "svd" else "lm",
+                     max_iterations=max_iterations, progress=solver_progress(step, 2, total))
     step(3, total, f"identifying {n_free} parameter(s) + base + {K} target point(s) ({loss} loss)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotConvergedWarning)
-        result = solve(setup["problem"], loss=loss, method=method, state0=res0.state, max_iterations=max_iterations,
-                       progress=solver_progress(step, 3, total))
+        if method in ("lm", "svd"):
+            result = solve(setup["problem"], loss=loss, method=method, state0=res0.state,
+                           max_iterations=max_iterations, progress=solver_progress(step, 3, total))
+        else:
+            result = identify(setup["problem"], res0.state, method=method, loss=loss, max_iterations=max_iterations,
+                              **swarm)
     return res0, result, [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
 
 
@@ -297,6 +307,7 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
     rdict["accuracy_map"] = json_ready(accuracy)
     rdict["six_d"] = bool(setup["six_d"])
     rdict["tool_frame"] = json_ready(tool_frame_summary(result, problem))
+    swarm_record(rdict, result, metadata["method"])
     if convergence_warnings:
         rdict["solver"]["warning"] = convergence_warnings[-1]
     return rdict
@@ -343,7 +354,8 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
             "note": "Flange positions in the robot base frame, coloured by the predicted 1-std position uncertainty "
                     "(J Cov J^T over the identified variables, base frame included)."}
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap,
-                                   title=f"Calibration of {nominal.name} from {Path(str(data)).name}")
+                                   title=f"Calibration of {nominal.name} from {Path(str(data)).name}",
+                                   extra_plots=convergence_plots(result))
     return files
 
 
