@@ -1,0 +1,1 @@
+"""Hand-eye calibration (issue 14): AX=XB and AX=ZB solvers. Math only."""
