@@ -8,9 +8,10 @@ from .fixed_point import FixedPointResidual
 from .plane import PointOnPlaneResidual
 from .points import PointResidual
 from .prior import PriorResidual
+from .reprojection import ReprojectionResidual
 from .rotation import RotationResidual
 from .tool_pose import ToolPointResidual, ToolRotationResidual, tool_chain
 
 __all__ = ["RESIDUAL_BLOCKS", "Evaluation", "ResidualBlock", "TargetChain", "ChainPoints", "PointResidual",
-           "RotationResidual", "DistanceResidual", "PointOnPlaneResidual", "PriorResidual", "FixedPointResidual", "ToolPointResidual", "ToolRotationResidual", "tool_chain",
+           "RotationResidual", "DistanceResidual", "PointOnPlaneResidual", "PriorResidual", "ReprojectionResidual", "FixedPointResidual", "ToolPointResidual", "ToolRotationResidual", "tool_chain",
            "jacobian_errors", "perturbed_values"]
