@@ -103,6 +103,39 @@ def _check_units(origin, links, limits, lu: str, au: str) -> None:
 
 def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
     """Build a :class:`RobotModel` from the parsed TOML of a robot file."""
+    kind, lu, au = _header(data, origin)
+    ls, as_ = _LENGTH[lu], _ANGLE[au]
+    entries = data.get("joints")
+    if not isinstance(entries, list) or not entries:
+        raise RobotFileError(f"{origin}: needs a non-empty [[joints]] list")
+    links, names, limits_by_name, couplings = [], [], {}, []
+    for i, j in enumerate(entries):
+        link, where = _parse_joint(i, j, names, kind, ls, as_, origin)
+        links.append(link)
+        names.append(link.name)
+        if link.joint_type != "fixed":
+            couplings.append((where, _joint_coupling(where, j, link.name)))
+            if "limits" in j:
+                limits_by_name[link.name] = _joint_limits(where, j, link.joint_type, ls, as_)
+    ctrl, coupling = _controller_coupling(data, origin, links, couplings)
+    limits = _controller_limits(data, origin, links, ctrl, coupling, limits_by_name, ls, as_)
+    _check_units(origin, links, [limits_by_name[L.name] for L in links
+                                 if L.joint_type == "revolute" and L.name in limits_by_name], lu, au)
+    T_world_base = _frame(f"{origin}: [base]", data.get("base"), ls, as_)
+    ees = _end_effectors(data, origin, names, len(links), ls, as_)
+    try:
+        return RobotModel(
+            name=str(data.get("name", Path(origin).stem)), kind=kind, links=links, controller_joints=ctrl,
+            coupling=coupling, limits=limits, T_world_base=T_world_base, end_effectors=ees,
+            title=str(data.get("title", "")), source=str(data.get("source", "")),
+            extra={"length_unit": lu, "angle_unit": au, "origin": origin},
+        )
+    except ValueError as exc:
+        raise RobotFileError(f"{origin}: {exc}") from None
+
+
+def _header(data: dict, origin: str):
+    """(model kind, length unit, angle unit) of a robot file, checked."""
     fmt = data.get("format")
     if fmt != FORMAT:
         raise RobotFileError(f"{origin}: 'format' is {fmt!r}, expected {FORMAT!r}")
@@ -114,90 +147,104 @@ def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
         raise RobotFileError(f"{origin}: 'length_unit' is {lu!r}, expected 'mm' or 'm'")
     if au not in _ANGLE:
         raise RobotFileError(f"{origin}: 'angle_unit' is {au!r}, expected 'deg' or 'rad'")
-    ls, as_ = _LENGTH[lu], _ANGLE[au]
-    entries = data.get("joints")
-    if not isinstance(entries, list) or not entries:
-        raise RobotFileError(f"{origin}: needs a non-empty [[joints]] list")
+    return kind, lu, au
 
-    links, names, limits_by_name = [], [], {}
-    couplings = []
-    for i, j in enumerate(entries):
-        where = f"{origin}: joints[{i}]"
-        name = j.get("name")
-        if not isinstance(name, str) or not name:
-            raise RobotFileError(f"{where}: missing 'name'")
-        if name in names:
-            raise RobotFileError(f"{where}: duplicate joint name {name!r}")
-        where = f"{origin}: joint {name!r}"
-        jtype = j.get("type", "revolute")
-        if jtype not in ("revolute", "prismatic", "fixed"):
-            raise RobotFileError(f"{where}: type {jtype!r}, expected revolute, prismatic or fixed")
-        parent_name = j.get("parent")
-        if parent_name is None:
-            parent = i - 1
-        elif parent_name in ("base", ""):
-            parent = -1
-        elif parent_name in names:
-            parent = names.index(parent_name)
-        else:
-            raise RobotFileError(f"{where}: parent {parent_name!r} is not an earlier joint")
-        if kind == "urdf" or (jtype == "fixed" and "xyz" in j):
-            conv = "urdf" if kind == "urdf" else "frame"
-            xyz = _vec(where, j, "xyz", 3, (0, 0, 0))
-            rpy = _vec(where, j, "rpy", 3, (0, 0, 0))
-            params = dict(zip(("x", "y", "z"), (v * ls for v in xyz)))
-            params.update(zip(("roll", "pitch", "yaw"), (v * as_ for v in rpy)))
-            if conv == "urdf" and jtype != "fixed":
-                off = "theta" if jtype == "revolute" else "d"
-                params[off] = float(j.get(off, 0.0)) * (as_ if off == "theta" else ls)
-            axis = _vec(where, j, "axis", 3, (0, 0, 1))
-            n = math.sqrt(sum(a * a for a in axis))
-            if n == 0:
-                raise RobotFileError(f"{where}: 'axis' has zero length")
-            axis = tuple(a / n for a in axis)
-        else:
-            conv = kind
-            expected = link_param_names(kind, jtype, has_beta="beta" in j or kind == "dh_beta")
-            params = {}
-            for p in expected:
-                if p not in j:
-                    if p == "beta":
-                        params[p] = 0.0
-                        continue
-                    raise RobotFileError(f"{where}: missing parameter {p!r} (model {kind} needs {', '.join(expected)})")
-                v = j[p]
-                if not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise RobotFileError(f"{where}: parameter {p!r} must be a finite number, got {v!r}")
-                params[p] = float(v) * (as_ if p in ANGLE_PARAMS else ls)
-            axis = (0.0, 0.0, 1.0)
-        fixed = j.get("fixed", [])
-        if not isinstance(fixed, list) or not all(isinstance(f, str) for f in fixed):
-            raise RobotFileError(f"{where}: 'fixed' must be a list of parameter names")
-        unknown = [f for f in fixed if f not in params]
-        if unknown:
-            raise RobotFileError(f"{where}: 'fixed' names unknown parameters {unknown}; this joint has {list(params)}")
-        try:
-            links.append(Link(name, jtype, conv, params, parent, axis, frozenset(fixed)))
-        except ValueError as exc:
-            raise RobotFileError(f"{origin}: {exc}") from None
-        names.append(name)
-        if jtype != "fixed":
-            cpl = j.get("coupling")
-            if cpl is None:
-                sign = j.get("sign", 1)
-                if sign not in (1, -1):
-                    raise RobotFileError(f"{where}: 'sign' must be 1 or -1, got {sign!r}")
-                cpl = {name: float(sign)}
-            elif not isinstance(cpl, dict) or not all(isinstance(v, (int, float)) for v in cpl.values()):
-                raise RobotFileError(f"{where}: 'coupling' must map controller joint names to numbers")
-            couplings.append((where, cpl))
-            if "limits" in j:
-                lim = _vec(where, j, "limits", 2)
-                scale = as_ if jtype == "revolute" else ls
-                if lim[0] >= lim[1]:
-                    raise RobotFileError(f"{where}: limits {lim} must be [lower, upper] with lower < upper")
-                limits_by_name[name] = [lim[0] * scale, lim[1] * scale]
 
+def _parse_joint(i: int, j: dict, names: list, kind: str, ls: float, as_: float, origin: str):
+    """The :class:`Link` of joint entry ``i`` (parameters in mm / rad) and its error prefix."""
+    where = f"{origin}: joints[{i}]"
+    name = j.get("name")
+    if not isinstance(name, str) or not name:
+        raise RobotFileError(f"{where}: missing 'name'")
+    if name in names:
+        raise RobotFileError(f"{where}: duplicate joint name {name!r}")
+    where = f"{origin}: joint {name!r}"
+    jtype = j.get("type", "revolute")
+    if jtype not in ("revolute", "prismatic", "fixed"):
+        raise RobotFileError(f"{where}: type {jtype!r}, expected revolute, prismatic or fixed")
+    parent_name = j.get("parent")
+    if parent_name is None:
+        parent = i - 1
+    elif parent_name in ("base", ""):
+        parent = -1
+    elif parent_name in names:
+        parent = names.index(parent_name)
+    else:
+        raise RobotFileError(f"{where}: parent {parent_name!r} is not an earlier joint")
+    if kind == "urdf" or (jtype == "fixed" and "xyz" in j):
+        conv = "urdf" if kind == "urdf" else "frame"
+        params, axis = _frame_joint_params(where, j, conv, jtype, ls, as_)
+    else:
+        conv = kind
+        params, axis = _dh_joint_params(where, j, kind, jtype, ls, as_), (0.0, 0.0, 1.0)
+    fixed = j.get("fixed", [])
+    if not isinstance(fixed, list) or not all(isinstance(f, str) for f in fixed):
+        raise RobotFileError(f"{where}: 'fixed' must be a list of parameter names")
+    unknown = [f for f in fixed if f not in params]
+    if unknown:
+        raise RobotFileError(f"{where}: 'fixed' names unknown parameters {unknown}; this joint has {list(params)}")
+    try:
+        return Link(name, jtype, conv, params, parent, axis, frozenset(fixed)), where
+    except ValueError as exc:
+        raise RobotFileError(f"{origin}: {exc}") from None
+
+
+def _frame_joint_params(where, j, conv, jtype, ls, as_):
+    """xyz/rpy (+ joint offset) parameters and the unit axis of a URDF joint or a fixed frame."""
+    xyz = _vec(where, j, "xyz", 3, (0, 0, 0))
+    rpy = _vec(where, j, "rpy", 3, (0, 0, 0))
+    params = dict(zip(("x", "y", "z"), (v * ls for v in xyz)))
+    params.update(zip(("roll", "pitch", "yaw"), (v * as_ for v in rpy)))
+    if conv == "urdf" and jtype != "fixed":
+        off = "theta" if jtype == "revolute" else "d"
+        params[off] = float(j.get(off, 0.0)) * (as_ if off == "theta" else ls)
+    axis = _vec(where, j, "axis", 3, (0, 0, 1))
+    n = math.sqrt(sum(a * a for a in axis))
+    if n == 0:
+        raise RobotFileError(f"{where}: 'axis' has zero length")
+    return params, tuple(a / n for a in axis)
+
+
+def _dh_joint_params(where, j, kind, jtype, ls, as_) -> dict:
+    """The DH-family parameters of a joint entry [mm | rad] (``beta`` defaults to 0)."""
+    expected = link_param_names(kind, jtype, has_beta="beta" in j or kind == "dh_beta")
+    params = {}
+    for p in expected:
+        if p not in j:
+            if p == "beta":
+                params[p] = 0.0
+                continue
+            raise RobotFileError(f"{where}: missing parameter {p!r} (model {kind} needs {', '.join(expected)})")
+        v = j[p]
+        if not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise RobotFileError(f"{where}: parameter {p!r} must be a finite number, got {v!r}")
+        params[p] = float(v) * (as_ if p in ANGLE_PARAMS else ls)
+    return params
+
+
+def _joint_coupling(where, j, name) -> dict:
+    """Controller joint name -> coefficient of a moving joint (default: its own name, ``sign``)."""
+    cpl = j.get("coupling")
+    if cpl is None:
+        sign = j.get("sign", 1)
+        if sign not in (1, -1):
+            raise RobotFileError(f"{where}: 'sign' must be 1 or -1, got {sign!r}")
+        return {name: float(sign)}
+    if not isinstance(cpl, dict) or not all(isinstance(v, (int, float)) for v in cpl.values()):
+        raise RobotFileError(f"{where}: 'coupling' must map controller joint names to numbers")
+    return cpl
+
+
+def _joint_limits(where, j, jtype, ls, as_) -> list:
+    lim = _vec(where, j, "limits", 2)
+    scale = as_ if jtype == "revolute" else ls
+    if lim[0] >= lim[1]:
+        raise RobotFileError(f"{where}: limits {lim} must be [lower, upper] with lower < upper")
+    return [lim[0] * scale, lim[1] * scale]
+
+
+def _controller_coupling(data, origin, links, couplings):
+    """Controller joint names and the coupling matrix (moving model joints x controller joints)."""
     moving_names = [L.name for L in links if L.moves]
     ctrl = data.get("controller_joints", moving_names)
     if not isinstance(ctrl, list) or not all(isinstance(c, str) for c in ctrl) or len(set(ctrl)) != len(ctrl):
@@ -208,38 +255,36 @@ def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
             if cname not in ctrl:
                 raise RobotFileError(f"{where}: coupling names controller joint {cname!r}, not in {ctrl}")
             coupling[m, ctrl.index(cname)] = float(coef)
+    return ctrl, coupling
+
+
+def _controller_limits(data, origin, links, ctrl, coupling, limits_by_name, ls, as_) -> np.ndarray:
+    """(n_ctrl, 2) joint limits [rad | mm]: ``[controller_limits]`` first, else the joint entries'."""
     ctrl_limits = data.get("controller_limits", {})
     limits = np.tile([-np.inf, np.inf], (len(ctrl), 1))
+    moving = [k for k, L in enumerate(links) if L.moves]
     for c, cname in enumerate(ctrl):
         if cname in ctrl_limits:
             lim = _vec(f"{origin}: controller_limits", ctrl_limits, cname, 2)
             # a controller joint's unit follows the first model joint it drives
             m = int(np.flatnonzero(coupling[:, c])[0]) if np.any(coupling[:, c]) else None
-            pris = m is not None and links[[k for k, L in enumerate(links) if L.moves][m]].joint_type == "prismatic"
+            pris = m is not None and links[moving[m]].joint_type == "prismatic"
             limits[c] = np.array(lim) * (ls if pris else as_)
         elif cname in limits_by_name:
             limits[c] = limits_by_name[cname]
+    return limits
 
-    _check_units(origin, links, [limits_by_name[L.name] for L in links
-                                 if L.joint_type == "revolute" and L.name in limits_by_name], lu, au)
-    T_world_base = _frame(f"{origin}: [base]", data.get("base"), ls, as_)
-    ees = []
-    if "end_effectors" in data:
-        for i, e in enumerate(data["end_effectors"]):
-            where = f"{origin}: end_effectors[{i}]"
-            if e.get("link") not in names:
-                raise RobotFileError(f"{where}: 'link' must name a joint entry, got {e.get('link')!r}")
-            ees.append(EndEffector(str(e.get("name", f"ee{i}")), names.index(e["link"]), _frame(where, e, ls, as_)))
-    else:
+
+def _end_effectors(data, origin, names, n_links, ls, as_) -> list:
+    """The ``[[end_effectors]]`` of a tree, or one flange / ``[tool]`` on the last joint."""
+    if "end_effectors" not in data:
         tool = data.get("tool")
-        ees.append(EndEffector("flange" if tool is None else "tool", len(links) - 1,
-                               _frame(f"{origin}: [tool]", tool, ls, as_)))
-    try:
-        return RobotModel(
-            name=str(data.get("name", Path(origin).stem)), kind=kind, links=links, controller_joints=ctrl,
-            coupling=coupling, limits=limits, T_world_base=T_world_base, end_effectors=ees,
-            title=str(data.get("title", "")), source=str(data.get("source", "")),
-            extra={"length_unit": lu, "angle_unit": au, "origin": origin},
-        )
-    except ValueError as exc:
-        raise RobotFileError(f"{origin}: {exc}") from None
+        return [EndEffector("flange" if tool is None else "tool", n_links - 1,
+                            _frame(f"{origin}: [tool]", tool, ls, as_))]
+    ees = []
+    for i, e in enumerate(data["end_effectors"]):
+        where = f"{origin}: end_effectors[{i}]"
+        if e.get("link") not in names:
+            raise RobotFileError(f"{where}: 'link' must name a joint entry, got {e.get('link')!r}")
+        ees.append(EndEffector(str(e.get("name", f"ee{i}")), names.index(e["link"]), _frame(where, e, ls, as_)))
+    return ees
