@@ -81,49 +81,84 @@ def result_to_dict(result, problem, *, nominal: RobotModel | None = None, pose_i
     pose_ids = [str(i) for i in range(N)] if pose_ids is None else [str(p) for p in pose_ids]
     if len(pose_ids) != N:
         raise ValueError(f"pose_ids: {len(pose_ids)} names for {N} poses")
+    params = [dict(row, block=str(block)) for row, block in zip(result.parameter_table(), problem.blocks)]
+    outliers = [dict(o, pose_id=pose_ids[o["pose"]] if 0 <= o["pose"] < N else None) for o in result.outliers]
+    out = {
+        "format": RESULT_FORMAT,
+        "robot": nominal.name,
+        "units": {"length": "mm", "angle": "rad",
+                  "frames": "T_a_b is frame b written in frame a; 'instrument' is the measurement frame"},
+        "parameters": params,
+        "model_parameters": _model_parameter_rows(result, nominal),
+        "bases": _base_rows(result, problem),
+        "targets": _target_rows(result, problem, nominal),
+        "residuals": _residual_summary(result, problem, pose_ids),
+        "solver": {
+            "iterations": result.iterations, "converged": result.converged, "reason": result.reason,
+            "rank": result.rank, "n_variables": len(result.names), "condition_number": result.condition_number,
+            "sigma0": result.sigma0, "point_sigma_mm": problem.point_sigma,
+            "n_poses": N, "n_residuals": int(np.size(result.residuals_after)),
+        },
+        "identifiability": _identifiability_dict(result.identifiability),
+        "outliers": outliers,
+    }
+    if include_covariance:
+        out["covariance"] = _covariance_dict(result)
+    if validation is not None:
+        out["validation"] = validation
+    if metadata is not None:
+        out["metadata"] = metadata
+    return json_ready(out)
+
+
+def _model_parameter_rows(result, nominal) -> list:
+    """Every kinematic parameter of the robot, estimated or not: nominal, calibrated, change, std."""
     ident = set(result.identifiability.identifiable)
     index = {n: i for i, n in enumerate(result.names)}
-
-    params = []
-    for row, block in zip(result.parameter_table(), problem.blocks):
-        row = dict(row)
-        row["block"] = str(block)
-        params.append(row)
-
-    # every kinematic parameter of the robot, estimated or not
-    model_params = []
     cal = result.state.params
+    rows = []
     for i, name in enumerate(nominal.params.names):
         j = index.get(name)
-        model_params.append({
+        rows.append({
             "name": name, "unit": nominal.params.units[i], "nominal": float(nominal.params.values[i]),
             "calibrated": float(cal[i]), "change": float(cal[i] - nominal.params.values[i]),
             "estimated": name in ident, "free_in_problem": j is not None,
             "std": float(result.std[j]) if j is not None else None,
         })
+    return rows
 
-    bases = []
+
+def _base_rows(result, problem) -> list:
+    """Per station: the identified ``T_instrument_base`` (4, 4) [mm], its xyz and rpy, the start."""
+    rows = []
     for g in range(problem.n_stations):
         T = result.state.bases[g]
-        T0 = problem.base_initial[g]
-        bases.append({
+        rows.append({
             "name": "base" if problem.n_stations == 1 else f"base{g}",
             "estimated": bool(problem.estimate_base),
             "T_instrument_base": T, "xyz_mm": T[:3, 3], "rpy_rad": euler_from_matrix(T[:3, :3], "rpy"),
-            "initial_T_instrument_base": T0,
+            "initial_T_instrument_base": problem.base_initial[g],
             "n_poses": int(np.sum(problem.stations == g)),
         })
+    return rows
 
-    targets = []
+
+def _target_rows(result, problem, nominal) -> list:
+    """Per target: the point in its end-effector frame [mm], the start and the std."""
+    index = {n: i for i, n in enumerate(result.names)}
+    rows = []
     for k, t in enumerate(problem.targets):
         cols = [index.get(f"{t.name}.{c}") for c in "xyz"]
-        std = [float(result.std[c]) if c is not None else None for c in cols]
-        targets.append({
+        rows.append({
             "name": t.name, "end_effector": nominal.end_effectors[int(problem.ee_of_target[k])].name,
             "point_mm": result.state.targets[k], "initial_mm": list(t.point), "estimated": bool(t.free),
-            "std_mm": std,
+            "std_mm": [float(result.std[c]) if c is not None else None for c in cols],
         })
+    return rows
 
+
+def _residual_summary(result, problem, pose_ids) -> dict:
+    """Position-error statistics before/after [mm] and the error of every measured point."""
     residuals = {"unit": "mm", "before": _stats(result.point_errors_before), "after": _stats(result.point_errors_after),
                  "rms_before": result.rms_before, "rms_after": result.rms_after}
     if problem.points is not None and result.point_errors_after is not None:
@@ -133,48 +168,23 @@ def result_to_dict(result, problem, *, nominal: RobotModel | None = None, pose_i
             "target": [problem.targets[k].name for k in target_idx],
             "before": result.point_errors_before, "after": result.point_errors_after,
         }
+    return residuals
 
+
+def _identifiability_dict(report) -> dict:
     dropped = [{"name": d["name"], "why": d["why"],
                 "trades_off_with": [{"name": n, "coefficient": c} for n, c in d.get("trades_off_with", [])]}
-               for d in result.identifiability.dropped]
-    outliers = []
-    for o in result.outliers:
-        o = dict(o)
-        o["pose_id"] = pose_ids[o["pose"]] if 0 <= o["pose"] < N else None
-        outliers.append(o)
+               for d in report.dropped]
+    return {"identifiable": list(report.identifiable), "dropped": dropped,
+            "rank": report.rank, "condition_number": report.condition_number}
 
-    out = {
-        "format": RESULT_FORMAT,
-        "robot": nominal.name,
-        "units": {"length": "mm", "angle": "rad",
-                  "frames": "T_a_b is frame b written in frame a; 'instrument' is the measurement frame"},
-        "parameters": params,
-        "model_parameters": model_params,
-        "bases": bases,
-        "targets": targets,
-        "residuals": residuals,
-        "solver": {
-            "iterations": result.iterations, "converged": result.converged, "reason": result.reason,
-            "rank": result.rank, "n_variables": len(result.names), "condition_number": result.condition_number,
-            "sigma0": result.sigma0, "point_sigma_mm": problem.point_sigma,
-            "n_poses": N, "n_residuals": int(np.size(result.residuals_after)),
-        },
-        "identifiability": {
-            "identifiable": list(result.identifiability.identifiable), "dropped": dropped,
-            "rank": result.identifiability.rank, "condition_number": result.identifiability.condition_number,
-        },
-        "outliers": outliers,
-    }
-    if include_covariance:
-        act = [i for i, n in enumerate(result.names) if n in ident and np.isfinite(result.covariance[i, i])]
-        out["covariance"] = {"names": [result.names[i] for i in act],
-                             "units": [result.units[i] for i in act],
-                             "matrix": result.covariance[np.ix_(act, act)]}
-    if validation is not None:
-        out["validation"] = validation
-    if metadata is not None:
-        out["metadata"] = metadata
-    return json_ready(out)
+
+def _covariance_dict(result) -> dict:
+    """Covariance of the identified variables with a finite variance (names, units, matrix)."""
+    ident = set(result.identifiability.identifiable)
+    act = [i for i, n in enumerate(result.names) if n in ident and np.isfinite(result.covariance[i, i])]
+    return {"names": [result.names[i] for i in act], "units": [result.units[i] for i in act],
+            "matrix": result.covariance[np.ix_(act, act)]}
 
 
 # ---------------------------------------------------------------------------------------------
