@@ -320,6 +320,45 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
     if frame == "base":
         calibrated = calibrated.replace(T_world_base=np.eye(4))
     nominal = nominal.replace(T_world_base=calibrated.T_world_base)
+    T, position_only = _target_poses(targets, rotations)
+    N, n = len(T), nominal.n_joints
+    if q_seed is not None:
+        q_ref = np.array(np.broadcast_to(np.asarray(q_seed, dtype=float), (N, n)), copy=True)
+    else:
+        q_ref = np.tile(_reference_joints(nominal), (N, 1))
+
+    # 1. nominal solution (what the uncorrected controller would command)
+    q0 = q_ref.copy()
+    if q_seed is None and not position_only:
+        seed = _nominal_seed(nominal, T, q_ref, end_effector)
+        have = np.all(np.isfinite(seed), axis=1)
+        q0[have] = seed[have]
+    kw = dict(end_effector=end_effector, tol_mm=tol_mm, tol_rad=tol_rad, max_iterations=max_iterations)
+    q_nom, nom_conv, nom_status, _, nom_err = _ik_with_restarts(nominal, T, q0, n_restarts,
+                                                                position_only=position_only, **kw)
+    if position_only:
+        T[:, :3, :3] = nominal.fk(q_nom, end_effector)[:, :3, :3]
+
+    # 2. the calibrated model from there (same branch)
+    q, conv, status, iters = _calibrated_solution(calibrated, T, q_nom, n_restarts, position_only, kw)
+    T_reached = calibrated.fk(q, end_effector)
+    dp, dr = pose_errors(T_reached, T)
+    pos_err, rot_err = np.linalg.norm(dp, axis=1), np.linalg.norm(dr, axis=1)
+    T_filtered_world = nominal.fk(q, end_effector)
+    T_filtered = nominal_base.fk(q, end_effector)
+    dT, dR = pose_errors(T, T_filtered_world)
+    within = calibrated.within_limits(q)
+    report = _correction_rows(conv, status, iters, pos_err, rot_err, nom_conv, nom_status, nom_err, q, q_nom, dT, dR,
+                              within)
+    return CorrectedTargets(q=q, q_nominal=q_nom, T_target=T, T_filtered=T_filtered,
+                            T_filtered_world=T_filtered_world, converged=conv,
+                            position_error_mm=pos_err, rotation_error_rad=rot_err, report=report,
+                            position_only=position_only)
+
+
+def _target_poses(targets, rotations):
+    """(N, 4, 4) target poses [mm] and whether they are position-only, from (N, 4, 4) poses or
+    (N, 3) positions with optional (N, 3, 3) rotations."""
     t = np.asarray(targets, dtype=float)
     if t.ndim == 2 and t.shape == (4, 4) and rotations is None:
         t = t[None]
@@ -341,25 +380,12 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
         raise ValueError(f"targets: expected (N, 4, 4) poses or (N, 3) positions [mm], got shape {t.shape}")
     if not np.all(np.isfinite(T)):
         raise ValueError("targets: contain NaN or infinite values")
-    N, n = len(T), nominal.n_joints
-    if q_seed is not None:
-        q_ref = np.array(np.broadcast_to(np.asarray(q_seed, dtype=float), (N, n)), copy=True)
-    else:
-        q_ref = np.tile(_reference_joints(nominal), (N, 1))
+    return T, position_only
 
-    # 1. nominal solution (what the uncorrected controller would command)
-    q0 = q_ref.copy()
-    if q_seed is None and not position_only:
-        seed = _nominal_seed(nominal, T, q_ref, end_effector)
-        have = np.all(np.isfinite(seed), axis=1)
-        q0[have] = seed[have]
-    kw = dict(end_effector=end_effector, tol_mm=tol_mm, tol_rad=tol_rad, max_iterations=max_iterations)
-    q_nom, nom_conv, nom_status, _, nom_err = _ik_with_restarts(nominal, T, q0, n_restarts,
-                                                                position_only=position_only, **kw)
-    if position_only:
-        T[:, :3, :3] = nominal.fk(q_nom, end_effector)[:, :3, :3]
 
-    # 2. the calibrated model from there (same branch)
+def _calibrated_solution(calibrated, T, q_nom, n_restarts, position_only, kw):
+    """Joints (N, n) on the calibrated model from the nominal solution (same branch); position-only
+    and restarted solves for the targets the first pass misses. Returns (q, conv, status, iters)."""
     q, conv, status, iters, _ = _ik(calibrated, T, q_nom, **kw)
     if position_only and not np.all(conv):
         # near a singularity the nominal orientation may be out of the calibrated robot's reach:
@@ -376,15 +402,14 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
         q[todo], conv[todo], iters[todo] = q2, c2, i2
         status = status.astype(object)
         status[todo] = s2
-    T_reached = calibrated.fk(q, end_effector)
-    dp, dr = pose_errors(T_reached, T)
-    pos_err, rot_err = np.linalg.norm(dp, axis=1), np.linalg.norm(dr, axis=1)
-    T_filtered_world = nominal.fk(q, end_effector)
-    T_filtered = nominal_base.fk(q, end_effector)
-    dT, dR = pose_errors(T, T_filtered_world)
-    within = calibrated.within_limits(q)
+    return q, conv, status, iters
+
+
+def _correction_rows(conv, status, iters, pos_err, rot_err, nom_conv, nom_status, nom_err, q, q_nom, dT, dR,
+                     within) -> list:
+    """One dict per target: convergence, remaining error, joint change and Cartesian correction."""
     report = []
-    for i in range(N):
+    for i in range(len(q)):
         report.append({
             "index": i, "converged": bool(conv[i]), "status": str(status[i]), "iterations": int(iters[i]),
             "position_error_mm": float(pos_err[i]), "rotation_error_rad": float(rot_err[i]),
@@ -396,7 +421,4 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
             "orientation_correction_rad": float(np.linalg.norm(dR[i])),
             "within_limits": bool(within[i]),
         })
-    return CorrectedTargets(q=q, q_nominal=q_nom, T_target=T, T_filtered=T_filtered,
-                            T_filtered_world=T_filtered_world, converged=conv,
-                            position_error_mm=pos_err, rotation_error_rad=rot_err, report=report,
-                            position_only=position_only)
+    return report
