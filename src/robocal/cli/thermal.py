@@ -16,6 +16,8 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ._common import _names, _user_error as _fail, _step_printer as _progress
+
 __all__ = ["thermal"]
 
 thermal = click.Group(
@@ -29,40 +31,19 @@ FILE = click.Path(path_type=str)   # existence and kind are checked by the reade
 _USER_ERRORS = (ValueError, KeyError, OSError)
 
 
-def _fail(exc) -> click.ClickException:
-    msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
-    return click.ClickException(" ".join(str(msg).split()))
-
-
-def _progress(i, n, text):
-    click.echo(f"[{i}/{n}] {text}", err=True)
-
-
-def _num(x):
-    x = float(x)
-    return x if math.isfinite(x) else None
-
-
-def _clean(obj):
-    """JSON-safe: NaN / inf -> null, numpy -> Python."""
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, (np.bool_, bool)):
-        return bool(obj)
-    if isinstance(obj, (np.integer, int)):
-        return int(obj)
-    if isinstance(obj, (np.floating, float)):
-        return _num(obj)
-    return obj
+def _call(workflow, *args, **kwargs) -> dict:
+    """``workflow(*args, **kwargs)``; a user error (file, value, name) ends in one line ``Error: ...``."""
+    try:
+        return workflow(*args, **kwargs)
+    except _USER_ERRORS as exc:
+        raise _fail(exc) from None
 
 
 def _echo_json(res) -> None:
     """Print a workflow's result as JSON, without its display-only ``_`` keys."""
-    click.echo(json.dumps(_clean({k: v for k, v in res.items() if not k.startswith("_")}), indent=2))
+    from ..calib.outputs import json_ready
+
+    click.echo(json.dumps(json_ready({k: v for k, v in res.items() if not k.startswith("_")}), indent=2))
 
 
 def _v(a, fmt="{:.4f}") -> str:
@@ -72,10 +53,6 @@ def _v(a, fmt="{:.4f}") -> str:
 def _matrix(T, indent="  "):
     for row in np.asarray(T):
         click.echo(indent + " ".join(f"{x:14.6f}" for x in row))
-
-
-def _names(values):
-    return [n for v in values for n in str(v).replace(",", " ").split()]
 
 
 # ---------------------------------------------------------------------------------------------- simulate
@@ -105,11 +82,8 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, preset, out_dir, overw
     """
     from ..workflows.thermal_commands import simulate_thermal_cell
 
-    try:
-        res = simulate_thermal_cell(out_dir, seed=seed, schedule_seed=schedule_seed, n_cycles=n_cycles,
-                                    n_sphere=n_sphere, preset=preset, overwrite=overwrite, progress=_progress)
-    except _USER_ERRORS as exc:
-        raise _fail(exc) from None
+    res = _call(simulate_thermal_cell, out_dir, seed=seed, schedule_seed=schedule_seed, n_cycles=n_cycles,
+                n_sphere=n_sphere, preset=preset, overwrite=overwrite, progress=_progress)
     if as_json:
         _echo_json(res)
         return
@@ -181,11 +155,8 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
     from ..workflows.thermal_commands import calibrate_sensor
     from .tcp import _exit_if_failed
 
-    try:
-        res = calibrate_sensor(robot, sphere_file, method=method, sigma_mm=sigma_mm, poses=poses,
-                               truth_file=truth_file, out_file=out_file, overwrite=overwrite)
-    except _USER_ERRORS as exc:
-        raise _fail(exc) from None
+    res = _call(calibrate_sensor, robot, sphere_file, method=method, sigma_mm=sigma_mm, poses=poses,
+                truth_file=truth_file, out_file=out_file, overwrite=overwrite)
     if as_json:
         _echo_json(res)
     else:
@@ -263,12 +234,9 @@ def screen_cmd(run_dir, n_keep, threshold_mm, statistic, n_online, params, senso
     """
     from ..workflows.thermal_commands import screen_run
 
-    try:
-        res = screen_run(run_dir, n_keep=n_keep, threshold_mm=threshold_mm, statistic=statistic, n_online=n_online,
-                         params=_names(params), sensor_file=sensor_file, setup_file=setup_file, robot=robot,
-                         progress=_progress)
-    except _USER_ERRORS as exc:
-        raise _fail(exc) from None
+    res = _call(screen_run, run_dir, n_keep=n_keep, threshold_mm=threshold_mm, statistic=statistic, n_online=n_online,
+                params=_names(params), sensor_file=sensor_file, setup_file=setup_file, robot=robot,
+                progress=_progress)
     if as_json:
         _echo_json(res)
         return
@@ -352,14 +320,10 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
     """
     from ..workflows.thermal_commands import compensate_program_files
 
-    try:
-        res = compensate_program_files(robot, sensor_file=sensor_file, sphere_file=sphere_file, poses=poses,
-                                       cold_file=cold_file, params=_names(params), program_file=program_file,
-                                       out_file=out_file, overwrite=overwrite, position_only=position_only,
-                                       sigma_mm=sigma_mm, history=history, robot_id=robot_id,
-                                       note=lambda text: click.echo(text, err=True))
-    except _USER_ERRORS as exc:
-        raise _fail(exc) from None
+    res = _call(compensate_program_files, robot, sensor_file=sensor_file, sphere_file=sphere_file, poses=poses,
+                cold_file=cold_file, params=_names(params), program_file=program_file, out_file=out_file,
+                overwrite=overwrite, position_only=position_only, sigma_mm=sigma_mm, history=history,
+                robot_id=robot_id, note=lambda text: click.echo(text, err=True))
     if as_json:
         _echo_json(res)
         return
