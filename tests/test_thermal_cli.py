@@ -317,3 +317,29 @@ def test_experiment_json_is_the_librarys_multi_seed_table():
     assert "selection frequency over seeds" in text
     assert run("experiment", "--preset", "warm").exit_code != 0
     assert run("experiment", "--seeds", 0).exit_code != 0
+
+
+def test_compensate_refuses_a_moved_sensor(cell, tmp_path):
+    """Sphere centres from a sensor that was knocked 40 mm: the identified 'drift' is not heat, the
+    result fails the sanity gates (exit 3, status failed), and no corrected program is written
+    unless --force."""
+    d, s = cell["dir"], cell["screen"]
+    run2 = d / "run2"
+    poses = ",".join(f"c{CYCLES:03d}-{p}" for p in s["online_poses"]["screened"])
+    text = (run2 / "sphere.csv").read_text().splitlines()
+    head = [i for i, ln in enumerate(text) if ln.startswith("pose,")][0]
+    cols = text[head].split(",")
+    ix = cols.index("x")
+    moved = text[:head + 1] + [",".join(f"{float(v) + 40.0!r}" if k == ix else v for k, v in enumerate(ln.split(",")))
+                               for ln in text[head + 1:] if ln.strip()]
+    (tmp_path / "moved.csv").write_text("\n".join(moved) + "\n")
+    args = ["compensate", ROBOT, "--sensor", cell["sensor"], "--sphere", tmp_path / "moved.csv", "--poses", poses,
+            "--cold", run2 / "sphere_cold.csv", "--params", ",".join(s["selected"]), "--program", d / "program.csv",
+            "--out", tmp_path / "corrected.csv", "--json"]
+    r = run(*args)
+    assert r.exit_code == 3, r.output
+    res = json.loads(r.output[r.output.index("{"):r.output.rindex("}") + 1])
+    assert res["status"] == "failed" and res["out"] is None and res["reasons"]
+    assert not (tmp_path / "corrected.csv").exists()
+    r = run(*args, "--force")
+    assert r.exit_code == 3 and (tmp_path / "corrected.csv").exists()

@@ -20,6 +20,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 __all__ = [
     "Verdict", "NOISE_FACTOR", "RESIDUAL_LIMIT_MM", "NOMINAL_MISFIT_MM", "HOLDOUT_WORSE_FACTOR",
     "LENGTH_CHANGE_MM", "LENGTH_CHANGE_FRACTION", "ANGLE_CHANGE_DEG", "TOOL_LENGTH_LIMIT_MM",
@@ -45,6 +47,10 @@ ANGLE_CHANGE_DEG = 5.0
 #: A touch-up TCP farther than this from the flange [mm] is no tool a robot carries.
 TOOL_LENGTH_LIMIT_MM = 2000.0
 #: A cross-laser sensor's beams cross within this of 90 deg [deg] and pass closer than this [mm].
+#: thermal drift of an arm: a length delta beyond this [mm] or an angle delta beyond
+#: ``DRIFT_ANGLE_DEG`` is not heat (the thesis's arm drifts 0.1-0.5 mm at the TCP over 3 h)
+DRIFT_LENGTH_MM = 5.0
+DRIFT_ANGLE_DEG = 0.5
 BEAM_ANGLE_TOLERANCE_DEG = 10.0
 BEAM_GAP_LIMIT_MM = 20.0
 
@@ -187,4 +193,22 @@ def sensor_verdict(beta_deg: float, gap_mm: float) -> Verdict:
     if not _check(checks, "beam_gap", gap_mm, BEAM_GAP_LIMIT_MM, "mm"):
         reasons.append(f"the beams pass {gap_mm:.4g} mm apart (limit {BEAM_GAP_LIMIT_MM:g} mm): likely swapped point "
                        "labels or lengths in another unit than declared")
+    return Verdict(tuple(reasons), checks)
+
+
+def drift_verdict(names, units, delta, residual_rms_mm: float, sigma_mm: float | None = None) -> Verdict:
+    """Gates on an online thermal identification (thesis (3-8)-(3-10)): the sphere residual left by
+    the identified deltas against the noise (:func:`residual_reasons`), and every delta within what
+    heat can do (``DRIFT_LENGTH_MM``, ``DRIFT_ANGLE_DEG``). names, units ("mm" | "rad"), delta (k,)."""
+    checks: dict = {}
+    reasons = residual_reasons(residual_rms_mm, sigma_mm, checks, what="drift fit residual")
+    worst = []
+    for n, u, d in zip(names, units, np.asarray(delta, float)):
+        limit, value = (DRIFT_LENGTH_MM, abs(d)) if u == "mm" else (DRIFT_ANGLE_DEG, abs(math.degrees(d)))
+        if not _check(checks, f"drift_{n}", value, limit, "mm" if u == "mm" else "deg"):
+            worst.append(f"{n} {value:.4g} {'mm' if u == 'mm' else 'deg'}")
+    if worst:
+        reasons.append(f"identified thermal deltas beyond what heat does to an arm (limits {DRIFT_LENGTH_MM:g} mm, "
+                       f"{DRIFT_ANGLE_DEG:g} deg): {', '.join(worst)}: {_CAUSE_DATA}, a sensor that moved, "
+                       "or sphere poses that do not match the cold reference")
     return Verdict(tuple(reasons), checks)

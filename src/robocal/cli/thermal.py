@@ -310,25 +310,31 @@ def _echo_online(res, n_online) -> None:
                    "$ROBOCAL_HISTORY_DB or robocal-history.sqlite).")
 @click.option("--robot-id", "robot_id", default=None, help="Robot id in the history (default: the robot's name).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+@click.option("--force", is_flag=True,
+              help="Write the corrected program even when the identification fails the sanity gates (exit code 3).")
 def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, program_file, out_file, overwrite,
-                   position_only, sigma_mm, history, robot_id, as_json):
+                   position_only, sigma_mm, history, robot_id, as_json, force):
     """Online compensation: identify the given parameter deltas from the current sphere
     measurements (thesis (3-8)-(3-10)) and correct the joints of a taught program so the warm
     robot reaches the taught poses (iterative IK, <= 3 iterations).
 
     ROBOT: robot name or robot file (the cold model the program was taught on).
     """
+    from ..calib.sanity import Verdict
     from ..workflows.thermal_commands import compensate_program_files
+    from .tcp import _exit_if_failed
 
     res = _call(compensate_program_files, robot, sensor_file=sensor_file, sphere_file=sphere_file, poses=poses,
                 cold_file=cold_file, params=_names(params), program_file=program_file, out_file=out_file,
                 overwrite=overwrite, position_only=position_only, sigma_mm=sigma_mm, history=history,
-                robot_id=robot_id, note=lambda text: click.echo(text, err=True))
+                robot_id=robot_id, note=lambda text: click.echo(text, err=True), force=force)
     if as_json:
         _echo_json(res)
-        return
-    _echo_drift(res)
-    _echo_corrected(res)
+    else:
+        _echo_drift(res)
+        if res["out"] is not None:
+            _echo_corrected(res)
+    _exit_if_failed(Verdict(tuple(res["reasons"])))
 
 
 def _echo_drift(res) -> None:

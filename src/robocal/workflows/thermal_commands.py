@@ -401,15 +401,19 @@ def _drift_json(drift) -> dict:
 
 def compensate_program_files(robot, *, sensor_file, sphere_file, params, program_file, out_file, poses=(),
                              cold_file=None, overwrite: bool = False, position_only: bool = False, sigma_mm=None,
-                             history=None, robot_id=None, note=_silent) -> dict:
+                             history=None, robot_id=None, note=_silent, force: bool = False) -> dict:
     """Online compensation (thesis (3-8)-(3-10)): identify the deltas ``params`` (names) from the
     current sphere centres and write the corrected taught program to ``out_file``.
 
     history: None (no record), "" (the default database) or a path / URL: a
     ``thermal_compensation`` cycle is recorded there. Returns the identification (deltas [mm |
     rad], rank, residuals [mm]), ``points`` (per program point), ``elapsed_s`` and ``history``;
-    ``_summary`` is the compensation's one-line summary.
+    ``_summary`` is the compensation's one-line summary. The identification passes the sanity
+    gates (:func:`robocal.calib.sanity.drift_verdict`: residual vs noise, deltas within what heat
+    does) or gets ``status`` "failed" with ``reasons``, and then no corrected program is written
+    (no history record either) unless ``force``.
     """
+    from ..calib.sanity import drift_verdict
     from ..thermal import compensate_program, identify_drift
 
     t_start = time.perf_counter()
@@ -424,16 +428,20 @@ def compensate_program_files(robot, *, sensor_file, sphere_file, params, program
                            point_sigma_mm=sigma_mm)
     comp = compensate_program(model, drift, program.joints, position_only=position_only)
     elapsed = time.perf_counter() - t_start
-    _write_corrected(out_file, program_file, program, comp, drift, model, overwrite)
+    verdict = drift_verdict(drift.names, drift.units, drift.delta, drift.rms_after_mm, sigma_mm)
+    write = verdict.ok or force
+    if write:
+        _write_corrected(out_file, program_file, program, comp, drift, model, overwrite)
     meta = {"sensor": sensor_file, "sphere": sphere_file, "cold": cold_file, "program": program_file, "out": out_file,
             "position_only": position_only, "pose_ids": list(meas.pose_ids)}
     db = cycle_id = None
-    if history is not None:
+    if history is not None and write:
         db, cycle_id = _record_history(history, robot_id, model, meta, out_file, q_s, P_w, drift, comp, program,
                                        program_file, elapsed)
     return {"robot": model.name, "sensor": sensor_file, "sphere": sphere_file, "cold": cold_file,
             "pose_ids": list(meas.pose_ids), **_drift_json(drift),
-            "program": program_file, "out": out_file, "position_only": position_only,
+            "program": program_file, "out": out_file if write else None, "position_only": position_only,
+            "status": verdict.status, "reasons": list(verdict.reasons),
             "angle_unit_of_corrections": "rad", "points": _point_rows(model, program, comp),
             "all_converged": comp.all_converged, "all_within_limits": bool(comp.within_limits.all()),
             "elapsed_s": elapsed, "history": None if db is None else {"db": str(db), "cycle_id": cycle_id},
