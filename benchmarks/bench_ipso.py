@@ -5,8 +5,9 @@ Objective: (7) on the ER10L-C10 simulation (``robocal.workflows.ipso_study.er10l
 seed 0, degree-scale joint noise), 24 identifiable MDH parameters, box ±0.01 rad / ±0.5 mm.
 Rows (all in one process, one thread):
 
-* robocal ``run_pso`` + ``SwarmObjective`` -- the whole swarm per generation in one compiled
-  batched FK call (what ``solve_swarm`` runs);
+* robocal ``run_pso`` + ``SwarmObjective`` -- the whole swarm per generation in one compiled call
+  that returns objective (7) per particle (FK, residuals and rotation angles fused; what
+  ``solve_swarm`` runs);
 * pyswarms ``GlobalBestPSO`` (w = K = 0.7298, c1 = c2 = K * 2.05: Clerc's constriction written in
   inertia form, the same update) on the same objective computed per particle through the
   problem's own residuals (``objective_at``: one ``Problem.evaluate`` per particle, as one would

@@ -133,3 +133,24 @@ def test_cli_ipso_records_method_generations_objective(tmp_path):
     bad = r.invoke(cli, ["calibrate", "ur10_dh_beta", str(data), "--out", str(tmp_path / "c2"), "--method", "ipso",
                          "--loss", "huber", "--no-report"])
     assert bad.exit_code != 0 and "plain squared errors" in bad.output
+
+
+@pytest.mark.parametrize("search_base", [False, True])
+def test_swarm_objective_with_points_and_searched_targets(search_base):
+    """Tracker problem (PointResidual): the compiled sum (base fixed, targets searched) and the
+    numpy path (base searched) both equal objective (7) from Problem.evaluate."""
+    from robocal.workflows.ipso_study import tracker_experiment
+
+    prob = tracker_experiment(0, n_train=30).problem
+    names = [n for n, b in zip(prob.names, prob.column_blocks) if search_base or b != "base"]
+    obj = SwarmObjective(prob, names=names)
+    assert bool(obj._groups) != search_base
+    cols = [prob.names.index(n) for n in names]
+    rng = np.random.default_rng(2)
+    X = rng.uniform(-1, 1, (5, len(names))) * np.where(np.array(prob.units)[cols] == "rad", 0.01, 0.5)
+    ref = []
+    for x in X:
+        step = np.zeros(prob.n_variables)
+        step[cols] = x
+        ref.append(objective_at(prob, prob.retract(prob.initial_state(), step)))
+    np.testing.assert_allclose(obj(X), ref, rtol=1e-12)

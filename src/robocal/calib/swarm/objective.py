@@ -11,9 +11,10 @@ with ``s`` the problem's common measurement sigma (``Problem.residual_scale``, 1
 have different or no sigmas) and ``rotation_weight`` the rotation blocks' mm per rad; f is then
 in mm^2. Prior rows (a Gaussian prior on the robot geometry) add their squared weighted errors
 times ``s^2``. :func:`objective_at` computes f from ``Problem.evaluate`` for one state; the
-:class:`SwarmObjective` computes the same numbers for P states at once (one batched forward
-kinematics call per end effector and configuration set, :class:`ParameterBatchFK`), which the
-tests compare.
+:class:`SwarmObjective` computes the same numbers for P states at once, which the tests compare:
+the point and rotation residuals of each end effector and configuration set are summed inside one
+compiled call (:meth:`ParameterBatchFK.squared_residuals`: f (P,) directly, no frame stored) when
+the base frames are not searched; otherwise through the batched frames and numpy.
 
 Supported residual blocks: point and tool-point positions, rotation and tool-rotation residuals,
 priors on the robot geometry; parameter blocks searched: robot geometry, vector blocks (target
@@ -70,6 +71,7 @@ class SwarmObjective:
         self._fk = {}
         for rb in problem.residual_blocks:
             self._check_supported(rb)
+        self._groups, self._rest = self._plan_fused()
         self.scale2 = problem.residual_scale**2 / max(problem.n_poses, 1)
 
     # ------------------------------------------------------------------ set-up
@@ -99,13 +101,86 @@ class SwarmObjective:
             raise SwarmInputError(f"the swarm cannot evaluate {type(rb).__name__} residuals (kind {rb.kind!r}); "
                                   "supported: point, rotation, tool point, tool rotation, geometry prior")
 
-    def _frames(self, model, q, ee, params):
-        """End-effector frames (P, N, 3, 4) in the robot base frame, one compiled call."""
+    def _plan_fused(self):
+        """([group], [residual blocks left to numpy]): blocks sharing model, joints, end effector,
+        geometry, base frames and stations form one group, evaluated in one compiled call."""
+        groups, rest = {}, []
+        for rb in self.problem.residual_blocks:
+            if isinstance(rb, PriorResidual):
+                rest.append(rb)
+                continue
+            if isinstance(rb, (PointResidual, ToolPointResidual, ToolRotationResidual)):
+                c = rb.chain
+                src = (c.model, c.q, c.geometry, c.frames, c.stations)
+            else:
+                src = (rb.model, rb.q, rb.geometry, rb.frames, rb.stations)
+            if src[3] in self._block_columns:  # searched base frames: the numpy path
+                rest.append(rb)
+                continue
+            ees = np.unique(rb.chain.ee_of_target) if isinstance(rb, PointResidual) else \
+                [rb.chain.ee_of_target[0] if hasattr(rb, "chain") else rb.ee]
+            for e in ees:
+                key = (id(src[0]), id(src[1]), int(e), src[2], src[3], id(src[4]))
+                g = groups.get(key)
+                if g is None:
+                    B = np.asarray(self.state0[self.problem.parameter_blocks.index(src[3])])[src[4]]
+                    g = groups[key] = dict(model=src[0], q=src[1], ee=int(e), geometry=src[2],
+                                           base=np.ascontiguousarray(B[:, :3, :]), points=[], rotations=[])
+                self._add_terms(g, rb, e)
+        out = []
+        for g in groups.values():
+            pts, rots = g.pop("points"), g.pop("rotations")
+            N = len(g["base"])
+            g["p_src"] = [p[0] for p in pts]
+            g["p_meas"] = np.ascontiguousarray(np.concatenate([p[1] for p in pts], axis=1) if pts else np.zeros((N, 0, 3)))
+            g["p_mask"] = np.ascontiguousarray(np.concatenate([p[2] for p in pts], axis=1) if pts
+                                               else np.zeros((N, 0), dtype=bool))
+            g["p_w2"] = np.array([w for p in pts for w in p[3]], dtype=float)
+            g["r_src"] = [r[0] for r in rots]
+            g["r_meas"] = np.ascontiguousarray(np.stack([r[1] for r in rots], axis=1) if rots else np.zeros((N, 0, 3, 3)))
+            g["r_w2"] = np.array([r[2] for r in rots], dtype=float)
+            g["static"] = not any(s[0] in self._block_columns for s in g["p_src"] + g["r_src"] if s[0] is not None)
+            g["cache"] = {}
+            out.append(g)
+        return out, rest
+
+    @staticmethod
+    def _add_terms(g, rb, e):
+        """Point terms (source, measured (N, K, 3), mask (N, K), squared weights (K,)) and rotation
+        terms (source, measured (N, 3, 3), squared weight) of block ``rb`` at end effector ``e``."""
+        if isinstance(rb, PointResidual):
+            ks = np.flatnonzero(rb.chain.ee_of_target == e)
+            g["points"].append(((rb.chain.targets, ks), rb.measured[:, ks], rb.mask[:, ks], [rb.weight**2] * len(ks)))
+        elif isinstance(rb, ToolPointResidual):
+            g["points"].append(((rb.tool, None), rb.measured[:, None], rb.mask[:, None], [rb.weight**2]))
+        elif isinstance(rb, ToolRotationResidual):
+            g["rotations"].append(((rb.tool, None), rb.measured, (rb.weight * rb.rotation_weight) ** 2))
+        else:
+            g["rotations"].append(((None, None), rb.measured, (rb.weight * rb.rotation_weight) ** 2))
+
+    def _group_inputs(self, g, vals, P):
+        """Per-particle targets (P, K, 3) and right rotation factors (P, M, 3, 3) of one group."""
+        if g["static"] and P in g["cache"]:
+            return g["cache"][P]
+        tg = [vals[b][:, ks] if ks is not None else vals[b][:, 0, None, :3, 3] for b, ks in g["p_src"]]
+        rr = [np.broadcast_to(np.eye(3), (P, 1, 3, 3)) if b is None else vals[b][:, 0, None, :3, :3]
+              for b, _ in g["r_src"]]
+        out = (np.ascontiguousarray(np.concatenate(tg, axis=1) if tg else np.zeros((P, 0, 3))),
+               np.ascontiguousarray(np.concatenate(rr, axis=1) if rr else np.zeros((P, 0, 3, 3))))
+        if g["static"]:
+            g["cache"][P] = out
+        return out
+
+    def _fk_of(self, model, q, ee):
         key = (id(model), id(q), int(ee))
         fk = self._fk.get(key)
         if fk is None:
             fk = self._fk[key] = ParameterBatchFK(model, q, int(ee))
-        return fk(params)
+        return fk
+
+    def _frames(self, model, q, ee, params):
+        """End-effector frames (P, N, 3, 4) in the robot base frame, one compiled call."""
+        return self._fk_of(model, q, ee)(params)
 
     # ------------------------------------------------------------------ values
     def block_values(self, X) -> dict:
@@ -145,8 +220,14 @@ class SwarmObjective:
         X = np.atleast_2d(np.asarray(X, dtype=float))
         vals = self.block_values(X)
         self._call_cache = {}
-        total = np.zeros(len(X))
-        for rb in self.problem.residual_blocks:
+        P = len(X)
+        total = np.zeros(P)
+        for g in self._groups:
+            tg, rr = self._group_inputs(g, vals, P)
+            self._fk_of(g["model"], g["q"], g["ee"]).squared_residuals(
+                vals[g["geometry"]], g["base"], tg, g["p_meas"], g["p_mask"], g["p_w2"], rr, g["r_meas"], g["r_w2"],
+                out=total)
+        for rb in self._rest:
             total += self._squared(rb, vals)
         self._call_cache = {}
         return total * self.scale2
