@@ -150,8 +150,9 @@ class DampedGaussNewton:
         for _ in range(30):
             if self.method == "lm":
                 try:
-                    step_s = cho_solve(cho_factor(G + (self.lam * g_max) * np.eye(len(G)), check_finite=False), g,
-                                       check_finite=False)
+                    A = G.copy()  # G + lam * max(diag G) * I: only the diagonal changes
+                    A.flat[::len(A) + 1] += self.lam * g_max
+                    step_s = cho_solve(cho_factor(A, overwrite_a=True, check_finite=False), g, check_finite=False)
                 except np.linalg.LinAlgError:
                     self.lam *= 10.0
                     continue

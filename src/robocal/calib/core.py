@@ -129,6 +129,17 @@ class Problem:
         """Every block's initial value (copies), as the problem's state type."""
         return self._make_state([np.array(b.initial, dtype=float) for b in self.parameter_blocks])
 
+    def initial_values(self) -> np.ndarray:
+        """``variable_values(initial_state())``, cached while no block's initial value changes (a copy)."""
+        inits = [b.initial for b in self.parameter_blocks]
+        cached = getattr(self, "_initial_values_cache", None)
+        if cached is not None and len(cached[0]) == len(inits) and all(
+                np.array_equal(a, b) for a, b in zip(cached[0], inits)):
+            return cached[1].copy()
+        vals = self.variable_values(self.initial_state())
+        self._initial_values_cache = ([np.array(b, dtype=float) for b in inits], vals.copy())
+        return vals
+
     def value(self, state, block):
         """The value of ``block`` (object or name) in ``state``."""
         return state[self._index[self.block(block)]]

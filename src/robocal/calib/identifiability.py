@@ -84,8 +84,9 @@ def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priorit
     blocks = np.array(["geometry"] * n) if blocks is None else np.asarray(blocks)
     norms = np.linalg.norm(J, axis=0)
     scale = norms.max(initial=0.0)
-    order = [i for b in priority for i in range(n) if blocks[i] == b]
-    order += [i for i in range(n) if i not in order]
+    order = [i for b in priority for i in np.flatnonzero(blocks == b).tolist()]
+    seen = set(order)
+    order += [i for i in range(n) if i not in seen]
     kept, dropped = [], []
     zero = norms <= 1e-12 * max(scale, 1e-300)
     cand = [i for i in order if not zero[i]]

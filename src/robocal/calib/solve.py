@@ -160,7 +160,7 @@ def _refine_identifiable(problem, res, state0, kw):
         res = _solve_once(problem, state0=res.state, ident=ident, **kw)
         res.iterations += iters
         res.residuals_before, res.point_errors_before = before, err_before
-        res.initial = _state_values(problem, start)
+        res.initial = problem.initial_values() if state0 is None else _state_values(problem, start)
     return res
 
 
@@ -230,7 +230,8 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     if ident is None:
         ident = analyse_identifiability(J, problem.names, problem.blocks, column_blocks=problem.column_blocks) \
             if auto_identifiable else IdentifiabilityReport.trivial(problem.names)
-    active = np.array([nm in set(ident.identifiable) for nm in problem.names])
+    ident_set = set(ident.identifiable)
+    active = np.array([nm in ident_set for nm in problem.names])
     r0 = r.copy()
     gn = DampedGaussNewton(problem, state, r, J, labels, active, method=method, loss=loss, f_scale=f_scale,
                            prior_weight=prior_weight, rcond=rcond, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol,
@@ -248,7 +249,7 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     r_after_pts = problem.point_errors(r)
     return CalibrationResult(
         names=problem.names, units=problem.units, values=_state_values(problem, state),
-        initial=_state_values(problem, start_state), std=std,
+        initial=problem.initial_values() if state0 is None else _state_values(problem, start_state), std=std,
         covariance=cov, state=state, problem=problem, residuals_before=r0, residuals_after=r,
         iterations=gn.it, converged=gn.converged, reason=gn.reason, rank=rank, condition_number=cond, sigma0=sigma0,
         identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts,
@@ -259,9 +260,12 @@ def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
     """Covariance (n, n) [NaN outside the identifiable set], std (n,), rank, condition number and
     the residual standard deviation sigma0, from the final weighted Jacobian J (M, n)."""
     n = J.shape[1]
-    sw = np.sqrt(row_weights)
-    Ja = J[:, active] * sw[:, None]
-    ra = r * sw
+    if np.all(row_weights == 1.0):  # multiplying by sqrt(1) = 1 changes no bit: skip it
+        Ja, ra = (J if active.all() else J[:, active]), r
+    else:
+        sw = np.sqrt(row_weights)
+        Ja = J[:, active] * sw[:, None]
+        ra = r * sw
     dof = max(Ja.shape[0] - Ja.shape[1], 1)
     sigma0 = math.sqrt(float(ra @ ra) / dof)
     Js = Ja / col_scale[active]
