@@ -58,12 +58,17 @@ def _pose_problem(nominal, q, T_meas, names=None, start=None):
     return Problem([geometry, frames, tool], residuals, n_poses=len(q), kinds=("point", "rotation"))
 
 
+def _orientation_rms_deg(R_ref, R) -> float:
+    """RMS rotation angle [deg] between (M, 3, 3) rotation stacks."""
+    c = np.clip((np.einsum("nij,nij->n", R_ref, R) - 1.0) / 2.0, -1.0, 1.0)
+    return float(np.degrees(np.sqrt(np.mean(np.arccos(c) ** 2))))
+
+
 def pose_errors(model, q, p_meas, R_meas):
     """(position RMS [mm], orientation RMS [deg]) of ``model``'s flange at commanded q against the measured poses."""
     T = model.replace(T_world_base=np.eye(4)).fk(q)
     dp = np.linalg.norm(T[:, :3, 3] - p_meas, axis=1)
-    c = np.clip((np.einsum("nij,nij->n", R_meas, T[:, :3, :3]) - 1.0) / 2.0, -1.0, 1.0)
-    return float(np.sqrt(np.mean(dp**2))), float(np.degrees(np.sqrt(np.mean(np.arccos(c) ** 2))))
+    return float(np.sqrt(np.mean(dp**2))), _orientation_rms_deg(R_meas, T[:, :3, :3])
 
 
 def er10l_experiment(seed: int, joint_unit: str = "deg", n_train: int = 32, n_hold: int = 200,
@@ -107,6 +112,8 @@ def run_method(exp: Experiment, method: str, *, seed: int = 0, generations: int 
     else:
         d = np.linalg.norm(exp.predict(res, exp.q_hold) - exp.p_hold, axis=-1)
         hold_mm, hold_deg = float(np.sqrt(np.mean(d**2))), float("nan")
+        if exp.R_hold is not None:  # orientation against the simulation's truth (the tracker measures none)
+            hold_deg = _orientation_rms_deg(exp.R_hold, res.model.fk(exp.q_hold)[:, :3, :3])
     est = dict(zip(res.names, res.values))
     ident = [n for n in res.identifiability.identifiable if n in est and n in exp.nominal.params.names]
     idx = [exp.nominal.params.index(n) for n in ident]
@@ -141,7 +148,9 @@ def tracker_experiment(seed: int, robot: str = "ur10_dh_beta", n_train: int = 10
     def predict(res, qh):
         return problem.predict_points(res.state, q=qh)[:, 0]
 
-    return Experiment(nominal, vr.true_model, problem, q[n_train:], pts[n_train:, 0], None, floor, float("nan"),
+    # the true flange orientation in the tracker frame: evaluation only (the tracker measures none)
+    R_hold_true = (tracker.T_tracker_world @ vr.true_model.fk(q[n_train:]))[:, :3, :3]
+    return Experiment(nominal, vr.true_model, problem, q[n_train:], pts[n_train:, 0], R_hold_true, floor, 0.0,
                       predict)
 
 
@@ -171,7 +180,25 @@ def compare(make, seeds, methods=("lm", "ipso", "ipso+lm"), **options) -> dict:
     out = {m: _summary(r) for m, r in rows.items()}
     out["floor_mm"] = float(np.median(floors))
     out["nominal_mm"] = float(np.median(nominal)) if nominal else float("nan")
+    out["per_seed"] = [dict(r, seed=s, floor_mm=f) for m in methods for s, f, r in zip(seeds, floors, rows[m])]
     return out
+
+
+_PER_SEED_COLUMNS = ("experiment", "seed", "method", "holdout_mm", "holdout_deg", "param_mm", "param_mrad",
+                     "seconds", "objective", "floor_mm", "at_floor", "converged", "n_identified")
+
+
+def per_seed_csv(tables: dict) -> str:
+    """{experiment title: compare() output} -> CSV text, one row per experiment, seed and method
+    (units in the header: mm, deg, mrad, s; objective (7) in mm^2)."""
+    lines = ["# robocal IPSO study, one row per seed; holdout_mm [mm], holdout_deg [deg], param_mm [mm], "
+             "param_mrad [mrad], seconds [s], objective [mm^2], floor_mm [mm]", ",".join(_PER_SEED_COLUMNS)]
+    for title, table in tables.items():
+        for r in table["per_seed"]:
+            row = dict(r, experiment=title.replace(",", ";"))
+            lines.append(",".join(f"{row[c]:.6g}" if isinstance(row[c], float) else str(row[c])
+                                  for c in _PER_SEED_COLUMNS))
+    return "\n".join(lines) + "\n"
 
 
 def _print(title, table):
@@ -190,17 +217,29 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--hard-seeds", type=int, default=5)
+    ap.add_argument("--per-seed", metavar="CSV", help="also write every seed's row to this CSV file (not overwritten)")
     a = ap.parse_args(argv)
     seeds, hard = range(a.seeds), range(a.hard_seeds)
     print("medians over seeds; at floor = holdout position RMS within 10 % of the true model's")
-    _print(f"ER10L-C10, joint noise +-0.1 deg ({a.seeds} seeds)", compare(lambda s: er10l_experiment(s, "deg"), seeds))
-    _print(f"ER10L-C10, joint noise +-0.1 rad as printed ({a.seeds} seeds)",
-           compare(lambda s: er10l_experiment(s, "rad"), seeds))
-    _print(f"UR10 (DH + beta) tracker simulation, 100 poses ({a.seeds} seeds)", compare(tracker_experiment, seeds))
-    _print(f"ER10L, errors x30 (+-0.3 rad / +-1.5 mm), box +-0.3 rad / +-1.5 mm ({a.hard_seeds} seeds)",
-           compare(lambda s: er10l_experiment(s, "deg", error_scale=30.0), hard, box_rad=0.3, box_mm=1.5))
-    _print(f"ER10L, theta4 slipped by 180 deg, box +-pi rad / +-0.5 mm ({a.hard_seeds} seeds)",
-           compare(lambda s: er10l_experiment(s, "deg", slip={"theta4": np.pi}), hard, box_rad=np.pi))
+    tables = {}
+
+    def run(title, table):
+        tables[title] = table
+        _print(title, table)
+
+    run(f"ER10L-C10, joint noise +-0.1 deg ({a.seeds} seeds)", compare(lambda s: er10l_experiment(s, "deg"), seeds))
+    run(f"ER10L-C10, joint noise +-0.1 rad as printed ({a.seeds} seeds)",
+        compare(lambda s: er10l_experiment(s, "rad"), seeds))
+    run(f"UR10 (DH + beta) tracker simulation, 100 poses ({a.seeds} seeds)", compare(tracker_experiment, seeds))
+    run(f"ER10L, errors x30 (+-0.3 rad / +-1.5 mm), box +-0.3 rad / +-1.5 mm ({a.hard_seeds} seeds)",
+        compare(lambda s: er10l_experiment(s, "deg", error_scale=30.0), hard, box_rad=0.3, box_mm=1.5))
+    run(f"ER10L, theta4 slipped by 180 deg, box +-pi rad / +-0.5 mm ({a.hard_seeds} seeds)",
+        compare(lambda s: er10l_experiment(s, "deg", slip={"theta4": np.pi}), hard, box_rad=np.pi))
+    if a.per_seed:
+        from ..io.atomic import atomic_write_text
+
+        atomic_write_text(a.per_seed, per_seed_csv(tables))
+        print(f"\nper-seed rows written to {a.per_seed}")
 
 
 if __name__ == "__main__":
