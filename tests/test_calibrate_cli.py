@@ -6,6 +6,7 @@ the noise floor on held-out poses and agrees with the hidden truth; bad input en
 """
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -106,7 +107,12 @@ def test_calibration_reaches_the_noise_floor_on_held_out_poses(campaign):
     for name in ("result.json", "calibrated_robot.toml", "calibrated_robot.urdf", "report.html"):
         assert (campaign["out"] / name).stat().st_size > 500
     html = (campaign["out"] / "report.html").read_text()
-    assert html.count("data:image/png;base64,") >= 4 and "Parameters not identifiable" in html
+    assert html.count('<div class="fig"') >= 4 and "Parameters not identifiable" in html
+    # the per-pose figure draws one bar per calibration pose and set (before and after)
+    per_pose = html.split('aria-label="error per pose">')[1].split("</div>")[0].split("<svg xmlns")[1]
+    bar_groups = re.findall(r'<g fill="[^"]*" fill-opacity="[^"]*">(.*?)</g>', per_pose)
+    n_train = len(set(res["residuals"]["per_point"]["pose"]))
+    assert [g.count("<rect ") for g in bar_groups] == [n_train, n_train]
 
 
 def test_result_agrees_with_the_truth(campaign):

@@ -1,6 +1,7 @@
-"""A self-contained HTML report of a calibration (one file, plots embedded as base64 PNG).
+"""A self-contained HTML report of a calibration (one file; figures inline as SVG, callers' extra
+PNG plots embedded as base64).
 
-The figures are drawn by :mod:`robocal.report._figures`.
+The figures are drawn by :mod:`robocal.report._figures` (SVG text, no plotting library).
 
 The report only draws and formats what it is given: the dict of
 :func:`robocal.calib.outputs.result_to_dict` (with an optional ``validation`` entry) and,
@@ -18,14 +19,13 @@ import numpy as np
 
 from ..io.atomic import atomic_write_text
 from ._figures import (
-    figure_png,
     plot_accuracy_map,
     plot_errors_per_pose,
     plot_histogram,
     plot_parameter_changes,
 )
 
-__all__ = ["write_report", "render_report", "figure_png"]
+__all__ = ["write_report", "render_report"]
 
 _CSS = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
@@ -34,12 +34,15 @@ table { border-collapse: collapse; margin: 0.5em 0; font-size: 0.9em; }
 th, td { border: 1px solid #ccc; padding: 0.2em 0.6em; text-align: right; }
 th { background: #f0f0f0; } td.l, th.l { text-align: left; }
 tr.dropped td { color: #888; } .bad { color: #b00; font-weight: bold; } .ok { color: #070; }
-img { max-width: 100%; } .note { color: #555; font-size: 0.9em; }
+img, .fig svg { max-width: 100%; height: auto; } .note { color: #555; font-size: 0.9em; }
 """
 
 
-def _img(png: bytes, alt: str) -> str:
-    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode("ascii")}">'
+def _img(figure, alt: str) -> str:
+    """A figure for the page: SVG text inline, PNG bytes as an embedded image."""
+    if isinstance(figure, str):
+        return f'<div class="fig" role="img" aria-label="{html.escape(alt)}">{figure}</div>'
+    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{base64.b64encode(figure).decode("ascii")}">'
 
 
 def _f(x, digits=4) -> str:
@@ -149,21 +152,21 @@ def _errors_section(result: dict) -> list:
         out.append(_table(["poses", "RMS", "mean", "p95", "max", "n"], rows))
     out.append('<p class="note">"before": nominal kinematics with the best-fit base frame and target points; '
                '"after": the calibrated model. Held-out poses were not used in the fit.</p>')
-    for png, alt in ((plot_errors_per_pose(result), "error per pose"), (plot_histogram(result), "error histogram")):
-        if png:
-            out.append(_img(png, alt))
+    for fig, alt in ((plot_errors_per_pose(result), "error per pose"), (plot_histogram(result), "error histogram")):
+        if fig:
+            out.append(_img(fig, alt))
     return out
 
 
 def _accuracy_map_section(accuracy_map: dict | None) -> list:
     """The accuracy map plot with its note, if one was given."""
-    amap_png = plot_accuracy_map(accuracy_map)
-    if not amap_png:
+    amap_fig = plot_accuracy_map(accuracy_map)
+    if not amap_fig:
         return []
     out = ["<h2>Accuracy map</h2>"]
     if accuracy_map.get("note"):
         out.append(f'<p class="note">{html.escape(accuracy_map["note"])}</p>')
-    out.append(_img(amap_png, "accuracy map"))
+    out.append(_img(amap_fig, "accuracy map"))
     return out
 
 
@@ -171,9 +174,9 @@ def _parameters_section(result: dict) -> list:
     """Parameter changes (plot and table, angles in degrees) and the parameters not identifiable."""
     e = html.escape
     out = ["<h2>Parameters</h2>"]
-    png = plot_parameter_changes(result)
-    if png:
-        out.append(_img(png, "parameter changes"))
+    fig = plot_parameter_changes(result)
+    if fig:
+        out.append(_img(fig, "parameter changes"))
     prow, pcls = [], []
     for p in result.get("parameters", []):
         init, unit = _display(p["initial"], p["unit"])
@@ -226,15 +229,18 @@ def _frames_section(result: dict) -> list:
 
 
 def _extra_sections(extra_tables: dict | None, extra_plots: dict | None) -> list:
-    """The caller's extra tables (preformatted cells), then its extra plots (PNG bytes or files)."""
+    """The caller's extra tables (preformatted cells), then its extra plots (SVG text, PNG bytes or files)."""
     e = html.escape
     out = []
     for name, (header, rows) in (extra_tables or {}).items():
         out.append(f"<h2>{e(name)}</h2>")
         out.append(_table([e(str(h)) for h in header], [[e(str(c)) for c in row] for row in rows]))
-    for name, png in (extra_plots or {}).items():
-        data = png if isinstance(png, (bytes, bytearray)) else Path(png).read_bytes()
-        out.append(f"<h2>{e(name)}</h2>" + _img(bytes(data), name))
+    for name, fig in (extra_plots or {}).items():
+        if isinstance(fig, str) and fig.lstrip().startswith("<svg"):
+            data = fig
+        else:
+            data = bytes(fig) if isinstance(fig, (bytes, bytearray)) else Path(fig).read_bytes()
+        out.append(f"<h2>{e(name)}</h2>" + _img(data, name))
     return out
 
 
@@ -247,7 +253,7 @@ def write_report(path, result: dict, *, accuracy_map: dict | None = None, title:
         ``target``, ``before``, ``after``}}.
     accuracy_map: optional {``positions_mm`` (N, 3), ``values_mm`` (N,), ``label``, ``title``,
         ``note``}: a value per workspace position (predicted uncertainty or residual) to map.
-    extra_plots: optional {section title: PNG bytes or PNG file path} appended at the end.
+    extra_plots: optional {section title: SVG text, PNG bytes or PNG file path} appended at the end.
     extra_tables: optional {section title: (header, rows)} of preformatted cells, before the plots.
 
     Contents: error per pose before/after, error histograms, parameter changes with 1-std error

@@ -62,11 +62,11 @@ def swarm_record(rdict: dict, result, method: str) -> None:
 
 
 def convergence_plots(result) -> dict:
-    """{section title: PNG} with the swarm's convergence curve (empty for LM)."""
+    """{section title: SVG text} with the swarm's convergence curve (empty for LM)."""
     history = getattr(result, "history", None)
     if history is None or len(history) < 2:
         return {}
     from ..report.convergence import plot_convergence
 
-    png = plot_convergence(history)
-    return {"IPSO convergence (best objective per generation)": png} if png else {}
+    svg = plot_convergence(history)
+    return {"IPSO convergence (best objective per generation)": svg} if svg else {}
