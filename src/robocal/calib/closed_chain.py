@@ -32,7 +32,7 @@ from .residuals.base import Evaluation
 from .residuals.ray_spot import BEAM_LENGTH_MM
 
 __all__ = ["ClosedChainError", "ClosedChainProblem", "spot_index", "triangulate_spots", "length_scale_check",
-           "practically_unidentifiable", "e_op"]
+           "practically_unidentifiable", "classify_unidentified", "e_op"]
 
 
 class ClosedChainError(ProblemError):
@@ -106,7 +106,10 @@ class ClosedChainProblem(Problem):
     spacing_mm: the known distance between consecutive targets of a plate (in order of first
     appearance), or ``None``; spacing_sigma_mm: its uncertainty; laser_T0 (4, 4): nominal mount;
     laser_initial (4,): start of the mount errors; hold: geometry names held fixed in addition
-    (e.g. practically unidentifiable ones); end_effector: the end effector carrying the laser.
+    (e.g. practically unidentifiable ones); end_effector: the end effector carrying the laser;
+    spots_initial (S, 3): start of the spots (default: triangulated from the nominal rays);
+    fix_scale: hold one length when the scale is free; check_closure: refuse held spots of which
+    none repeats (off to evaluate single rows against known spots).
 
     Attributes: ``geometry``, ``frames``, ``laser``, ``spots``, ``ray`` (the residual), ``spacing``
     (or ``None``), ``spot_labels`` [(plate, target)], ``plate_of_spot``, ``spot_of_row``,
@@ -116,12 +119,12 @@ class ClosedChainProblem(Problem):
 
     def __init__(self, model, q, plate, target, *, free=None, sigma_mm: float = 0.05, spacing_mm=None,
                  spacing_sigma_mm: float = 0.02, laser_T0=None, laser_initial=(0.0, 0.0, 0.0, 0.0), hold=(),
-                 end_effector=None, spots_initial=None, fix_scale: bool = True):
+                 end_effector=None, spots_initial=None, fix_scale: bool = True, check_closure: bool = True):
         self.model = model
         q = np.asarray(q, dtype=float)
         self.spot_of_row, self.spot_labels, self.plate_of_spot = spot_index(plate, target)
         S = len(self.spot_labels)
-        if S == len(q):
+        if check_closure and S == len(q):
             raise ClosedChainError(f"no chain closes: all {len(q)} held spots are on different (plate, target) "
                                    "pairs; hold each target from two or more configurations (at least 4 are needed "
                                    "for a useful calibration)")
@@ -240,9 +243,33 @@ def practically_unidentifiable(problem: Problem, state=None, *, max_std_mm: floa
             break
         i = active.pop(k)
         unit = units[i]
-        out.append({"name": names[i], "std": float(std[k]), "unit": str(unit),
+        Jk = J[:, active] / np.linalg.norm(J[:, active], axis=0)
+        coef = np.linalg.lstsq(Jk, J[:, i] / np.linalg.norm(J[:, i]), rcond=None)[0]
+        partners = [(names[active[b]], float(coef[b])) for b in np.argsort(-np.abs(coef))[:3] if abs(coef[b]) > 0.05]
+        out.append({"name": names[i], "std": float(std[k]), "unit": str(unit), "trades_off_with": partners,
                     "why": f"barely observable: its standard deviation would be {std[k]:.3g} {unit} from these "
                            f"held spots (limit {limit[k]:g} {unit}); held at its initial value"})
+    return out
+
+
+def classify_unidentified(entries, spot_names, mount_names) -> dict:
+    """Sort held / dropped geometry entries (dicts with ``name``, ``why``, ``trades_off_with``) by
+    cause: ``"base_frame"`` (they move the arm as a common motion of the spots does: rotation about
+    or shift along the first axis), ``"laser_mount"`` (the mount's four parameters absorb them: the
+    last link and the mount cannot be told apart), ``"along_beam"`` (no effect at all: they move
+    the beam along itself or turn it about itself), ``"other"`` (trade-offs among robot parameters)."""
+    spot_names, mount_names = set(spot_names), set(mount_names)
+    out = {"base_frame": [], "laser_mount": [], "along_beam": [], "other": []}
+    for d in entries:
+        partners = [n for n, _ in d.get("trades_off_with", [])]
+        if not partners:
+            out["along_beam"].append(d["name"])
+        elif all(n in spot_names for n in partners):
+            out["base_frame"].append(d["name"])
+        elif any(n in mount_names for n in partners):
+            out["laser_mount"].append(d["name"])
+        else:
+            out["other"].append(d["name"])
     return out
 
 
