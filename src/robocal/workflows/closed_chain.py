@@ -49,7 +49,7 @@ from .calibrate import OUTPUT_FILES, CalibrationInputError, output_paths, select
 from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .simulate import truth_path_for
 
-__all__ = ["simulate_closed_chain", "run_closed_chain_calibration", "split_spots", "DEFAULT_JOINT_RESOLUTION_DEG"]
+__all__ = ["simulate_closed_chain", "run_closed_chain_calibration", "split_spots", "make_cell", "calibrate_held_spots", "DEFAULT_JOINT_RESOLUTION_DEG"]
 
 #: joint resolution / reading noise of the simulated controller [deg]: ABB's 0.03 mm position
 #: repeatability of the IRB 140 over its ~0.8 m reach is ~0.002 deg; half of it per joint
@@ -82,15 +82,10 @@ def simulate_closed_chain(robot, out_path, *, plates: int = 2, targets: int = 5,
     if not (0.0 < tolerance_mm < 50.0) or not (0.0 < spacing_mm < 2000.0):
         raise ValueError("--tolerance must be in (0, 50) mm and --spacing in (0, 2000) mm")
     nominal = load_robot(robot)
-    s_robot, s_laser, s_hold = (np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(3))
-    virtual = VirtualRobot.perturbed(nominal, s_robot, length_sigma_mm=length_sigma_mm, angle_sigma_deg=angle_sigma_deg,
-                                     offset_sigma_deg=offset_sigma_deg, joint_noise_deg=0.0, joint_noise_mm=0.0)
-    res = math.radians(joint_resolution_deg)
-    noise = res if joint_noise_deg is None else math.radians(joint_noise_deg)
-    readout = JointReadout(noise, res, math.radians(cyclic_error_deg), s_robot.uniform(-np.pi, np.pi, nominal.n_joints))
-    reach = float(np.max(np.linalg.norm(nominal.fk(np.zeros(nominal.n_joints))[:3, 3])))
-    cell = ClosedChainCell(virtual, LaserPointer.drawn(s_laser), default_plates(plates, reach_mm=reach,
-                           n_targets=targets, spacing_mm=spacing_mm), readout)
+    cell, s_hold = make_cell(nominal, seed, plates=plates, targets=targets, spacing_mm=spacing_mm,
+                             joint_resolution_deg=joint_resolution_deg, joint_noise_deg=joint_noise_deg,
+                             cyclic_error_deg=cyclic_error_deg, length_sigma_mm=length_sigma_mm,
+                             angle_sigma_deg=angle_sigma_deg, offset_sigma_deg=offset_sigma_deg)
     spots, _ = cell.hold_spots(configurations, s_hold, tolerance_mm=tolerance_mm)
     notes = [f"simulated: {plates} plate position(s), {targets} targets {spacing_mm:g} mm apart, {configurations} "
              f"configurations each; seed {seed}", f"robocal closed-chain calibrate ... --target-spacing {spacing_mm:g}"]
@@ -105,6 +100,26 @@ def simulate_closed_chain(robot, out_path, *, plates: int = 2, targets: int = 5,
     if return_cell:
         out["cell"] = cell
     return out
+
+
+def make_cell(nominal, seed: int, *, plates: int = 2, targets: int = 5, spacing_mm: float = 50.0,
+              joint_resolution_deg: float = DEFAULT_JOINT_RESOLUTION_DEG, joint_noise_deg=None,
+              cyclic_error_deg: float = 0.0005, length_sigma_mm: float = 0.5, angle_sigma_deg: float = 0.05,
+              offset_sigma_deg: float = 0.05):
+    """A simulated cell (:class:`~robocal.sim.closed_chain.ClosedChainCell`) of ``nominal`` and the
+    random generator for the holding; seeds ``SeedSequence(seed).spawn(3)``: robot (and the
+    readout's cyclic-error phases), laser mount, holding. The plates are placed for the robot's
+    reach (its flange distance at zero joints)."""
+    s_robot, s_laser, s_hold = (np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(3))
+    virtual = VirtualRobot.perturbed(nominal, s_robot, length_sigma_mm=length_sigma_mm, angle_sigma_deg=angle_sigma_deg,
+                                     offset_sigma_deg=offset_sigma_deg, joint_noise_deg=0.0, joint_noise_mm=0.0)
+    res = math.radians(joint_resolution_deg)
+    noise = res if joint_noise_deg is None else math.radians(joint_noise_deg)
+    readout = JointReadout(noise, res, math.radians(cyclic_error_deg), s_robot.uniform(-np.pi, np.pi, nominal.n_joints))
+    reach = float(np.linalg.norm(nominal.fk(np.zeros(nominal.n_joints))[:3, 3]))
+    cell = ClosedChainCell(virtual, LaserPointer.drawn(s_laser), default_plates(plates, reach_mm=reach,
+                           n_targets=targets, spacing_mm=spacing_mm), readout)
+    return cell, s_hold
 
 
 def split_spots(spots, holdout: float, seed: int):
@@ -144,6 +159,19 @@ def _state_from(problem, laser, spots_by_label, params=None):
 
 def _spots_by_label(problem, state):
     return {lab: p for lab, p in zip(problem.spot_labels, np.asarray(state[3]).reshape(-1, 3))}
+
+
+def calibrate_held_spots(nominal, spots, train, free_names, kw, max_iterations: int = 50) -> tuple:
+    """The "before" fit and the calibration of the rows ``train`` of ``spots`` (HeldSpots).
+
+    kw: ``sigma_mm``, ``spacing_mm``, ``spacing_sigma_mm`` of
+    :class:`~robocal.calib.closed_chain.ClosedChainProblem`. Returns ``(problem0, result0, problem,
+    result, convergence warnings, practically unidentifiable entries)``."""
+    problem0 = _problem(nominal, spots, train, free=[], **kw)
+    res0, _ = _solve_quiet(problem0, max_iterations=max_iterations)
+    problem, result, warns, weak = _calibrate(nominal, spots, train, free_names, kw,
+                                              (problem0, res0.state, res0.value("laser")), max_iterations)
+    return problem0, res0, problem, result, warns, weak
 
 
 def _calibrate(nominal, spots, train, free_names, kw, state0, max_iterations):
@@ -199,12 +227,10 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
     kw = dict(sigma_mm=sigma_mm, spacing_mm=target_spacing_mm, spacing_sigma_mm=spacing_sigma_mm)
     step(1, 5, f"read {spots.n_rows} held spots of {nominal.name} from {spots_file}: {len(train)} to calibrate, "
                f"{len(hold)} held out (seed {seed})")
-    problem0 = _problem(nominal, spots, train, free=[], **kw)
-    step(2, 5, f"'before': nominal geometry, best-fit laser mount and {len(problem0.spot_labels)} spots")
-    res0, _ = _solve_quiet(problem0, max_iterations=max_iterations)
-    step(3, 5, f"identifying {len(free_names)} parameter(s), the laser mount and the spots")
-    problem, result, warns, weak = _calibrate(nominal, spots, train, free_names, kw, (problem0, res0.state, res0.value("laser")),
-                                              max_iterations)
+    step(2, 5, "'before': nominal geometry, best-fit laser mount and spots; then identifying "
+               f"{len(free_names)} parameter(s), the laser mount and the spots")
+    problem0, res0, problem, result, warns, weak = calibrate_held_spots(nominal, spots, train, free_names, kw,
+                                                                        max_iterations)
     step(4, 5, f"validating on {len(hold)} held-out spot(s)")
     e_before, e_after = problem0.spot_errors(res0.state), problem.spot_errors(result.state)
     validation = _validate(nominal, spots, hold, problem0, res0, problem, result, kw)
@@ -313,8 +339,12 @@ def _closed_chain_section(problem, result, res0, e_before, e_after, weak) -> dic
     ]
     if cls["other"]:
         findings.append({"what": "trade-offs", "identifiable": False,
-                         "why": "these parameters act like combinations of the identified ones (see identifiability)",
-                         "parameters_held": cls["other"], "to_recover": "more plate positions and configurations"})
+                         "why": "these parameters act exactly or nearly like combinations of identified robot "
+                                "parameters (e.g. offsets along parallel axes, whose sum alone is seen); the "
+                                "identifiability table names the partners",
+                         "parameters_held": cls["other"],
+                         "to_recover": "nothing for exact redundancies (any measurement sees only the combination); "
+                                       "for near ones, more plate positions and more varied configurations"})
     return {
         "E_OP_before_mm": e_op(e_before), "E_OP_after_mm": e_op(e_after),
         "E_OP_definition": "mean in-plate distance |E_i| between each ray's intersection with the plate and its spot "
