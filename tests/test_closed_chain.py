@@ -17,7 +17,7 @@ from robocal.cli.main import main
 from robocal.io.spots import HeldSpots, SpotFileError, read_spots, write_spots
 from robocal.robots import load_robot
 from robocal.transforms import transform_points
-from robocal.workflows.closed_chain import make_cell, run_closed_chain_calibration, simulate_closed_chain
+from robocal.workflows.closed_chain import make_cell, run_closed_chain_calibration
 from robocal.workflows.closed_chain_study import run_seed
 
 

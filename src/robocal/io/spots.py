@@ -69,7 +69,10 @@ class HeldSpots:
 
     def subset(self, rows) -> "HeldSpots":
         rows = np.asarray(rows, dtype=int)
-        pick = (lambda seq: tuple(seq[i] for i in rows))
+
+        def pick(seq):
+            return tuple(seq[i] for i in rows)
+
         return HeldSpots(pick(self.ids), pick(self.plate), pick(self.target), self.joints[rows], self.joint_names,
                          self.tolerance_mm, dict(self.metadata), pick(self.lines) if self.lines else ())
 
