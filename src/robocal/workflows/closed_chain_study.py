@@ -88,16 +88,19 @@ def _tracker_calibration(cell, nominal, n_poses, rng, free_names):
 
 
 def run_seed(seed: int, *, robot: str = "abb_irb140", plates: int = 2, targets: int = 5, configurations: int = 8,
-             tolerance_mm: float = 0.1, spacing_mm: float = 50.0, n_holdout: int = 300) -> dict:
-    """One cell: the closed chain, its gauge truth, the tracker calibration, the workspace holdout."""
+             tolerance_mm: float = 0.1, spacing_mm: float = 50.0, known_spacing: bool = True,
+             n_holdout: int = 300) -> dict:
+    """One cell: the closed chain, its gauge truth, the tracker calibration, the workspace holdout.
+    known_spacing: calibrate with the target spacing (else the scale is held by one length)."""
     nominal = load_robot(robot)
     cell, s_hold = make_cell(nominal, seed, plates=plates, targets=targets, spacing_mm=spacing_mm)
     spots, _ = cell.hold_spots(configurations, s_hold, tolerance_mm=tolerance_mm)
     free_names = [n for n, f in zip(nominal.params.names, nominal.params.free) if f]
-    kw = dict(sigma_mm=tolerance_mm / 2.0, spacing_mm=spacing_mm, spacing_sigma_mm=0.02)
+    known = spacing_mm if known_spacing else None
+    kw = dict(sigma_mm=tolerance_mm / 2.0, spacing_mm=known, spacing_sigma_mm=0.02)
     _, res0, problem, result, warns, weak = calibrate_held_spots(nominal, spots, np.arange(spots.n_rows), free_names, kw)
     hold = [w["name"] for w in weak]
-    truth, truth_rms = gauge_truth(cell, nominal, spots, free_names, hold, spacing_mm)
+    truth, truth_rms = gauge_truth(cell, nominal, spots, free_names, hold, known)
     ident = set(result.identifiability.identifiable)
     check = [n for n in result.names if n in ident and (n in problem.geometry.names or n in problem.laser.names)]
     ti = {n: k for k, n in enumerate(truth.names)}
