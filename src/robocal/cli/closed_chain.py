@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import sys
-
 import click
 
-from ._common import EXIT_FAILED_RESULT, _names, _report_verdict, _step_printer, _user_error
-from .calibrate_inputs import EXIT_NOT_CONVERGED
+from ._common import _names, _step_printer, _user_error
+from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration
 from .calibrate_table import parameter_table
 
 
@@ -102,13 +100,4 @@ def calibrate_cmd(robot, spots, out_dir, target_spacing_mm, spacing_sigma_mm, si
     if res.get("validation"):
         v = res["validation"]
         click.echo(f"held-out spots: in-plate error RMS {v['before']['rms']:.4f} mm before, {v['after']['rms']:.4f} mm after")
-    for note in r["notes"]:
-        click.echo(f"note: {note}")
-    click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
-    for w in r["convergence_warnings"]:
-        click.echo(f"Warning: {w}", err=True)
-    if not r["verdict"].ok:
-        _report_verdict(r["verdict"])
-        sys.exit(EXIT_FAILED_RESULT)
-    if r["convergence_warnings"] and not allow_unconverged:
-        sys.exit(EXIT_NOT_CONVERGED)
+    finish_calibration(r, allow_unconverged)

@@ -47,7 +47,7 @@ from ..sim import VirtualRobot, write_truth
 from ..sim.closed_chain import ClosedChainCell, JointReadout, LaserPointer, default_plates
 from .calibrate import OUTPUT_FILES, CalibrationInputError, output_paths, select_free
 from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
-from .simulate import truth_path_for
+from .simulate import check_simulation_outputs
 
 __all__ = ["simulate_closed_chain", "run_closed_chain_calibration", "split_spots", "make_cell", "calibrate_held_spots", "DEFAULT_JOINT_RESOLUTION_DEG"]
 
@@ -69,13 +69,7 @@ def simulate_closed_chain(robot, out_path, *, plates: int = 2, targets: int = 5,
     ``SeedSequence(seed).spawn(3)`` -> robot, laser mount, holding. Returns the paths, the row
     count and (``return_cell``) the simulated cell."""
     out_path = Path(out_path)
-    truth_path = truth_path_for(out_path)
-    if not overwrite:
-        for p in (out_path, truth_path):
-            if p.exists():
-                raise FileExistsError(f"{p}: file exists; pass --overwrite to replace it")
-    if not out_path.parent.is_dir() and str(out_path.parent):
-        raise FileNotFoundError(f"{out_path}: directory {out_path.parent} does not exist")
+    truth_path = check_simulation_outputs(out_path, overwrite)
     for name, v, lo in (("--plates", plates, 1), ("--targets", targets, 2), ("--configurations", configurations, 2)):
         if v < lo:
             raise ValueError(f"{name} must be at least {lo}, got {v}")
