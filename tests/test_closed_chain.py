@@ -173,3 +173,11 @@ def test_cli_simulate_and_calibrate_write_the_outputs_of_calibrate(tmp_path):
     assert "E_OP" in (tmp_path / "cal" / "report.html").read_text()
     r = run("closed-chain", "calibrate", "abb_irb140", spots, "--out", tmp_path / "cal")
     assert r.exit_code == 1 and "--overwrite" in r.output
+
+
+def test_a_length_fixed_by_the_user_anchors_the_scale_without_holding_another(irb140, one_plate, tmp_path):
+    _, spots, _ = one_plate
+    path = write_spots(tmp_path / "one.csv", spots, robot=irb140.name)
+    out = run_closed_chain_calibration("abb_irb140", path, tmp_path / "d", holdout=0.0, report=False, fix=["d4"])
+    assert out["problem"].scale_held == "d4"
+    assert {"a2", "a1", "d5"} <= set(out["calibration_result"].identifiability.identifiable)

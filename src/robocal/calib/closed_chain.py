@@ -113,7 +113,8 @@ class ClosedChainProblem(Problem):
 
     Attributes: ``geometry``, ``frames``, ``laser``, ``spots``, ``ray`` (the residual), ``spacing``
     (or ``None``), ``spot_labels`` [(plate, target)], ``plate_of_spot``, ``spot_of_row``,
-    ``scale_held`` (the length parameter held to fix the scale, or ``None``), ``held`` (names held
+    ``scale_held`` (the length parameter whose nominal value fixes the scale when no known distance
+    does: a length not estimated, else the largest free one, then held; or ``None``), ``held`` (names held
     by ``hold``), ``model``.
     """
 
@@ -156,8 +157,10 @@ class ClosedChainProblem(Problem):
         super().__init__(blocks, residuals, n_poses=len(q))
         self.scale_held = None
         if fix_scale and names and not length_scale_check(self)["identifiable"]:
-            self.scale_held = _scale_anchor(model, names)
-            self._hold_geometry([self.scale_held])
+            fixed = _fixed_length(model, names)
+            self.scale_held = fixed or _scale_anchor(model, names)
+            if not fixed:
+                self._hold_geometry([self.scale_held])
 
     def _hold_geometry(self, names) -> None:
         """Fix geometry variables ``names`` (and rebuild the column layout)."""
@@ -171,6 +174,15 @@ class ClosedChainProblem(Problem):
         """|E_i| [mm] per held spot (eq. 5) at ``state``."""
         ev = Evaluation(dict(zip(self.parameter_blocks, state)), False)
         return self.ray.errors(self.ray.evaluate(ev, False)[0])
+
+
+def _fixed_length(model, names):
+    """A non-zero length parameter of ``model`` not among ``names`` (held at its value: it already
+    fixes the scale), or ``None``."""
+    for n, u, v in zip(model.params.names, model.params.units, model.params.values):
+        if u == "mm" and n not in names and abs(v) > 1.0:
+            return n
+    return None
 
 
 def _scale_anchor(model, names) -> str:
