@@ -22,7 +22,8 @@ def _heavy_modules(args):
     return out.stdout.strip()
 
 
-@pytest.mark.parametrize("args", [["--help"], ["robots"], ["history", "--help"], ["calibrate", "--help"]])
+@pytest.mark.parametrize("args", [["--help"], ["robots"], ["history", "--help"], ["calibrate", "--help"],
+                                  ["closed-chain", "calibrate", "--help"]])
 def test_cli_start_imports_no_numba_scipy_matplotlib(args):
     assert _heavy_modules(args) == "[] []"
 

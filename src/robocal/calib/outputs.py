@@ -27,7 +27,7 @@ from ..kinematics.model import RobotModel
 from ..metrics import error_statistics
 from ..transforms import euler_from_matrix
 
-__all__ = ["RESULT_FORMAT", "result_to_dict", "json_ready", "CorrectedTargets", "corrected_joint_targets"]
+__all__ = ["RESULT_FORMAT", "result_to_dict", "problem_result_dict", "json_ready", "CorrectedTargets", "corrected_joint_targets"]
 
 #: ``format`` value of the dict returned by :func:`result_to_dict` (and of ``result.json``).
 RESULT_FORMAT = "robocal-calibration-result/1"
@@ -89,16 +89,11 @@ def result_to_dict(result, problem, *, nominal: RobotModel | None = None, pose_i
         "units": {"length": "mm", "angle": "rad",
                   "frames": "T_a_b is frame b written in frame a; 'instrument' is the measurement frame"},
         "parameters": params,
-        "model_parameters": _model_parameter_rows(result, nominal),
+        "model_parameters": _model_parameter_rows(result, nominal, result.state.params),
         "bases": _base_rows(result, problem),
         "targets": _target_rows(result, problem, nominal),
         "residuals": _residual_summary(result, problem, pose_ids),
-        "solver": {
-            "iterations": result.iterations, "converged": result.converged, "reason": result.reason,
-            "rank": result.rank, "n_variables": len(result.names), "condition_number": result.condition_number,
-            "sigma0": result.sigma0, "point_sigma_mm": problem.point_sigma,
-            "n_poses": N, "n_residuals": int(np.size(result.residuals_after)),
-        },
+        "solver": dict(_solver_dict(result, N), point_sigma_mm=problem.point_sigma),
         "identifiability": _identifiability_dict(result.identifiability),
         "outliers": outliers,
     }
@@ -111,11 +106,41 @@ def result_to_dict(result, problem, *, nominal: RobotModel | None = None, pose_i
     return json_ready(out)
 
 
-def _model_parameter_rows(result, nominal) -> list:
-    """Every kinematic parameter of the robot, estimated or not: nominal, calibrated, change, std."""
+def problem_result_dict(result, problem, *, nominal: RobotModel, calibrated_params, metadata=None,
+                        include_covariance: bool = True) -> dict:
+    """The parts of :func:`result_to_dict` that any :class:`~robocal.calib.core.Problem` with a
+    robot geometry has: ``format, robot, units, parameters, model_parameters, solver,
+    identifiability, outliers, covariance, metadata``. calibrated_params (P,): the model's
+    parameter vector at the solution [mm | rad]. Methods add their own sections (frames,
+    targets, residuals) to the returned dict."""
+    params = [dict(row, block=str(block)) for row, block in zip(result.parameter_table(), problem.blocks)]
+    out = {
+        "format": RESULT_FORMAT, "robot": nominal.name,
+        "units": {"length": "mm", "angle": "rad", "frames": "T_a_b is frame b written in frame a"},
+        "parameters": params,
+        "model_parameters": _model_parameter_rows(result, nominal, calibrated_params),
+        "solver": _solver_dict(result, problem.n_poses),
+        "identifiability": _identifiability_dict(result.identifiability),
+        "outliers": list(result.outliers),
+    }
+    if include_covariance:
+        out["covariance"] = _covariance_dict(result)
+    if metadata is not None:
+        out["metadata"] = metadata
+    return json_ready(out)
+
+
+def _solver_dict(result, n_poses) -> dict:
+    return {"iterations": result.iterations, "converged": result.converged, "reason": result.reason,
+            "rank": result.rank, "n_variables": len(result.names), "condition_number": result.condition_number,
+            "sigma0": result.sigma0, "n_poses": n_poses, "n_residuals": int(np.size(result.residuals_after))}
+
+
+def _model_parameter_rows(result, nominal, cal) -> list:
+    """Every kinematic parameter of the robot, estimated or not: nominal, calibrated (``cal`` (P,)),
+    change, std."""
     ident = set(result.identifiability.identifiable)
     index = {n: i for i, n in enumerate(result.names)}
-    cal = result.state.params
     rows = []
     for i, name in enumerate(nominal.params.names):
         j = index.get(name)

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_FAILED_RESULT, _names, _report_verdict, _step_printer, _user_error
+from ._common import _names, _step_printer, _user_error
 from .calibrate_table import parameter_table
-from .calibrate_inputs import EXIT_NOT_CONVERGED, import_options, read_export
+from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
 from .swarm_progress import swarm_progress_bar
 
 
@@ -103,16 +103,7 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
                  ("held-out poses, after", res["validation"]["after"])]
     for label, s in rows:
         click.echo(f"{label:<30}{s['rms']:9.4f}{s['mean']:9.4f}{s['p95']:9.4f}{s['max']:9.4f}")
-    for note in r["notes"]:
-        click.echo(f"note: {note}")
-    click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
-    for w in r["convergence_warnings"]:
-        click.echo(f"Warning: {w}", err=True)
-    if not r["verdict"].ok:
-        _report_verdict(r["verdict"])
-        sys.exit(EXIT_FAILED_RESULT)
-    if r["convergence_warnings"] and not allow_unconverged:
-        sys.exit(EXIT_NOT_CONVERGED)
+    finish_calibration(r, allow_unconverged)
 
 
 @click.command()

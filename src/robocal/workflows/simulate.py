@@ -16,7 +16,7 @@ import numpy as np
 from ..robots import load_robot
 from ..sim import LaserTracker, VirtualRobot, write_truth
 
-__all__ = ["truth_path_for", "simulate_tracker"]
+__all__ = ["truth_path_for", "check_simulation_outputs", "simulate_tracker"]
 
 
 def truth_path_for(measurements_path) -> Path:
@@ -24,6 +24,20 @@ def truth_path_for(measurements_path) -> Path:
     p = Path(measurements_path)
     stem = p.name[:-4] if p.name.lower().endswith(".csv") else p.name
     return p.with_name(stem + ".truth.json")
+
+
+def check_simulation_outputs(out_path, overwrite: bool) -> Path:
+    """The truth file's path for the simulated file ``out_path``, after checking before any work
+    that neither exists (``FileExistsError`` unless ``overwrite``) and that the folder exists."""
+    out_path = Path(out_path)
+    truth_path = truth_path_for(out_path)
+    if not overwrite:
+        for p in (out_path, truth_path):
+            if p.exists():
+                raise FileExistsError(f"{p}: file exists; pass --overwrite to replace it")
+    if not out_path.parent.is_dir() and str(out_path.parent):
+        raise FileNotFoundError(f"{out_path}: directory {out_path.parent} does not exist")
+    return truth_path
 
 
 def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: int, reflectors: int = 1,
@@ -45,13 +59,7 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
     Returns {``measurements``, ``truth`` (paths), ``n_poses``, ``robot``, ``truth_data``}.
     """
     out_path = Path(out_path)
-    truth_path = truth_path_for(out_path)
-    if not overwrite:
-        for p in (out_path, truth_path):
-            if p.exists():
-                raise FileExistsError(f"{p}: file exists; pass --overwrite to replace it")
-    if not out_path.parent.is_dir() and str(out_path.parent):
-        raise FileNotFoundError(f"{out_path}: directory {out_path.parent} does not exist")
+    truth_path = check_simulation_outputs(out_path, overwrite)
     if n_poses < 1:
         raise ValueError(f"n_poses must be at least 1, got {n_poses}")
     if reflectors not in (1, 3):

@@ -12,3 +12,6 @@ from .tool import ToolFrame
 __all__ = ["CameraIntrinsics", "GaussianPrior", "ParameterBlock", "free_mask", "VectorBlock", "FramesBlock", "UnitVectorsBlock",
            "StationFrames", "TargetPoints", "Planes", "RobotGeometry", "ToolFrame", "plane_normals", "plane_normal_derivatives",
            "so3_right_jacobian_inverse", "tangent_basis"]
+from .laser import LaserMount  # noqa: E402
+
+__all__ += ["LaserMount"]

@@ -15,3 +15,9 @@ from .tool_pose import ToolPointResidual, ToolRotationResidual, tool_chain
 __all__ = ["RESIDUAL_BLOCKS", "Evaluation", "ResidualBlock", "TargetChain", "ChainPoints", "PointResidual",
            "RotationResidual", "DistanceResidual", "PointOnPlaneResidual", "PriorResidual", "ReprojectionResidual", "FixedPointResidual", "ToolPointResidual", "ToolRotationResidual", "tool_chain",
            "jacobian_errors", "perturbed_values"]
+from .ray_spot import RaySpotResidual, laser_chain  # noqa: E402
+
+__all__ += ["RaySpotResidual", "laser_chain"]
+from .spot_spacing import PointSpacingResidual  # noqa: E402
+
+__all__ += ["PointSpacingResidual"]
