@@ -27,6 +27,7 @@ __all__ = ["FORMAT", "save_ik_network", "load_ik_network", "default_network_path
 FORMAT = "robocal-ik-net/1"
 _STATS = ("joint_deg", "position_mm", "rotation_deg")
 _QUANTS = ("median", "p95", "max")
+_ENVELOPE = ("centre_distance", "workspace_mm", "position_mm", "rotation_rad")
 
 
 class IKNetworkFileError(FileFormatError):
@@ -51,8 +52,7 @@ def save_ik_network(path, net: IKSeedNetwork, overwrite: bool = False) -> Path:
         "x_mean": net.rbf.x_mean, "x_std": net.rbf.x_std, "centres": net.rbf.centres,
         "sigma": np.array(net.rbf.sigma), "weights": net.rbf.weights, "y_mean": net.rbf.y_mean,
         "structure": np.array([s.n_centres, s.width_factor, s.reg, s.position_weight]),
-        "envelope": np.array([net.envelope["centre_distance"], net.envelope["position_mm"],
-                              net.envelope["rotation_rad"]]),
+        "envelope": np.array([net.envelope[k] for k in _ENVELOPE]), "workspace_points": net.workspace_points,
     }
     for key in _STATS:
         if key in st:
@@ -84,7 +84,7 @@ def load_ik_network(path, model=None) -> IKSeedNetwork:
         raise IKNetworkFileError(path, f"format {fmt or 'missing'!r}, expected {FORMAT!r}")
     missing = [k for k in ("robot_name", "robot_fingerprint", "branch_index", "branch_box", "branch_margin_rad",
                            "encoding", "length_scale_mm", "x_mean", "x_std", "centres", "sigma", "weights",
-                           "y_mean", "structure", "envelope") if k not in d]
+                           "y_mean", "structure", "envelope", "workspace_points") if k not in d]
     if missing:
         raise IKNetworkFileError(path, f"missing entries {missing}")
     if str(d["encoding"]) != ENCODING:
@@ -100,14 +100,15 @@ def load_ik_network(path, model=None) -> IKSeedNetwork:
     stats["ga_history"] = [{"generation": int(g), "best_rms_rad": b, "mean_rms_rad": m, "evaluations": int(e)}
                            for g, b, m, e in d.get("stats_ga_history", np.zeros((0, 4))).tolist()]
     stats["robocal_version"] = str(d.get("robocal_version", ""))
-    env = d["envelope"].tolist()
+    if d["envelope"].shape != (len(_ENVELOPE),):
+        raise IKNetworkFileError(path, f"envelope has {d['envelope'].size} values, expected {len(_ENVELOPE)}")
     net = IKSeedNetwork(
         robot_name=str(d["robot_name"]), robot_fingerprint=str(d["robot_fingerprint"]),
         branch=ConfigurationBranch(int(d["branch_index"]), d["branch_box"], float(d["branch_margin_rad"])),
         length_scale_mm=float(d["length_scale_mm"]),
         rbf=RBFNetwork(d["x_mean"], d["x_std"], d["centres"], float(d["sigma"]), d["weights"], d["y_mean"]),
         structure=Structure(int(n_c), wf, reg, pw),
-        envelope={"centre_distance": env[0], "position_mm": env[1], "rotation_rad": env[2]},
+        envelope=dict(zip(_ENVELOPE, d["envelope"].tolist())), workspace_points=d["workspace_points"],
         stats=stats, encoding=str(d["encoding"]))
     if model is not None:
         try:

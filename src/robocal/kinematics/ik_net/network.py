@@ -8,10 +8,12 @@ training split, and the validation split gives the error statistics and the *env
 checked against.
 
 Prediction (:meth:`IKSeedNetwork.seed`) never answers silently: every pose gets a flag. A pose is
-``in_domain`` only if (1) its encoding is no farther from the nearest RBF centre than the validation
-poses were (else ``outside_workspace``: the network would extrapolate), (2) the predicted joints lie in
+``in_domain`` only if (1) its position is no farther from the nearest training position than 1.5 times
+the largest such distance of the validation poses, and its encoding no farther from the nearest RBF
+centre than 1.1 times the largest such distance of the samples (else ``outside_workspace``: the
+network would extrapolate), (2) the predicted joints lie in
 the branch's joint box (else ``outside_branch``) and (3) FK of the predicted joints is within the
-validation envelope (99th percentile times 1.5) of the target (else ``poor_seed``: typically a pose
+validation envelope (95th percentile of position and rotation error) of the target (else ``poor_seed``: typically a pose
 whose solution on this branch needs joints outside the trained box, or a pose near a singularity).
 """
 
@@ -21,20 +23,27 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..fingerprint import model_fingerprint
 from ..ik import IKResult, ik_numeric, pose_errors
 from ..model import RobotModel
-from .branch import ConfigurationBranch, default_branch, reference_model, sample_branch
+from ..ik_analytic import NotAnalyticError
+from .branch import ConfigurationBranch, default_branch, on_branch, reference_model, sample_branch
 from .encoding import ENCODING, encode_poses
 from .rbf import RBFNetwork, fit_rbf
 from .tuning import DEFAULT_STRUCTURE, Structure, tune_structure
 
 __all__ = ["IKSeedNetwork", "SeedPrediction", "train_ik_network", "ik_with_seed_network", "NetworkMismatchError",
-           "ENVELOPE_FACTOR"]
+           "ENVELOPE_FACTOR", "ENVELOPE_PERCENTILE"]
 
 ENVELOPE_FACTOR = 1.5
-"""A seed whose FK misses the target by more than this times the validation p99 is ``poor_seed``."""
+"""Workspace check: a position farther than this times the validation poses' largest distance from the
+nearest training position is ``outside_workspace``."""
+ENVELOPE_PERCENTILE = 95.0
+"""A seed whose FK misses the target by more than the validation seeds' 95th percentile (position or
+rotation) is ``poor_seed``: about 5 % of poses inside the branch get that flag (a false alarm rate
+stated in docs/kinematics.md), poses outside it far more often."""
 
 
 class NetworkMismatchError(ValueError):
@@ -60,8 +69,9 @@ class SeedPrediction:
 class IKSeedNetwork:
     """A trained GA-RBF seed network for one robot model and one configuration branch.
 
-    ``envelope``: ``centre_distance`` [sigma], ``position_mm``, ``rotation_rad`` limits of the domain
-    check; ``stats``: validation errors (``joint_deg``, ``position_mm``, ``rotation_deg``: median, p95,
+    ``envelope``: ``centre_distance`` [sigma], ``workspace_mm`` (distance to the nearest training
+    position), ``position_mm``, ``rotation_rad`` limits of the domain check; ``workspace_points`` (N, 3)
+    the training positions [mm]; ``stats``: validation errors (``joint_deg``, ``position_mm``, ``rotation_deg``: median, p95,
     max) and training facts (samples, seed, seconds, GA history)."""
 
     robot_name: str
@@ -71,6 +81,7 @@ class IKSeedNetwork:
     rbf: RBFNetwork
     structure: Structure
     envelope: dict
+    workspace_points: np.ndarray
     stats: dict = field(default_factory=dict)
     encoding: str = ENCODING
 
@@ -98,10 +109,11 @@ class IKSeedNetwork:
         X = encode_poses(T, self.length_scale_mm)
         q = self.rbf.predict(X)
         dist = self.rbf.nearest_centre_distance(X)
+        ws, _ = cKDTree(self.workspace_points).query(T[:, :3, 3])
         dp, dr = pose_errors(model.fk(q), T)
         pos, rot = np.linalg.norm(dp, axis=1), np.linalg.norm(dr, axis=1)
         env = self.envelope
-        outside = dist > env["centre_distance"]
+        outside = (dist > env["centre_distance"]) | (ws > env["workspace_mm"])
         off_box = ~self.branch.contains(q, tol=self.branch.margin_rad)
         poor = (pos > env["position_mm"]) | (rot > env["rotation_rad"])
         status = np.where(outside, "outside_workspace", np.where(off_box, "outside_branch",
@@ -165,22 +177,34 @@ def train_ik_network(model: RobotModel, n_samples: int = 20000, seed: int = 0, *
     q_val = rbf.predict(X[va])
     stats = pose_error_stats(model, q_val, q[va], T[va])
     dp, dr = pose_errors(model.fk(q_val), T[va])
+    ws, _ = cKDTree(T[tr, :3, 3]).query(T[va, :3, 3])
     envelope = {"centre_distance": float(1.1 * rbf.nearest_centre_distance(X).max()),
-                "position_mm": float(ENVELOPE_FACTOR * np.percentile(np.linalg.norm(dp, axis=1), 99)),
-                "rotation_rad": float(ENVELOPE_FACTOR * np.percentile(np.linalg.norm(dr, axis=1), 99))}
+                "workspace_mm": float(ENVELOPE_FACTOR * ws.max()),
+                "position_mm": float(np.percentile(np.linalg.norm(dp, axis=1), ENVELOPE_PERCENTILE)),
+                "rotation_rad": float(np.percentile(np.linalg.norm(dr, axis=1), ENVELOPE_PERCENTILE))}
     seconds = time.perf_counter() - t0
     stats.update({"n_samples": int(n_samples), "n_validation": n_val, "seed": int(seed), "tuned": bool(tune),
                   "train_seconds": float(seconds), "ga_history": history})
     report("fit", f"K={structure.n_centres} centres; validation median joint error "
                   f"{stats['joint_deg']['median']:.2f} deg, position {stats['position_mm']['median']:.1f} mm "
                   f"({seconds:.1f} s)")
-    return IKSeedNetwork(model.name, model_fingerprint(model), branch, length_scale, rbf, structure, envelope, stats)
+    return IKSeedNetwork(model.name, model_fingerprint(model), branch, length_scale, rbf, structure, envelope,
+                         np.ascontiguousarray(T[tr, :3, 3]), stats)
 
 
 def ik_with_seed_network(model: RobotModel, T_target, network: IKSeedNetwork, **ik_options):
     """Batched damped least squares (:func:`~robocal.kinematics.ik.ik_numeric`) started from the
-    network's seeds. Returns ``(IKResult, SeedPrediction)``; poses whose seed is not ``in_domain`` are
-    still solved (the flag says how much to trust the start), so check both."""
+    network's seeds. Returns ``(IKResult, SeedPrediction, on_branch)``: ``on_branch`` (N,) bool says
+    whether the converged solution lies on the network's branch (closed-form labels of the reference
+    model, see :mod:`.branch`; all False where no reference exists). Poses whose seed is not
+    ``in_domain`` are still solved; damped least squares converges to the solution nearest its start,
+    which for a poor seed can be another branch, so check the flags."""
     pred = network.seed(model, T_target)
     res: IKResult = ik_numeric(model, np.asarray(T_target, dtype=float).reshape(-1, 4, 4), pred.q, **ik_options)
-    return res, pred
+    q = np.atleast_2d(res.q)
+    try:
+        ref = reference_model(model)
+        branch_ok = on_branch(ref, q, network.branch) & np.atleast_1d(res.converged)
+    except NotAnalyticError:
+        branch_ok = np.zeros(len(q), dtype=bool)
+    return res, pred, branch_ok
