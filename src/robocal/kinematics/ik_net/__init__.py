@@ -6,7 +6,7 @@ structure; :mod:`.network` trains it, checks every query against the trained dom
 damped least squares from it. Files: :mod:`robocal.io.ik_network`.
 """
 
-from .branch import ConfigurationBranch, default_branch, on_branch, reference_model, sample_branch
+from .branch import ConfigurationBranch, default_branch, joint_box_branch, on_branch, reference_model, sample_branch
 from .encoding import ENCODING, encode_poses
 from .network import (
     IKSeedNetwork,
@@ -20,5 +20,5 @@ from .tuning import DEFAULT_STRUCTURE, Structure, tune_structure
 
 __all__ = ["ConfigurationBranch", "DEFAULT_STRUCTURE", "ENCODING", "IKSeedNetwork", "NetworkMismatchError",
            "RBFNetwork", "SeedPrediction", "Structure", "default_branch", "encode_poses", "fit_rbf",
-           "ik_with_seed_network", "on_branch", "reference_model", "sample_branch", "train_ik_network",
+           "ik_with_seed_network", "joint_box_branch", "on_branch", "reference_model", "sample_branch", "train_ik_network",
            "tune_structure"]

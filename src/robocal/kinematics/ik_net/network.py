@@ -143,7 +143,7 @@ def train_ik_network(model: RobotModel, n_samples: int = 20000, seed: int = 0, *
     n_samples: FK samples (training + validation); seed: seeds sampling, centres and the GA.
     tune: run the GA (DEAP needed); else ``structure`` (default :data:`DEFAULT_STRUCTURE`).
     branch / reference: see :mod:`.branch` (default: branch 0 ``front/up/noflip`` labelled by the
-    closed form of ``model`` or of its beta-free nominal shape). progress(stage, detail) gets
+    closed form of ``model`` or of its beta-free nominal shape; a joint-box branch needs no reference). progress(stage, detail) gets
     one-line reports: ``("sample", text)``, ``("ga", text)`` per generation, ``("fit", text)``.
     """
     if n_samples < 100:
@@ -153,7 +153,8 @@ def train_ik_network(model: RobotModel, n_samples: int = 20000, seed: int = 0, *
     report = progress or (lambda stage, text: None)
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
-    reference = reference if reference is not None else reference_model(model)
+    if branch is None or branch.index >= 0:
+        reference = reference if reference is not None else reference_model(model)
     branch = branch if branch is not None else default_branch(model)
     q = sample_branch(reference, branch, n_samples, rng)
     T = model.fk(q)
@@ -196,14 +197,14 @@ def ik_with_seed_network(model: RobotModel, T_target, network: IKSeedNetwork, **
     """Batched damped least squares (:func:`~robocal.kinematics.ik.ik_numeric`) started from the
     network's seeds. Returns ``(IKResult, SeedPrediction, on_branch)``: ``on_branch`` (N,) bool says
     whether the converged solution lies on the network's branch (closed-form labels of the reference
-    model, see :mod:`.branch`; all False where no reference exists). Poses whose seed is not
+    model, see :mod:`.branch`; the box alone for a joint-box branch). Poses whose seed is not
     ``in_domain`` are still solved; damped least squares converges to the solution nearest its start,
     which for a poor seed can be another branch, so check the flags."""
     pred = network.seed(model, T_target)
     res: IKResult = ik_numeric(model, np.asarray(T_target, dtype=float).reshape(-1, 4, 4), pred.q, **ik_options)
     q = np.atleast_2d(res.q)
     try:
-        ref = reference_model(model)
+        ref = None if network.branch.index < 0 else reference_model(model)
         branch_ok = on_branch(ref, q, network.branch) & np.atleast_1d(res.converged)
     except NotAnalyticError:
         branch_ok = np.zeros(len(q), dtype=bool)
