@@ -108,6 +108,8 @@ def ik(robot, pose, convention, deg, start, all_branches, seed_net, end_effector
     solutions = []
     if seed_net is not None and (start is not None or all_branches):
         raise click.ClickException("--seed-net cannot be combined with --start or --all-branches")
+    if seed_net is not None and end_effector is not None and model.end_effector_index(end_effector) != 0:
+        raise click.ClickException("--seed-net: the network is trained for the first end effector; drop --ee")
     seed_info = None
     if all_branches:
         try:
