@@ -161,6 +161,7 @@ def test_cli_train_and_seeded_ik(tmp_path, irb140):
     assert r.exit_code == 0, r.output
     data = json.loads(r.output)
     assert data["seed"]["in_domain"] and data["seed"]["branch"] == "front/up/noflip"
+    assert data["seed"]["solution_on_branch"]
     q = np.array(data["solutions"][0]["joints"])
     np.testing.assert_allclose(irb140.fk(q)[:3, 3], T[:3, 3], atol=1e-5)
     r = CliRunner().invoke(main, ["ik", "kuka_kr150_r3100", "1965", "0", "1984", "0", "90", "0", "--seed-net", str(out)])

@@ -125,13 +125,15 @@ def ik(robot, pose, convention, deg, start, all_branches, seed_net, end_effector
             raise click.ClickException("pose is not reachable (no valid closed-form branch)")
     else:
         if seed_net is not None:
-            q0, seed_info = _network_seed(model, T, seed_net, to_out)
+            q0, seed_info, branch = _network_seed(model, T, seed_net, to_out)
         elif start is None:
             lo, hi = model.limits[:, 0], model.limits[:, 1]
             q0 = np.where(np.isfinite(lo) & np.isfinite(hi), (lo + hi) / 2, 0.0)
         else:
             q0 = _joints_from_cli(model, start.split(","), deg)
         res = ik_numeric(model, T, q0, end_effector=end_effector)
+        if seed_info is not None:
+            seed_info["solution_on_branch"] = bool(res.converged) and _solution_on_branch(model, res.q, branch)
         if not res.converged:
             raise click.ClickException(
                 f"IK did not converge ({res.status}): remaining error {res.position_error_mm:.4g} mm, "
@@ -151,11 +153,26 @@ def ik(robot, pose, convention, deg, start, all_branches, seed_net, end_effector
         note = "" if seed_info["in_domain"] else "  -- the pose is outside what the network was trained on; the seed is a guess"
         click.echo(f"seed [{unit}] ({seed_info['status']}, FK of the seed {seed_info['position_error_mm']:.1f} mm "
                    f"from the target): " + "  ".join(f"{v:.6f}" for v in seed_info["joints"]) + note)
+        if not seed_info["solution_on_branch"]:
+            click.echo(f"note: the solution is not on the network's branch ({seed_info['branch']}): damped least "
+                       "squares went to another configuration")
     for s in solutions:
         tag = f"branch {s['branch']}" if "branch" in s else "solution"
         extra = "" if s.get("within_limits", True) else "  (outside joint limits)"
         click.echo(f"{tag} [{unit}]: " + "  ".join(f"{v:.6f}" for v in s["joints"]) + extra)
 
+
+
+def _solution_on_branch(model, q, branch) -> bool:
+    """Whether joints ``q`` lie on the network's configuration ``branch``."""
+    from ..kinematics.ik_analytic import NotAnalyticError
+    from ..kinematics.ik_net import on_branch, reference_model
+
+    try:
+        ref = None if branch.index < 0 else reference_model(model)
+    except NotAnalyticError:
+        return False
+    return bool(on_branch(ref, q, branch)[0])
 
 
 def _network_seed(model, T, path, to_out):
@@ -164,9 +181,10 @@ def _network_seed(model, T, path, to_out):
 
     net = load_ik_network(path, model)
     pred = net.seed(model, T)
+
     info = {"network": str(path), "branch": net.branch.name, "status": str(pred.status[0]),
             "in_domain": bool(pred.in_domain[0]), "joints": to_out(pred.q[0]).tolist(),
             "position_error_mm": float(pred.position_error_mm[0]),
             "rotation_error_deg": float(math.degrees(pred.rotation_error_rad[0])),
             "centre_distance_sigma": float(pred.centre_distance[0])}
-    return pred.q[0], info
+    return pred.q[0], info, net.branch
