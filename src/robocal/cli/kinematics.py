@@ -84,9 +84,11 @@ def fk(robot, joints, deg, convention, end_effector, as_json):
 @click.option("--start", "start", default=None,
               help="Starting joints for the numerical solver, comma separated (units as --deg).")
 @click.option("--all-branches", is_flag=True, help="All closed-form branches (6R spherical-wrist arms).")
+@click.option("--seed-net", "seed_net", default=None, type=click.Path(dir_okay=False),
+              help="Start the numerical solver from a trained IK network (robocal ik-train).")
 @click.option("--ee", "end_effector", default=None, help="End effector of a tree robot (default: the first).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def ik(robot, pose, convention, deg, start, all_branches, end_effector, as_json):
+def ik(robot, pose, convention, deg, start, all_branches, seed_net, end_effector, as_json):
     """Inverse kinematics: joints that put ROBOT's flange at POSE = X Y Z [mm] and orientation angles."""
     from ..kinematics.ik import ik_numeric
     from ..transforms import transform_from_pose
@@ -104,6 +106,11 @@ def ik(robot, pose, convention, deg, start, all_branches, end_effector, as_json)
     pris = _prismatic(model)
     to_out = (lambda q: np.where(pris, q, np.degrees(q))) if deg else (lambda q: q)
     solutions = []
+    if seed_net is not None and (start is not None or all_branches):
+        raise click.ClickException("--seed-net cannot be combined with --start or --all-branches")
+    if seed_net is not None and end_effector is not None and model.end_effector_index(end_effector) != 0:
+        raise click.ClickException("--seed-net: the network is trained for the first end effector; drop --ee")
+    seed_info = None
     if all_branches:
         try:
             from ..kinematics.ik_analytic import ik_analytic
@@ -117,25 +124,67 @@ def ik(robot, pose, convention, deg, start, all_branches, end_effector, as_json)
         if not solutions:
             raise click.ClickException("pose is not reachable (no valid closed-form branch)")
     else:
-        if start is None:
+        if seed_net is not None:
+            q0, seed_info, branch = _network_seed(model, T, seed_net, to_out)
+        elif start is None:
             lo, hi = model.limits[:, 0], model.limits[:, 1]
             q0 = np.where(np.isfinite(lo) & np.isfinite(hi), (lo + hi) / 2, 0.0)
         else:
             q0 = _joints_from_cli(model, start.split(","), deg)
         res = ik_numeric(model, T, q0, end_effector=end_effector)
+        if seed_info is not None:
+            seed_info["solution_on_branch"] = bool(res.converged) and _solution_on_branch(model, res.q, branch)
         if not res.converged:
             raise click.ClickException(
                 f"IK did not converge ({res.status}): remaining error {res.position_error_mm:.4g} mm, "
-                f"{math.degrees(res.rotation_error_rad):.4g} deg; try --start closer to the solution")
+                f"{math.degrees(res.rotation_error_rad):.4g} deg; try --start closer to the solution"
+                + (f" (network seed: {seed_info['status']})" if seed_info else ""))
         solutions.append({"joints": to_out(res.q).tolist(), "iterations": int(res.iterations),
                           "position_error_mm": float(res.position_error_mm)})
     unit = "deg" if deg else "rad"
     if as_json:
-        click.echo(json.dumps({"robot": model.name, "joint_unit": unit, "joints_names": list(model.controller_joints),
-                               "solutions": solutions}, indent=2))
+        out = {"robot": model.name, "joint_unit": unit, "joints_names": list(model.controller_joints),
+               "solutions": solutions}
+        if seed_info is not None:
+            out["seed"] = seed_info
+        click.echo(json.dumps(out, indent=2))
         return
+    if seed_info is not None:
+        note = "" if seed_info["in_domain"] else "  -- the pose is outside what the network was trained on; the seed is a guess"
+        click.echo(f"seed [{unit}] ({seed_info['status']}, FK of the seed {seed_info['position_error_mm']:.1f} mm "
+                   f"from the target): " + "  ".join(f"{v:.6f}" for v in seed_info["joints"]) + note)
+        if not seed_info["solution_on_branch"]:
+            click.echo(f"note: the solution is not on the network's branch ({seed_info['branch']}): damped least "
+                       "squares went to another configuration")
     for s in solutions:
         tag = f"branch {s['branch']}" if "branch" in s else "solution"
         extra = "" if s.get("within_limits", True) else "  (outside joint limits)"
         click.echo(f"{tag} [{unit}]: " + "  ".join(f"{v:.6f}" for v in s["joints"]) + extra)
 
+
+
+def _solution_on_branch(model, q, branch) -> bool:
+    """Whether joints ``q`` lie on the network's configuration ``branch``."""
+    from ..kinematics.ik_analytic import NotAnalyticError
+    from ..kinematics.ik_net import on_branch, reference_model
+
+    try:
+        ref = None if branch.index < 0 else reference_model(model)
+    except NotAnalyticError:
+        return False
+    return bool(on_branch(ref, q, branch)[0])
+
+
+def _network_seed(model, T, path, to_out):
+    """Seed joints from a network file, and what the domain check said about them."""
+    from ..io.ik_network import load_ik_network
+
+    net = load_ik_network(path, model)
+    pred = net.seed(model, T)
+
+    info = {"network": str(path), "branch": net.branch.name, "status": str(pred.status[0]),
+            "in_domain": bool(pred.in_domain[0]), "joints": to_out(pred.q[0]).tolist(),
+            "position_error_mm": float(pred.position_error_mm[0]),
+            "rotation_error_deg": float(math.degrees(pred.rotation_error_rad[0])),
+            "centre_distance_sigma": float(pred.centre_distance[0])}
+    return pred.q[0], info, net.branch

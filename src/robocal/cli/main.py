@@ -30,6 +30,7 @@ _COMMANDS = {
     "robots": ("kinematics", "robots", "List the robots shipped with robocal.", None),
     "fk": ("kinematics", "fk", "Forward kinematics: flange pose at given joints.", None),
     "ik": ("kinematics", "ik", "Inverse kinematics: joints for a flange pose.", None),
+    "ik-train": ("ik_net", "ik_train", "Train a learned IK seed (GA-RBF network) for a robot.", None),
     "calibrate": ("calibrate", "calibrate", "Calibrate a robot's kinematics from a measurement file.", None),
     "correct": ("calibrate", "correct", "Corrected joint targets for a nominal-model controller.", None),
     "simulate": ("simulate", "simulate", "Simulated measurement campaigns with the hidden truth.", None),

@@ -20,7 +20,7 @@ from ..transforms import euler_from_matrix
 from .links import OP_RX, OP_RY, OP_RZ, OP_TX, OP_TZ, Link, elementary_transforms
 from .model import EndEffector, RobotModel
 
-__all__ = ["dh_to_mdh", "mdh_to_urdf", "to_urdf_kind", "ConversionError"]
+__all__ = ["dh_to_mdh", "dh_with_beta", "mdh_to_urdf", "to_urdf_kind", "ConversionError"]
 
 
 class ConversionError(ValueError):
@@ -31,6 +31,17 @@ def _trail(link: Link) -> np.ndarray:
     p = link.params
     return (elementary_transforms(OP_TX, p["a"]) @ elementary_transforms(OP_RX, p["alpha"])
             @ elementary_transforms(OP_RY, p.get("beta", 0.0)))
+
+
+def dh_with_beta(model: RobotModel) -> RobotModel:
+    """A ``dh`` model as ``dh_beta`` (Hayati's beta, METHODS.md (2-18)) with beta = 0 on every link
+    that has none: identical kinematics, and the betas can then be set (``with_params(beta2=...)``)."""
+    if model.kind not in ("dh", "dh_beta"):
+        raise ConversionError(f"{model.name}: dh_with_beta needs a dh or dh_beta model, got {model.kind}")
+    links = [L if L.convention not in ("dh", "dh_beta") or "beta" in L.params else
+             Link(L.name, L.joint_type, "dh_beta", {**L.params, "beta": 0.0}, L.parent, L.axis, L.fixed)
+             for L in model.links]
+    return model.replace(kind="dh_beta", links=links)
 
 
 def dh_to_mdh(model: RobotModel) -> RobotModel:
