@@ -60,11 +60,11 @@ def test_refined_hand_eye_beats_every_opencv_linear_method(setup):
     ours = median.pop("robocal")
     for k, (rot, tr) in median.items():
         assert ours[0] < rot and ours[1] < tr, f"{k}: {rot:.4f} deg, {tr:.3f} mm vs robocal {ours}"
-    # measured medians (eye_in_hand / eye_to_hand): robocal 0.024 / 0.027 deg, 0.14 / 0.10 mm; best OpenCV
-    # rotation 0.036 / 0.045 deg, best translation 0.30 / 0.32 mm (calibrateRobotWorldHandEye SHAH)
+    # measured medians (eye_in_hand / eye_to_hand): robocal 0.017 / 0.027 deg, 0.11 / 0.12 mm; best OpenCV
+    # rotation 0.028 (TSAI) / 0.036 (PARK) deg, best translation 0.23 / 0.33 mm (calibrateRobotWorldHandEye SHAH)
     assert ours[0] < 0.04 and ours[1] < 0.2
     # the reported 1-sigma covers the error (errors in variables: pixel and robot-pose noise both modelled)
-    assert np.max(normalised) < 4.0
+    assert np.max(normalised) < 4.0  # measured max 1.3 / 2.1
 
 
 def test_per_image_pnp_agrees_with_opencv_solvepnp():
