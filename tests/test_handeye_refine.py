@@ -200,3 +200,16 @@ def test_refining_the_intrinsics_recovers_a_wrong_camera():
     assert free.rms_px < 0.65 and _errors(free.camera_pose, sim.camera_pose)[1] < 0.3
     assert abs(free.camera.fx - 1400.0) < 2.0 and abs(free.camera.fy - 1400.0) < 2.0
     assert "cam.fx" in free.variable_names and "cam.fx" not in fixed.variable_names
+
+
+def test_a_robust_loss_rejects_images_whose_poses_were_swapped():
+    sim = simulate_hand_eye(20, n_images=15)
+    F = sim.T_base_flange.copy()
+    F[[4, 9]] = F[[9, 4]]  # two robot poses swapped in the pose file
+    plain = refine_hand_eye(F, sim.image_points, sim.target_points, sim.camera)
+    robust = refine_hand_eye(F, sim.image_points, sim.target_points, sim.camera, loss="huber")
+    assert _errors(plain.camera_pose, sim.camera_pose)[1] > 50.0  # measured 149 mm, 14.6 deg
+    rot, tr = _errors(robust.camera_pose, sim.camera_pose)
+    assert rot < 0.1 and tr < 0.5  # measured 0.048 deg, 0.29 mm
+    assert set(robust.outliers) == {4, 9} and "rejected as outliers" in robust.message
+    assert robust.per_image_rms_px[4] > 100 and robust.per_image_rms_px[3] < 1.0  # shown, not hidden
