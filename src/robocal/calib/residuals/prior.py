@@ -24,10 +24,11 @@ class PriorResidual(ResidualBlock):
         self.block = block
         self.rows = np.flatnonzero(block.free)
         self.row_weight = 1.0 / np.asarray(block.prior.sigma, dtype=float)[self.rows]
+        self.mean = block.prior.mean
         super().__init__((block,), np.full(len(self.rows), -1), None)
 
     def evaluate(self, ev, jacobian):
-        e, D = self.block.prior_error(ev[self.block], self.block.prior.mean)
+        e, D = self.block.prior_error(ev[self.block], self.mean)
         r = e[self.rows] * self.row_weight
         if not jacobian:
             return r, None
@@ -80,13 +81,6 @@ class PosePriorResidual(PriorResidual):
         if poses.shape != (block.size,):
             raise ValueError(f"{block.name}: poses must have one entry per variable ({block.size})")
         ResidualBlock.__init__(self, (block,), poses[self.rows], None)
-
-    def evaluate(self, ev, jacobian):
-        e, D = self.block.prior_error(ev[self.block], self.mean)
-        r = e[self.rows] * self.row_weight
-        if not jacobian:
-            return r, None
-        return r, {self.block: D[self.rows] * self.row_weight[:, None]}
 
     @classmethod
     def example(cls, rng):
