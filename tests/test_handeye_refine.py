@@ -47,7 +47,8 @@ def _errors(T, truth):
 def test_refined_hand_eye_beats_every_opencv_linear_method(setup):
     errors, normalised = {}, []
     for seed in range(5):
-        sim = simulate_hand_eye(seed, setup=setup, n_images=15, pixel_noise=0.3, pose_noise_mm=0.05, pose_noise_deg=0.01)
+        sim = simulate_hand_eye(seed, setup=setup, n_images=15, pixel_noise=0.3, pose_noise_mm=0.05,
+                                pose_noise_deg=0.01)
         res = refine_hand_eye(sim.T_base_flange, sim.image_points, sim.target_points, sim.camera, setup=setup)
         assert res.converged and res.camera_pose_frame == ("flange" if setup == "eye_in_hand" else "base")
         # OpenCV on the same data: the same per-image target poses (our PnP, checked against solvePnP below)
