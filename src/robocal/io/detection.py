@@ -23,13 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from .boards import ARUCO_DICTIONARIES, Board
-from .header import FileFormatError
+from .images import ImageFileError, read_image_gray
 
 __all__ = ["Detection", "detect_board", "detect_images", "read_image_gray", "BlobSettings", "ImageFileError"]
-
-
-class ImageFileError(FileFormatError):
-    """An image file cannot be read."""
 
 
 @dataclass(frozen=True)
@@ -70,19 +66,6 @@ class Detection:
     @property
     def used(self) -> bool:
         return self.skip_reason is None
-
-
-def read_image_gray(path) -> np.ndarray:
-    """An 8-bit grey image (H, W) from a PNG/JPEG/BMP/TIFF file; :class:`ImageFileError` if unreadable."""
-    import cv2
-
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"{p}: no such image file")
-    img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-    if img is None:
-        raise ImageFileError(p, "not an image OpenCV can read (PNG, JPEG, BMP, TIFF expected)")
-    return img
 
 
 def _empty(board: Board) -> np.ndarray:
