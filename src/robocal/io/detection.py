@@ -244,7 +244,8 @@ def detect_board(image, board: Board, *, name: str = "image", min_points: int | 
     found = int(np.count_nonzero(np.isfinite(pts[:, 0])))
     if reason is None and found < need:
         reason = f"too few points: {found} of {board.n_points} found, need {need}"
-    return Detection(name=name, image_points=pts, image_size=(w, h), skip_reason=reason)
+    return Detection(name=name, image_points=np.ascontiguousarray(pts, dtype=float), image_size=(w, h),
+                     skip_reason=reason)
 
 
 def detect_images(paths, board: Board, *, min_points: int | None = None, blob_settings: BlobSettings | None = None,
