@@ -1,0 +1,142 @@
+"""Hand-eye inputs: the ROS-Industrial cal_data.yaml layout, flange-pose CSV written and read back,
+image folders paired with pose files by name, and `robocal simulate camera` (issue 14)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from robocal.cli.main import main
+from robocal.io.boards import parse_board
+from robocal.io.datasets import datasets_root
+from robocal.io.detection import detect_images
+from robocal.io.image_poses import ImagePoseMismatch, pair_images_with_poses
+from robocal.io.images import list_images
+from robocal.io.ros_calibration import CalDataError, read_cal_data
+from robocal.io.tcp_files import read_flange_poses_csv, write_flange_poses_csv
+from robocal.transforms import rotation_angle, so3_exp, transforms_from
+
+ROS = datasets_root() / "ros_industrial_handeye" / "raw"
+needs_ros = pytest.mark.skipif(not ROS.is_dir(), reason=f"real data folder {ROS} absent (tests read "
+                                                         "../shared/datasets relative to the repository root)")
+
+
+@needs_ros
+def test_cal_data_of_both_real_sets():
+    c = read_cal_data(ROS / "test_set_charuco" / "cal_data.yaml")
+    assert c.setup == "eye_to_hand" and len(c.labels) == 16 and c.labels[:2] == ("0", "1")
+    assert c.board.spec == "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250"
+    # poses/0.yaml: x 0.113074 m, qw 0.23897: converted to mm, the rotation from the quaternion
+    assert np.allclose(c.T_base_flange[0, :3, 3], [113.074204220918, 589.2802789268905, 652.673790716681])
+    assert np.isclose(np.degrees(rotation_angle(c.T_base_flange[0, :3, :3])), 2 * np.degrees(np.arccos(0.2389701531981282)))
+    assert (c.camera.fx, c.camera.cy) == (1352.02747, 627.2995)
+    assert np.allclose(c.camera_guess[:3, 3], [-19.646, 1278.43, 283.965])
+    m = read_cal_data(ROS / "test_set_10x10")  # the folder works too
+    assert m.setup == "eye_in_hand" and len(m.labels) == 15 and m.board.spec == "circles:10x10:25.4mm:modified"
+    assert m.labels[2] == "10" and m.blob_settings.min_area == 25.0 and m.blob_settings.min_convexity == 0.95
+
+
+def _write_layout(tmp_path, poses, spacing=0.0254, data=None):
+    (tmp_path / "poses").mkdir()
+    (tmp_path / "images").mkdir()
+    for i, text in enumerate(poses):
+        (tmp_path / "poses" / f"{i}.yaml").write_text(text)
+        (tmp_path / "images" / f"{i}.png").write_bytes(b"")
+    data = data or "\n".join(f"  - pose: poses/{i}.yaml\n    image: images/{i}.png" for i in range(len(poses)))
+    (tmp_path / "cal_data.yaml").write_text(
+        f"data:\n{data}\ntarget_finder:\n  type: ModifiedCircleGridTargetFinder\n  rows: 5\n  cols: 5\n"
+        f"  spacing: {spacing}\nintrinsics: {{fx: 550.0, fy: 550.0, cx: 320.0, cy: 240.0}}\nstatic_camera: false\n")
+    return tmp_path / "cal_data.yaml"
+
+
+POSE = "x: 0.5\ny: 0.1\nz: 0.6\nqx: 0.0\nqy: 0.0\nqz: 0.0\nqw: 1.0\n"
+
+
+def test_cal_data_errors_name_the_file_and_key(tmp_path):
+    (tmp_path / "a").mkdir()
+    p = _write_layout(tmp_path / "a", [POSE] * 3)
+    assert len(read_cal_data(p).labels) == 3
+    (tmp_path / "b").mkdir()
+    with pytest.raises(CalDataError, match="unit quaternion"):
+        read_cal_data(_write_layout(tmp_path / "b", [POSE, POSE.replace("qw: 1.0", "qw: 2.0")]))
+    (tmp_path / "c").mkdir()
+    with pytest.raises(CalDataError, match="millimetres"):  # positions in mm where the layout says metres
+        read_cal_data(_write_layout(tmp_path / "c", [POSE.replace("0.5", "500.0").replace("0.6", "600.0")] * 3))
+    (tmp_path / "d").mkdir()
+    with pytest.raises(CalDataError, match="spacing"):
+        read_cal_data(_write_layout(tmp_path / "d", [POSE] * 3, spacing=25.4))
+    (tmp_path / "e").mkdir()
+    with pytest.raises(FileNotFoundError, match=r"data\[1\].pose"):
+        read_cal_data(_write_layout(tmp_path / "e", [POSE], data="  - {pose: poses/0.yaml, image: images/0.png}\n"
+                                                                   "  - {pose: poses/9.yaml, image: images/0.png}"))
+    (tmp_path / "f").mkdir()
+    with pytest.raises(CalDataError, match="missing key 'qw'"):
+        read_cal_data(_write_layout(tmp_path / "f", [POSE.replace("qw: 1.0\n", "")]))
+
+
+def _poses(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return transforms_from(so3_exp(rng.normal(0, 1, (n, 3))), rng.normal(0, 500, (n, 3)) + [1000, 0, 800])
+
+
+@pytest.mark.parametrize("convention,lu,au", [("kuka_abc", "mm", "deg"), ("quaternion", "m", "deg"),
+                                              ("rotvec", "m", "rad"), ("fanuc_wpr", "mm", "deg")])
+def test_flange_pose_csv_round_trip(tmp_path, convention, lu, au):
+    T = _poses(6)
+    p = write_flange_poses_csv(tmp_path / "p.csv", [f"img_{i}" for i in range(6)], T, convention=convention,
+                               length_unit=lu, angle_unit=au)
+    r = read_flange_poses_csv(p)
+    assert r.convention == convention and r.labels[0] == "img_0"
+    assert np.abs(r.T_base_flange[:, :3, 3] - T[:, :3, 3]).max() < 1e-6
+    assert np.abs(r.T_base_flange[:, :3, :3] - T[:, :3, :3]).max() < 1e-9
+    with pytest.raises(FileExistsError):
+        write_flange_poses_csv(p, [f"img_{i}" for i in range(6)], T, convention=convention)
+
+
+def test_images_and_poses_must_match_by_name(tmp_path):
+    (tmp_path / "imgs").mkdir()
+    for name in ("a.png", "b.png", "c.png"):
+        (tmp_path / "imgs" / name).write_bytes(b"")
+    write_flange_poses_csv(tmp_path / "ok.csv", ["a", "b.png", "c"], _poses(3))
+    pairs = pair_images_with_poses(tmp_path / "imgs", tmp_path / "ok.csv")
+    assert pairs.labels == ("a", "b.png", "c") and [p.name for p in pairs.image_paths] == ["a.png", "b.png", "c.png"]
+    write_flange_poses_csv(tmp_path / "few.csv", ["a", "b"], _poses(2))
+    with pytest.raises(ImagePoseMismatch, match=r"3 images .* and 2 poses .*images without a pose: 'c.png'"):
+        pair_images_with_poses(tmp_path / "imgs", tmp_path / "few.csv")
+    write_flange_poses_csv(tmp_path / "names.csv", ["a", "b", "x"], _poses(3))
+    with pytest.raises(ImagePoseMismatch, match="poses without an image: 'x'"):
+        pair_images_with_poses(tmp_path / "imgs", tmp_path / "names.csv")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValueError, match="no image files"):
+        list_images(tmp_path / "empty")
+
+
+def test_simulate_camera_command_writes_a_consistent_cell(tmp_path):
+    out = tmp_path / "cell"
+    args = ["simulate", "camera", "--out", str(out), "--images", "3", "--eye-to-hand", "--seed", "4",
+            "--orientation", "quaternion", "--length-unit", "m"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0, r.output
+    truth = json.loads((out / "truth.json").read_text())
+    assert truth["setup"] == "eye_to_hand" and truth["camera_pose"]["frame"] == "base"
+    poses = read_flange_poses_csv(out / "flange_poses.csv")
+    assert poses.convention == "quaternion" and poses.length_unit == "m" and len(poses.labels) == 3
+    T_true = np.array(truth["T_base_flange_true"])
+    # the file holds the reported poses: the truth plus 0.05 mm / 0.01 deg robot pose noise
+    dp = np.linalg.norm(poses.T_base_flange[:, :3, 3] - T_true[:, :3, 3], axis=1)
+    assert 0.0 < dp.max() < 0.4
+    board = parse_board(truth["board"])
+    dets = detect_images(list_images(out / "images"), board)
+    T_ct = np.array(truth["T_camera_target"])
+    from robocal.camera import Camera
+
+    cam = Camera(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in truth["camera"].items()})
+    for d, T in zip(dets, T_ct):
+        X = board.object_points()
+        px = cam.project((T[:3, :3] @ X.T).T + T[:3, 3]).pixels
+        assert d.used and np.nanmax(np.abs(d.image_points - px)) < 0.4
+    r2 = CliRunner().invoke(main, args)
+    assert r2.exit_code == 1 and "exists" in r2.output and "--overwrite" in r2.output
