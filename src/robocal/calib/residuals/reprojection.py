@@ -71,12 +71,18 @@ class ReprojectionResidual(ResidualBlock):
             raise ProblemError(f"reprojection: {frames.name} index must be ({N},) in [0, {frames.n_frames})")
         return index
 
+    def _links(self, ev):
+        """The per-image links ``M_i`` (N, 4, 4) at this evaluation (fixed here; a subclass may
+        compute them from parameters)."""
+        return self.links
+
     def _points(self, ev):
-        """(y, q, p_camera, R_C, R_M), each (n, 3) or (n, 3, 3) for the n detected points."""
+        """(y, q, p_camera, R_C, R_M, image of each point), each (n, 3) or (n, 3, 3) for the n
+        detected points."""
         img, pt = np.nonzero(self.mask)
         T = ev[self.target_poses][self.target_index[img]]
         C = ev[self.camera_poses][self.camera_index[img]]
-        M = self.links[img]
+        M = self._links(ev)[img]
         X = self.target_points[pt]
         y = np.einsum("nij,nj->ni", T[:, :3, :3], X) + T[:, :3, 3]
         q = np.einsum("nij,nj->ni", M[:, :3, :3], y) + M[:, :3, 3]
@@ -84,13 +90,18 @@ class ReprojectionResidual(ResidualBlock):
         return y, q, p, C[:, :3, :3], M[:, :3, :3], img
 
     def evaluate(self, ev, jacobian):
+        return self._evaluate(ev, jacobian)[:2]
+
+    def _evaluate(self, ev, jacobian):
+        """``(r, jac, (y, q, p, R_C, R_M, img, d_point))``: the residuals, the Jacobians and the
+        intermediate points for subclasses (``d_point`` (n, 2, 3) None without ``jacobian``)."""
         y, q, p, RC, RM, img = self._points(ev)
         intr, dist = CameraIntrinsics.split(ev[self.camera])
         proj = project_points(p, intr, dist, self.camera.model, jacobian)
         w = self.weight
         r = ((self.image_points[self.mask] - proj.pixels) * w).ravel()
         if not jacobian:
-            return r, None
+            return r, None, (y, q, p, RC, RM, img, None)
         jac = {}
         if ev.wants(self.camera):
             jac[self.camera] = np.concatenate([proj.d_intrinsics, proj.d_distortion], axis=2).reshape(len(r), -1) * w
@@ -102,7 +113,7 @@ class ReprojectionResidual(ResidualBlock):
                 J = np.zeros((len(p), 2, frames.n_frames, 6))
                 J[np.arange(len(p)), :, index[img], :] = proj.d_point @ dp
                 jac[frames] = J.reshape(len(r), -1) * w
-        return r, jac
+        return r, jac, (y, q, p, RC, RM, img, proj.d_point)
 
     def errors(self, r):
         """Pixel distances between detected and predicted points."""

@@ -1,0 +1,150 @@
+"""Image points of a target seen through a robot's flange pose with the pose in the loop (issue 14
+item 4: hand-eye refinement with the robot's joint offsets and with per-image flange-pose errors;
+METHODS.md section 3, "Hand-eye").
+
+The per-image link ``M_i`` of :class:`~.reprojection.ReprojectionResidual` is built from the
+flange pose ``F_i`` -- forward kinematics at the recorded joints with the parameters of a robot
+geometry block, or given poses -- and, optionally, a per-image correction frame ``E_i`` (a
+FramesBlock near the identity, in the flange frame: the true flange pose is ``F_i E_i``; with a
+Gaussian prior it models the robot's pose noise, the errors-in-variables form of the problem):
+
+* eye-in-hand (``invert=True``): ``M_i = (F_i E_i)^-1``, ``p_camera = C^-1 E_i^-1 F_i^-1 T X``;
+* eye-to-hand (``invert=False``): ``M_i = F_i E_i``, ``p_camera = C^-1 F_i E_i T X``.
+
+Derivatives (frames left-perturbed, ``F <- [exp(w) | v] F`` with the spatial twist ``xi`` of the
+end effector from :meth:`~robocal.kinematics.model.RobotModel.kinematics_with`; ``y = T X``):
+
+* geometry, eye-to-hand: ``q = M_i y`` moves by ``-[q]x w + v``, ``dp = R_C^T (-[q]x w + v)``;
+  eye-in-hand: ``dp = -R_C^T R_M (-[y]x w + v)``;
+* correction, eye-to-hand: ``E y`` moves by ``-[E y]x w + v`` in the flange, ``dp = R_C^T R_F (...)``;
+  eye-in-hand: with ``g = F^-1 y``, ``dp = -R_C^T R_E^T (-[g]x w + v)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...transforms import invert_transforms, skew, so3_exp
+from ..errors import ProblemError
+from .reprojection import ReprojectionResidual
+
+__all__ = ["FlangeReprojectionResidual"]
+
+
+def _frame_rows(p):
+    """(n, 3, 6): ``[-[p]x | I]``, the motion of points p (n, 3) under a left step (w, v)."""
+    return np.concatenate([-skew(p), np.broadcast_to(np.eye(3), p.shape + (3,))], axis=2)
+
+
+class FlangeReprojectionResidual(ReprojectionResidual):
+    """:class:`ReprojectionResidual` with the flange pose in the loop (module docstring).
+
+    Either ``model`` (a RobotModel), ``q`` (N, n_ctrl) [rad | mm] and ``geometry`` (a
+    :class:`~robocal.calib.blocks.RobotGeometry` on the model; ``end_effector`` names the frame,
+    default the model's first) or ``flange_poses`` (N, 4, 4) [mm] fixed; ``corrections``: an
+    optional FramesBlock of N per-image flange corrections; ``invert``: eye-in-hand. Other
+    arguments as :class:`ReprojectionResidual` (no ``links``).
+    """
+
+    def __init__(self, camera, camera_poses, target_poses, image_points, target_points, *, model=None, q=None,
+                 geometry=None, flange_poses=None, corrections=None, end_effector=None, invert: bool = True,
+                 camera_index=None, target_index=None, sigma: float | None = None):
+        super().__init__(camera, camera_poses, target_poses, image_points, target_points,
+                         camera_index=camera_index, target_index=target_index, sigma=sigma)
+        N = len(self.image_points)
+        self.model, self.geometry, self.corrections, self.invert = model, geometry, corrections, bool(invert)
+        extra = ()
+        if model is not None:
+            if geometry is None or q is None:
+                raise ProblemError("flange reprojection: a robot model needs q and a geometry block")
+            self.q = np.asarray(q, dtype=float)
+            if len(self.q) != N:
+                raise ProblemError(f"flange reprojection: {len(self.q)} joint rows for {N} images")
+            self.ee = model.end_effector_index(end_effector)
+            extra += (geometry,)
+        else:
+            F = np.asarray(flange_poses, dtype=float) if flange_poses is not None else None
+            if F is None or F.shape != (N, 4, 4):
+                raise ProblemError(f"flange reprojection: flange_poses must be ({N}, 4, 4) without a robot model")
+            self.flange_poses = F
+        if corrections is not None:
+            if corrections.n_frames != N:
+                raise ProblemError(f"flange reprojection: {corrections.n_frames} correction frames for {N} images")
+            extra += (corrections,)
+        self.parameter_blocks = self.parameter_blocks + extra
+
+    def _flange(self, ev):
+        """(F (N, 4, 4), twists (N, 6, k) or None) at this evaluation, computed once."""
+        if self.model is None:
+            return self.flange_poses, None
+
+        def compute(ev):
+            T, ptw, _, masks = self.model.kinematics_with(self.q, ev[self.geometry], T_world_base=np.eye(4),
+                                                          end_effectors=[self.ee])
+            return T[:, 0], (ptw * masks[0])[:, :, self.geometry.index]
+        return ev.shared((self, "kinematics"), compute)
+
+    def _links(self, ev):
+        F = self._flange(ev)[0]
+        if self.corrections is not None:
+            F = F @ ev[self.corrections]
+        return invert_transforms(F) if self.invert else F
+
+    def evaluate(self, ev, jacobian):
+        r, jac, (y, q, p, RC, RM, img, d_point) = self._evaluate(ev, jacobian)
+        if not jacobian:
+            return r, jac
+        RCt = np.swapaxes(RC, 1, 2)
+        w = self.weight
+        if self.model is not None and ev.wants(self.geometry):
+            xi = self._flange(ev)[1][img]  # (n, 6, k)
+            dp = -(RCt @ RM) @ _frame_rows(y) if self.invert else RCt @ _frame_rows(q)
+            jac[self.geometry] = (d_point @ dp @ xi).reshape(len(r), -1) * w
+        if self.corrections is not None and ev.wants(self.corrections):
+            F = self._flange(ev)[0][img]
+            E = ev[self.corrections][img]
+            if self.invert:  # g = F^-1 y
+                g = np.einsum("nji,nj->ni", F[:, :3, :3], y - F[:, :3, 3])
+                dp = -(RCt @ np.swapaxes(E[:, :3, :3], 1, 2)) @ _frame_rows(g)
+            else:
+                e = np.einsum("nij,nj->ni", E[:, :3, :3], y) + E[:, :3, 3]
+                dp = (RCt @ F[:, :3, :3]) @ _frame_rows(e)
+            n_frames = self.corrections.n_frames
+            J = np.zeros((len(p), 2, n_frames, 6))
+            J[np.arange(len(p)), :, img, :] = d_point @ dp
+            jac[self.corrections] = J.reshape(len(r), -1) * w
+        return r, jac
+
+    @classmethod
+    def example(cls, rng):
+        """On the 4-joint example robot (eye-in-hand and eye-to-hand, every parameter and a
+        correction per image free) and with fixed flange poses and corrections."""
+        from ..blocks import CameraIntrinsics, FramesBlock, RobotGeometry
+        from .examples import example_frames, example_robot
+
+        grid = np.stack(np.meshgrid(np.arange(4.0), np.arange(3.0)), -1).reshape(-1, 2) * 30.0
+        X = np.column_stack([grid - 45.0, np.zeros(len(grid))])
+        out = []
+        for invert, robot in ((True, True), (False, True), (True, False), (False, False)):
+            N = 4
+            model = example_robot(rng)
+            q = rng.uniform(-1.0, 1.0, (N, model.n_joints))
+            geometry = RobotGeometry(model)
+            F = model.kinematics_with(q, geometry.initial, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
+            E = np.tile(np.eye(4), (N, 1, 1))
+            E[:, :3, :3] = so3_exp(rng.normal(0, 0.02, (N, 3)))
+            E[:, :3, 3] = rng.normal(0, 1.0, (N, 3))
+            FE = F @ E
+            M = invert_transforms(FE) if invert else FE
+            cam = CameraIntrinsics(rng.uniform([900, 900, 600, 450], [1100, 1100, 700, 550]),
+                                   rng.normal(0, [0.1, 0.05, 0.002, 0.002, 0.02]))
+            T_ct = example_frames(rng, N)
+            T_ct[:, :3, 3] = np.column_stack([rng.normal(0, 40, (N, 2)), rng.uniform(400, 700, N)])
+            C = example_frames(rng, 1)
+            T = invert_transforms(M) @ C @ T_ct  # per-image target frames so that every point is seen
+            uv = np.full((N, len(X), 2), 500.0) + rng.normal(0, 50, (N, len(X), 2))
+            uv[2, 1] = np.nan
+            kw = dict(model=model, q=q, geometry=geometry) if robot else dict(flange_poses=F)
+            out.append(cls(cam, FramesBlock("camera", C), FramesBlock("target", T), uv, X, invert=invert,
+                           corrections=FramesBlock("corrections", E), target_index=np.arange(N), sigma=0.3, **kw))
+        return out
