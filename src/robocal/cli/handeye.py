@@ -30,12 +30,18 @@ def handeye():
               help="Camera file (robocal JSON, ROS or OpenCV YAML); default: cal_data's intrinsics or a calibration "
                    "on the same images.")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics together with the hand-eye transform.")
+@click.option("--robot-pose-sigma", type=float, nargs=2, default=None, metavar="MM DEG",
+              help="The robot's pose error per axis (errors in variables); default: refine_hand_eye's (0.05 mm, 0.01 deg).")
+@click.option("--exact-poses", is_flag=True, help="Take the flange poses as exact (as ROS-Industrial's calibration).")
+@click.option("--homography-threshold", type=float, default=None,
+              help="Skip images whose detections one homography misses by more than this mean [px] "
+                   "(default: cal_data.yaml's homography_threshold, else no check).")
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def solve_cmd(cal_data, poses, images, board, setup, method, camera_file, refine_intrinsics, out_dir, overwrite,
-              as_json):
+def solve_cmd(cal_data, poses, images, board, setup, method, camera_file, refine_intrinsics, robot_pose_sigma,
+              exact_poses, homography_threshold, out_dir, overwrite, as_json):
     """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
     cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC."""
     from ..handeye import HandEyeError
@@ -43,9 +49,13 @@ def solve_cmd(cal_data, poses, images, board, setup, method, camera_file, refine
 
     if cal_data is None and (poses is None or images is None or board is None):
         raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv --images DIR --board SPEC")
+    if exact_poses and robot_pose_sigma:
+        raise click.UsageError("--exact-poses and --robot-pose-sigma exclude each other")
+    sigma = None if exact_poses else (tuple(robot_pose_sigma) if robot_pose_sigma else "default")
     try:
         s = solve_handeye(cal_data=cal_data, poses=poses, images=images, board=board, setup=setup, method=method,
-                          camera_file=camera_file, refine_intrinsics=refine_intrinsics, out_dir=out_dir,
+                          camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
+                          homography_threshold=homography_threshold, out_dir=out_dir,
                           overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None

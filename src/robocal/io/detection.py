@@ -25,7 +25,7 @@ import numpy as np
 from .boards import ARUCO_DICTIONARIES, Board
 from .images import ImageFileError, read_image_gray
 
-__all__ = ["Detection", "detect_board", "detect_images", "read_image_gray", "BlobSettings", "ImageFileError"]
+__all__ = ["Detection", "detect_board", "detect_images", "homography_error_px", "read_image_gray", "BlobSettings", "ImageFileError"]
 
 
 @dataclass(frozen=True)
@@ -248,13 +248,44 @@ def detect_board(image, board: Board, *, name: str = "image", min_points: int | 
                      skip_reason=reason)
 
 
+def homography_error_px(image_points: np.ndarray, object_points: np.ndarray) -> float:
+    """How well one plane-to-image homography explains a detection (as ROS-Industrial's
+    ``homography_threshold`` check): the homography is fitted to every third detected point and
+    the mean distance [px] of the other points from their mapped positions is returned (NaN with
+    fewer than 6 points). A wrong correspondence or strong lens distortion makes it large."""
+    import cv2
+
+    ok = np.isfinite(image_points[:, 0])
+    uv, xy = image_points[ok], object_points[ok, :2]
+    if len(uv) < 6:
+        return float("nan")
+    fit = np.zeros(len(uv), bool)
+    fit[::3] = True
+    if fit.sum() < 4:
+        fit[:4] = True
+    H, _ = cv2.findHomography(xy[fit].astype(np.float64), uv[fit].astype(np.float64), 0)
+    if H is None:
+        return float("inf")
+    mapped = cv2.perspectiveTransform(xy[~fit].reshape(-1, 1, 2).astype(np.float64), H).reshape(-1, 2)
+    return float(np.mean(np.linalg.norm(mapped - uv[~fit], axis=1)))
+
+
 def detect_images(paths, board: Board, *, min_points: int | None = None, blob_settings: BlobSettings | None = None,
-                  progress=None) -> list[Detection]:
-    """:func:`detect_board` on every file of ``paths``; ``progress(i, n, text)`` after each image."""
+                  homography_threshold: float | None = None, progress=None) -> list[Detection]:
+    """:func:`detect_board` on every file of ``paths``; ``progress(i, n, text)`` after each image.
+    With ``homography_threshold`` [px], an image whose :func:`homography_error_px` exceeds it is
+    skipped with that reason."""
     paths = [Path(p) for p in paths]
     out = []
+    X = board.object_points()
     for i, p in enumerate(paths, 1):
         det = detect_board(read_image_gray(p), board, name=p.name, min_points=min_points, blob_settings=blob_settings)
+        if det.used and homography_threshold is not None:
+            err = homography_error_px(det.image_points, X)
+            if err > homography_threshold:
+                det = Detection(det.name, det.image_points, det.image_size,
+                                f"homography error {err:.2f} px above the threshold {homography_threshold:g} px "
+                                "(a wrong detection or strong lens distortion)")
         out.append(det)
         if progress is not None:
             status = f"{det.n_found} points" if det.used else f"skipped: {det.skip_reason}"

@@ -39,9 +39,11 @@ class DetectedSet:
         return np.array([r is None for r in self.skip_reasons])
 
 
-def detect_set(paths, board: Board, *, blob_settings: BlobSettings | None = None, progress=None) -> DetectedSet:
+def detect_set(paths, board: Board, *, blob_settings: BlobSettings | None = None, homography_threshold=None,
+               progress=None) -> DetectedSet:
     """Detect ``board`` in every image; ``ValueError`` when the images differ in size."""
-    dets = detect_images(paths, board, blob_settings=blob_settings, progress=progress)
+    dets = detect_images(paths, board, blob_settings=blob_settings, homography_threshold=homography_threshold,
+                         progress=progress)
     sizes = {d.image_size for d in dets}
     if len(sizes) > 1:
         first = dets[0]

@@ -77,7 +77,7 @@ def _rms(residuals) -> float:
 
 
 def _inputs(cal_data, poses, images, board, setup, camera_file):
-    """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source)."""
+    """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source, homography threshold)."""
     if cal_data is not None:
         if poses is not None or images is not None:
             raise ValueError("give either cal_data.yaml or --poses with --images, not both")
@@ -87,29 +87,39 @@ def _inputs(cal_data, poses, images, board, setup, camera_file):
             raise ValueError(f"{d.path}: static_camera says {d.setup}, but {setup} was asked for; drop the option "
                              "or fix the file")
         cam = read_camera(camera_file) if camera_file else d.camera
-        return d.image_paths, d.labels, d.T_base_flange, b, d.blob_settings, cam, d.setup, str(d.path)
+        return (d.image_paths, d.labels, d.T_base_flange, b, d.blob_settings, cam, d.setup, str(d.path),
+                d.homography_threshold)
     if poses is None or images is None or board is None:
         raise ValueError("need --poses POSES.csv, --images DIR and --board SPEC (or a cal_data.yaml)")
     b = parse_board(board)
     pairs = pair_images_with_poses(images, poses)
     cam = read_camera(camera_file) if camera_file else None
     return (pairs.image_paths, pairs.labels, pairs.T_base_flange, b, None, cam, setup or "eye_in_hand",
-            f"{poses} + {images}")
+            f"{poses} + {images}", None)
 
 
 def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
-                  method: str = "shah", camera_file=None, refine_intrinsics: bool = False, out_dir=None,
-                  overwrite: bool = False, progress=None) -> dict:
-    """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict."""
+                  method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
+                  robot_pose_sigma="default", homography_threshold=None, out_dir=None, overwrite: bool = False,
+                  progress=None) -> dict:
+    """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
+
+    robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
+    refinement, ``None`` to take the flange poses as exact (as ROS-Industrial's calibration does),
+    ``"default"`` for :func:`~robocal.handeye.refine.refine_hand_eye`'s default.
+    homography_threshold [px]: skip images whose detections one homography cannot explain
+    (default: the cal_data.yaml value, else no check)."""
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.refine import refine_hand_eye
 
     if setup is not None and setup not in SETUPS:
         raise ValueError(f"setup must be one of {', '.join(SETUPS)}, got {setup!r}")
-    paths, labels, F, b, blobs, camera, setup, source = _inputs(cal_data, poses, images, board, setup, camera_file)
+    paths, labels, F, b, blobs, camera, setup, source, file_threshold = _inputs(cal_data, poses, images, board, setup,
+                                                                                camera_file)
+    threshold = file_threshold if homography_threshold is None else homography_threshold
     if out_dir is not None:
         check_outputs_free(out_dir, HANDEYE_OUTPUTS, overwrite)
-    detected = detect_set(paths, b, blob_settings=blobs, progress=progress)
+    detected = detect_set(paths, b, blob_settings=blobs, homography_threshold=threshold, progress=progress)
     used = detected.used
     if used.sum() < 3:
         reasons = "; ".join(f"{n}: {r}" for n, r in zip(detected.names, detected.skip_reasons) if r)
@@ -126,8 +136,9 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     elif tuple(camera.image_size) != tuple(detected.image_size):
         raise ValueError(f"the camera is for {camera.image_size[0]}x{camera.image_size[1]} px images, the images are "
                          f"{detected.image_size[0]}x{detected.image_size[1]} px")
+    extra = {} if isinstance(robot_pose_sigma, str) else {"robot_pose_sigma": robot_pose_sigma}
     result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method, refine_intrinsics=refine_intrinsics,
-                             min_points=b.min_points)
+                             min_points=b.min_points, **extra)
     idx_used = np.flatnonzero(used)
     solver_skips = {int(idx_used[k]): r for k, r in (getattr(result, "skipped", None) or {}).items()}
     N = len(used)
@@ -158,6 +169,10 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         linear[m] = d
     summary = {
         "format": "robocal-handeye/1", "setup": setup, "source": source, "board": b.to_dict(), "method": method,
+        "robot_pose_sigma": "exact flange poses" if robot_pose_sigma is None else (
+            "refine_hand_eye default" if isinstance(robot_pose_sigma, str) else
+            {"mm": robot_pose_sigma[0], "deg": robot_pose_sigma[1]}),
+        "homography_threshold_px": threshold,
         "convention": POSE_CONVENTION,
         "camera_pose": pose_dict(result.camera_pose, result.camera_pose_frame, result.sigma_translation_mm,
                                  result.sigma_rotation_deg),
