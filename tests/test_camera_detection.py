@@ -1,8 +1,8 @@
 """Boards, detection on rendered and real pixels, the renderer's rays (issue 14 items 2 and 3).
 
 Rendered images carry lens distortion, blur, lighting and noise; detections are compared with the
-exact projections of the board points under the true camera and pose. Real images: the
-ROS-Industrial sets in ../shared/datasets (skipped with the reason when absent).
+exact projections of the board points under the true camera and pose. The real images are
+checked in tests/test_handeye_real.py.
 """
 
 from __future__ import annotations
@@ -12,16 +12,11 @@ import numpy as np
 import pytest
 
 from robocal.io.boards import BoardSpecError, board_image, parse_board
-from robocal.io.datasets import datasets_root
-from robocal.io.detection import detect_board, detect_images
-from robocal.io.images import list_images
+from robocal.io.detection import detect_board
 from robocal.sim.camera_cell import default_camera, simulate_hand_eye_poses
 from robocal.sim.camera_render import BoardRenderer
 from robocal.workflows.camera_simulate import _texel_mm
 
-ROS = datasets_root() / "ros_industrial_handeye" / "raw"
-needs_ros = pytest.mark.skipif(not ROS.is_dir(), reason=f"real data folder {ROS} absent (tests read "
-                                                         "../shared/datasets relative to the repository root)")
 BOARDS = ["checkerboard:9x6:30mm", "charuco:9x7:30mm:22mm:DICT_5X5_100", "circles:10x10:25.4mm:modified"]
 
 
@@ -128,48 +123,3 @@ def test_board_specs_and_object_points():
                        ("charuco:5x7:30mm:20mm:DICT_9X9_1", "dictionary"), ("checkerboard:9x6:25mm:modified", "expected")]:
         with pytest.raises(BoardSpecError, match=words):
             parse_board(bad)
-
-
-@needs_ros
-def test_real_charuco_set_detections():
-    board = parse_board("charuco:5x7:36.195mm:18.256mm:DICT_6X6_250")
-    dets = detect_images(list_images(ROS / "test_set_charuco" / "images"), board)
-    assert [d.name for d in dets][:3] == ["0.png", "1.png", "2.png"]
-    skipped = {d.name: d.skip_reason for d in dets if not d.used}
-    assert list(skipped) == ["2.png"] and "too few points: 4 of 24" in skipped["2.png"]
-    K = np.array([[1352.02747, 0, 789.67065], [0, 1356.14287, 627.2995], [0, 0, 1]])
-    obj = board.object_points()
-    worst = 0.0
-    for d in dets:
-        if not d.used:
-            continue
-        ok = np.isfinite(d.image_points[:, 0])
-        _, r, t = cv2.solvePnP(obj[ok], d.image_points[ok], K, None)
-        pr = cv2.projectPoints(obj[ok], r, t, K, None)[0].reshape(-1, 2)
-        worst = max(worst, float(np.sqrt(np.mean(np.sum((pr - d.image_points[ok]) ** 2, 1)))))
-        img = cv2.imread(str(ROS / "test_set_charuco" / "images" / d.name), cv2.IMREAD_GRAYSCALE)
-        sp = cv2.cornerSubPix(img, d.image_points[ok].astype(np.float32).reshape(-1, 1, 2), (5, 5), (-1, -1),
-                              (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-3)).reshape(-1, 2)
-        assert np.all(np.abs((sp - d.image_points[ok]).mean(axis=0)) < 0.12)  # no 0.5 px offset
-    assert worst < 1.1  # per-image PnP with the given intrinsics (no distortion): the ids are right
-
-
-@needs_ros
-def test_real_modified_circle_grid_is_ordered_from_its_large_dot():
-    board = parse_board("circles:10x10:25.4mm:modified")
-    folder = ROS / "test_set_10x10" / "images"
-    dets = detect_images(list_images(folder), board)
-    assert all(d.used for d in dets), [d.skip_reason for d in dets if not d.used]
-    K = np.array([[550.0, 0, 320], [0, 550, 240], [0, 0, 1]])
-    obj = board.object_points()
-    params = cv2.SimpleBlobDetector_Params()
-    params.minArea, params.maxArea, params.minDistBetweenBlobs = 25, 5000, 5
-    blobs = cv2.SimpleBlobDetector_create(params)
-    for d in dets:
-        _, r, t = cv2.solvePnP(obj, d.image_points, K, None)
-        R = cv2.Rodrigues(r)[0]
-        assert R[2, 2] < -0.5  # the board's +z points toward the camera: its printed face
-        kp = blobs.detect(cv2.imread(str(folder / d.name), cv2.IMREAD_GRAYSCALE))
-        pts, sizes = np.array([k.pt for k in kp]), np.array([k.size for k in kp])
-        big = pts[np.argmax(sizes)]
-        assert np.linalg.norm(d.image_points[90] - big) < 1.0, d.name  # the origin is the large dot
