@@ -11,6 +11,7 @@ from click.testing import CliRunner
 
 from robocal.cli.main import main
 from robocal.io.boards import parse_board
+from robocal.io.camera_files import read_camera
 from robocal.io.datasets import datasets_root
 from robocal.io.detection import detect_images
 from robocal.io.image_poses import ImagePoseMismatch, pair_images_with_poses
@@ -114,16 +115,23 @@ def test_images_and_poses_must_match_by_name(tmp_path):
         list_images(tmp_path / "empty")
 
 
-def test_simulate_camera_command_writes_a_consistent_cell(tmp_path):
-    out = tmp_path / "cell"
-    args = ["simulate", "camera", "--out", str(out), "--images", "3", "--eye-to-hand", "--seed", "4",
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    """`robocal simulate camera`: 5 rendered images of an eye-to-hand cell, poses as quaternions in metres."""
+    out = tmp_path_factory.mktemp("sim") / "cell"
+    args = ["simulate", "camera", "--out", str(out), "--images", "5", "--eye-to-hand", "--seed", "4",
             "--orientation", "quaternion", "--length-unit", "m"]
     r = CliRunner().invoke(main, args)
     assert r.exit_code == 0, r.output
+    return out, args
+
+
+def test_simulate_camera_command_writes_a_consistent_cell(simulated):
+    out, args = simulated
     truth = json.loads((out / "truth.json").read_text())
     assert truth["setup"] == "eye_to_hand" and truth["camera_pose"]["frame"] == "base"
     poses = read_flange_poses_csv(out / "flange_poses.csv")
-    assert poses.convention == "quaternion" and poses.length_unit == "m" and len(poses.labels) == 3
+    assert poses.convention == "quaternion" and poses.length_unit == "m" and len(poses.labels) == 5
     T_true = np.array(truth["T_base_flange_true"])
     # the file holds the reported poses: the truth plus 0.05 mm / 0.01 deg robot pose noise
     dp = np.linalg.norm(poses.T_base_flange[:, :3, 3] - T_true[:, :3, 3], axis=1)
@@ -131,12 +139,57 @@ def test_simulate_camera_command_writes_a_consistent_cell(tmp_path):
     board = parse_board(truth["board"])
     dets = detect_images(list_images(out / "images"), board)
     T_ct = np.array(truth["T_camera_target"])
-    from robocal.camera import Camera
-
-    cam = Camera(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in truth["camera"].items()})
+    cam = read_camera(out / "camera.json")
     for d, T in zip(dets, T_ct):
         X = board.object_points()
         px = cam.project((T[:3, :3] @ X.T).T + T[:3, 3]).pixels
         assert d.used and np.nanmax(np.abs(d.image_points - px)) < 0.4
     r2 = CliRunner().invoke(main, args)
     assert r2.exit_code == 1 and "exists" in r2.output and "--overwrite" in r2.output
+
+
+def test_handeye_and_camera_commands_on_the_simulated_cell(simulated, tmp_path):
+    out, _ = simulated
+    truth = json.loads((out / "truth.json").read_text())
+    board = truth["board"]
+    r = CliRunner().invoke(main, ["handeye", "solve", "--poses", str(out / "flange_poses.csv"), "--images",
+                                  str(out / "images"), "--board", board, "--eye-to-hand", "--camera",
+                                  str(out / "camera.json"), "--json", "--out", str(tmp_path / "he")])
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "he" / "handeye.json").read_text())
+    assert s["camera_pose"]["frame"] == "base" and s["n_images_used"] == 5
+    d = np.array(s["camera_pose"]["position_mm"]) - truth["camera_pose"]["position_mm"]
+    assert np.linalg.norm(d) < 1.0  # 5 images, 0.05 mm robot noise
+    assert np.all(np.abs(d) < 4 * np.array(s["camera_pose"]["sigma_position_mm"]) + 0.05)
+    R = np.array(s["camera_pose"]["matrix"])[:3, :3]
+    assert np.degrees(rotation_angle(R.T @ np.array(truth["camera_pose"]["matrix"])[:3, :3])) < 0.05
+    assert s["reprojection_rms_px"] < 0.3 and set(s["linear"]) == {"tsai", "park", "daniilidis", "shah"}
+    assert "translation:" in (tmp_path / "he" / "handeye.yaml").read_text()
+    # the camera from the same 5 images: the truth within 4 sigma
+    r = CliRunner().invoke(main, ["camera", "calibrate", str(out / "images"), "--board", board, "--json",
+                                  "--out", str(tmp_path / "cam")])
+    assert r.exit_code == 0, r.output
+    c = json.loads((tmp_path / "cam" / "camera_calibration.json").read_text())
+    for name in ("fx", "fy", "cx", "cy"):
+        assert abs(c["camera"]["parameters"][name] - truth["camera"][name]) < 4 * c["camera"]["sigma"][name] + 0.5
+    assert read_camera(tmp_path / "cam" / "camera.yaml").image_size == (1280, 1024)
+
+
+def test_command_line_errors_are_one_clear_line(simulated, tmp_path):
+    out, _ = simulated
+    board = json.loads((out / "truth.json").read_text())["board"]
+    labels = [f"img_{i:02d}" for i in range(4)]  # one image has no pose
+    write_flange_poses_csv(tmp_path / "four.csv", labels, _poses(4))
+    base = ["handeye", "solve", "--images", str(out / "images"), "--board", board]
+    r = CliRunner().invoke(main, base + ["--poses", str(tmp_path / "four.csv")])
+    assert r.exit_code == 1 and "images without a pose: 'img_04.png'" in r.output and "Traceback" not in r.output
+    # all flange rotations about one axis: the rotation about it leaves the translation along it open
+    T = transforms_from(so3_exp(np.outer(np.radians([0, 20, 45, 70, 95]), [0, 0, 1])), [[800, 10 * i, 500] for i in range(5)])
+    write_flange_poses_csv(tmp_path / "one_axis.csv", [f"img_{i:02d}" for i in range(5)], T)
+    r = CliRunner().invoke(main, base + ["--poses", str(tmp_path / "one_axis.csv"), "--eye-to-hand"])
+    assert r.exit_code == 1 and "one axis" in r.output and "Traceback" not in r.output
+    r = CliRunner().invoke(main, ["handeye", "solve", "--images", str(out / "images")])
+    assert r.exit_code == 2 and "cal_data.yaml" in r.output
+    r = CliRunner().invoke(main, base[:2] + ["--poses", str(tmp_path / "four.csv"), "--images", str(out / "images"),
+                                             "--board", "charuco:9x7:30:22mm:DICT_5X5_100"])
+    assert r.exit_code == 1 and "unit" in r.output
