@@ -93,7 +93,7 @@ def test_refined_hand_eye_on_rendered_images_beats_every_opencv_method(cells, se
     # and the reported uncertainty covers the error (3 sigma per axis)
     d = np.abs(res.camera_pose[:3, 3] - truth.camera_pose[:3, 3])
     assert np.all(d < 3 * res.sigma_translation_mm + 0.02), (d, res.sigma_translation_mm)
-    print(setup, "robocal", ours, {k: tuple(round(x, 4) for x in v) for k, v in theirs.items()})
+    print(setup, "detection RMS", round(detection_error, 4), "robocal", ours, {k: tuple(round(x, 4) for x in v) for k, v in theirs.items()})
 
 
 def test_intrinsics_match_opencv_calibrate_camera_within_the_reported_uncertainty(cells):
