@@ -18,7 +18,7 @@ def camera():
 
 
 @camera.command("calibrate")
-@click.argument("images_dir", type=click.Path(exists=True, file_okay=False))
+@click.argument("images_dir", type=click.Path(path_type=str))  # existence and kind checked by io (one-line errors)
 @click.option("--board", required=True, help=BOARD_HELP)
 @click.option("--model", type=click.Choice(["brown", "division"]), default="brown", show_default=True,
               help="Distortion model: OpenCV's Brown-Conrady or HALCON's division model.")
@@ -51,6 +51,11 @@ def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrit
     for name, value in cam["parameters"].items():
         sigma = cam["sigma"].get(name)
         click.echo(f"  {name:>5s} {value:14.6f}" + ("" if sigma is None else f"  +- {sigma:.6f}"))
+    echo_findings(s, out_dir)
+
+
+def echo_findings(s: dict, out_dir) -> None:
+    """The skipped images, the identifiability findings and the files written."""
     for r in s["images"]:
         if not r["used"]:
             click.echo(f"  skipped {r['name']}: {r['skip_reason']}")

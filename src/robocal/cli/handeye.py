@@ -7,7 +7,7 @@ import json
 import click
 
 from ._common import _user_error
-from .camera import BOARD_HELP
+from .camera import BOARD_HELP, echo_findings
 
 
 @click.group()
@@ -16,17 +16,17 @@ def handeye():
 
 
 @handeye.command("solve")
-@click.argument("cal_data", required=False, type=click.Path(exists=True))
-@click.option("--poses", default=None, type=click.Path(exists=True, dir_okay=False),
+@click.argument("cal_data", required=False, type=click.Path(path_type=str))
+@click.option("--poses", default=None, type=click.Path(path_type=str),
               help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image.")
-@click.option("--images", default=None, type=click.Path(exists=True, file_okay=False), help="Folder of the images.")
+@click.option("--images", default=None, type=click.Path(path_type=str), help="Folder of the images.")
 @click.option("--board", default=None, help=BOARD_HELP + " With cal_data.yaml: taken from its target_finder.")
 @click.option("--eye-in-hand", "setup", flag_value="eye_in_hand", default=None,
               help="Camera on the flange, board fixed (the default for --poses/--images).")
 @click.option("--eye-to-hand", "setup", flag_value="eye_to_hand", help="Camera fixed in the cell, board on the flange.")
 @click.option("--method", type=click.Choice(["shah", "tsai", "park", "daniilidis"]), default="shah", show_default=True,
               help="Linear solution the refinement starts from (all are reported side by side).")
-@click.option("--camera", "camera_file", default=None, type=click.Path(exists=True, dir_okay=False),
+@click.option("--camera", "camera_file", default=None, type=click.Path(path_type=str),
               help="Camera file (robocal JSON, ROS or OpenCV YAML); default: cal_data's intrinsics or a calibration "
                    "on the same images.")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics together with the hand-eye transform.")
@@ -72,13 +72,7 @@ def solve_cmd(cal_data, poses, images, board, setup, method, camera_file, refine
     for m, d in s["linear"].items():
         click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {d['difference_position_mm']:.2f} mm / "
                    f"{d['difference_rotation_deg']:.3f} deg from the refined, RMS {d['reprojection_rms_px']:.2f} px")
-    for r in s["images"]:
-        if not r["used"]:
-            click.echo(f"  skipped {r['name']}: {r['skip_reason']}")
-    for line in s["identifiability"]:
-        click.echo(f"  identifiability: {line}")
-    if out_dir:
-        click.echo(f"wrote {', '.join(s['outputs'].values())}")
+    echo_findings(s, out_dir)
 
 
 def _v(values, digits=2) -> str:

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 from ..calib.outputs import json_ready
-from ..handeye import HandEyeError
 from ..io.boards import parse_board
 from ..io.camera_files import write_camera_json, write_camera_ros_yaml
 from ..io.images import list_images
@@ -66,11 +65,8 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
     if out_dir is not None:
         check_outputs_free(out_dir, CAMERA_OUTPUTS, overwrite)
     detected = detect_set(list_images(images_dir), b, progress=progress)
+    detected.require(3, "camera calibration")
     used = detected.used
-    if used.sum() < 3:
-        reasons = "; ".join(f"{n}: {r}" for n, r in zip(detected.names, detected.skip_reasons) if r)
-        raise HandEyeError(f"camera calibration needs at least 3 images with the board found, got {int(used.sum())} "
-                           f"of {len(used)} ({reasons})")
     X = b.object_points()
     cal = calibrate_camera(detected.image_points[used], X, detected.image_size, model=model,
                            n_distortion=n_distortion, fix=tuple(fix), min_points=b.min_points)

@@ -38,6 +38,16 @@ class DetectedSet:
     def used(self) -> np.ndarray:
         return np.array([r is None for r in self.skip_reasons])
 
+    def require(self, n: int, what: str) -> None:
+        """``HandEyeError`` naming every skipped image when fewer than ``n`` images are usable."""
+        from ..handeye import HandEyeError
+
+        used = self.used
+        if used.sum() < n:
+            reasons = "; ".join(f"{name}: {r}" for name, r in zip(self.names, self.skip_reasons) if r)
+            raise HandEyeError(f"{what} needs at least {n} images with the board found, got {int(used.sum())} of "
+                               f"{len(used)} ({reasons})")
+
 
 def detect_set(paths, board: Board, *, blob_settings: BlobSettings | None = None, homography_threshold=None,
                progress=None) -> DetectedSet:

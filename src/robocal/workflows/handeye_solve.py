@@ -28,7 +28,6 @@ from pathlib import Path
 import numpy as np
 
 from ..calib.outputs import json_ready
-from ..handeye import HandEyeError
 from ..io.boards import parse_board
 from ..io.camera_files import read_camera
 from ..io.image_poses import pair_images_with_poses
@@ -120,11 +119,8 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     if out_dir is not None:
         check_outputs_free(out_dir, HANDEYE_OUTPUTS, overwrite)
     detected = detect_set(paths, b, blob_settings=blobs, homography_threshold=threshold, progress=progress)
+    detected.require(3, "hand-eye calibration")
     used = detected.used
-    if used.sum() < 3:
-        reasons = "; ".join(f"{n}: {r}" for n, r in zip(detected.names, detected.skip_reasons) if r)
-        raise HandEyeError(f"hand-eye calibration needs at least 3 images with the board found, got "
-                           f"{int(used.sum())} of {len(used)} ({reasons})")
     X = b.object_points()
     uv = detected.image_points[used]
     camera_source = "given"
