@@ -20,7 +20,7 @@ from ..io.boards import parse_board
 from ..io.camera_files import write_camera_json, write_camera_ros_yaml
 from ..io.images import list_images
 from ..report.camera_report import write_camera_report
-from .camera_common import detect_set, identifiability_lines, image_rows, overlay_pngs
+from .camera_common import backprojection, detect_set, identifiability_lines, image_rows, overlay_pngs
 from .outputs import check_outputs_free, staged_outputs
 
 __all__ = ["calibrate_camera_images", "CAMERA_OUTPUTS", "camera_summary"]
@@ -42,17 +42,6 @@ def camera_summary(camera, sigma: dict | None = None) -> dict:
             "image_size": None if camera.image_size is None else [int(v) for v in camera.image_size],
             "units": "fx, fy, cx, cy in pixels (OpenCV pixel-centre convention); distortion coefficients "
                      "unitless, OpenCV order"}
-
-
-def projected_camera_points(camera, T_camera_target, target_points) -> np.ndarray:
-    """(N, P, 2) [px] of the target points under per-image poses (NaN for NaN poses)."""
-    N = len(T_camera_target)
-    out = np.full((N, len(target_points), 2), np.nan)
-    for i in range(N):  # per image, for the report only (not a hot path)
-        T = T_camera_target[i]
-        if np.all(np.isfinite(T)):
-            out[i] = camera.project((T[:3, :3] @ target_points.T).T + T[:3, 3]).pixels
-    return out
 
 
 def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str = "brown", n_distortion: int = 5,
@@ -86,7 +75,7 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
         "identifiability": identifiability_lines(cal.identifiability), "images": rows,
     }
     if out_dir is not None:
-        projected = projected_camera_points(camera, T, X)
+        projected, _ = backprojection(camera, T, X, detected.image_points)
         per_image = np.array([np.nan if r["rms_px"] is None else r["rms_px"] for r in rows])
         overlays = overlay_pngs(detected, projected, per_image)
         with staged_outputs(out_dir, CAMERA_OUTPUTS, overwrite=overwrite) as stage:

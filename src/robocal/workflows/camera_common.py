@@ -14,7 +14,7 @@ from ..io.images import read_image_gray
 from ..transforms import quaternion_from_matrix, rotvec_from_matrix
 
 __all__ = ["DetectedSet", "detect_set", "pose_dict", "image_rows", "ros_transform_yaml", "overlay_pngs",
-           "identifiability_lines", "POSE_CONVENTION"]
+           "identifiability_lines", "POSE_CONVENTION", "backprojection"]
 
 #: how every pose in the JSON outputs is written
 POSE_CONVENTION = ("T_<frame>_<object>: the object's pose in the named frame; position_mm in millimetres; "
@@ -78,6 +78,14 @@ def pose_dict(T: np.ndarray, frame: str, sigma_position_mm=None, sigma_rotation_
     if sigma_rotation_deg is not None:
         out["sigma_rotation_deg"] = [float(v) for v in sigma_rotation_deg]
     return out
+
+
+def backprojection(camera, T_camera_target, target_points, image_points):
+    """(projected (N, P, 2), residuals detected minus projected (N, P, 2)) [px], vectorised over images."""
+    N, P = image_points.shape[:2]
+    pts = np.einsum("nij,pj->npi", T_camera_target[:, :3, :3], target_points) + T_camera_target[:, None, :3, 3]
+    projected = camera.project(pts.reshape(-1, 3)).pixels.reshape(N, P, 2)
+    return projected, image_points - projected
 
 
 def _rms(r) -> float | None:

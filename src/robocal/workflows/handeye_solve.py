@@ -37,6 +37,7 @@ from ..transforms import invert_transforms, rotation_angle
 from .camera_calibrate import camera_summary
 from .camera_common import (
     POSE_CONVENTION,
+    backprojection,
     detect_set,
     identifiability_lines,
     image_rows,
@@ -46,7 +47,7 @@ from .camera_common import (
 )
 from .outputs import check_outputs_free, staged_outputs
 
-__all__ = ["solve_handeye", "HANDEYE_OUTPUTS", "chain_T_camera_target", "backprojection"]
+__all__ = ["solve_handeye", "HANDEYE_OUTPUTS", "chain_T_camera_target"]
 
 HANDEYE_OUTPUTS = ["handeye.json", "handeye.yaml", "report.html"]
 SETUPS = ("eye_in_hand", "eye_to_hand")
@@ -59,14 +60,6 @@ def chain_T_camera_target(setup: str, camera_pose, target_pose, T_base_flange) -
     F = np.asarray(T_base_flange, dtype=float)
     links = invert_transforms(F) if setup == "eye_in_hand" else F
     return invert_transforms(camera_pose)[None] @ links @ np.asarray(target_pose)[None]
-
-
-def backprojection(camera, T_camera_target, target_points, image_points):
-    """(projected (N, P, 2), residuals detected minus projected (N, P, 2)) [px], vectorised over images."""
-    N, P = image_points.shape[:2]
-    pts = np.einsum("nij,pj->npi", T_camera_target[:, :3, :3], target_points) + T_camera_target[:, None, :3, 3]
-    projected = camera.project(pts.reshape(-1, 3)).pixels.reshape(N, P, 2)
-    return projected, image_points - projected
 
 
 def _rms(residuals) -> float:
