@@ -193,3 +193,26 @@ def test_command_line_errors_are_one_clear_line(simulated, tmp_path):
     r = CliRunner().invoke(main, base[:2] + ["--poses", str(tmp_path / "four.csv"), "--images", str(out / "images"),
                                              "--board", "charuco:9x7:30:22mm:DICT_5X5_100"])
     assert r.exit_code == 1 and "unit" in r.output
+
+
+def test_joints_and_robot_file_route_recovers_the_joint_offsets(tmp_path):
+    """`simulate camera --robot` writes the controller's joints of a robot whose true joint zero
+    offsets differ from its robot file; `handeye solve --joints --robot --joint-offsets` finds them,
+    and names the two that trade off with the camera and target rotations about their axes."""
+    out = tmp_path / "cell"
+    r = CliRunner().invoke(main, ["simulate", "camera", "--out", str(out), "--images", "6", "--robot",
+                                  "kuka_kr150_r3100", "--seed", "2"])
+    assert r.exit_code == 0, r.output
+    truth = json.loads((out / "truth.json").read_text())
+    r = CliRunner().invoke(main, ["handeye", "solve", "--joints", str(out / "joints.csv"), "--robot", "kuka_kr150_r3100",
+                                  "--joint-offsets", "--images", str(out / "images"), "--board", truth["board"],
+                                  "--camera", str(out / "camera.json"), "--json"])
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.output[r.output.index("{"):])
+    true = truth["robot"]["joint_offsets_deg"]
+    for name in ("theta2", "theta3", "theta4", "theta5"):
+        assert abs(s["joint_offsets_deg"][name] - true[name]) < 0.01, (name, s["joint_offsets_deg"][name], true[name])
+    assert any(line.startswith("theta1:") for line in s["identifiability"])
+    assert any(line.startswith("theta6:") for line in s["identifiability"])
+    d = np.array(s["camera_pose"]["position_mm"]) - truth["camera_pose"]["position_mm"]
+    assert np.linalg.norm(d) < 0.5

@@ -19,6 +19,10 @@ def handeye():
 @click.argument("cal_data", required=False, type=click.Path(path_type=str))
 @click.option("--poses", default=None, type=click.Path(path_type=str),
               help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image.")
+@click.option("--joints", "joints_file", default=None, type=click.Path(path_type=str),
+              help="Instead of --poses: a robocal-program/1 joint table (point names = image names), with --robot.")
+@click.option("--robot", default=None, help="With --joints: the robot (shipped name or robot file).")
+@click.option("--joint-offsets", is_flag=True, help="With --joints: also estimate the robot's joint zero offsets.")
 @click.option("--images", default=None, type=click.Path(path_type=str), help="Folder of the images.")
 @click.option("--board", default=None, help=BOARD_HELP + " With cal_data.yaml: taken from its target_finder.")
 @click.option("--eye-in-hand", "setup", flag_value="eye_in_hand", default=None,
@@ -40,22 +44,24 @@ def handeye():
               help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def solve_cmd(cal_data, poses, images, board, setup, method, camera_file, refine_intrinsics, robot_pose_sigma,
+def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, refine_intrinsics, robot_pose_sigma,
               exact_poses, homography_threshold, out_dir, overwrite, as_json):
     """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
     cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC."""
     from ..handeye import HandEyeError
     from ..workflows.handeye_solve import solve_handeye
 
-    if cal_data is None and (poses is None or images is None or board is None):
-        raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv --images DIR --board SPEC")
+    if cal_data is None and ((poses is None and joints_file is None) or images is None or board is None):
+        raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv (or --joints JOINTS.csv --robot ROBOT) "
+                               "--images DIR --board SPEC")
     if exact_poses and robot_pose_sigma:
         raise click.UsageError("--exact-poses and --robot-pose-sigma exclude each other")
     sigma = None if exact_poses else (tuple(robot_pose_sigma) if robot_pose_sigma else "default")
     try:
         s = solve_handeye(cal_data=cal_data, poses=poses, images=images, board=board, setup=setup, method=method,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
-                          homography_threshold=homography_threshold, out_dir=out_dir,
+                          homography_threshold=homography_threshold, joints=joints_file, robot=robot,
+                          joint_offsets=joint_offsets, out_dir=out_dir,
                           overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
@@ -72,6 +78,8 @@ def solve_cmd(cal_data, poses, images, board, setup, method, camera_file, refine
     for m, d in s["linear"].items():
         click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {d['difference_position_mm']:.2f} mm / "
                    f"{d['difference_rotation_deg']:.3f} deg from the refined, RMS {d['reprojection_rms_px']:.2f} px")
+    for name, value in (s.get("joint_offsets_deg") or {}).items():
+        click.echo(f"  joint offset {name}: {value:+.4f} deg")
     echo_findings(s, out_dir)
 
 

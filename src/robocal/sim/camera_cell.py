@@ -17,7 +17,7 @@ import numpy as np
 from ..camera import Camera
 from ..transforms import compose, invert_transforms, so3_exp, transforms_from
 
-__all__ = ["HandEyeTruth", "simulate_hand_eye_poses", "default_camera", "SETUPS"]
+__all__ = ["HandEyeTruth", "simulate_hand_eye_poses", "default_camera", "robot_joints", "reachable", "SETUPS"]
 
 SETUPS = ("eye_in_hand", "eye_to_hand")
 
@@ -94,17 +94,20 @@ def _pose_noise(n: int, rng, sigma_mm: float, sigma_deg: float) -> np.ndarray:
 def simulate_hand_eye_poses(object_points: np.ndarray, *, setup: str = "eye_in_hand", n_images: int = 15,
                             camera: Camera | None = None, front_z: int = -1, pose_noise_mm: float = 0.05,
                             pose_noise_deg: float = 0.01, max_tilt_deg: float = 40.0, margin_px: float = 40.0,
-                            seed: int = 0) -> HandEyeTruth:
+                            seed: int = 0, accept=None) -> HandEyeTruth:
     """A cell with random truth and ``n_images`` views of the board (module docstring).
 
     object_points (P, 3) [mm]: the board's points (to keep them in view); front_z: the board's
-    :attr:`~robocal.io.boards.Board.front_z` (the camera stays on the printed side).
+    :attr:`~robocal.io.boards.Board.front_z` (the camera stays on the printed side); accept:
+    optional ``accept(T_base_flange (M, 4, 4)) -> (M,) bool`` (e.g. a robot's reach): views are then
+    drawn from 4 x ``n_images`` candidates, the first accepted ones kept.
     """
     if setup not in SETUPS:
         raise ValueError(f"setup must be one of {', '.join(SETUPS)}, got {setup!r}")
     rng = np.random.default_rng(seed)
     camera = camera or default_camera()
-    T_camera_target = _views(camera, np.asarray(object_points, float), front_z, n_images, rng, max_tilt_deg, margin_px)
+    n_draw = n_images if accept is None else 4 * n_images
+    T_camera_target = _views(camera, np.asarray(object_points, float), front_z, n_draw, rng, max_tilt_deg, margin_px)
     if setup == "eye_in_hand":
         # camera about 100 mm off the flange, looking roughly along the tool axis
         camera_pose = transforms_from(so3_exp(rng.normal(0, 0.3, 3)), np.array([60.0, -40.0, 110.0]) + rng.normal(0, 10, 3))
@@ -119,6 +122,41 @@ def simulate_hand_eye_poses(object_points: np.ndarray, *, setup: str = "eye_in_h
         target_pose = transforms_from(so3_exp(rng.normal(0, 0.3, 3)), np.array([0.0, 0.0, 120.0]) + rng.normal(0, 10, 3))
         # T_base_flange = T_base_camera T_camera_target T_target_flange
         T_true = compose(camera_pose, T_camera_target, invert_transforms(target_pose))
+    if accept is not None:
+        keep = np.flatnonzero(accept(T_true))[:n_images]
+        if len(keep) < n_images:
+            raise ValueError(f"only {len(keep)} of {n_draw} drawn views are accepted (robot reach?); need {n_images}")
+        T_camera_target, T_true = T_camera_target[keep], T_true[keep]
     T_reported = compose(T_true, _pose_noise(n_images, rng, pose_noise_mm, pose_noise_deg))
     return HandEyeTruth(setup, camera, camera_pose, target_pose, T_true, T_reported, T_camera_target,
                         float(pose_noise_mm), float(pose_noise_deg))
+
+
+def _ik_branches(model, T_base_flange: np.ndarray):
+    from ..kinematics.ik_analytic import ik_analytic, is_analytic
+
+    if not is_analytic(model):
+        raise ValueError(f"robot {model.name}: joints for the simulated cell need a 6R robot with a spherical wrist "
+                         "(closed-form inverse kinematics)")
+    T = np.asarray(model.T_world_base) @ np.asarray(T_base_flange, dtype=float).reshape(-1, 4, 4)
+    q, valid = ik_analytic(model, T, within_limits=True)
+    cost = np.where(valid, np.nansum(q ** 2, axis=2), np.inf)
+    best = np.argmin(cost, axis=1)
+    rows = np.arange(len(T))
+    return q[rows, best], np.isfinite(cost[rows, best])
+
+
+def reachable(model, T_base_flange: np.ndarray) -> np.ndarray:
+    """(N,) bool: which flange poses (N, 4, 4) [mm, base frame] ``model`` reaches within its limits."""
+    return _ik_branches(model, T_base_flange)[1]
+
+
+def robot_joints(model, T_base_flange: np.ndarray) -> np.ndarray:
+    """(N, n) controller joints [rad] that put ``model``'s flange at ``T_base_flange`` (N, 4, 4) [mm,
+    the model's base frame]: its closed-form inverse kinematics within the joint limits, the branch
+    closest to the zero configuration. ``ValueError`` naming the poses it cannot reach."""
+    q, ok = _ik_branches(model, T_base_flange)
+    if not ok.all():
+        raise ValueError(f"robot {model.name} cannot reach the flange poses of images {np.flatnonzero(~ok).tolist()} "
+                         "within its joint limits; choose another robot or seed")
+    return q

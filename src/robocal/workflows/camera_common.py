@@ -151,7 +151,5 @@ def identifiability_lines(report) -> list:
         return ["every estimated parameter is identifiable from these images"]
     lines = []
     for d in dropped:
-        why = d.get("why", "not identifiable")
-        other = d.get("trades_off_with")
-        lines.append(f"{d['name']}: {why}" + (f" (trades off with {', '.join(map(str, other))})" if other else ""))
+        lines.append(f"{d['name']}: {d.get('why', 'not identifiable')}; held at its start value")
     return lines

@@ -30,9 +30,11 @@ import numpy as np
 from ..calib.outputs import json_ready
 from ..io.boards import parse_board
 from ..io.camera_files import read_camera
-from ..io.image_poses import pair_images_with_poses
+from ..io.image_poses import pair_images_with_labels, pair_images_with_poses
+from ..io.programs.joint_table import read_joint_program
 from ..io.ros_calibration import read_cal_data
 from ..report.camera_report import write_camera_report
+from ..robots import load_robot
 from ..transforms import invert_transforms, rotation_angle
 from .camera_calibrate import camera_summary
 from .camera_common import (
@@ -68,11 +70,12 @@ def _rms(residuals) -> float:
     return float(np.sqrt(np.mean(np.sum(r ** 2, axis=1)))) if len(r) else float("nan")
 
 
-def _inputs(cal_data, poses, images, board, setup, camera_file):
-    """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source, homography threshold)."""
+def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None, robot=None):
+    """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source, homography
+    threshold, joints or None, robot model or None)."""
     if cal_data is not None:
-        if poses is not None or images is not None:
-            raise ValueError("give either cal_data.yaml or --poses with --images, not both")
+        if poses is not None or images is not None or joints_file is not None:
+            raise ValueError("give either cal_data.yaml or --poses/--joints with --images, not both")
         d = read_cal_data(cal_data)
         b = parse_board(board) if board else d.board
         if setup is not None and setup != d.setup:
@@ -80,34 +83,51 @@ def _inputs(cal_data, poses, images, board, setup, camera_file):
                              "or fix the file")
         cam = read_camera(camera_file) if camera_file else d.camera
         return (d.image_paths, d.labels, d.T_base_flange, b, d.blob_settings, cam, d.setup, str(d.path),
-                d.homography_threshold)
-    if poses is None or images is None or board is None:
-        raise ValueError("need --poses POSES.csv, --images DIR and --board SPEC (or a cal_data.yaml)")
+                d.homography_threshold, None, None)
+    if (poses is None) == (joints_file is None) or images is None or board is None:
+        raise ValueError("need --poses POSES.csv or --joints JOINTS.csv --robot ROBOT, with --images DIR and "
+                         "--board SPEC (or a cal_data.yaml)")
     b = parse_board(board)
-    pairs = pair_images_with_poses(images, poses)
     cam = read_camera(camera_file) if camera_file else None
-    return (pairs.image_paths, pairs.labels, pairs.T_base_flange, b, None, cam, setup or "eye_in_hand",
-            f"{poses} + {images}", None)
+    setup = setup or "eye_in_hand"
+    if poses is not None:
+        pairs = pair_images_with_poses(images, poses)
+        return (pairs.image_paths, pairs.labels, pairs.T_base_flange, b, None, cam, setup, f"{poses} + {images}",
+                None, None, None)
+    if robot is None:
+        raise ValueError("--joints needs --robot (a shipped robot name or a robot file)")
+    model = load_robot(robot)
+    program = read_joint_program(joints_file, model)
+    paths, idx = pair_images_with_labels(images, program.names, joints_file)
+    q = program.joints[idx]
+    F = model.kinematics_with(q, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
+    return (paths, tuple(program.names[i] for i in idx), F, b, None, cam, setup, f"{joints_file} ({model.name}) + "
+            f"{images}", None, q, model)
 
 
 def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
                   method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
-                  robot_pose_sigma="default", homography_threshold=None, out_dir=None, overwrite: bool = False,
-                  progress=None) -> dict:
+                  robot_pose_sigma="default", homography_threshold=None, joints=None, robot=None,
+                  joint_offsets: bool = False, out_dir=None, overwrite: bool = False, progress=None) -> dict:
     """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
 
     robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
     refinement, ``None`` to take the flange poses as exact (as ROS-Industrial's calibration does),
     ``"default"`` for :func:`~robocal.handeye.refine.refine_hand_eye`'s default.
     homography_threshold [px]: skip images whose detections one homography cannot explain
-    (default: the cal_data.yaml value, else no check)."""
+    (default: the cal_data.yaml value, else no check). joints: a ``robocal-program/1`` joint table
+    (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
+    flange poses are the robot file's forward kinematics; ``joint_offsets`` also estimates the
+    robot's joint zero offsets."""
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.refine import refine_hand_eye
 
     if setup is not None and setup not in SETUPS:
         raise ValueError(f"setup must be one of {', '.join(SETUPS)}, got {setup!r}")
-    paths, labels, F, b, blobs, camera, setup, source, file_threshold = _inputs(cal_data, poses, images, board, setup,
-                                                                                camera_file)
+    paths, labels, F, b, blobs, camera, setup, source, file_threshold, q, model = _inputs(
+        cal_data, poses, images, board, setup, camera_file, joints, robot)
+    if joint_offsets and q is None:
+        raise ValueError("--joint-offsets needs --joints JOINTS.csv and --robot ROBOT")
     threshold = file_threshold if homography_threshold is None else homography_threshold
     if out_dir is not None:
         check_outputs_free(out_dir, HANDEYE_OUTPUTS, overwrite)
@@ -126,6 +146,8 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         raise ValueError(f"the camera is for {camera.image_size[0]}x{camera.image_size[1]} px images, the images are "
                          f"{detected.image_size[0]}x{detected.image_size[1]} px")
     extra = {} if isinstance(robot_pose_sigma, str) else {"robot_pose_sigma": robot_pose_sigma}
+    if q is not None:
+        extra.update(joints=q[used], robot=model, joint_offsets=bool(joint_offsets))
     result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method, refine_intrinsics=refine_intrinsics,
                              min_points=b.min_points, **extra)
     idx_used = np.flatnonzero(used)
@@ -176,8 +198,9 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         "identifiability": identifiability_lines(result.identifiability),
         "linear": linear, "images": rows,
     }
-    if getattr(result, "joint_offsets_rad", None) is not None:
-        summary["joint_offsets_rad"] = result.joint_offsets_rad
+    if joint_offsets and getattr(result, "joint_offsets_rad", None) is not None:
+        names = getattr(result, "joint_offset_names", ()) or [f"joint{k + 1}" for k in range(len(result.joint_offsets_rad))]
+        summary["joint_offsets_deg"] = {n: float(np.degrees(v)) for n, v in zip(names, result.joint_offsets_rad)}
     if out_dir is not None:
         per_image = np.array([np.nan if r["backprojection_rms_px"] is None else r["backprojection_rms_px"] for r in rows])
         overlays = overlay_pngs(detected, projected, per_image)
