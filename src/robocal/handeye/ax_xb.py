@@ -86,12 +86,14 @@ def daniilidis(A, B) -> np.ndarray:
     S[:, :3, 0], S[:, :3, 1:4] = ar[:, 1:] - br[:, 1:], skew(ar[:, 1:] + br[:, 1:])
     S[:, 3:, 0], S[:, 3:, 1:4] = ad[:, 1:] - bd[:, 1:], skew(ad[:, 1:] + bd[:, 1:])
     S[:, 3:, 4], S[:, 3:, 5:8] = S[:, :3, 0], S[:, :3, 1:4]
-    v = np.linalg.svd(S.reshape(-1, 8))[2][-2:]  # the two-dimensional null space
+    v = np.linalg.svd(S.reshape(-1, 8), full_matrices=False)[2][-2:]  # the two-dimensional null space
     u1, v1, u2, v2 = v[0, :4], v[0, 4:], v[1, :4], v[1, 4:]
     # q = l1 (u1, v1) + l2 (u2, v2): |q_r| = 1 and q_r . q_d = 0; with s = l1 / l2 the second is quadratic
     a, b, c = u1 @ v1, u1 @ v2 + u2 @ v1, u2 @ v2
     roots = np.roots([a, b, c]) if abs(a) > 1e-15 else np.array([-c / b])
-    roots = np.real(roots[np.abs(np.imag(roots)) < 1e-9])
+    real = np.abs(np.imag(roots)) < 1e-9
+    # noisy motions can push the discriminant below zero: the nearest real choice is the real part
+    roots = np.real(roots[real]) if real.any() else np.real(roots[:1])
     norms = roots**2 * (u1 @ u1) + 2 * roots * (u1 @ u2) + u2 @ u2
     s = roots[np.argmax(norms)]
     l2 = 1.0 / np.sqrt(norms.max())

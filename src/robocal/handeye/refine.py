@@ -31,8 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calib import Problem, solve
-from ..calib.blocks import CameraIntrinsics, FramesBlock, GaussianPrior, RobotGeometry
-from ..calib.residuals import FlangeReprojectionResidual
+from ..calib.blocks import CameraIntrinsics, FramesBlock, RobotGeometry
+from ..calib.residuals import FlangeReprojectionResidual, PosePriorResidual
 from ..calib.solve import NotConvergedWarning
 from ..camera import Camera
 from ..kinematics.links import link_operations
@@ -65,7 +65,8 @@ class HandEyeRefinement:
     joint_offsets_rad: the joint-offset corrections (rad; mm for a prismatic joint) in the order of
     ``joint_offset_names``, 0 for held ones, or None; converged; message; T_camera_target (N, 4, 4)
     the per-image PnP poses (NaN for skipped images); skipped: {image index: reason};
-    residuals_mm_rms, per_image_rms_mm (N,).
+    residuals_mm_rms, per_image_rms_mm (N,); outliers: {image index: reason} of the images a robust
+    ``loss`` rejected (their residuals are still reported).
     """
 
     setup: str
@@ -92,6 +93,7 @@ class HandEyeRefinement:
     rms_mm: float = float("nan")
     per_image_rms_mm: np.ndarray | None = None
     joint_offset_names: tuple = ()
+    outliers: dict | None = None
 
 
 def joint_offset_names(model) -> list:
@@ -188,7 +190,9 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     joints (N, n) [rad | mm] + robot (a :class:`~robocal.kinematics.model.RobotModel`) +
     ``joint_offsets=True``: the links come from forward kinematics (the model's base frame,
     ``end_effector`` default its first, usually ``flange``) and the joint offsets are estimated;
-    loss: ``"linear"`` or ``"huber"`` (robust per image); images with fewer than ``min_points``
+    loss: ``"linear"``, ``"huber"`` or ``"cauchy"`` (robust per image, the image's corner rows and its
+    flange-correction prior together; images weighted below 0.5 are dropped and listed in
+    ``outliers``); images with fewer than ``min_points``
     corners are skipped; robot_pose_sigma: ``(mm, deg)`` 1-sigma of the robot's pose error per
     axis (its repeatability): each image gets a flange-pose correction with that Gaussian prior
     (errors in variables; ``None``: the flange poses are taken as exact); pixel_sigma [px]: the
@@ -246,23 +250,29 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
         flange = dict(model=robot, q=q[good], geometry=geometry, end_effector=ee)
     else:
         flange = dict(flange_poses=F)
-    sigma = None
+    sigma, extra = None, []
     if robot_pose_sigma is not None:
         s_mm, s_deg = (float(v) for v in robot_pose_sigma)
         if not (s_mm > 0 and s_deg > 0):
             raise HandEyeError(f"robot_pose_sigma: expected positive (mm, deg), got {robot_pose_sigma!r}")
         corrections = FramesBlock("flange_error", np.tile(np.eye(4), (len(uv), 1, 1)), group="corrections",
-                                  labels=[f"flange_error{i}" for i in np.flatnonzero(good)],
-                                  prior=GaussianPrior(np.tile([np.radians(s_deg)] * 3 + [s_mm] * 3, len(uv))))
+                                  labels=[f"flange_error{i}" for i in np.flatnonzero(good)])
         blocks.append(corrections)
+        # the prior's rows belong to their image: a robust loss weighs a wrong robot reading with its image
+        extra.append(PosePriorResidual(corrections, np.tile([np.radians(s_deg)] * 3 + [s_mm] * 3, len(uv)),
+                                       np.repeat(np.arange(len(uv)), 6)))
         flange["corrections"] = corrections
         sigma = _pixel_sigma(uv, C, camera, X) if pixel_sigma is None else float(pixel_sigma)
     residual = FlangeReprojectionResidual(cam, cam_block, target_block, uv, X, invert=eye_in_hand, sigma=sigma,
                                           **flange)
-    problem = Problem(blocks, [residual], n_poses=len(uv))
+    problem = Problem(blocks, [residual, *extra], n_poses=len(uv))
+    f_scale = None
+    if loss != "linear" and sigma is not None:
+        # weighted rows are ~unit: an image's norm is ~sqrt(its rows); twice that marks a bad image
+        f_scale = 2.0 * float(np.sqrt(np.median(np.bincount(problem.labels[:, 0][problem.labels[:, 0] >= 0]))))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)
-        result = solve(problem, loss=loss)
+        result = solve(problem, loss=loss, f_scale=f_scale)
 
     state = dict(zip([b.name for b in blocks], result.state))
     cam_pose, target_pose = state["camera_pose"][0], state["target_pose"][0]
@@ -286,9 +296,13 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     if joint_offsets:
         offsets = state["joint_offsets"][geometry.index] - geometry.initial[geometry.index]
     dropped = result.identifiability.dropped
+    used = np.flatnonzero(good)
+    outliers = {int(used[o["pose"]]): f"rejected by the {loss} loss: " + o["reason"] for o in result.outliers}
     msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
            f"{result.iterations} iterations from the {method} start; {int(good.sum())} of {N} images, "
            f"RMS {rms:.3f} px, {rms_mm:.4f} mm on the target")
+    if outliers:
+        msg += f"; image(s) {', '.join(map(str, outliers))} rejected as outliers ({loss} loss)"
     if dropped:
         msg += "; not identifiable from these poses (held at their start): " + "; ".join(
             f"{d['name']} ({d['why']})" for d in dropped)
@@ -299,7 +313,8 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
         sigma_rotation_deg=s_rot, sigma_translation_mm=s_tr, covariance=result.covariance,
         variable_names=tuple(result.names), identifiability=result.identifiability, linear=linear,
         joint_offsets_rad=offsets, converged=bool(result.converged), message=msg, T_camera_target=C_all,
-        skipped=skipped, rms_mm=rms_mm, per_image_rms_mm=per_image_mm, joint_offset_names=tuple(offsets_names))
+        skipped=skipped, rms_mm=rms_mm, per_image_rms_mm=per_image_mm, joint_offset_names=tuple(offsets_names),
+        outliers=outliers)
 
 
 def rotation_error_deg(T, T_ref) -> float:

@@ -7,12 +7,12 @@ from .distance import DistanceResidual
 from .fixed_point import FixedPointResidual
 from .plane import PointOnPlaneResidual
 from .points import PointResidual
-from .prior import PriorResidual
+from .prior import PosePriorResidual, PriorResidual
 from .reprojection import ReprojectionResidual
 from .flange_reprojection import FlangeReprojectionResidual
 from .rotation import RotationResidual
 from .tool_pose import ToolPointResidual, ToolRotationResidual, tool_chain
 
 __all__ = ["RESIDUAL_BLOCKS", "Evaluation", "ResidualBlock", "TargetChain", "ChainPoints", "PointResidual",
-           "RotationResidual", "DistanceResidual", "PointOnPlaneResidual", "PriorResidual", "ReprojectionResidual", "FlangeReprojectionResidual", "FixedPointResidual", "ToolPointResidual", "ToolRotationResidual", "tool_chain",
+           "RotationResidual", "DistanceResidual", "PointOnPlaneResidual", "PriorResidual", "PosePriorResidual", "ReprojectionResidual", "FlangeReprojectionResidual", "FixedPointResidual", "ToolPointResidual", "ToolRotationResidual", "tool_chain",
            "jacobian_errors", "perturbed_values"]

@@ -24,10 +24,11 @@ class PriorResidual(ResidualBlock):
         self.block = block
         self.rows = np.flatnonzero(block.free)
         self.row_weight = 1.0 / np.asarray(block.prior.sigma, dtype=float)[self.rows]
+        self.mean = block.prior.mean
         super().__init__((block,), np.full(len(self.rows), -1), None)
 
     def evaluate(self, ev, jacobian):
-        e, D = self.block.prior_error(ev[self.block], self.block.prior.mean)
+        e, D = self.block.prior_error(ev[self.block], self.mean)
         r = e[self.rows] * self.row_weight
         if not jacobian:
             return r, None
@@ -55,3 +56,36 @@ class PriorResidual(ResidualBlock):
 
 def _unit(v):
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+class PosePriorResidual(PriorResidual):
+    """A Gaussian prior on ``block`` whose rows belong to poses: ``r = e / sigma`` as
+    :class:`PriorResidual`, but given here (the block itself carries no prior, so the problem adds
+    no second one) and each free variable's row labelled with ``poses`` (size,), so robust losses
+    weigh it together with that pose's measurements -- e.g. a per-image correction of a robot pose
+    whose prior grows when the robot reading was wrong.
+
+    sigma: scalar or (size,) in the block's variable units; mean: in the block's value
+    representation (default its initial value); poses: (size,) pose index per variable.
+    """
+
+    def __init__(self, block, sigma, poses, mean=None):
+        self.block = block
+        self.rows = np.flatnonzero(block.free)
+        sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (block.size,))
+        if not np.all(sigma > 0):
+            raise ValueError(f"{block.name}: prior sigma must be positive")
+        self.row_weight = 1.0 / sigma[self.rows]
+        self.mean = np.array(block.initial if mean is None else mean, dtype=float)
+        poses = np.asarray(poses, dtype=int).reshape(-1)
+        if poses.shape != (block.size,):
+            raise ValueError(f"{block.name}: poses must have one entry per variable ({block.size})")
+        ResidualBlock.__init__(self, (block,), poses[self.rows], None)
+
+    @classmethod
+    def example(cls, rng):
+        from ..blocks import FramesBlock
+        from .examples import example_frames
+
+        frames = FramesBlock("corrections", example_frames(rng, 3), free=[True] * 16 + [False] * 2)
+        return cls(frames, rng.uniform(0.01, 1.0, 18), np.repeat(np.arange(3), 6), mean=example_frames(rng, 3))

@@ -14,13 +14,16 @@ one module per data set:
 * :func:`read_dlr_justin`         DLR Agile Justin (19 joints), Vicon, 2 hand markers, 500 poses
   (:mod:`.dlr_justin`);
 * :func:`read_hilti_trailblazer`  Hilti Trailblazer (column + Doosan 6R), total station, one set
-  (:mod:`.hilti_trailblazer`).
+  (:mod:`.hilti_trailblazer`);
+* :func:`read_ros_industrial_positioner`  a 2-axis part positioner, target poses measured by a fixed
+  camera, 205 records (:mod:`.ros_industrial_positioner`).
 """
 
 from ._common import DatasetError, RealDataset, datasets_root
 from .boby_fanuc import read_boby_fanuc
 from .dlr_justin import DLR_JUSTIN_JOINTS, read_dlr_justin
 from .hilti_trailblazer import HILTI_CROSS_CMDS, HILTI_SETS, read_hilti_trailblazer
+from .ros_industrial_positioner import read_ros_industrial_positioner
 
 __all__ = [
     "DatasetError",
@@ -32,4 +35,5 @@ __all__ = [
     "read_boby_fanuc",
     "read_dlr_justin",
     "read_hilti_trailblazer",
+    "read_ros_industrial_positioner",
 ]
