@@ -216,3 +216,25 @@ def test_joints_and_robot_file_route_recovers_the_joint_offsets(tmp_path):
     assert any(line.startswith("theta6:") for line in s["identifiability"])
     d = np.array(s["camera_pose"]["position_mm"]) - truth["camera_pose"]["position_mm"]
     assert np.linalg.norm(d) < 0.5
+
+
+def test_robust_loss_names_an_image_whose_pose_is_wrong(simulated, tmp_path):
+    """One flange pose 30 mm off: the plain fit is pulled off by more than 10 mm, --loss huber
+    rejects that image by name and stays within 1 mm of the truth."""
+    out, _ = simulated
+    truth = json.loads((out / "truth.json").read_text())
+    poses = read_flange_poses_csv(out / "flange_poses.csv")
+    T = poses.T_base_flange.copy()
+    T[1, 0, 3] += 30.0
+    write_flange_poses_csv(tmp_path / "bad.csv", poses.labels, T)
+    errors = {}
+    for loss in ("linear", "huber"):
+        r = CliRunner().invoke(main, ["handeye", "solve", "--poses", str(tmp_path / "bad.csv"), "--images",
+                                      str(out / "images"), "--board", truth["board"], "--eye-to-hand", "--camera",
+                                      str(out / "camera.json"), "--loss", loss, "--json"])
+        assert r.exit_code == 0, r.output
+        s = json.loads(r.output[r.output.index("{"):])
+        errors[loss] = np.linalg.norm(np.array(s["camera_pose"]["position_mm"]) - truth["camera_pose"]["position_mm"])
+        outliers = [row["name"] for row in s["images"] if row["outlier"]]
+        assert outliers == ([] if loss == "linear" else ["img_01.png"])
+    assert errors["linear"] > 10.0 and errors["huber"] < 1.0, errors

@@ -33,6 +33,8 @@ def handeye():
 @click.option("--camera", "camera_file", default=None, type=click.Path(path_type=str),
               help="Camera file (robocal JSON, ROS or OpenCV YAML); default: cal_data's intrinsics or a calibration "
                    "on the same images.")
+@click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
+              help="Robust loss per image: images that do not fit (a swapped pose) are rejected and named.")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics together with the hand-eye transform.")
 @click.option("--robot-pose-sigma", type=float, nargs=2, default=None, metavar="MM DEG",
               help="The robot's pose error per axis (errors in variables); default: refine_hand_eye's (0.05 mm, 0.01 deg).")
@@ -44,8 +46,8 @@ def handeye():
               help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, refine_intrinsics, robot_pose_sigma,
-              exact_poses, homography_threshold, out_dir, overwrite, as_json):
+def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
+              refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, as_json):
     """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
     cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC."""
     from ..handeye import HandEyeError
@@ -61,7 +63,7 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
         s = solve_handeye(cal_data=cal_data, poses=poses, images=images, board=board, setup=setup, method=method,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
                           homography_threshold=homography_threshold, joints=joints_file, robot=robot,
-                          joint_offsets=joint_offsets, out_dir=out_dir,
+                          joint_offsets=joint_offsets, loss=loss, out_dir=out_dir,
                           overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
@@ -78,6 +80,9 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
     for m, d in s["linear"].items():
         click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {d['difference_position_mm']:.2f} mm / "
                    f"{d['difference_rotation_deg']:.3f} deg from the refined, RMS {d['reprojection_rms_px']:.2f} px")
+    for r in s["images"]:
+        if r.get("outlier"):
+            click.echo(f"  outlier {r['name']}: {r['outlier']}")
     for name, value in (s.get("joint_offsets_deg") or {}).items():
         click.echo(f"  joint offset {name}: {value:+.4f} deg")
     echo_findings(s, out_dir)

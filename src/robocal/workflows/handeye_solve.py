@@ -108,7 +108,7 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
 def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
                   method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
                   robot_pose_sigma="default", homography_threshold=None, joints=None, robot=None,
-                  joint_offsets: bool = False, out_dir=None, overwrite: bool = False, progress=None) -> dict:
+                  joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None) -> dict:
     """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
 
     robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
@@ -118,7 +118,8 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     (default: the cal_data.yaml value, else no check). joints: a ``robocal-program/1`` joint table
     (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
     flange poses are the robot file's forward kinematics; ``joint_offsets`` also estimates the
-    robot's joint zero offsets."""
+    robot's joint zero offsets. loss: ``"linear"``, or ``"huber"`` / ``"cauchy"`` to reject whole
+    images that do not fit (listed per image as ``outlier``)."""
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.refine import refine_hand_eye
 
@@ -148,9 +149,10 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     extra = {} if isinstance(robot_pose_sigma, str) else {"robot_pose_sigma": robot_pose_sigma}
     if q is not None:
         extra.update(joints=q[used], robot=model, joint_offsets=bool(joint_offsets))
-    result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method, refine_intrinsics=refine_intrinsics,
-                             min_points=b.min_points, **extra)
     idx_used = np.flatnonzero(used)
+    result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method, refine_intrinsics=refine_intrinsics,
+                             min_points=b.min_points, loss=loss, **extra)
+    outliers = {int(idx_used[k]): r for k, r in (getattr(result, "outliers", None) or {}).items()}
     solver_skips = {int(idx_used[k]): r for k, r in (getattr(result, "skipped", None) or {}).items()}
     N = len(used)
     res_px = np.full(detected.image_points.shape, np.nan)
@@ -168,6 +170,7 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     for i, r in enumerate(rows):
         r["label"] = labels[i]
         r["backprojection_rms_px"] = None if not r["used"] else _rms(back[i])
+        r["outlier"] = outliers.get(i)
     linear = {}
     for m, (cam_pose, target_pose) in result.linear.items():
         _, lin_back = backprojection(result.camera, chain_T_camera_target(setup, cam_pose, target_pose, F), X,
@@ -180,6 +183,7 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         linear[m] = d
     summary = {
         "format": "robocal-handeye/1", "setup": setup, "source": source, "board": b.to_dict(), "method": method,
+        "loss": loss,
         "robot_pose_sigma": "exact flange poses" if robot_pose_sigma is None else (
             "refine_hand_eye default" if isinstance(robot_pose_sigma, str) else
             {"mm": robot_pose_sigma[0], "deg": robot_pose_sigma[1]}),
