@@ -123,3 +123,21 @@ def test_board_specs_and_object_points():
                        ("charuco:5x7:30mm:20mm:DICT_9X9_1", "dictionary"), ("checkerboard:9x6:25mm:modified", "expected")]:
         with pytest.raises(BoardSpecError, match=words):
             parse_board(bad)
+
+
+def test_legacy_charuco_pattern_needs_the_legacy_setting():
+    """A board with an even number of rows printed in OpenCV's pre-4.6 pattern: found with
+    ``:legacy``, not (or wrongly) without it."""
+    legacy = parse_board("charuco:5x6:30mm:22mm:DICT_5X5_100:legacy")
+    plain = parse_board("charuco:5x6:30mm:22mm:DICT_5X5_100")
+    cam = default_camera()
+    truth = simulate_hand_eye_poses(legacy.object_points(), n_images=1, camera=cam, front_z=-1, seed=8)
+    texture, affine = board_image(legacy, _texel_mm(legacy))
+    image = BoardRenderer(cam, texture, affine).render(truth.T_camera_target[0], np.random.default_rng(1))
+    T = truth.T_camera_target[0]
+    good = detect_board(image, legacy)
+    assert good.used and good.n_found == legacy.n_points
+    assert np.abs(good.image_points - _truth_pixels(cam, T, legacy.object_points())).max() < 0.4
+    wrong = detect_board(image, plain)
+    err = wrong.image_points - _truth_pixels(cam, T, plain.object_points())
+    assert not wrong.used or wrong.n_found < plain.n_points // 2 or np.nanmax(np.abs(err)) > 5.0
