@@ -26,11 +26,11 @@ def _truth_pixels(camera, T, obj):
 
 @pytest.fixture(scope="module", params=BOARDS)
 def rendered(request):
-    """4 views of a board (seeded), rendered and detected."""
+    """3 views of a board (seeded), rendered and detected."""
     board = parse_board(request.param)
     obj = board.object_points()
     cam = default_camera()
-    truth = simulate_hand_eye_poses(obj, n_images=4, camera=cam, front_z=board.front_z, seed=3)
+    truth = simulate_hand_eye_poses(obj, n_images=3, camera=cam, front_z=board.front_z, seed=3)
     texture, affine = board_image(board, _texel_mm(board))
     renderer = BoardRenderer(cam, texture, affine)
     rng = np.random.default_rng(11)

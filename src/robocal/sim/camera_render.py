@@ -114,30 +114,51 @@ class BoardRenderer:
         rows, cols = self._region(T)
         R, t = T[:3, :3], T[:3, 3]
         r1, r2, r3 = (R[:, k].astype(np.float32) for k in range(3))
-        x, y = self._x[rows, :, cols, :], self._y[rows, :, cols, :]
-        den = r3[0] * x + r3[1] * y + r3[2]
+        x = np.ascontiguousarray(self._x[rows, :, cols, :])
+        y = np.ascontiguousarray(self._y[rows, :, cols, :])
+        # ray parameter s of the plane z = 0: s = (r3 . t) / (r3 . d), d = (x, y, 1)
+        s = r3[0] * x
+        s += r3[1] * y
+        s += r3[2]
         with np.errstate(divide="ignore", invalid="ignore"):
-            s = np.float32(r3 @ t) / den
+            np.divide(np.float32(r3 @ t), s, out=s)
         s[~(s > 0)] = np.nan
-        # the ray point s (x, y, 1) in the board frame: R^T (s d - t)
-        X = s * (r1[0] * x + r1[1] * y + r1[2]) - np.float32(r1 @ t)
-        Y = s * (r2[0] * x + r2[1] * y + r2[2]) - np.float32(r2 @ t)
+        # the ray point s (x, y, 1) in the board frame: R^T (s d - t); then texel coordinates
+        X = r1[0] * x
+        X += r1[1] * y
+        X += r1[2]
+        X *= s
+        X -= np.float32(r1 @ t)
+        Y = r2[0] * x
+        Y += r2[1] * y
+        Y += r2[2]
+        Y *= s
+        Y -= np.float32(r2 @ t)
         A = self.affine.astype(np.float32)
-        col = A[0, 0] * X + A[0, 1] * Y + A[0, 2]
-        row = A[1, 0] * X + A[1, 1] * Y + A[1, 2]
+        col = A[0, 0] * X
+        col += A[0, 1] * Y
+        col += A[0, 2]
+        row = A[1, 0] * X
+        row += A[1, 1] * Y
+        row += A[1, 2]
         Ht, Wt = self.texture.shape
-        inside = (col >= 0) & (col <= Wt - 1) & (row >= 0) & (row <= Ht - 1)
-        col = np.where(inside, col, 0)
-        row = np.where(inside, row, 0)
-        c0 = np.minimum(col.astype(np.int32), Wt - 2)
-        r0 = np.minimum(row.astype(np.int32), Ht - 2)
-        fc = col - c0
-        fr = row - r0
+        inside = (col >= 0) & (col < Wt - 1) & (row >= 0) & (row < Ht - 1)
+        col[~inside] = 0
+        row[~inside] = 0
+        c0 = np.floor(col)
+        r0 = np.floor(row)
+        col -= c0  # fractions
+        row -= r0
+        k = (r0 * Wt + c0).astype(np.int32)
         flat = self.texture.ravel()
-        k = r0 * Wt + c0
-        top = flat[k] + fc * (flat[k + 1] - flat[k])
-        bottom = flat[k + Wt] + fc * (flat[k + Wt + 1] - flat[k + Wt])
-        val = top + fr * (bottom - top)
+        top = flat[k]
+        top += col * (flat[k + 1] - top)
+        k += Wt
+        bottom = flat[k]
+        bottom += col * (flat[k + 1] - bottom)
+        bottom -= top
+        bottom *= row
+        val = top + bottom
         val[~inside] = np.nan
         return rows, cols, val
 
