@@ -47,7 +47,8 @@ def one_run(seed: int, n: int, model: str) -> tuple:
         cal = calibrate_camera(sim.image_points, sim.target_points, (1280, 1024), model=kind, n_distortion=nd, fix=fix)
         names = ("k1", "k2", "p1", "p2", "k3") if kind == "brown" else ("kappa",)
         free = ["fx", "fy", "cx", "cy"] + [d for d in names if d not in fix]
-        res = refine_hand_eye(sim.T_base_flange, sim.image_points, sim.target_points, cal.camera, refine_intrinsics=free)
+        res = refine_hand_eye(sim.T_base_flange, sim.image_points, sim.target_points, cal.camera,
+                              refine_intrinsics=free)
     except HandEyeError:
         return (np.nan,) * 5
     tsai = res.linear["tsai"][0]

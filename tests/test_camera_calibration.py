@@ -25,7 +25,8 @@ def test_intrinsics_match_opencv_within_the_reported_uncertainty():
     assert res.converged and res.rms_px == pytest.approx(0.3 * np.sqrt(2), rel=0.05)
     ok = np.all(np.isfinite(sim.image_points), axis=2)
     rms, K, dist, _, _ = cv2.calibrateCamera(
-        [sim.target_points[m].astype(np.float32) for m in ok], [u[m].astype(np.float32) for u, m in zip(sim.image_points, ok)],
+        [sim.target_points[m].astype(np.float32) for m in ok],
+        [u[m].astype(np.float32) for u, m in zip(sim.image_points, ok)],
         (1280, 1024), None, None, criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12))
     theirs = dict(zip(("fx", "fy", "cx", "cy") + BROWN, (K[0, 0], K[1, 1], K[0, 2], K[1, 2], *dist.ravel()[:5])))
     ours, truth = _values(res.camera), _values(sim.camera)

@@ -47,7 +47,8 @@ def _errors(T, truth):
 def test_refined_hand_eye_beats_every_opencv_linear_method(setup):
     errors, normalised = {}, []
     for seed in range(5):
-        sim = simulate_hand_eye(seed, setup=setup, n_images=15, pixel_noise=0.3, pose_noise_mm=0.05, pose_noise_deg=0.01)
+        sim = simulate_hand_eye(seed, setup=setup, n_images=15, pixel_noise=0.3, pose_noise_mm=0.05,
+                                pose_noise_deg=0.01)
         res = refine_hand_eye(sim.T_base_flange, sim.image_points, sim.target_points, sim.camera, setup=setup)
         assert res.converged and res.camera_pose_frame == ("flange" if setup == "eye_in_hand" else "base")
         # OpenCV on the same data: the same per-image target poses (our PnP, checked against solvePnP below)
@@ -213,3 +214,49 @@ def test_a_robust_loss_rejects_images_whose_poses_were_swapped():
     assert rot < 0.1 and tr < 0.5  # measured 0.048 deg, 0.29 mm
     assert set(robust.outliers) == {4, 9} and "rejected as outliers" in robust.message
     assert robust.per_image_rms_px[4] > 100 and robust.per_image_rms_px[3] < 1.0  # shown, not hidden
+
+
+def test_joint_offsets_eye_in_hand():
+    from robocal.robots import load_robot
+    from robocal.sim.handeye_points import CAMERA_MODELS
+
+    robot = load_robot("abb_irb140")
+    rng = np.random.default_rng(8)
+    names = [f"theta{k}" for k in range(1, 7)]
+    true_offsets = np.radians([0.0, 0.03, -0.04, 0.05, -0.03, 0.0])
+    p_true = robot.params.values.copy()
+    p_true[[robot.params.index(nm) for nm in names]] += true_offsets
+
+    def fk(q, p=None):
+        return robot.kinematics_with(q, p, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
+
+    q0 = np.radians([0.0, 20.0, 10.0, 0.0, 60.0, 0.0])
+    X_fc = _T(np.eye(3), [0.0, 60.0, 80.0])  # the camera on the flange
+    T_bc0 = fk(q0[None], p_true)[0] @ X_fc
+    centre = T_bc0[:3, 3] + 550.0 * T_bc0[:3, 2]
+    Z = np.eye(4)  # the board 550 mm in front of the camera at q0, facing it
+    Z[:3, :3] = np.column_stack([T_bc0[:3, 0], np.cross(-T_bc0[:3, 2], T_bc0[:3, 0]), -T_bc0[:3, 2]])
+    Z[:3, 3] = centre - Z[:3, :3] @ np.array([100.0, 70.0, 0.0])
+    X, camera = board_points(), CAMERA_MODELS["brown"]
+    qs, uvs = [], []
+    while len(qs) < 20:  # random joint poses whose view keeps the whole board in the image
+        q = q0 + rng.uniform(-0.25, 0.25, 6)
+        T_ct = invert_transforms(fk(q[None], p_true) @ X_fc)[0] @ Z
+        P = X @ T_ct[:3, :3].T + T_ct[:3, 3]
+        uv = camera.project(P).pixels
+        if np.all(P[:, 2] > 100) and np.all((uv > 0) & (uv < [1279, 1023])):
+            qs.append(q)
+            uvs.append(uv)
+    q = np.array(qs)
+    uv = np.array(uvs) + rng.normal(0, 0.1, (20, len(X), 2))
+    F_meas = noisy_poses(fk(q), rng, 0.02, 0.002)
+    res = refine_hand_eye(F_meas, uv, X, camera, joints=q, robot=robot, joint_offsets=True,
+                          robot_pose_sigma=(0.02, 0.002))
+    # joint 1 turns the board about the base z axis, joint 6 the camera about the flange z axis
+    assert set(res.identifiability.dropped_names) == {"theta1", "theta6"}
+    err = np.degrees(res.joint_offsets_rad[1:5] - true_offsets[1:5])
+    sigma = np.degrees([np.sqrt(res.covariance[i, i]) for i in map(res.variable_names.index, names[1:5])])
+    assert np.all(np.abs(err) < 3 * sigma) and np.all(sigma < 0.02)  # measured |err| <= 0.012, sigma 0.004-0.017 deg
+    without = refine_hand_eye(F_meas, uv, X, camera, robot_pose_sigma=(0.02, 0.002))
+    floor = 0.1 * np.sqrt(2.0)
+    assert res.rms_px < 1.05 * floor and without.rms_px > 1.25 * floor  # measured 0.144 and 0.370 px

@@ -131,7 +131,8 @@ def _short(name: str) -> str:
 
 
 def calibrate_camera(image_points, target_points, image_size, *, model: str = "brown", n_distortion: int = 5,
-                     camera: Camera | None = None, fix=(), min_points: int = 6, loss: str = "linear") -> CameraCalibration:
+                     camera: Camera | None = None, fix=(), min_points: int = 6,
+                     loss: str = "linear") -> CameraCalibration:
     """Intrinsics and distortion of one camera from N images of a known target.
 
     image_points (N, P, 2) [px], NaN where a corner was not detected; target_points (P, 3) [mm] in

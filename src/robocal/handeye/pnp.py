@@ -148,8 +148,8 @@ def refine_poses(camera, target_points, image_points, T0, *, mask=None, iteratio
     for _ in range(iterations):
         H = np.einsum("npki,npkj->nij", J, J)
         g = np.einsum("npki,npk->ni", J, r)
-        d = np.linalg.solve(H + lam[:, None, None] * (np.einsum("nii->ni", H)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)),
-                            g[..., None])[..., 0]
+        damping = np.einsum("nii->ni", H)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
+        d = np.linalg.solve(H + lam[:, None, None] * damping, g[..., None])[..., 0]
         d[~active] = 0.0
         Tn = T.copy()
         R = so3_exp(d[:, :3])

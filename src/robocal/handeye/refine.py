@@ -218,49 +218,22 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     cam_pose0, target_pose0 = linear[method]
 
     eye_in_hand = setup == "eye_in_hand"
-    cam = CameraIntrinsics(camera.intrinsics, camera.distortion, model=camera.model, name="cam")
-    if refine_intrinsics is True:
-        free_cam = True
-    elif refine_intrinsics is False or refine_intrinsics is None:
-        free_cam = False
-    else:
-        free_cam = [n if n.startswith("cam.") else f"cam.{n}" for n in refine_intrinsics]
-    cam = cam.with_free(free_cam)
+    cam = _intrinsics_block(camera, refine_intrinsics)
     cam_block = FramesBlock("camera_pose", cam_pose0, group="base")
     target_block = FramesBlock("target_pose", target_pose0, group="targets")
-    blocks = [cam, cam_block, target_block]
-    offsets_names: list = []
+    blocks, extra = [cam, cam_block, target_block], []
+    geometry = None
     if joint_offsets:
-        if joints is None or robot is None:
-            raise HandEyeError("joint_offsets=True needs the joints (N, n) [rad] and the robot model")
-        q = np.asarray(joints, dtype=float)
-        if q.shape[0] != N:
-            raise HandEyeError(f"{q.shape[0]} joint rows but {N} images: they must pair one to one")
-        ee = robot.end_effector_index(end_effector)
-        F_fk = robot.kinematics_with(q, T_world_base=np.eye(4), end_effectors=[ee])[0][:, 0]
-        dev = np.linalg.norm(F_fk[:, :3, 3] - F_all[:, :3, 3], axis=1)
-        if dev.max() > 20.0:
-            i = int(np.argmax(dev))
-            raise HandEyeError(f"the robot model's forward kinematics at the joints differ from T_base_flange by "
-                               f"{dev[i]:.1f} mm at image {i}: wrong robot file, joints not in radians, or the "
-                               "poses are not flange poses in the robot base")
-        offsets_names = joint_offset_names(robot)
-        geometry = RobotGeometry(robot, offsets_names, name="joint_offsets")
+        q, ee, geometry = _joint_offsets_block(robot, joints, end_effector, F_all)
         blocks.append(geometry)
         flange = dict(model=robot, q=q[good], geometry=geometry, end_effector=ee)
     else:
         flange = dict(flange_poses=F)
-    sigma, extra = None, []
+    sigma = None
     if robot_pose_sigma is not None:
-        s_mm, s_deg = (float(v) for v in robot_pose_sigma)
-        if not (s_mm > 0 and s_deg > 0):
-            raise HandEyeError(f"robot_pose_sigma: expected positive (mm, deg), got {robot_pose_sigma!r}")
-        corrections = FramesBlock("flange_error", np.tile(np.eye(4), (len(uv), 1, 1)), group="corrections",
-                                  labels=[f"flange_error{i}" for i in np.flatnonzero(good)])
+        corrections, prior = _flange_corrections(robot_pose_sigma, np.flatnonzero(good))
         blocks.append(corrections)
-        # the prior's rows belong to their image: a robust loss weighs a wrong robot reading with its image
-        extra.append(PosePriorResidual(corrections, np.tile([np.radians(s_deg)] * 3 + [s_mm] * 3, len(uv)),
-                                       np.repeat(np.arange(len(uv)), 6)))
+        extra.append(prior)
         flange["corrections"] = corrections
         sigma = _pixel_sigma(uv, C, camera, X) if pixel_sigma is None else float(pixel_sigma)
     residual = FlangeReprojectionResidual(cam, cam_block, target_block, uv, X, invert=eye_in_hand, sigma=sigma,
@@ -278,34 +251,19 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     cam_pose, target_pose = state["camera_pose"][0], state["target_pose"][0]
     value = state["cam"]
     refined = Camera(*value[:4], tuple(value[4:]), camera.model, camera.image_size)
-    # the target in the camera per image at the solution: C^-1 M_i T
-    if joint_offsets:
-        M_all = robot.kinematics_with(q, state["joint_offsets"], T_world_base=np.eye(4), end_effectors=[ee])[0][:, 0]
-    else:
-        M_all = F_all
-    M_all = invert_transforms(M_all) if eye_in_hand else M_all
-    T_ct = invert_transforms(cam_pose)[None] @ M_all @ target_pose[None]
-    T_ct[~good] = np.nan
-    p = np.einsum("nij,pj->npi", T_ct[:, :3, :3], X) + T_ct[:, None, :3, 3]
-    res_px = uv_all - refined.project(p.reshape(-1, 3)).pixels.reshape(uv_all.shape)
-    res_mm = target_plane_residuals(refined, T_ct, uv_all, X)
+    if joint_offsets:  # the links at the solution, from the reported joints
+        F_all = robot.kinematics_with(np.asarray(joints, dtype=float), state["joint_offsets"], T_world_base=np.eye(4),
+                                      end_effectors=[flange["end_effector"]])[0][:, 0]
+    res_px, res_mm = _back_projection(refined, cam_pose, target_pose, F_all, eye_in_hand, good, uv_all, X)
     rms, per_image = rms_px(res_px)
     rms_mm, per_image_mm = rms_px(res_mm)
     s_rot, s_tr = _pose_sigmas(result, "camera_pose", cam_pose)
     offsets = None
-    if joint_offsets:
+    if geometry is not None:
         offsets = state["joint_offsets"][geometry.index] - geometry.initial[geometry.index]
-    dropped = result.identifiability.dropped
     used = np.flatnonzero(good)
     outliers = {int(used[o["pose"]]): f"rejected by the {loss} loss: " + o["reason"] for o in result.outliers}
-    msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
-           f"{result.iterations} iterations from the {method} start; {int(good.sum())} of {N} images, "
-           f"RMS {rms:.3f} px, {rms_mm:.4f} mm on the target")
-    if outliers:
-        msg += f"; image(s) {', '.join(map(str, outliers))} rejected as outliers ({loss} loss)"
-    if dropped:
-        msg += "; not identifiable from these poses (held at their start): " + "; ".join(
-            f"{d['name']} ({d['why']})" for d in dropped)
+    msg = _message(result, method, int(good.sum()), N, rms, rms_mm, outliers, loss)
     return HandEyeRefinement(
         setup=setup, camera_pose=cam_pose, camera_pose_frame="flange" if eye_in_hand else "base",
         target_pose=target_pose, target_pose_frame="base" if eye_in_hand else "flange", camera=refined,
@@ -313,8 +271,74 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
         sigma_rotation_deg=s_rot, sigma_translation_mm=s_tr, covariance=result.covariance,
         variable_names=tuple(result.names), identifiability=result.identifiability, linear=linear,
         joint_offsets_rad=offsets, converged=bool(result.converged), message=msg, T_camera_target=C_all,
-        skipped=skipped, rms_mm=rms_mm, per_image_rms_mm=per_image_mm, joint_offset_names=tuple(offsets_names),
-        outliers=outliers)
+        skipped=skipped, rms_mm=rms_mm, per_image_rms_mm=per_image_mm,
+        joint_offset_names=() if geometry is None else tuple(geometry.names), outliers=outliers)
+
+
+def _intrinsics_block(camera, refine_intrinsics) -> CameraIntrinsics:
+    """The camera's block ``cam``: nothing free, everything (True) or the named parameters."""
+    cam = CameraIntrinsics(camera.intrinsics, camera.distortion, model=camera.model, name="cam")
+    if refine_intrinsics is True:
+        return cam.with_free(True)
+    if refine_intrinsics is False or refine_intrinsics is None:
+        return cam.with_free(False)
+    return cam.with_free([n if n.startswith("cam.") else f"cam.{n}" for n in refine_intrinsics])
+
+
+def _joint_offsets_block(robot, joints, end_effector, F_all) -> tuple:
+    """``(q (N, n), end-effector index, RobotGeometry of the joint offsets)``, after checking that the
+    model's forward kinematics at the joints reproduce the flange poses (to 20 mm)."""
+    if joints is None or robot is None:
+        raise HandEyeError("joint_offsets=True needs the joints (N, n) [rad] and the robot model")
+    q = np.asarray(joints, dtype=float)
+    if q.shape[0] != len(F_all):
+        raise HandEyeError(f"{q.shape[0]} joint rows but {len(F_all)} images: they must pair one to one")
+    ee = robot.end_effector_index(end_effector)
+    F_fk = robot.kinematics_with(q, T_world_base=np.eye(4), end_effectors=[ee])[0][:, 0]
+    dev = np.linalg.norm(F_fk[:, :3, 3] - F_all[:, :3, 3], axis=1)
+    if dev.max() > 20.0:
+        i = int(np.argmax(dev))
+        raise HandEyeError(f"the robot model's forward kinematics at the joints differ from T_base_flange by "
+                           f"{dev[i]:.1f} mm at image {i}: wrong robot file, joints not in radians, or the "
+                           "poses are not flange poses in the robot base")
+    return q, ee, RobotGeometry(robot, joint_offset_names(robot), name="joint_offsets")
+
+
+def _flange_corrections(robot_pose_sigma, images) -> tuple:
+    """``(FramesBlock of one flange correction per used image, its PosePriorResidual)``; the prior's
+    rows belong to their image, so a robust loss weighs a wrong robot reading with its image."""
+    s_mm, s_deg = (float(v) for v in robot_pose_sigma)
+    if not (s_mm > 0 and s_deg > 0):
+        raise HandEyeError(f"robot_pose_sigma: expected positive (mm, deg), got {robot_pose_sigma!r}")
+    n = len(images)
+    block = FramesBlock("flange_error", np.tile(np.eye(4), (n, 1, 1)), group="corrections",
+                        labels=[f"flange_error{i}" for i in images])
+    prior = PosePriorResidual(block, np.tile([np.radians(s_deg)] * 3 + [s_mm] * 3, n), np.repeat(np.arange(n), 6))
+    return block, prior
+
+
+def _back_projection(camera, cam_pose, target_pose, F_all, eye_in_hand, good, uv_all, X) -> tuple:
+    """``(residuals_px, residuals_mm)`` (N, P, 2) of every image with the flange poses as given:
+    the target in the camera is ``C^-1 M_i T``; NaN for skipped images."""
+    M = invert_transforms(F_all) if eye_in_hand else F_all
+    T_ct = invert_transforms(cam_pose)[None] @ M @ target_pose[None]
+    T_ct[~good] = np.nan
+    p = np.einsum("nij,pj->npi", T_ct[:, :3, :3], X) + T_ct[:, None, :3, 3]
+    res_px = uv_all - camera.project(p.reshape(-1, 3)).pixels.reshape(uv_all.shape)
+    return res_px, target_plane_residuals(camera, T_ct, uv_all, X)
+
+
+def _message(result, method, n_used, N, rms, rms_mm, outliers, loss) -> str:
+    """One line: convergence, images, RMS, rejected images, what is not identifiable and why."""
+    msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
+           f"{result.iterations} iterations from the {method} start; {n_used} of {N} images, "
+           f"RMS {rms:.3f} px, {rms_mm:.4f} mm on the target")
+    if outliers:
+        msg += f"; image(s) {', '.join(map(str, outliers))} rejected as outliers ({loss} loss)"
+    if result.identifiability.dropped:
+        msg += "; not identifiable from these poses (held at their start): " + "; ".join(
+            f"{d['name']} ({d['why']})" for d in result.identifiability.dropped)
+    return msg
 
 
 def rotation_error_deg(T, T_ref) -> float:

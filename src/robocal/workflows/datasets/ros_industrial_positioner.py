@@ -117,7 +117,8 @@ def axes_in_camera(problem, result) -> dict:
     n = np.cross(z0, z1)
     dist = abs(np.dot(o1 - o0, n)) / np.linalg.norm(n) if np.linalg.norm(n) > 1e-12 else float("nan")
     return {"axis1_point": o0, "axis1_direction": z0, "axis2_point": o1, "axis2_direction": z1,
-            "angle_deg": float(np.degrees(np.arccos(np.clip(abs(z0 @ z1), -1.0, 1.0)))), "common_normal_mm": float(dist),
+            "angle_deg": float(np.degrees(np.arccos(np.clip(abs(z0 @ z1), -1.0, 1.0)))),
+            "common_normal_mm": float(dist),
             "dropped": [(d["name"], d["why"]) for d in result.identifiability.dropped]}
 
 
