@@ -188,6 +188,14 @@ def test_command_line_errors_are_one_clear_line(simulated, tmp_path):
     write_flange_poses_csv(tmp_path / "one_axis.csv", [f"img_{i:02d}" for i in range(5)], T)
     r = CliRunner().invoke(main, base + ["--poses", str(tmp_path / "one_axis.csv"), "--eye-to-hand"])
     assert r.exit_code == 1 and "one axis" in r.output and "Traceback" not in r.output
+    # fewer than 3 images
+    (tmp_path / "two").mkdir()
+    for name in ("img_00.png", "img_01.png"):
+        (tmp_path / "two" / name).write_bytes((out / "images" / name).read_bytes())
+    write_flange_poses_csv(tmp_path / "two.csv", ["img_00", "img_01"], _poses(2))
+    r = CliRunner().invoke(main, ["handeye", "solve", "--images", str(tmp_path / "two"), "--board", board, "--poses",
+                                  str(tmp_path / "two.csv")])
+    assert r.exit_code == 1 and "at least 3 images" in r.output and "got 2 of 2" in r.output
     r = CliRunner().invoke(main, ["handeye", "solve", "--images", str(out / "images")])
     assert r.exit_code == 2 and "cal_data.yaml" in r.output
     r = CliRunner().invoke(main, base[:2] + ["--poses", str(tmp_path / "four.csv"), "--images", str(out / "images"),

@@ -46,7 +46,7 @@ class DetectedSet:
         if used.sum() < n:
             reasons = "; ".join(f"{name}: {r}" for name, r in zip(self.names, self.skip_reasons) if r)
             raise HandEyeError(f"{what} needs at least {n} images with the board found, got {int(used.sum())} of "
-                               f"{len(used)} ({reasons})")
+                               f"{len(used)}" + (f" ({reasons})" if reasons else ""))
 
 
 def detect_set(paths, board: Board, *, blob_settings: BlobSettings | None = None, homography_threshold=None,
