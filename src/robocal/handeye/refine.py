@@ -94,6 +94,7 @@ class HandEyeRefinement:
     per_image_rms_mm: np.ndarray | None = None
     joint_offset_names: tuple = ()
     outliers: dict | None = None
+    noise_estimate: dict | None = None
 
 
 def joint_offset_names(model) -> list:
@@ -157,6 +158,26 @@ def _linear_solutions(F, C, setup) -> dict:
     return out
 
 
+def _variance_factors(result, n_pixel_rows) -> np.ndarray:
+    """Variance-component factors (3,) for the pixel rows, the correction priors' rotation rows and
+    their translation rows: ``sqrt(sum r^2 / redundancy)`` of each group, the redundancy being the
+    group's rows minus their share of the fitted unknowns (the trace of the hat matrix over the
+    group; Foerstner's estimate). 1 when the assumed sigmas fit the residuals."""
+    r = result.residuals_after
+    ok = np.isfinite(np.diag(result.covariance))
+    J = result.jacobian[:, ok]
+    h = np.einsum("ij,jk,ik->i", J, result.covariance[np.ix_(ok, ok)], J)  # hat-matrix diagonal
+    rows = np.arange(len(r))
+    prior = rows >= n_pixel_rows
+    groups = (~prior, prior & ((rows - n_pixel_rows) % 6 < 3), prior & ((rows - n_pixel_rows) % 6 >= 3))
+    out = np.ones(3)
+    for k, g in enumerate(groups):
+        redundancy = g.sum() - h[g].sum()
+        if redundancy > 0.5:
+            out[k] = np.sqrt(np.sum(r[g] ** 2) / redundancy)
+    return np.clip(out, 0.1, 10.0)
+
+
 def _pixel_sigma(uv, T_camera_target, camera, X) -> float:
     """The corner noise per coordinate [px] from the per-image PnP residuals (6 pose unknowns per image)."""
     p = np.einsum("nij,pj->npi", T_camera_target[:, :3, :3], X) + T_camera_target[:, None, :3, 3]
@@ -195,8 +216,10 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     ``outliers``); images with fewer than ``min_points``
     corners are skipped; robot_pose_sigma: ``(mm, deg)`` 1-sigma of the robot's pose error per
     axis (its repeatability): each image gets a flange-pose correction with that Gaussian prior
-    (errors in variables; ``None``: the flange poses are taken as exact); pixel_sigma [px]: the
-    corner noise per coordinate (default: from the per-image PnP residuals).
+    (errors in variables; ``None``: the flange poses are taken as exact; ``"estimate"``: the corner
+    noise and the robot's rotation and translation noise estimated from the data by variance
+    components, reported in ``noise_estimate``); pixel_sigma [px]: the corner noise per coordinate
+    (default: from the per-image PnP residuals).
 
     Raises :class:`HandEyeError` naming the problem for mismatched counts, fewer than 3 usable
     images, pure translations or rotations about one axis only, or a robot model whose forward
@@ -221,7 +244,7 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     cam = _intrinsics_block(camera, refine_intrinsics)
     cam_block = FramesBlock("camera_pose", cam_pose0, group="base")
     target_block = FramesBlock("target_pose", target_pose0, group="targets")
-    blocks, extra = [cam, cam_block, target_block], []
+    blocks = [cam, cam_block, target_block]
     geometry = None
     if joint_offsets:
         q, ee, geometry = _joint_offsets_block(robot, joints, end_effector, F_all)
@@ -229,23 +252,50 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
         flange = dict(model=robot, q=q[good], geometry=geometry, end_effector=ee)
     else:
         flange = dict(flange_poses=F)
+    base_blocks = list(blocks)
+    estimate = isinstance(robot_pose_sigma, str)
+    if estimate and robot_pose_sigma != "estimate":
+        raise HandEyeError(f"robot_pose_sigma: expected (mm, deg), None or 'estimate', got {robot_pose_sigma!r}")
+    pose_sigma = (0.05, 0.01) if estimate else robot_pose_sigma
     sigma = None
-    if robot_pose_sigma is not None:
-        corrections, prior = _flange_corrections(robot_pose_sigma, np.flatnonzero(good))
-        blocks.append(corrections)
-        extra.append(prior)
-        flange["corrections"] = corrections
+    if pose_sigma is not None:
         sigma = _pixel_sigma(uv, C, camera, X) if pixel_sigma is None else float(pixel_sigma)
-    residual = FlangeReprojectionResidual(cam, cam_block, target_block, uv, X, invert=eye_in_hand, sigma=sigma,
-                                          **flange)
-    problem = Problem(blocks, [residual, *extra], n_poses=len(uv))
-    f_scale = None
-    if loss != "linear" and sigma is not None:
-        # weighted rows are ~unit: an image's norm is ~sqrt(its rows); twice that marks a bad image
-        f_scale = 2.0 * float(np.sqrt(np.median(np.bincount(problem.labels[:, 0][problem.labels[:, 0] >= 0]))))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", NotConvergedWarning)
-        result = solve(problem, loss=loss, f_scale=f_scale)
+
+    def build(pose_sigma, sigma):
+        """The problem (and its blocks) for these noise levels."""
+        blocks, extra, kw = list(base_blocks), [], dict(flange)
+        if pose_sigma is not None:
+            corrections, prior = _flange_corrections(pose_sigma, np.flatnonzero(good))
+            blocks.append(corrections)
+            extra.append(prior)
+            kw["corrections"] = corrections
+        residual = FlangeReprojectionResidual(cam, cam_block, target_block, uv, X, invert=eye_in_hand, sigma=sigma,
+                                              **kw)
+        return Problem(blocks, [residual, *extra], n_poses=len(uv)), blocks
+
+    def run(problem, sigma, state0=None):
+        f_scale = None
+        if loss != "linear" and sigma is not None:
+            # weighted rows are ~unit: an image's norm is ~sqrt(its rows); twice that marks a bad image
+            labels = problem.labels[:, 0]
+            f_scale = 2.0 * float(np.sqrt(np.median(np.bincount(labels[labels >= 0]))))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotConvergedWarning)
+            return solve(problem, loss=loss, f_scale=f_scale, state0=state0)
+
+    problem, blocks = build(pose_sigma, sigma)
+    result = run(problem, sigma)
+    noise = None
+    if estimate:  # variance components: pixels, robot rotation, robot translation
+        for _ in range(10):
+            factors = _variance_factors(result, problem.residual_blocks[0].n_rows)
+            if np.all(np.abs(factors - 1.0) < 0.05):
+                break
+            sigma, pose_sigma = sigma * factors[0], (pose_sigma[0] * factors[2], pose_sigma[1] * factors[1])
+            problem, blocks = build(pose_sigma, sigma)
+            result = run(problem, sigma, result.state)
+        noise = {"pixel_sigma_px": float(sigma), "robot_pose_sigma": tuple(float(v) for v in pose_sigma),
+                 "converged": bool(np.all(np.abs(factors - 1.0) < 0.05))}
 
     state = dict(zip([b.name for b in blocks], result.state))
     cam_pose, target_pose = state["camera_pose"][0], state["target_pose"][0]
@@ -272,7 +322,8 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
         variable_names=tuple(result.names), identifiability=result.identifiability, linear=linear,
         joint_offsets_rad=offsets, converged=bool(result.converged), message=msg, T_camera_target=C_all,
         skipped=skipped, rms_mm=rms_mm, per_image_rms_mm=per_image_mm,
-        joint_offset_names=() if geometry is None else tuple(geometry.names), outliers=outliers)
+        joint_offset_names=() if geometry is None else tuple(geometry.names), outliers=outliers,
+        noise_estimate=noise)
 
 
 def _intrinsics_block(camera, refine_intrinsics) -> CameraIntrinsics:
