@@ -39,6 +39,8 @@ _COMMANDS = {
     "history": ("history", "history_cmd", "A robot's calibration and maintenance history.", None),
     "import": ("importing", "import_cmd", "A tracker export and a joint log into a measurement file.", None),
     "plan-poses": ("plan", "plan_poses_cmd", "Measurement poses for a calibration, with the predicted sigma.", None),
+    "camera": ("camera", "camera", "Camera intrinsics and distortion from images of a board.", None),
+    "handeye": ("handeye", "handeye", "Hand-eye calibration of a camera on the flange or in the cell.", None),
     "closed-chain": ("closed_chain", "closed_chain", "Calibration with a laser spot held on plate targets.", None),
 }
 

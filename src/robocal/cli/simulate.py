@@ -37,3 +37,45 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
     click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm)")
     click.echo(f"wrote {r['measurements']} and {r['truth']}")
 
+
+
+@simulate.command("camera")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for images/, flange_poses.csv, camera.json and truth.json.")
+@click.option("--board", default="charuco:9x7:30mm:22mm:DICT_5X5_100", show_default=True,
+              help="Board spec (docs/handeye.md): checkerboard:9x6:25mm, charuco:5x7:36.195mm:18.256mm:DICT_6X6_250, "
+                   "circles:10x10:25.4mm:modified.")
+@click.option("--eye-in-hand/--eye-to-hand", "eye_in_hand", default=True, show_default=True,
+              help="Camera on the flange (board fixed) or fixed in the cell (board on the flange).")
+@click.option("--images", "n_images", default=15, show_default=True, help="Number of images (robot poses).")
+@click.option("--pose-noise-mm", default=0.05, show_default=True, help="Robot pose noise per axis [mm].")
+@click.option("--pose-noise-deg", default=0.01, show_default=True, help="Robot pose noise per axis [deg].")
+@click.option("--orientation", "convention", default="kuka_abc", show_default=True,
+              help="Orientation convention of flange_poses.csv (a robocal.transforms.POSE_CONVENTIONS name).")
+@click.option("--length-unit", type=click.Choice(["mm", "m"]), default="mm", show_default=True)
+@click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True)
+@click.option("--robot", default=None,
+              help="Also write joints.csv: the joints of this robot (shipped name or robot file) at every image.")
+@click.option("--joint-offset-sigma-deg", default=0.05, show_default=True,
+              help="With --robot: spread of the robot's true joint zero offsets around its robot file [deg].")
+@click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses and the image noise.")
+@click.option("--overwrite", is_flag=True, help="Replace the files of an earlier run in the folder.")
+def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, pose_noise_deg, convention,
+                        length_unit, angle_unit, robot, joint_offset_sigma_deg, seed, overwrite):
+    """Render a hand-eye cell: PNG images of a board (1280x1024, lens distortion, blur, lighting,
+    noise), the flange poses as a CSV in a named convention, the camera and the hidden truth."""
+    from ..workflows.camera_simulate import simulate_camera
+
+    if n_images < 1:
+        raise click.ClickException(f"--images must be at least 1, got {n_images}")
+    try:
+        r = simulate_camera(out_dir, board=board, setup="eye_in_hand" if eye_in_hand else "eye_to_hand",
+                            n_images=n_images, pose_noise_mm=pose_noise_mm, pose_noise_deg=pose_noise_deg,
+                            convention=convention, length_unit=length_unit, angle_unit=angle_unit, robot=robot,
+                            joint_offset_sigma_deg=joint_offset_sigma_deg, seed=seed,
+                            overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+    except (ValueError, KeyError, OSError, RuntimeError) as exc:
+        raise _user_error(exc) from None
+    click.echo(f"rendered {r['n_images']} images of {r['board']} ({r['setup']}, seed {seed})")
+    joints = "" if r["joints"] is None else f"{r['joints']}, "
+    click.echo(f"wrote {r['images']}/, {r['poses']}, {joints}{r['camera']} and {r['truth']}")

@@ -35,6 +35,7 @@ __all__ = [
     "read_sensor_points_csv",
     "write_sensor_points_csv",
     "read_flange_poses_csv",
+    "write_flange_poses_csv",
     "read_parallel_barriers_file",
 ]
 
@@ -233,6 +234,33 @@ def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
     meta.update(orientation=conv, length_unit=lu, angle_unit=au)
     return FlangePoses(labels=tuple(labels), T_base_flange=np.array(poses).reshape(-1, 4, 4), convention=conv,
                        length_unit=lu, angle_unit=au, metadata=meta)
+
+
+_ORIENTATION_COLUMNS = {"quaternion": ("qw", "qx", "qy", "qz"), "rotvec": ("rx", "ry", "rz")}
+
+
+def write_flange_poses_csv(path, labels, T_base_flange, *, convention: str = "kuka_abc", length_unit: str = "mm",
+                           angle_unit: str = "deg", notes=(), overwrite: bool = False) -> Path:
+    """Write flange poses ``T_base_flange`` (N, 4, 4) [mm] with their ``labels`` in the format
+    :func:`read_flange_poses_csv` reads (atomic; an existing file needs ``overwrite``). Orientation
+    columns are named ``qw,qx,qy,qz`` (quaternion), ``rx,ry,rz`` (rotvec) or ``a,b,c`` (Euler, in the
+    convention's order); ``notes`` become ``# note:`` lines."""
+    from ..transforms import pose_from_transform
+    from .atomic import atomic_write_text
+
+    T = np.asarray(T_base_flange, dtype=float).reshape(-1, 4, 4)
+    labels = [str(v) for v in labels]
+    if len(labels) != len(T) or len(set(labels)) != len(labels):
+        raise ValueError(f"write_flange_poses_csv: need {len(T)} unique labels, got {len(labels)}")
+    conv = convention.lower()
+    values = pose_from_transform(T, conv, length_unit, angle_unit)
+    lines = [f"# orientation: {conv}", f"# length_unit: {length_unit}"]
+    if conv != "quaternion":
+        lines.append(f"# angle_unit: {angle_unit}")
+    lines += [f"# note: {n}" for n in notes]
+    lines.append(",".join(("pose", "x", "y", "z") + _ORIENTATION_COLUMNS.get(conv, ("a", "b", "c"))))
+    lines += [",".join([lab] + [f"{v:.12g}" for v in row]) for lab, row in zip(labels, values)]
+    return atomic_write_text(path, "\n".join(lines) + "\n", overwrite=overwrite)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,0 +1,92 @@
+"""``robocal handeye solve``: the camera's pose on the flange or in the cell (issue 14)."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from ._common import _user_error
+from .camera import BOARD_HELP, echo_findings
+
+
+@click.group()
+def handeye():
+    """Hand-eye calibration: camera on the flange (eye-in-hand) or fixed in the cell (eye-to-hand)."""
+
+
+@handeye.command("solve")
+@click.argument("cal_data", required=False, type=click.Path(path_type=str))
+@click.option("--poses", default=None, type=click.Path(path_type=str),
+              help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image.")
+@click.option("--joints", "joints_file", default=None, type=click.Path(path_type=str),
+              help="Instead of --poses: a robocal-program/1 joint table (point names = image names), with --robot.")
+@click.option("--robot", default=None, help="With --joints: the robot (shipped name or robot file).")
+@click.option("--joint-offsets", is_flag=True, help="With --joints: also estimate the robot's joint zero offsets.")
+@click.option("--images", default=None, type=click.Path(path_type=str), help="Folder of the images.")
+@click.option("--board", default=None, help=BOARD_HELP + " With cal_data.yaml: taken from its target_finder.")
+@click.option("--eye-in-hand", "setup", flag_value="eye_in_hand", default=None,
+              help="Camera on the flange, board fixed (the default for --poses/--images).")
+@click.option("--eye-to-hand", "setup", flag_value="eye_to_hand", help="Camera fixed in the cell, board on the flange.")
+@click.option("--method", type=click.Choice(["shah", "tsai", "park", "daniilidis"]), default="shah", show_default=True,
+              help="Linear solution the refinement starts from (all are reported side by side).")
+@click.option("--camera", "camera_file", default=None, type=click.Path(path_type=str),
+              help="Camera file (robocal JSON, ROS or OpenCV YAML); default: cal_data's intrinsics or a calibration "
+                   "on the same images.")
+@click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
+              help="Robust loss per image: images that do not fit (a swapped pose) are rejected and named.")
+@click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics together with the hand-eye transform.")
+@click.option("--robot-pose-sigma", type=float, nargs=2, default=None, metavar="MM DEG",
+              help="The robot's pose error per axis (errors in variables); default: refine_hand_eye's (0.05 mm, 0.01 deg).")
+@click.option("--exact-poses", is_flag=True, help="Take the flange poses as exact (as ROS-Industrial's calibration).")
+@click.option("--homography-threshold", type=float, default=None,
+              help="Skip images whose detections one homography misses by more than this mean [px] "
+                   "(default: cal_data.yaml's homography_threshold, else no check).")
+@click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
+              help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
+@click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
+              refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, as_json):
+    """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
+    cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC."""
+    from ..handeye import HandEyeError
+    from ..workflows.handeye_solve import solve_handeye
+
+    if cal_data is None and ((poses is None and joints_file is None) or images is None or board is None):
+        raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv (or --joints JOINTS.csv --robot ROBOT) "
+                               "--images DIR --board SPEC")
+    if exact_poses and robot_pose_sigma:
+        raise click.UsageError("--exact-poses and --robot-pose-sigma exclude each other")
+    sigma = None if exact_poses else (tuple(robot_pose_sigma) if robot_pose_sigma else "default")
+    try:
+        s = solve_handeye(cal_data=cal_data, poses=poses, images=images, board=board, setup=setup, method=method,
+                          camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
+                          homography_threshold=homography_threshold, joints=joints_file, robot=robot,
+                          joint_offsets=joint_offsets, loss=loss, out_dir=out_dir,
+                          overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+    except (ValueError, HandEyeError, OSError) as exc:
+        raise _user_error(exc) from None
+    if as_json:
+        click.echo(json.dumps(s, indent=2))
+        return
+    cp = s["camera_pose"]
+    sig_p, sig_r = cp.get("sigma_position_mm") or [float("nan")] * 3, cp.get("sigma_rotation_deg") or [float("nan")] * 3
+    click.echo(f"hand-eye ({s['setup']}): {s['n_images_used']} of {s['n_images']} images, {s['n_corners']} corners, "
+               f"reprojection RMS {s['reprojection_rms_px']:.3f} px ({'converged' if s['converged'] else 'NOT converged'})")
+    click.echo(f"camera in {cp['frame']}: position {_v(cp['position_mm'])} mm  (1-sigma {_v(sig_p, 3)})")
+    click.echo(f"  rotation vector {_v(cp['rotation_vector_deg'], 4)} deg  (1-sigma {_v(sig_r, 4)})")
+    click.echo("linear solutions (start of the refinement):")
+    for m, d in s["linear"].items():
+        click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {d['difference_position_mm']:.2f} mm / "
+                   f"{d['difference_rotation_deg']:.3f} deg from the refined, RMS {d['reprojection_rms_px']:.2f} px")
+    for r in s["images"]:
+        if r.get("outlier"):
+            click.echo(f"  outlier {r['name']}: {r['outlier']}")
+    for name, value in (s.get("joint_offsets_deg") or {}).items():
+        click.echo(f"  joint offset {name}: {value:+.4f} deg")
+    echo_findings(s, out_dir)
+
+
+def _v(values, digits=2) -> str:
+    return "(" + ", ".join("nan" if v is None else f"{v:.{digits}f}" for v in values) + ")"

@@ -1,0 +1,95 @@
+"""``robocal camera calibrate IMAGES_DIR --board ...``: intrinsics and distortion from images of a
+board (issue 14 item 7). Detection (:mod:`robocal.io.detection`), then
+:func:`robocal.handeye.camera_calibration.calibrate_camera`; outputs, all or nothing:
+
+* ``camera.json`` (robocal-camera/1) and ``camera.yaml`` (ROS camera_info) of the calibrated camera;
+* ``camera_calibration.json``: the summary (RMS, 1-sigma of every parameter, per-image rows with
+  skip reasons, identifiability findings);
+* ``report.html``: per-image RMS, residuals, back-projection overlays.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..calib.outputs import json_ready
+from ..io.boards import parse_board
+from ..io.camera_files import write_camera_json, write_camera_ros_yaml
+from ..io.images import list_images
+from ..report.camera_report import write_camera_report
+from .camera_common import backprojection, detect_set, identifiability_lines, image_rows, overlay_pngs
+from .outputs import check_outputs_free, staged_outputs
+
+__all__ = ["calibrate_camera_images", "CAMERA_OUTPUTS", "camera_summary"]
+
+CAMERA_OUTPUTS = ["camera.json", "camera.yaml", "camera_calibration.json", "report.html"]
+
+
+def _camera_parameters(camera) -> dict:
+    names = ["fx", "fy", "cx", "cy"]
+    names += (["k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"][:len(camera.distortion)] if camera.model == "brown"
+              else ["kappa"])
+    values = [camera.fx, camera.fy, camera.cx, camera.cy, *camera.distortion]
+    return dict(zip(names, (float(v) for v in values)))
+
+
+def camera_summary(camera, sigma: dict | None = None) -> dict:
+    """The camera as JSON: model, parameters by name (px; distortion unitless), 1-sigma, image size."""
+    return {"model": camera.model, "parameters": _camera_parameters(camera), "sigma": dict(sigma or {}),
+            "image_size": None if camera.image_size is None else [int(v) for v in camera.image_size],
+            "units": "fx, fy, cx, cy in pixels (OpenCV pixel-centre convention); distortion coefficients "
+                     "unitless, OpenCV order"}
+
+
+def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str = "brown", n_distortion: int = 5,
+                            fix=(), overwrite: bool = False, progress=None) -> dict:
+    """Calibrate a camera from the images of ``images_dir`` (module docstring). Returns the summary
+    dict (the JSON); writes the outputs when ``out_dir`` is given."""
+    from ..handeye.camera_calibration import calibrate_camera
+
+    b = parse_board(board)
+    if out_dir is not None:
+        check_outputs_free(out_dir, CAMERA_OUTPUTS, overwrite)
+    detected = detect_set(list_images(images_dir), b, progress=progress)
+    detected.require(3, "camera calibration")
+    used = detected.used
+    X = b.object_points()
+    cal = calibrate_camera(detected.image_points[used], X, detected.image_size, model=model,
+                           n_distortion=n_distortion, fix=tuple(fix), min_points=b.min_points)
+    camera = cal.camera if cal.camera.image_size else _with_size(cal.camera, detected.image_size)
+    residuals = np.full(detected.image_points.shape, np.nan)
+    residuals[used] = cal.residuals_px
+    T = np.full((len(used), 4, 4), np.nan)
+    T[used] = cal.T_camera_target
+    solver_skips = {int(np.flatnonzero(used)[k]): r for k, r in (getattr(cal, "skipped", None) or {}).items()}
+    rows = image_rows(detected, residuals, None, solver_skips)
+    summary = {
+        "format": "robocal-camera-calibration/1", "board": b.to_dict(), "images_dir": str(images_dir),
+        "camera": camera_summary(camera, cal.sigma), "reprojection_rms_px": float(cal.rms_px),
+        "n_images": len(rows), "n_images_used": sum(r["used"] for r in rows),
+        "n_corners": int(np.count_nonzero(np.isfinite(residuals[..., 0]))),
+        "converged": bool(cal.converged), "message": cal.message,
+        "identifiability": identifiability_lines(cal.identifiability), "images": rows,
+    }
+    if out_dir is not None:
+        projected, _ = backprojection(camera, T, X, detected.image_points)
+        per_image = np.array([np.nan if r["rms_px"] is None else r["rms_px"] for r in rows])
+        overlays = overlay_pngs(detected, projected, per_image)
+        with staged_outputs(out_dir, CAMERA_OUTPUTS, overwrite=overwrite) as stage:
+            write_camera_json(stage / "camera.json", camera)
+            if camera.model == "brown":
+                write_camera_ros_yaml(stage / "camera.yaml", camera)
+            (stage / "camera_calibration.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
+            write_camera_report(stage / "report.html", {**summary, "_residuals_px": residuals},
+                                title=f"Camera calibration: {Path(images_dir).name}", overlays=overlays)
+        summary["outputs"] = {n: str(Path(out_dir) / n) for n in CAMERA_OUTPUTS if (Path(out_dir) / n).exists()}
+    return summary
+
+
+def _with_size(camera, size):
+    from dataclasses import replace
+
+    return replace(camera, image_size=tuple(int(v) for v in size))

@@ -1,0 +1,221 @@
+"""``robocal handeye solve``: the hand-eye transform from images and flange poses (issue 14 item 7).
+
+Inputs, either
+* ``--poses POSES.csv --images DIR --board SPEC``: a flange-pose CSV in a named convention paired
+  by name with the images (:mod:`robocal.io.image_poses`), or
+* ``path/to/cal_data.yaml``: the ROS-Industrial layout (:mod:`robocal.io.ros_calibration`: board,
+  intrinsics, set-up from ``static_camera``).
+
+The camera comes from ``--camera FILE``, else the layout's intrinsics, else a calibration on the
+same images (:func:`robocal.handeye.camera_calibration.calibrate_camera`). The board is detected in
+every image; :func:`robocal.handeye.refine.refine_hand_eye` starts from a linear solution
+(``--method``) and refines over all corners. Outputs, all or nothing:
+
+* ``handeye.json``: ``camera_pose {frame, position_mm, rotation_vector_deg, quaternion_xyzw,
+  matrix, sigma_*}``, ``target_pose``, ``reprojection_rms_px`` (the solver's), ``backprojection_rms_px``
+  (the target projected through the *reported* flange poses, no per-image corrections), per-image
+  rows with skip reasons, identifiability findings, the linear solutions side by side;
+* ``handeye.yaml``: the camera pose as a ROS transform (metres, quaternion x, y, z, w);
+* ``report.html``: back-projection overlays, per-image RMS, residuals.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..calib.outputs import json_ready
+from ..io.boards import parse_board
+from ..io.camera_files import read_camera
+from ..io.image_poses import pair_images_with_labels, pair_images_with_poses
+from ..io.programs.joint_table import read_joint_program
+from ..io.ros_calibration import read_cal_data
+from ..report.camera_report import write_camera_report
+from ..robots import load_robot
+from ..transforms import invert_transforms, rotation_angle
+from .camera_calibrate import camera_summary
+from .camera_common import (
+    POSE_CONVENTION,
+    backprojection,
+    detect_set,
+    identifiability_lines,
+    image_rows,
+    overlay_pngs,
+    pose_dict,
+    ros_transform_yaml,
+)
+from .outputs import check_outputs_free, staged_outputs
+
+__all__ = ["solve_handeye", "HANDEYE_OUTPUTS", "chain_T_camera_target"]
+
+HANDEYE_OUTPUTS = ["handeye.json", "handeye.yaml", "report.html"]
+SETUPS = ("eye_in_hand", "eye_to_hand")
+
+
+def chain_T_camera_target(setup: str, camera_pose, target_pose, T_base_flange) -> np.ndarray:
+    """(N, 4, 4) the target in the camera through the robot chain: eye-in-hand
+    ``X^-1 F_i^-1 Z`` (X = T_flange_camera, Z = T_base_target), eye-to-hand ``X^-1 F_i Z``
+    (X = T_base_camera, Z = T_flange_target)."""
+    F = np.asarray(T_base_flange, dtype=float)
+    links = invert_transforms(F) if setup == "eye_in_hand" else F
+    return invert_transforms(camera_pose)[None] @ links @ np.asarray(target_pose)[None]
+
+
+def _rms(residuals) -> float:
+    r = residuals.reshape(-1, 2)
+    r = r[np.isfinite(r).all(axis=1)]
+    return float(np.sqrt(np.mean(np.sum(r ** 2, axis=1)))) if len(r) else float("nan")
+
+
+def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None, robot=None):
+    """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source, homography
+    threshold, joints or None, robot model or None)."""
+    if cal_data is not None:
+        if poses is not None or images is not None or joints_file is not None:
+            raise ValueError("give either cal_data.yaml or --poses/--joints with --images, not both")
+        d = read_cal_data(cal_data)
+        b = parse_board(board) if board else d.board
+        if setup is not None and setup != d.setup:
+            raise ValueError(f"{d.path}: static_camera says {d.setup}, but {setup} was asked for; drop the option "
+                             "or fix the file")
+        cam = read_camera(camera_file) if camera_file else d.camera
+        return (d.image_paths, d.labels, d.T_base_flange, b, d.blob_settings, cam, d.setup, str(d.path),
+                d.homography_threshold, None, None)
+    if (poses is None) == (joints_file is None) or images is None or board is None:
+        raise ValueError("need --poses POSES.csv or --joints JOINTS.csv --robot ROBOT, with --images DIR and "
+                         "--board SPEC (or a cal_data.yaml)")
+    b = parse_board(board)
+    cam = read_camera(camera_file) if camera_file else None
+    setup = setup or "eye_in_hand"
+    if poses is not None:
+        pairs = pair_images_with_poses(images, poses)
+        return (pairs.image_paths, pairs.labels, pairs.T_base_flange, b, None, cam, setup, f"{poses} + {images}",
+                None, None, None)
+    if robot is None:
+        raise ValueError("--joints needs --robot (a shipped robot name or a robot file)")
+    model = load_robot(robot)
+    program = read_joint_program(joints_file, model)
+    paths, idx = pair_images_with_labels(images, program.names, joints_file)
+    q = program.joints[idx]
+    F = model.kinematics_with(q, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
+    return (paths, tuple(program.names[i] for i in idx), F, b, None, cam, setup, f"{joints_file} ({model.name}) + "
+            f"{images}", None, q, model)
+
+
+def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
+                  method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
+                  robot_pose_sigma="default", homography_threshold=None, joints=None, robot=None,
+                  joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None) -> dict:
+    """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
+
+    robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
+    refinement, ``None`` to take the flange poses as exact (as ROS-Industrial's calibration does),
+    ``"default"`` for :func:`~robocal.handeye.refine.refine_hand_eye`'s default.
+    homography_threshold [px]: skip images whose detections one homography cannot explain
+    (default: the cal_data.yaml value, else no check). joints: a ``robocal-program/1`` joint table
+    (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
+    flange poses are the robot file's forward kinematics; ``joint_offsets`` also estimates the
+    robot's joint zero offsets. loss: ``"linear"``, or ``"huber"`` / ``"cauchy"`` to reject whole
+    images that do not fit (listed per image as ``outlier``)."""
+    from ..handeye.camera_calibration import calibrate_camera
+    from ..handeye.refine import refine_hand_eye
+
+    if setup is not None and setup not in SETUPS:
+        raise ValueError(f"setup must be one of {', '.join(SETUPS)}, got {setup!r}")
+    paths, labels, F, b, blobs, camera, setup, source, file_threshold, q, model = _inputs(
+        cal_data, poses, images, board, setup, camera_file, joints, robot)
+    if joint_offsets and q is None:
+        raise ValueError("--joint-offsets needs --joints JOINTS.csv and --robot ROBOT")
+    threshold = file_threshold if homography_threshold is None else homography_threshold
+    if out_dir is not None:
+        check_outputs_free(out_dir, HANDEYE_OUTPUTS, overwrite)
+    detected = detect_set(paths, b, blob_settings=blobs, homography_threshold=threshold, progress=progress)
+    detected.require(3, "hand-eye calibration")
+    used = detected.used
+    X = b.object_points()
+    uv = detected.image_points[used]
+    camera_source = "given"
+    if camera is None:
+        cal = calibrate_camera(uv, X, detected.image_size, min_points=b.min_points)
+        camera, camera_source = cal.camera, "calibrated on the same images"
+    if camera.image_size is None:
+        camera = replace(camera, image_size=tuple(int(v) for v in detected.image_size))
+    elif tuple(camera.image_size) != tuple(detected.image_size):
+        raise ValueError(f"the camera is for {camera.image_size[0]}x{camera.image_size[1]} px images, the images are "
+                         f"{detected.image_size[0]}x{detected.image_size[1]} px")
+    extra = {} if isinstance(robot_pose_sigma, str) else {"robot_pose_sigma": robot_pose_sigma}
+    if q is not None:
+        extra.update(joints=q[used], robot=model, joint_offsets=bool(joint_offsets))
+    idx_used = np.flatnonzero(used)
+    result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method, refine_intrinsics=refine_intrinsics,
+                             min_points=b.min_points, loss=loss, **extra)
+    outliers = {int(idx_used[k]): r for k, r in (getattr(result, "outliers", None) or {}).items()}
+    solver_skips = {int(idx_used[k]): r for k, r in (getattr(result, "skipped", None) or {}).items()}
+    N = len(used)
+    res_px = np.full(detected.image_points.shape, np.nan)
+    res_px[used] = result.residuals_px
+    res_mm = np.full(detected.image_points.shape, np.nan)
+    res_mm[used] = result.residuals_mm
+    T_ct = chain_T_camera_target(setup, result.camera_pose, result.target_pose, F)
+    projected, back = backprojection(result.camera, T_ct, X, detected.image_points)
+    back[~used] = np.nan
+    for i in solver_skips:
+        back[i] = np.nan
+        res_px[i] = np.nan
+        res_mm[i] = np.nan
+    rows = image_rows(detected, res_px, res_mm, solver_skips)
+    for i, r in enumerate(rows):
+        r["label"] = labels[i]
+        r["backprojection_rms_px"] = None if not r["used"] else _rms(back[i])
+        r["outlier"] = outliers.get(i)
+    linear = {}
+    for m, (cam_pose, target_pose) in result.linear.items():
+        _, lin_back = backprojection(result.camera, chain_T_camera_target(setup, cam_pose, target_pose, F), X,
+                                     detected.image_points)
+        lin_back[[not r["used"] for r in rows]] = np.nan
+        d = pose_dict(cam_pose, result.camera_pose_frame)
+        d["difference_position_mm"] = float(np.linalg.norm(cam_pose[:3, 3] - result.camera_pose[:3, 3]))
+        d["difference_rotation_deg"] = float(np.degrees(rotation_angle(cam_pose[:3, :3].T @ result.camera_pose[:3, :3])))
+        d["reprojection_rms_px"] = _rms(lin_back)
+        linear[m] = d
+    summary = {
+        "format": "robocal-handeye/1", "setup": setup, "source": source, "board": b.to_dict(), "method": method,
+        "loss": loss,
+        "robot_pose_sigma": "exact flange poses" if robot_pose_sigma is None else (
+            "refine_hand_eye default" if isinstance(robot_pose_sigma, str) else
+            {"mm": robot_pose_sigma[0], "deg": robot_pose_sigma[1]}),
+        "homography_threshold_px": threshold,
+        "convention": POSE_CONVENTION,
+        "camera_pose": pose_dict(result.camera_pose, result.camera_pose_frame, result.sigma_translation_mm,
+                                 result.sigma_rotation_deg),
+        "target_pose": pose_dict(result.target_pose, result.target_pose_frame),
+        "reprojection_rms_px": float(result.rms_px),
+        "backprojection_rms_px": _rms(back),
+        "reprojection_rms_mm": float(getattr(result, "rms_mm", float("nan"))),
+        "n_images": N, "n_images_used": sum(r["used"] for r in rows),
+        "n_corners": int(np.count_nonzero(np.isfinite(back[..., 0]))),
+        "camera": {**camera_summary(result.camera), "source": camera_source, "refined": bool(refine_intrinsics)},
+        "converged": bool(result.converged), "message": result.message,
+        "identifiability": identifiability_lines(result.identifiability),
+        "linear": linear, "images": rows,
+    }
+    if joint_offsets and getattr(result, "joint_offsets_rad", None) is not None:
+        names = getattr(result, "joint_offset_names", ()) or [f"joint{k + 1}" for k in range(len(result.joint_offsets_rad))]
+        summary["joint_offsets_deg"] = {n: float(np.degrees(v)) for n, v in zip(names, result.joint_offsets_rad)}
+    if out_dir is not None:
+        per_image = np.array([np.nan if r["backprojection_rms_px"] is None else r["backprojection_rms_px"] for r in rows])
+        overlays = overlay_pngs(detected, projected, per_image)
+        parent, child = ("tool0", "camera") if setup == "eye_in_hand" else ("base_link", "camera")
+        with staged_outputs(out_dir, HANDEYE_OUTPUTS, overwrite=overwrite) as stage:
+            (stage / "handeye.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
+            (stage / "handeye.yaml").write_text(ros_transform_yaml(
+                result.camera_pose, parent, child,
+                f"robocal hand-eye ({setup}): the camera's optical frame in the robot's "
+                f"{result.camera_pose_frame} frame\nreprojection RMS {result.rms_px:.3f} px"))
+            write_camera_report(stage / "report.html", {**summary, "_residuals_px": back},
+                                title=f"Hand-eye calibration ({setup})", overlays=overlays)
+        summary["outputs"] = {n: str(Path(out_dir) / n) for n in HANDEYE_OUTPUTS}
+    return json_ready(summary)

@@ -1,0 +1,141 @@
+"""Issue 14 real-data acceptance: the ROS-Industrial sets (../shared/datasets/ros_industrial_handeye,
+read in place; skipped with the reason when absent), end to end through `robocal handeye solve
+cal_data.yaml` from the raw images and pose files: the eye-to-hand ChArUco set and the eye-in-hand
+modified circle grid. Detections are captured from the command's own run (one detection per set)
+for the checks of ids/order and for OpenCV's linear methods side by side. Figures: docs/datasets.md."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import robocal.workflows.handeye_solve as handeye_solve
+from robocal.cli.main import main
+from robocal.handeye import refine_hand_eye
+from robocal.handeye.camera_calibration import calibrate_camera
+from robocal.io.datasets import datasets_root
+from robocal.io.ros_calibration import read_cal_data
+
+ROS = datasets_root() / "ros_industrial_handeye" / "raw"
+pytestmark = pytest.mark.skipif(not ROS.is_dir(), reason=f"real data folder {ROS} absent (tests read "
+                                                         "../shared/datasets relative to the repository root)")
+# the source library's reprojection RMS per corner on these images (issue 14)
+SOURCE_RMS_PX = {"test_set_charuco": 2.4, "test_set_10x10": 2.3}
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """`robocal handeye solve <set>/cal_data.yaml --exact-poses --out DIR` per set, with the detections."""
+    out = {}
+    captured = {}
+    original = handeye_solve.detect_set
+
+    def spy(*args, **kwargs):
+        captured["set"] = original(*args, **kwargs)
+        return captured["set"]
+
+    handeye_solve.detect_set = spy
+    try:
+        for name in ("test_set_charuco", "test_set_10x10"):
+            folder = tmp_path_factory.mktemp(name)
+            r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / name / "cal_data.yaml"), "--exact-poses",
+                                          "--out", str(folder), "--json"])
+            assert r.exit_code == 0, r.output
+            summary = json.loads((folder / "handeye.json").read_text())
+            out[name] = (summary, captured.pop("set"), folder)
+    finally:
+        handeye_solve.detect_set = original
+    return out
+
+
+def test_charuco_eye_to_hand_end_to_end(runs):
+    s, det, folder = runs["test_set_charuco"]
+    assert s["setup"] == "eye_to_hand" and s["camera_pose"]["frame"] == "base"
+    skipped = {r["name"]: r["skip_reason"] for r in s["images"] if not r["used"]}
+    assert list(skipped) == ["2.png"] and "too few points: 4 of 24 found" in skipped["2.png"]
+    assert s["n_images_used"] == 15 and s["converged"]
+    # fixed (given) intrinsics without distortion, flange poses exact, as the source: 2.66 px per corner,
+    # above the source's ~2.4 px (docs/datasets.md discusses it); refined intrinsics below
+    assert 2.5 < s["reprojection_rms_px"] < 2.75
+    assert abs(s["backprojection_rms_px"] - s["reprojection_rms_px"]) < 1e-6  # exact poses: the same chain
+    # the solution sits near the layout's own initial guess of the camera (about 1.28 m from the base)
+    guess = read_cal_data(ROS / "test_set_charuco" / "cal_data.yaml").camera_guess
+    assert np.linalg.norm(np.array(s["camera_pose"]["position_mm"]) - guess[:3, 3]) < 15.0
+    # the linear solutions scatter by millimetres to tens of millimetres and all back-project worse
+    lin = s["linear"]
+    assert max(d["difference_position_mm"] for d in lin.values()) > 5.0
+    assert min(d["reprojection_rms_px"] for d in lin.values()) > s["reprojection_rms_px"] + 1.0
+    report = (folder / "report.html").read_text()
+    assert report.count("data:image/png;base64") >= 5 and "2.png" in report and "too few points" in report
+    yaml_text = (folder / "handeye.yaml").read_text()
+    assert "parent_frame: base_link" in yaml_text and "child_frame: camera" in yaml_text
+
+
+def test_circle_grid_eye_in_hand_end_to_end(runs):
+    s, det, _ = runs["test_set_10x10"]
+    assert s["setup"] == "eye_in_hand" and s["camera_pose"]["frame"] == "flange"
+    assert s["n_images_used"] == 15 and s["n_corners"] == 1500 and s["converged"]
+    assert s["reprojection_rms_px"] <= SOURCE_RMS_PX["test_set_10x10"]
+    lin = s["linear"]
+    assert max(d["difference_position_mm"] for d in lin.values()) > 20.0  # tens of mm
+
+
+def test_detections_real_ids_and_orientation(runs):
+    """ChArUco ids in OpenCV's order (per-image PnP with the given intrinsics fits to ~1 px, no
+    0.5 px offset against cornerSubPix); the modified grid's origin is its large dot."""
+    _, det, _ = runs["test_set_charuco"]
+    K = np.array([[1352.02747, 0, 789.67065], [0, 1356.14287, 627.2995], [0, 0, 1]])
+    X = det.board.object_points()
+    for i in np.flatnonzero(det.used):
+        uv = det.image_points[i]
+        ok = np.isfinite(uv[:, 0])
+        _, r, t = cv2.solvePnP(X[ok], uv[ok], K, None)
+        fit = cv2.projectPoints(X[ok], r, t, K, None)[0].reshape(-1, 2)
+        assert np.sqrt(np.mean(np.sum((fit - uv[ok]) ** 2, 1))) < 1.1
+        img = cv2.imread(str(det.paths[i]), cv2.IMREAD_GRAYSCALE)
+        sp = cv2.cornerSubPix(img, uv[ok].astype(np.float32).reshape(-1, 1, 2), (5, 5), (-1, -1),
+                              (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-3)).reshape(-1, 2)
+        assert np.all(np.abs((sp - uv[ok]).mean(axis=0)) < 0.12)
+    _, det, _ = runs["test_set_10x10"]
+    params = cv2.SimpleBlobDetector_Params()
+    params.minArea, params.maxArea, params.minDistBetweenBlobs = 25, 5000, 5
+    blobs = cv2.SimpleBlobDetector_create(params)
+    for i in range(len(det.paths)):
+        kp = blobs.detect(cv2.imread(str(det.paths[i]), cv2.IMREAD_GRAYSCALE))
+        big = np.array(kp[int(np.argmax([k.size for k in kp]))].pt)
+        assert np.linalg.norm(det.image_points[i, 90] - big) < 1.0, det.names[i]
+
+
+def _opencv_linear(F, uv, X, camera, setup):
+    from test_handeye_images import opencv_solutions  # the same OpenCV pipeline as the rendered-image test
+
+    return opencv_solutions(F, uv, X, camera, setup)
+
+
+@pytest.mark.parametrize("name", ["test_set_charuco", "test_set_10x10"])
+def test_opencv_linear_methods_scatter_and_refinement_is_needed(runs, name):
+    s, det, _ = runs[name]
+    data = read_cal_data(ROS / name / "cal_data.yaml")
+    used = det.used
+    from dataclasses import replace
+
+    camera = replace(data.camera, image_size=det.image_size)
+    X = det.board.object_points()
+    solutions = _opencv_linear(data.T_base_flange[used], det.image_points[used], X, camera, data.setup)
+    refined = np.array(s["camera_pose"]["position_mm"])
+    distances = {k: float(np.linalg.norm(T[:3, 3] - refined)) for k, T in solutions.items()}
+    print(name, {k: round(v, 1) for k, v in distances.items()})
+    assert max(distances.values()) > 10.0  # OpenCV's linear answers scatter by tens of millimetres
+    # with the intrinsics refined too, both sets go below the source's RMS
+    res = refine_hand_eye(data.T_base_flange[used], det.image_points[used], X, camera, setup=data.setup,
+                          refine_intrinsics=True, robot_pose_sigma=None)
+    assert res.converged and res.rms_px < SOURCE_RMS_PX[name] * 0.75
+    # two steps, as `camera calibrate` then `handeye solve --camera`: below the source's RMS too
+    cal = calibrate_camera(det.image_points[used], X, det.image_size, min_points=det.board.min_points)
+    two_step = refine_hand_eye(data.T_base_flange[used], det.image_points[used], X, cal.camera, setup=data.setup,
+                               robot_pose_sigma=None)
+    assert two_step.rms_px < SOURCE_RMS_PX[name] * 0.8, two_step.rms_px
