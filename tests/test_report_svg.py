@@ -53,3 +53,13 @@ def test_report_renders_without_importing_matplotlib(tmp_path):
             "print('matplotlib' in sys.modules)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_png_encoder_round_trips_through_opencv():
+    cv2 = pytest.importorskip("cv2")
+    from robocal.report.svg import png_gray
+
+    rng = np.random.default_rng(0)
+    gray = rng.integers(0, 256, (37, 53), dtype=np.uint8)
+    decoded = cv2.imdecode(np.frombuffer(png_gray(gray), np.uint8), cv2.IMREAD_UNCHANGED)
+    assert decoded.dtype == np.uint8 and np.array_equal(decoded, gray)

@@ -13,8 +13,8 @@ import html
 import numpy as np
 
 from ..io.atomic import atomic_write_text
-from ._figures import _figure, _title, figure_png
 from .html import _CSS, _f, _img, _table
+from .svg import Panel, image_overlay
 
 __all__ = ["plot_backprojection", "plot_rms_per_image", "plot_residuals", "render_camera_report",
            "write_camera_report"]
@@ -23,66 +23,43 @@ DETECTED_COLOUR = "#00c000"
 PROJECTED_COLOUR = "#e00000"
 
 
-def plot_backprojection(gray: np.ndarray, detected: np.ndarray, projected: np.ndarray, title: str) -> bytes:
-    """One image with detected (green circles) and projected (red crosses) points, (P, 2) px each."""
-    h, w = gray.shape[:2]
-    width = 6.0
-    fig, axes = _figure(1, 1, (width, width * h / w + 0.5), left=0.05, right=0.05, top=0.4, bottom=0.05)
-    ax = axes[0, 0]
-    ax.imshow(gray, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
-    ok = np.isfinite(detected[:, 0])
-    ax.scatter(detected[ok, 0], detected[ok, 1], s=40, facecolors="none", edgecolors=DETECTED_COLOUR, linewidths=1.2,
-               label="detected")
-    okp = np.isfinite(projected[:, 0])
-    ax.scatter(projected[okp, 0], projected[okp, 1], s=30, marker="x", c=PROJECTED_COLOUR, linewidths=1.0,
-               label="projected")
-    ax.set_xlim(0, w)
-    ax.set_ylim(h, 0)
-    ax.set_xticks([])
-    ax.set_yticks([])
-    ax.legend(loc="lower right", fontsize=8)
-    _title(ax, title)
-    return figure_png(fig)
+def plot_backprojection(gray: np.ndarray, detected: np.ndarray, projected: np.ndarray, title: str) -> str:
+    """One image with detected (green circles) and projected (red crosses) points, (P, 2) px each, as SVG."""
+    return image_overlay(gray, detected, projected, title=title, circle_colour=DETECTED_COLOUR,
+                         cross_colour=PROJECTED_COLOUR)
 
 
-def plot_rms_per_image(names, rms_px, skipped) -> bytes:
-    """Bars of the RMS reprojection error per image [px]; skipped images as grey marks at zero."""
+def plot_rms_per_image(names, rms_px, skipped) -> str:
+    """Bars of the RMS reprojection error per image [px]; skipped images as grey marks at zero (SVG)."""
     n = len(names)
-    fig, axes = _figure(1, 1, (max(5.0, 0.35 * n + 1.5), 3.2), bottom=1.0)
-    ax = axes[0, 0]
-    x = np.arange(n)
+    x = np.arange(n, dtype=float)
     values = np.array([np.nan if v is None else v for v in rms_px], dtype=float)
     used = np.isfinite(values)
-    ax.bar(x[used], values[used], width=0.7, color="#4060c0")
+    panel = Panel(max(420, 26 * n + 120), 300, title="Back-projection error per image", y_label="RMS [px]",
+                  margins=(70, 20, 28, 80))
+    panel.bars(x[used], values[used], 0.7, colour="#4060c0", opacity=1.0)
     if (~used).any():
-        ax.scatter(x[~used], np.zeros((~used).sum()), marker="x", c="#888888", label="skipped")
-        ax.legend(fontsize=8)
-    ax.set_xticks(x)
-    ax.set_xticklabels(names, rotation=90, fontsize=7)
-    ax.set_ylabel("RMS [px]")
-    _title(ax, "Back-projection error per image")
-    return figure_png(fig)
+        panel.points(x[~used], np.zeros(int((~used).sum())), colour="#888888", radius=4)
+        panel.bars([], [], 0.7, colour="#888888", label="skipped (grey dot)")
+    top = float(np.nanmax(values)) if used.any() else 1.0
+    panel.limits(x=(-0.6, n - 0.4), y=(0.0, 1.1 * top or 1.0))
+    panel.x_categories([str(v) for v in names])
+    return panel.svg()
 
 
-def plot_residuals(residuals_px: np.ndarray) -> bytes | None:
-    """Scatter of all corner residuals (detected minus projected) [px], (N, P, 2) with NaN."""
+def plot_residuals(residuals_px: np.ndarray) -> str | None:
+    """Scatter of all corner residuals (detected minus projected) [px], (N, P, 2) with NaN (SVG)."""
     r = np.asarray(residuals_px, dtype=float).reshape(-1, 2)
     r = r[np.isfinite(r).all(axis=1)]
     if len(r) == 0:
         return None
-    fig, axes = _figure(1, 1, (4.2, 4.2))
-    ax = axes[0, 0]
-    ax.scatter(r[:, 0], r[:, 1], s=6, alpha=0.5, c="#4060c0")
     lim = float(np.max(np.abs(r))) * 1.1 or 1.0
-    ax.set_xlim(-lim, lim)
-    ax.set_ylim(lim, -lim)
-    ax.axhline(0, color="#999", lw=0.5)
-    ax.axvline(0, color="#999", lw=0.5)
-    ax.set_aspect("equal")
-    ax.set_xlabel("du [px]")
-    ax.set_ylabel("dv [px]")
-    _title(ax, f"Corner residuals ({len(r)} corners)")
-    return figure_png(fig)
+    panel = Panel(420, 420, title=f"Corner residuals ({len(r)} corners)", x_label="du [px]", y_label="dv [px]")
+    panel.points(r[:, 0], r[:, 1], colour="#4060c0", opacity=0.5, radius=2)
+    panel.hline(0.0, colour="#999999")
+    panel.vline(0.0, colour="#999999")
+    panel.limits(x=(-lim, lim), y=(-lim, lim))
+    return panel.svg()
 
 
 def _pose_rows(summary: dict) -> list:
@@ -99,10 +76,10 @@ def _pose_rows(summary: dict) -> list:
     return rows
 
 
-def render_camera_report(summary: dict, *, title: str, overlays=(), rms_plot: bytes | None = None,
-                         residual_plot: bytes | None = None) -> str:
+def render_camera_report(summary: dict, *, title: str, overlays=(), rms_plot: str | None = None,
+                         residual_plot: str | None = None) -> str:
     """The HTML text. summary: the command's JSON dict (``images`` rows, ``camera``, optional
-    ``camera_pose``/``target_pose``/``linear``/``identifiability``); overlays: PNG bytes of
+    ``camera_pose``/``target_pose``/``linear``/``identifiability``); overlays: SVG text of
     :func:`plot_backprojection`."""
     e = html.escape
     out = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{e(title)}</title><style>{_CSS}</style>"
@@ -158,7 +135,8 @@ def render_camera_report(summary: dict, *, title: str, overlays=(), rms_plot: by
 
 
 def write_camera_report(path, summary: dict, *, title: str, overlays=(), overwrite: bool = False):
-    """Write the report (atomic); figures are drawn from ``summary`` and ``overlays`` (PNG bytes)."""
+    """Write the report (atomic); figures are drawn from ``summary``; ``overlays`` are SVG texts of
+    :func:`plot_backprojection`."""
     rows = summary.get("images", [])
     rms_plot = plot_rms_per_image([r["name"] for r in rows], [r.get("rms_px") for r in rows],
                                   [not r.get("used") for r in rows]) if rows else None

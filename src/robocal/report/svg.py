@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-__all__ = ["Panel", "viridis", "nice_ticks", "log_ticks"]
+__all__ = ["Panel", "viridis", "nice_ticks", "log_ticks", "png_gray", "image_overlay"]
 
 # viridis (matplotlib's default colour map, CC0; published table sampled at 17 evenly spaced points),
 # linearly interpolated in between (within 4/255 of the full table)
@@ -131,14 +131,20 @@ class Panel:
         if label:
             self._legend.append((label, colour, 1.0))
 
-    def points(self, x, y, values, *, vmin: float, vmax: float, radius: float = 3.0, label: str = "") -> None:
-        """Points coloured by ``values`` on viridis over [vmin, vmax], with a colour bar titled ``label``."""
-        x, y, v = (np.asarray(a, dtype=float) for a in (x, y, values))
+    def points(self, x, y, values=None, *, vmin: float = 0.0, vmax: float = 1.0, radius: float = 3.0,
+               label: str = "", colour: str = "blue", opacity: float = 1.0) -> None:
+        """Points coloured by ``values`` on viridis over [vmin, vmax], with a colour bar titled
+        ``label``; without ``values``, all in ``colour``."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         ok = np.isfinite(x) & np.isfinite(y)
-        span = (vmax - vmin) or 1.0
-        self._marks.append(("points", (x[ok], y[ok], viridis((v[ok] - vmin) / span), radius)))
+        if values is None:
+            colours = [self._fill(colour)] * int(ok.sum())
+        else:
+            span = (vmax - vmin) or 1.0
+            colours = viridis((np.asarray(values, dtype=float)[ok] - vmin) / span)
+            self._colourbar = (vmin, vmax, label)
+        self._marks.append(("points", (x[ok], y[ok], colours, radius, opacity)))
         self._extent(x[ok], y[ok])
-        self._colourbar = (vmin, vmax, label)
 
     def hline(self, y: float, colour: str = "black") -> None:
         self._marks.append(("hline", (float(y), colour)))
@@ -268,9 +274,17 @@ class Panel:
         return [f'<polyline points="{pts}" fill="none" stroke="{self._fill(colour)}" stroke-width="1.5"/>']
 
     def _draw_points(self, data, X, Y, *_):
-        x, y, colours, r = data
-        return ["".join(f'<circle cx="{a:.1f}" cy="{b:.1f}" r="{r}" fill="{c}"/>'
-                        for a, b, c in zip(X(x), Y(y), colours))]
+        x, y, colours, r, opacity = data
+        return [f'<g fill-opacity="{opacity}">' + "".join(f'<circle cx="{a:.1f}" cy="{b:.1f}" r="{r}" fill="{c}"/>'
+                                                   for a, b, c in zip(X(x), Y(y), colours)) + "</g>"]
+
+    def vline(self, x: float, colour: str = "black") -> None:
+        self._marks.append(("vline", (float(x), colour)))
+
+    def _draw_vline(self, data, X, Y, x0, x1, y0, y1):
+        x, colour = data
+        px = float(X(x))
+        return [f'<line x1="{px:.1f}" x2="{px:.1f}" y1="{y0}" y2="{y1}" stroke="{self._fill(colour)}" stroke-width="0.8"/>']
 
     def _draw_hline(self, data, X, Y, x0, x1, *_):
         y, colour = data
@@ -303,3 +317,59 @@ class Panel:
         out.append(f'<text x="{xb + 60}" y="{cy:.1f}" text-anchor="middle" transform="rotate(-90 {xb + 60} {cy:.1f})">'
                    f'{_esc(label)}</text>')
         return out
+
+
+def png_gray(gray) -> bytes:
+    """An 8-bit greyscale PNG (bytes) of ``gray`` (H, W) uint8 or float in [0, 255] (PNG spec: IHDR
+    colour type 0, filter 0 per row, zlib-compressed IDAT)."""
+    import struct
+    import zlib
+
+    g = np.clip(np.asarray(gray, dtype=float), 0, 255).astype(np.uint8)
+    if g.ndim != 2:
+        raise ValueError(f"gray: expected an (H, W) image, got shape {g.shape}")
+    h, w = g.shape
+    raw = np.concatenate([np.zeros((h, 1), np.uint8), g], axis=1).tobytes()
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
+
+
+def image_overlay(gray, circles, crosses, *, title: str = "", max_width: int = 800,
+                  circle_colour: str = "#00c000", cross_colour: str = "#e00000", legend=("detected", "projected")) -> str:
+    """An image with marks, as SVG: ``gray`` (H, W) embedded as PNG (downsampled by an integer
+    factor to at most ``max_width`` px), ``circles`` and ``crosses`` (P, 2) pixel coordinates of the
+    full-size image (NaN rows skipped)."""
+    import base64
+
+    g = np.asarray(gray)
+    h, w = g.shape[:2]
+    step = max(1, int(math.ceil(w / max_width)))
+    small = g[::step, ::step]
+    sh, sw = small.shape[:2]
+    s = 1.0 / step
+    top = 22 if title else 0
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {sw} {sh + top}" width="{sw}" height="{sh + top}" '
+           f'font-family="sans-serif" font-size="12">']
+    if title:
+        out.append(f'<text x="{sw / 2:.1f}" y="15" text-anchor="middle">{_esc(title)}</text>')
+    href = "data:image/png;base64," + base64.b64encode(png_gray(small)).decode("ascii")
+    out.append(f'<image x="0" y="{top}" width="{sw}" height="{sh}" href="{href}"/>')
+    c = np.asarray(circles, dtype=float).reshape(-1, 2)
+    c = c[np.isfinite(c).all(axis=1)] * s
+    out.append(f'<g fill="none" stroke="{circle_colour}" stroke-width="1.3">'
+               + "".join(f'<circle cx="{a:.1f}" cy="{b + top:.1f}" r="5"/>' for a, b in c) + "</g>")
+    x = np.asarray(crosses, dtype=float).reshape(-1, 2)
+    x = x[np.isfinite(x).all(axis=1)] * s
+    d = "".join(f"M{a - 3.5:.1f} {b + top - 3.5:.1f}l7 7M{a - 3.5:.1f} {b + top + 3.5:.1f}l7 -7" for a, b in x)
+    out.append(f'<path d="{d}" stroke="{cross_colour}" stroke-width="1.2"/>')
+    out.append(f'<rect x="{sw - 130}" y="{sh + top - 40}" width="126" height="36" fill="white" fill-opacity="0.8"/>'
+               f'<circle cx="{sw - 118}" cy="{sh + top - 29}" r="5" fill="none" stroke="{circle_colour}"/>'
+               f'<text x="{sw - 106}" y="{sh + top - 25}">{_esc(legend[0])}</text>'
+               f'<path d="M{sw - 121.5} {sh + top - 16.5}l7 7M{sw - 121.5} {sh + top - 9.5}l7 -7" stroke="{cross_colour}"/>'
+               f'<text x="{sw - 106}" y="{sh + top - 9}">{_esc(legend[1])}</text>')
+    out.append("</svg>")
+    return "\n".join(out)

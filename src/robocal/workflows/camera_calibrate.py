@@ -20,7 +20,7 @@ from ..io.boards import parse_board
 from ..io.camera_files import write_camera_json, write_camera_ros_yaml
 from ..io.images import list_images
 from ..report.camera_report import write_camera_report
-from .camera_common import backprojection, detect_set, identifiability_lines, image_rows, overlay_pngs
+from .camera_common import backprojection, detect_set, identifiability_lines, image_rows, overlay_figures
 from .outputs import check_outputs_free, staged_outputs
 
 __all__ = ["calibrate_camera_images", "CAMERA_OUTPUTS", "camera_summary"]
@@ -77,7 +77,7 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
     if out_dir is not None:
         projected, _ = backprojection(camera, T, X, detected.image_points)
         per_image = np.array([np.nan if r["rms_px"] is None else r["rms_px"] for r in rows])
-        overlays = overlay_pngs(detected, projected, per_image)
+        overlays = overlay_figures(detected, projected, per_image)
         with staged_outputs(out_dir, CAMERA_OUTPUTS, overwrite=overwrite) as stage:
             write_camera_json(stage / "camera.json", camera)
             if camera.model == "brown":

@@ -13,7 +13,7 @@ from ..io.detection import BlobSettings, detect_images
 from ..io.images import read_image_gray
 from ..transforms import quaternion_from_matrix, rotvec_from_matrix
 
-__all__ = ["DetectedSet", "detect_set", "pose_dict", "image_rows", "ros_transform_yaml", "overlay_pngs",
+__all__ = ["DetectedSet", "detect_set", "pose_dict", "image_rows", "ros_transform_yaml", "overlay_figures",
            "identifiability_lines", "POSE_CONVENTION", "backprojection"]
 
 #: how every pose in the JSON outputs is written
@@ -121,7 +121,7 @@ def ros_transform_yaml(T: np.ndarray, parent: str, child: str, comment: str) -> 
     return "\n".join(lines) + "\n"
 
 
-def overlay_pngs(detected: DetectedSet, projected: np.ndarray, order, k: int = 4) -> list:
+def overlay_figures(detected: DetectedSet, projected: np.ndarray, order, k: int = 4) -> list:
     """Back-projection overlays of up to ``k`` used images: the worst, the best and ones between
     (``order``: per-image RMS, NaN for unused)."""
     from ..report.camera_report import plot_backprojection

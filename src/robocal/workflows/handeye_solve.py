@@ -43,7 +43,7 @@ from .camera_common import (
     detect_set,
     identifiability_lines,
     image_rows,
-    overlay_pngs,
+    overlay_figures,
     pose_dict,
     ros_transform_yaml,
 )
@@ -207,7 +207,7 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         summary["joint_offsets_deg"] = {n: float(np.degrees(v)) for n, v in zip(names, result.joint_offsets_rad)}
     if out_dir is not None:
         per_image = np.array([np.nan if r["backprojection_rms_px"] is None else r["backprojection_rms_px"] for r in rows])
-        overlays = overlay_pngs(detected, projected, per_image)
+        overlays = overlay_figures(detected, projected, per_image)
         parent, child = ("tool0", "camera") if setup == "eye_in_hand" else ("base_link", "camera")
         with staged_outputs(out_dir, HANDEYE_OUTPUTS, overwrite=overwrite) as stage:
             (stage / "handeye.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
