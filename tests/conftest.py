@@ -2,7 +2,7 @@
 
 ``server_db_url`` is ``$ROBOCAL_TEST_DB_URL`` when set (a server the user runs); otherwise the test
 suite starts its own PostgreSQL server once per session from the ``pgserver`` package (a pip
-wheel with the PostgreSQL binaries; the ``test`` extra), in a temporary folder, reached over a
+wheel with the PostgreSQL binaries; the ``test`` extra), in a private temporary folder, reached over a
 Unix socket, and stops it at the end. When neither works the tests that need it are skipped
 with the reason.
 
@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import itertools
 import os
+import shutil
+import tempfile
 
 import pytest
 
@@ -27,7 +29,7 @@ def _with_driver(url: str) -> str:
 
 
 @pytest.fixture(scope="session")
-def server_db_url(tmp_path_factory):
+def server_db_url():
     """URL of a running PostgreSQL server (see the module docstring); skips with the reason if none."""
     given = os.environ.get("ROBOCAL_TEST_DB_URL")
     if given:
@@ -37,9 +39,13 @@ def server_db_url(tmp_path_factory):
         import pgserver
     except ImportError as exc:
         pytest.skip(f"no server database: set ROBOCAL_TEST_DB_URL or install pgserver (the test extra): {exc}")
+    # a private folder, not pytest's numbered basetemp: concurrent pytest runs on a shared machine
+    # rotate those folders away (and the server's files with them)
+    data = tempfile.mkdtemp(prefix="robocal-pg-")
     try:
-        server = pgserver.get_server(tmp_path_factory.mktemp("pg"), cleanup_mode="stop")
+        server = pgserver.get_server(data, cleanup_mode="stop")
     except Exception as exc:  # any failure to start (binaries, permissions, sockets) skips with its reason
+        shutil.rmtree(data, ignore_errors=True)
         pytest.skip(f"the PostgreSQL server from pgserver could not start: {type(exc).__name__}: {exc}")
     url = _with_driver(server.get_uri())
     try:
@@ -47,6 +53,7 @@ def server_db_url(tmp_path_factory):
         yield url
     finally:
         server.cleanup()
+        shutil.rmtree(data, ignore_errors=True)
 
 
 def _throwaway_settings(url: str) -> None:

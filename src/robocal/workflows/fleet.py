@@ -81,6 +81,10 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
     out = ensure_writable_dir(out_dir)
     entries = fleet.entries
     db_target = str(db) if db is not None else None
+    if db_target is not None:  # reachable, and its tables made once, before the workers write
+        from ..store import HistoryStore
+
+        HistoryStore.open(db_target).close()
     rows = run_tasks(client, calibrate_entry, entries, keys=[f"calibrate-{e.id}-{e.index}" for e in entries],
                      progress=progress, on_error=_lost, out_dir=str(out.resolve()), db=db_target, report=report)
     for e, row in zip(entries, rows):
