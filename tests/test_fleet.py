@@ -241,3 +241,50 @@ def test_fleet_file_errors_name_the_entry_and_the_problem(tmp_path, campaigns):
         assert [e.id for e in f.entries] == ["a"]
         (p,) = f.problems
         assert p.index == 2 and message in p.reason, p.reason
+
+
+def _status_history(db, now):
+    """Three robots: 'steady' (noise only, calibrated 10 days ago), 'drifter' (a2 grows 2 um/day,
+    plus noise), 'old' (steady, but last calibrated 200 days ago)."""
+    from datetime import timedelta
+
+    rng = np.random.default_rng(5)
+    plan = {"steady": (0.0, [130, 100, 70, 40, 10]), "drifter": (0.002, [130, 100, 70, 40, 10]),
+            "old": (0.0, [290, 260, 230, 200])}
+    with HistoryStore.open(db) as store:
+        for robot, (rate, days_ago) in plan.items():
+            for d in days_ago:
+                t = now - timedelta(days=d)
+                delta = 0.3 + rate * (130 - d) + rng.normal(0, 0.005)
+                with store.cycle(robot, "geometric_calibration", started_at=t, finished_at=t) as c:
+                    c.add_parameters(["a2", "beta3"], [delta, 1e-5 + rng.normal(0, 1e-6)], units=["mm", "rad"])
+                    c.add_metric("holdout_rms_after", 0.03, "mm")
+
+
+def test_fleet_status_flags_stale_and_drifting_robots(tmp_path, history_db):
+    from datetime import datetime, timezone
+
+    from robocal.workflows.fleet_status import drift_trend, fleet_status
+
+    now = datetime(2026, 6, 1, 12, tzinfo=timezone.utc)
+    _status_history(history_db, now)
+    r = fleet_status(history_db, max_age_days=90, tolerance_mm=0.1, tolerance_deg=0.01, now=now,
+                     plot_dir=tmp_path / "plots")
+    rows = {row["robot"]: row for row in r["robots"]}
+    assert sorted(r["flagged"]) == ["drifter", "old"]
+    assert (rows["old"]["stale"], rows["old"]["drifting"]) == (True, False)
+    assert (rows["drifter"]["stale"], rows["drifter"]["drifting"]) == (False, True)
+    assert not rows["steady"]["stale"] and not rows["steady"]["drifting"]
+    a2 = rows["drifter"]["drift"][0]
+    assert a2["parameter"] == "a2" and a2["over"]
+    # 2 um/day over the 130 days since the first calibration, within the noise of the fitted slope
+    assert a2["slope_per_day"] == pytest.approx(0.002, abs=2e-4) and a2["trend_drift"] == pytest.approx(0.26, abs=0.03)
+    assert abs(rows["steady"]["drift"][0]["trend_drift"]) < 0.03
+    assert Path(rows["drifter"]["plot"]).stat().st_size > 10_000 and "plot" not in rows["steady"]
+    # the trend by hand: exact line through two points, extrapolated
+    t = np.array(["2026-01-01", "2026-01-11"], dtype="datetime64[us]")
+    slope, drift = drift_trend(t, [1.0, 2.0], datetime(2026, 1, 21, tzinfo=timezone.utc))
+    assert (slope, drift) == (pytest.approx(0.1), pytest.approx(2.0))
+    res = CliRunner().invoke(main, ["fleet", "status", "--db", history_db, "--no-plots"])
+    assert res.exit_code == 3, res.output  # against today's date: flagged robots
+    assert "3 robots" in res.output and "DRIFTING" in res.output.split("drifter")[1].splitlines()[0]

@@ -96,3 +96,49 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
                + (f"; history {s['history']}" if s["history"] else ""))
     if c["failed"]:
         sys.exit(EXIT_FAILED_RESULT)
+
+
+@fleet.command("status")
+@click.option("--db", required=True, metavar="PATH_OR_URL",
+              help="History database: an SQLite file or a URL (postgresql+psycopg://user@host/db).")
+@click.option("--max-age", "max_age_days", type=float, default=90.0, show_default=True, metavar="DAYS",
+              help="A robot whose last calibration is older is stale.")
+@click.option("--tolerance", "tolerance_mm", type=float, default=0.1, show_default=True, metavar="MM",
+              help="Flag a length parameter whose drift trend since the first calibration exceeds this.")
+@click.option("--tolerance-deg", type=float, default=0.01, show_default=True, metavar="DEG",
+              help="Flag an angle parameter whose drift trend exceeds this.")
+@click.option("--kind", default="geometric_calibration", show_default=True,
+              type=click.Choice(["geometric_calibration", "thermal_compensation", "tool_recalibration", "measurement"]),
+              help="Which cycles count as calibrations.")
+@click.option("--plots", "plot_dir", default="drift-plots", show_default=True, type=click.Path(file_okay=False),
+              help="Folder for <robot>_drift.png per flagged robot.")
+@click.option("--no-plots", is_flag=True, help="Write no drift plots.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
+def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no_plots, as_json):
+    """Robots whose last calibration is older than --max-age or whose drift trend crosses the
+    tolerance, from the history database (SQLite or PostgreSQL). Exit code 3 when any is flagged."""
+    import json
+
+    from ..store import HistoryError
+    from ..workflows.fleet_status import fleet_status
+
+    try:
+        r = fleet_status(db, max_age_days=max_age_days, tolerance_mm=tolerance_mm, tolerance_deg=tolerance_deg,
+                         kind=kind, plot_dir=None if no_plots else plot_dir)
+    except (ValueError, OSError, HistoryError) as exc:
+        raise _user_error(exc) from None
+    if as_json:
+        click.echo(json.dumps(r, indent=2))
+    else:
+        click.echo(f"{len(r['robots'])} robots in {r['database']}: {len(r['flagged'])} need attention "
+                   f"(stale after {max_age_days:g} days; drift tolerance {tolerance_mm:g} mm, {tolerance_deg:g} deg)")
+        for row in r["robots"]:
+            state = ", ".join(s for s, on in (("STALE", row["stale"]), ("DRIFTING", row["drifting"])) if on) or "ok"
+            age = "-" if row["age_days"] is None else f"{row['age_days']:.1f} d"
+            click.echo(f"  {row['robot']:<24} {state:<16} calibrations {row['calibrations']:>3}  last {age:>9}")
+            for reason in row["reasons"]:
+                click.echo(f"      {reason}")
+            if row.get("plot"):
+                click.echo(f"      plot: {row['plot']}")
+    if r["flagged"]:
+        sys.exit(EXIT_FAILED_RESULT)
