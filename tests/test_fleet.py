@@ -288,3 +288,54 @@ def test_fleet_status_flags_stale_and_drifting_robots(tmp_path, history_db):
     res = CliRunner().invoke(main, ["fleet", "status", "--db", history_db, "--no-plots"])
     assert res.exit_code == 3, res.output  # against today's date: flagged robots
     assert "3 robots" in res.output and "DRIFTING" in res.output.split("drifter")[1].splitlines()[0]
+
+
+# -- robocal fleet study -------------------------------------------------------------------------
+
+def test_chunk_size_keeps_task_overhead_under_five_percent():
+    from robocal.workflows.fleet_chunks import chunk_size, chunks, overhead_share
+
+    # 5 ms per task, 1 ms per item: k >= 5 * 0.95 / (0.05 * 1) = 95 items, share 5 / (5 + 95) = 5 %
+    assert chunk_size(10_000, 1e-3, 5e-3, 2) == 95
+    assert overhead_share(5e-3, 1e-3, 95) == pytest.approx(0.05)
+    assert chunk_size(100, 1e-3, 5e-3, 2) == 50  # never fewer tasks than workers
+    assert chunk_size(10_000, 0.5, 5e-3, 2) == 1  # long items: one per task
+    assert chunks(7, 3) == [(0, 3), (3, 6), (6, 7)]
+
+
+def test_monte_carlo_plan_on_dask_equals_the_serial_loop_and_the_first_order_prediction(client):
+    from robocal.workflows.fleet_study import monte_carlo_plan
+    from robocal.workflows.plan_poses import candidate_poses
+    from robocal.calib.plan import plan_campaign
+    from robocal.robots import load_robot
+
+    model = load_robot("ur10")
+    qk = candidate_poses(model, 30, 400, 2)
+    q_plan = qk[plan_campaign(model, qk, 30)["indices"]]
+    kw = dict(samples=14, noise_mm=0.02, check_poses=100, seed=4)
+    dask_run = monte_carlo_plan("ur10", q_plan, client=client, **kw)
+    serial = monte_carlo_plan("ur10", q_plan, client=None, **kw)
+    assert dask_run["rms_after_mm"] == serial["rms_after_mm"] and dask_run["rms_before_mm"] == serial["rms_before_mm"]
+    c = dask_run["chunking"]
+    assert c["tasks"] * c["chunk_size"] >= 12 and c["workers"] == 2
+    after, before = np.array(dask_run["rms_after_mm"]), np.array(dask_run["rms_before_mm"])
+    # the hidden 0.5 mm / 0.05 deg errors give mm before; after calibration, the model error the
+    # linear theory predicts for 30 D-optimal poses at 0.02 mm noise (within a factor 1.5 at the median)
+    assert np.median(before) > 1.0 and np.all(after < 0.1 * before)
+    ratio = np.median(after) / dask_run["predicted_model_std_mm"]
+    print("MC median after / first-order prediction", ratio)
+    assert 1 / 1.5 < ratio < 1.5, ratio
+
+
+def test_pose_set_selection_is_reproducible_by_plan_poses(client, tmp_path):
+    from robocal.workflows.fleet_study import pose_set_selection
+    from robocal.workflows.plan_poses import plan_poses
+
+    kw = dict(sets=5, count=15, candidates=120, seed=10)
+    r = pose_set_selection("ur10", client=client, **kw)
+    assert r["sets"] == pose_set_selection("ur10", client=None, **kw)["sets"]
+    assert [s["seed"] for s in r["sets"]] == list(range(10, 15))
+    best = r["best"]
+    assert best["holdout_rms_mm"] == min(s["holdout_rms_mm"] for s in r["sets"]) < r["spread_mm"]["max"]
+    p = plan_poses("ur10", tmp_path / "best.csv", count=15, candidates=120, seed=best["seed"])
+    assert p["holdout_rms_mm"] == best["holdout_rms_mm"]

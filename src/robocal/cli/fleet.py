@@ -142,3 +142,142 @@ def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no
                 click.echo(f"      plot: {row['plot']}")
     if r["flagged"]:
         sys.exit(EXIT_FAILED_RESULT)
+
+
+study = click.Group("study", help="Embarrassingly parallel studies as chunked Dask tasks (task overhead under 5 %): "
+                                  "Monte-Carlo uncertainty of a pose plan, pose selection over candidate sets, "
+                                  "thermal screening per robot.",
+                    context_settings={"help_option_names": ["-h", "--help"]})
+fleet.add_command(study)
+
+
+def _write_json(data, out_file):
+    import json
+
+    from ..io.atomic import atomic_write_text
+
+    if out_file:
+        atomic_write_text(out_file, json.dumps(data, indent=2) + "\n", overwrite=True)
+        click.echo(f"wrote {out_file}")
+
+
+def _chunk_line(c):
+    click.echo(f"{c['items']} items in {c['tasks']} tasks of {c['chunk_size']} on {c['workers']} workers: "
+               f"{1e3 * c['item_seconds']:.1f} ms per item, {1e3 * c['task_overhead_seconds']:.1f} ms overhead per "
+               f"task ({100 * c['overhead_share']:.1f} % of a task; limit {100 * c['max_overhead_share']:.0f} %); "
+               f"{c['wall_seconds']:.1f} s")
+
+
+def _progress_bar(label):
+    return click.progressbar(length=1, label=label, file=sys.stderr, show_pos=True)
+
+
+def _study(label, scheduler, workers, fn, *args, **kwargs):
+    from ..workflows.fleet_cluster import FleetClusterError
+
+    try:
+        with _client(scheduler, workers) as client, _progress_bar(label) as bar:
+            def progress(done, total, _row):
+                bar.length = total
+                bar.update(1)
+
+            return fn(*args, client=client, progress=progress, **kwargs)
+    except (ValueError, KeyError, OSError, FleetClusterError) as exc:
+        raise _user_error(exc) from None
+
+
+@study.command("monte-carlo")
+@click.argument("robot")
+@click.argument("poses", type=click.Path(dir_okay=False))
+@click.option("--samples", default=200, show_default=True, help="Virtual robots (each its own true parameters).")
+@click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
+@click.option("--check-poses", default=200, show_default=True, help="Random poses where each result is checked.")
+@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
+              help="Reflector in the flange frame [mm].")
+@click.option("--seed", default=0, show_default=True)
+@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
+@_SCHEDULER
+@_WORKERS
+def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, scheduler, workers):
+    """Monte-Carlo accuracy of calibrating ROBOT from the pose plan POSES (a joint program, e.g. from
+    `robocal plan-poses`): simulated robots measured at those poses, calibrated, checked against
+    their truth."""
+    from ..io.programs.joint_table import read_joint_program
+    from ..workflows.fleet_study import monte_carlo_plan
+
+    try:
+        q = read_joint_program(poses, _robot_model(robot)).joints
+    except (ValueError, OSError) as exc:
+        raise _user_error(exc) from None
+    r = _study("samples", scheduler, workers, monte_carlo_plan, robot, q, samples=samples, noise_mm=noise_mm,
+               check_poses=check_poses, tool=tool, seed=seed)
+    b, a = r["before"], r["after"]
+    click.echo(f"{r['robot']}, {r['n_poses']} poses, {samples} virtual robots, {noise_mm} mm noise: position error "
+               f"at {check_poses} other poses [mm]")
+    click.echo(f"  nominal model     RMS median {_median(r['rms_before_mm']):.4f}  p95 {b['p95']:.4f}")
+    click.echo(f"  calibrated model  RMS median {_median(r['rms_after_mm']):.4f}  p95 {a['p95']:.4f}  "
+               f"max {a['max']:.4f}  (first-order prediction {r['predicted_model_std_mm']:.4f})")
+    _chunk_line(r["chunking"])
+    _write_json(r, out_file)
+
+
+def _median(v):
+    import statistics
+
+    return statistics.median(v)
+
+
+def _robot_model(robot):
+    from ._common import _robot
+
+    return _robot(robot)
+
+
+@study.command("pose-sets")
+@click.argument("robot")
+@click.option("--sets", default=100, show_default=True, help="Candidate sets (seeds SEED .. SEED+SETS-1).")
+@click.option("--count", default=40, show_default=True, help="Poses per plan.")
+@click.option("--candidates", default=800, show_default=True, help="Random candidate poses per set.")
+@click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
+@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z")
+@click.option("--seed", default=0, show_default=True)
+@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
+@_SCHEDULER
+@_WORKERS
+def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, scheduler, workers):
+    """Plan COUNT poses of ROBOT from each of SETS candidate sets; report the best seed
+    (`robocal plan-poses --seed <best>` writes that plan)."""
+    from ..workflows.fleet_study import pose_set_selection
+
+    r = _study("sets", scheduler, workers, pose_set_selection, robot, sets=sets, count=count, candidates=candidates,
+               sigma_mm=sigma_mm, tool=tool, seed=seed)
+    s, best = r["spread_mm"], r["best"]
+    click.echo(f"{r['robot']}: {sets} candidate sets of {candidates}, {count} poses each; predicted held-out RMS "
+               f"min {s['min']:.4f} / median {s['median']:.4f} / max {s['max']:.4f} mm")
+    click.echo(f"best: seed {best['seed']} ({best['holdout_rms_mm']:.4f} mm): robocal plan-poses {robot} --count {count} "
+               f"--candidates {candidates} --seed {best['seed']} --out poses.csv")
+    _chunk_line(r["chunking"])
+    _write_json(r, out_file)
+
+
+@study.command("thermal")
+@click.argument("runs", nargs=-1, required=True, type=click.Path(file_okay=False))
+@click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep per robot.")
+@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
+@_SCHEDULER
+@_WORKERS
+def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
+    """Thermal parameter screening (`robocal thermal screen`) of each robot's run folder RUNS
+    (the robot id is the folder name), one task per robot. Exit code 3 when any failed."""
+    from ..workflows.fleet_study import thermal_screening
+
+    r = _study("robots", scheduler, workers, thermal_screening, [(Path(d).name, d) for d in runs], n_keep=n_keep)
+    for row in r["robots"]:
+        if row["status"] == "ok":
+            lam = row["lambda_percent"]
+            click.echo(f"{row['id']}: {', '.join(row['selected'])}  lambda screened {lam.get('screened', float('nan')):.1f} %")
+        else:
+            click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
+    _write_json(r, out_file)
+    if r["failed"]:
+        sys.exit(EXIT_FAILED_RESULT)
