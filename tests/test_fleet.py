@@ -339,3 +339,20 @@ def test_pose_set_selection_is_reproducible_by_plan_poses(client, tmp_path):
     assert best["holdout_rms_mm"] == min(s["holdout_rms_mm"] for s in r["sets"]) < r["spread_mm"]["max"]
     p = plan_poses("ur10", tmp_path / "best.csv", count=15, candidates=120, seed=best["seed"])
     assert p["holdout_rms_mm"] == best["holdout_rms_mm"]
+
+
+def test_thermal_screening_per_robot_on_dask_equals_thermal_screen(client, tmp_path):
+    from robocal.workflows.fleet_study import thermal_screening
+    from robocal.workflows.thermal_commands import screen_run, simulate_thermal_cell
+
+    simulate_thermal_cell(tmp_path / "cell", n_cycles=8)
+    (tmp_path / "empty").mkdir()
+    runs = [("a", tmp_path / "cell" / "run1"), ("b", tmp_path / "cell" / "run2"), ("bad", tmp_path / "empty")]
+    r = thermal_screening(runs, n_keep=6, client=client)
+    assert (r["ok"], r["failed"]) == (2, 1)
+    a, b, bad = r["robots"]
+    for row, run in ((a, runs[0][1]), (b, runs[1][1])):
+        alone = screen_run(run, n_keep=6)
+        assert row["selected"] == alone["selected"] and row["lambda_percent"] == alone["lambda_percent"]
+        assert len(row["selected"]) == 6
+    assert bad["status"] == "failed" and "missing sphere_cold.csv" in bad["reason"]

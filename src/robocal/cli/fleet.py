@@ -217,6 +217,9 @@ def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, ou
     click.echo(f"  nominal model     RMS median {_median(r['rms_before_mm']):.4f}  p95 {b['p95']:.4f}")
     click.echo(f"  calibrated model  RMS median {_median(r['rms_after_mm']):.4f}  p95 {a['p95']:.4f}  "
                f"max {a['max']:.4f}  (first-order prediction {r['predicted_model_std_mm']:.4f})")
+    if r["unconverged_samples"]:
+        click.echo(f"  {len(r['unconverged_samples'])} sample(s) stopped at the solver's iteration limit (kept): "
+                   f"{r['unconverged_samples'][:10]}")
     _chunk_line(r["chunking"])
     _write_json(r, out_file)
 

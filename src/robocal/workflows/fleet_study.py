@@ -21,10 +21,12 @@ tasks finish in: the Dask run equals the serial loop bit for bit. Chunks are siz
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
 from ..calib import solve
+from ..calib.solve import NotConvergedWarning
 from ..calib.plan import plan_campaign, predicted_model_std
 from ..calib.problem import CalibrationProblem, Target
 from ..metrics import error_statistics
@@ -40,7 +42,7 @@ __all__ = ["monte_carlo_plan", "pose_set_selection", "thermal_screening", "mc_sa
 # -- Monte-Carlo uncertainty of a plan -------------------------------------------------------------
 
 def _mc_one(nominal, q_plan, q_check, tool, noise_mm, spread, seed_seq):
-    """(RMS before, RMS after) [mm] at ``q_check`` of one virtual robot calibrated from ``q_plan``."""
+    """(RMS before, RMS after [mm] at ``q_check``, converged) of one virtual robot calibrated from ``q_plan``."""
     rng = np.random.default_rng(seed_seq)
     virtual = VirtualRobot.perturbed(nominal, rng, length_sigma_mm=spread[0], angle_sigma_deg=spread[1],
                                      offset_sigma_deg=spread[2], joint_noise_deg=0.0, joint_noise_mm=0.0)
@@ -53,15 +55,18 @@ def _mc_one(nominal, q_plan, q_check, tool, noise_mm, spread, seed_seq):
     measured = points(virtual.true_model, q_plan) + rng.normal(0.0, noise_mm, (len(q_plan), 3))
     problem = CalibrationProblem(nominal, q_plan, [Target("reflector", point=tuple(tool))], measured[:, None, :],
                                  base_initial=nominal.T_world_base, point_sigma_mm=noise_mm)
-    result = solve(problem)
+    with warnings.catch_warnings():  # reported per sample instead (the third value)
+        warnings.simplefilter("ignore", NotConvergedWarning)
+        result = solve(problem)
     truth = points(virtual.true_model, q_check)
     after = problem.predict_points(result.state, q=q_check)[:, 0] - truth
     before = points(nominal, q_check) - truth
-    return (float(np.sqrt(np.mean(np.sum(before**2, axis=1)))), float(np.sqrt(np.mean(np.sum(after**2, axis=1)))))
+    return (float(np.sqrt(np.mean(np.sum(before**2, axis=1)))), float(np.sqrt(np.mean(np.sum(after**2, axis=1)))),
+            bool(result.converged))
 
 
 def mc_samples(span, *, robot, q_plan, q_check, tool, noise_mm, spread, seed, n_samples) -> list:
-    """The Monte-Carlo samples ``span = (start, stop)`` (one task): [(before, after), ...]."""
+    """The Monte-Carlo samples ``span = (start, stop)`` (one task): [(before, after, converged), ...]."""
     nominal = load_robot(robot).replace(T_world_base=np.eye(4))
     seqs = np.random.SeedSequence(seed).spawn(n_samples)[span[0]:span[1]]
     return [_mc_one(nominal, q_plan, q_check, tool, noise_mm, spread, s) for s in seqs]
@@ -121,7 +126,8 @@ def monte_carlo_plan(robot, q_plan, *, samples: int = 200, noise_mm: float = 0.0
     poses where each calibrated model is compared with its truth; tool: reflector in the flange
     frame [mm]; spread: (length sigma [mm], angle sigma [deg], joint offset sigma [deg]) of the
     hidden true parameters. Returns the per-sample RMS before/after [mm], their statistics, the
-    first-order prediction and the chunking report.
+    samples whose solve stopped at the iteration limit (``unconverged_samples``, reported, kept),
+    the first-order prediction and the chunking report.
     """
     if samples < 2:
         raise ValueError(f"--samples must be at least 2, got {samples}")
@@ -135,13 +141,14 @@ def monte_carlo_plan(robot, q_plan, *, samples: int = 200, noise_mm: float = 0.0
     kwargs = {"robot": robot, "q_plan": q_plan, "q_check": q_check, "tool": tuple(tool), "noise_mm": noise_mm,
               "spread": tuple(spread), "seed": seed, "n_samples": samples}
     items, report = _chunked(client, mc_samples, samples, kwargs, _workers(client), progress)
-    before = np.array([b for b, _ in items])
-    after = np.array([a for _, a in items])
+    before = np.array([it[0] for it in items])
+    after = np.array([it[1] for it in items])
+    unconverged = [i for i, it in enumerate(items) if not it[2]]
     predicted = predicted_model_std(model, q_plan, q_check, tool=tool, sigma_mm=noise_mm)
     return {"robot": model.name, "n_poses": int(len(q_plan)), "samples": samples, "noise_mm": noise_mm,
             "seed": seed, "rms_before_mm": before.tolist(), "rms_after_mm": after.tolist(),
             "before": error_statistics(before), "after": error_statistics(after),
-            "predicted_model_std_mm": predicted, "chunking": report}
+            "unconverged_samples": unconverged, "predicted_model_std_mm": predicted, "chunking": report}
 
 
 def pose_set_selection(robot, *, sets: int = 100, count: int = 40, candidates: int = 800, sigma_mm: float = 0.02,
