@@ -39,8 +39,9 @@ def _noop(x):
 def measure_task_overhead(client, n_tasks: int = 200) -> float:
     """Seconds of one worker's time per empty task on ``client``: the wall time of ``n_tasks``
     no-op tasks times the number of worker threads, over ``n_tasks`` (after a warm-up batch)."""
-    from distributed import wait
+    from .fleet_cluster import import_distributed
 
+    wait = import_distributed().wait
     threads = sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()) or 1
     wait(client.map(_noop, range(min(20, n_tasks)), pure=False))
     t0 = time.perf_counter()
