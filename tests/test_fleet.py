@@ -356,3 +356,20 @@ def test_thermal_screening_per_robot_on_dask_equals_thermal_screen(client, tmp_p
         assert row["selected"] == alone["selected"] and row["lambda_percent"] == alone["lambda_percent"]
         assert len(row["selected"]) == 6
     assert bad["status"] == "failed" and "missing sphere_cold.csv" in bad["reason"]
+
+
+def test_fleet_calibrate_command_on_an_existing_cluster(campaigns, client, tmp_path):
+    entries = good_entries(campaigns, 2) + [{"id": "lost", "model": "ur10", "measurements": "nowhere.csv"}]
+    fleet = fleet_toml(tmp_path, entries)
+    args = ["fleet", "calibrate", str(fleet), "--out", str(tmp_path / "out"), "--no-report",
+            "--scheduler", client.scheduler.address]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 3, res.output  # one robot failed
+    assert "3 robots: 2 ok, 1 failed, 0 unchanged" in res.output
+    assert "FAILED lost:" in res.output and "nowhere.csv not found" in res.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["history"] == str(tmp_path / "out" / "history.sqlite")
+    again = CliRunner().invoke(main, args)
+    assert "3 robots: 2 ok, 1 failed, 2 unchanged" in again.output
+    both = CliRunner().invoke(main, args + ["--workers", "2"])
+    assert both.exit_code == 1 and "either --scheduler" in both.output
