@@ -175,8 +175,8 @@ def test_every_result_is_recorded_in_the_history(campaigns, client, tmp_path, hi
 
 
 def _write_cycles(task, db):
-    """A worker's task: ``task = (worker_no, k)``: three cycles of robot ``w<worker_no>`` with known
-    content; returns the committed cycle ids."""
+    """A worker's task: ``task = (w, k)``: three cycles of robot ``w<w>`` with known content; returns
+    the committed cycle ids and the worker's address."""
     from datetime import datetime, timedelta, timezone
 
     w, k = task
@@ -190,15 +190,15 @@ def _write_cycles(task, db):
                 c.add_measurements(rng.uniform(-1, 1, (20, 6)), rng.uniform(-1500, 1500, (20, 3)))
                 c.add_metric("index", float(i), "1")
             ids.append(c.id)
-    return ids
+    return ids, distributed.get_worker().address
 
 
 def test_concurrent_writers_on_several_workers_keep_every_committed_cycle(client, history_db):
     # no schema yet: the workers' first opens race to create it (serialised by the store)
     tasks = [(w, k) for k in range(8) for w in range(4)]
-    ids = run_tasks(client, _write_cycles, tasks, db=history_db)
-    assert len({t for t in client.run(lambda: 1)}) == 2  # two workers took part
-    flat = [i for ids_ in ids for i in ids_]
+    done = run_tasks(client, _write_cycles, tasks, db=history_db)
+    assert len({worker for _, worker in done}) == 2  # both workers wrote
+    flat = [i for ids_, _ in done for i in ids_]
     assert len(flat) == len(set(flat)) == 96
     with HistoryStore.open(history_db, create=False) as store:
         assert store.check() == []
@@ -367,6 +367,7 @@ def test_fleet_calibrate_command_on_an_existing_cluster(campaigns, client, tmp_p
     assert res.exit_code == 3, res.output  # one robot failed
     assert "3 robots: 2 ok, 1 failed, 0 unchanged" in res.output
     assert "FAILED lost:" in res.output and "nowhere.csv not found" in res.output
+    assert res.output.strip().splitlines()[-1] == "Error: 1 of 3 robots failed (reasons above)"
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["history"] == str(tmp_path / "out" / "history.sqlite")
     again = CliRunner().invoke(main, args)

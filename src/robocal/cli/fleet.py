@@ -62,8 +62,8 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
 
     Writes OUT/<id>/ (the files of `robocal calibrate`), OUT/summary.json (status ok or failed with
     the reason, per robot), OUT/summary.html and .png. Robots whose inputs are unchanged since an
-    earlier run into OUT are skipped (content hash): a crashed run resumes. Exit code 3 when any
-    robot failed.
+    earlier run into OUT are skipped (content hash): a crashed run resumes. Exit code 3 when some
+    robots failed (the last line counts them), 1 when all did.
     """
     from ..workflows.fleet import run_fleet_calibration
     from ..workflows.fleet_cluster import FleetClusterError
@@ -94,8 +94,18 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
                f"{c['outliers']} outlier(s); {s['wall_seconds']:.1f} s")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values())
                + (f"; history {s['history']}" if s["history"] else ""))
-    if c["failed"]:
-        sys.exit(EXIT_FAILED_RESULT)
+    _exit_on_failures([row for row in s["robots"] if row["status"] != "ok"], c["robots"])
+
+
+def _exit_on_failures(failed, total) -> None:
+    """Every robot failed: one ``Error:`` line, exit 1 (nothing usable). Some failed: a last
+    ``Error:`` line counting them, exit 3. None: return."""
+    if not failed:
+        return
+    if len(failed) == total:
+        raise click.ClickException(f"all {total} robot(s) failed; the first: {failed[0]['id']}: {failed[0]['reason']}")
+    click.echo(f"Error: {len(failed)} of {total} robots failed (reasons above)", err=True)
+    sys.exit(EXIT_FAILED_RESULT)
 
 
 @fleet.command("status")
@@ -271,7 +281,8 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
 @_WORKERS
 def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
     """Thermal parameter screening (`robocal thermal screen`) of each robot's run folder RUNS
-    (the robot id is the folder name), one task per robot. Exit code 3 when any failed."""
+    (the robot id is the folder name), one task per robot. Exit code 3 when some robots failed, 1
+    when all did."""
     from ..workflows.fleet_study import thermal_screening
 
     r = _study("robots", scheduler, workers, thermal_screening, [(Path(d).name, d) for d in runs], n_keep=n_keep)
@@ -282,5 +293,4 @@ def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
         else:
             click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
     _write_json(r, out_file)
-    if r["failed"]:
-        sys.exit(EXIT_FAILED_RESULT)
+    _exit_on_failures([row for row in r["robots"] if row["status"] != "ok"], len(r["robots"]))
