@@ -30,7 +30,7 @@ def plot_fleet_accuracy(rows, title: str) -> bytes:
     """PNG: accuracy before and after calibration per robot (log scale, mm), outliers in red."""
     done = [r for r in rows if _accuracy(r, "after") is not None]
     n = max(1, len(done))
-    fig, axes = _figure(1, 1, (min(4.0 + 0.18 * n, 24.0), 4.2), left=0.9, bottom=1.3)
+    fig, axes = _figure(1, 1, (min(5.0 + 0.18 * n, 24.0), 4.6), left=0.9, bottom=1.0, top=0.8)
     ax = axes[0, 0]
     x = np.arange(len(done))
     before = np.array([_accuracy(r, "before") for r in done], dtype=float)
@@ -45,9 +45,9 @@ def plot_fleet_accuracy(rows, title: str) -> bytes:
         ax.set_yscale("log")
         ax.set_xticks(x)
         ax.set_xticklabels([r["id"] for r in done], rotation=90, fontsize=6 if n > 40 else 8)
-        ax.legend(fontsize=8, loc="upper right")
+        ax.legend(fontsize=8, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=3, frameon=False)
     ax.set_ylabel("position error RMS [mm]\n(held-out poses)")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=10, pad=22)
     ax.grid(True, axis="y", alpha=0.3)
     return figure_png(fig)
 
