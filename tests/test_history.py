@@ -78,26 +78,20 @@ def raw_integrity(path):
         con.close()
 
 
-SERVER_URL = os.environ.get("ROBOCAL_TEST_DB_URL")  # e.g. postgresql+psycopg://user:pw@localhost/robocal_test
-
-
 @pytest.fixture(params=["sqlite3", "sqlalchemy", "server"])
 def store(request, tmp_path):
-    """The same tests on the standard library's sqlite3, on SQLAlchemy over SQLite, and on a server
-    database named by $ROBOCAL_TEST_DB_URL (its robocal tables are dropped after each test)."""
+    """The same tests on the standard library's sqlite3, on SQLAlchemy over SQLite, and on a real
+    PostgreSQL server (``$ROBOCAL_TEST_DB_URL``, else one the suite starts from pgserver: conftest),
+    in a fresh database per test."""
     if request.param != "sqlite3" and not HAVE_SA:
         pytest.skip("SQLAlchemy not installed (the 'db' extra)")
-    if request.param == "server" and not SERVER_URL:
-        pytest.skip("no server database: set ROBOCAL_TEST_DB_URL")
     if request.param == "sqlite3":
         s = HistoryStore.open(tmp_path / "h.sqlite")
     elif request.param == "sqlalchemy":
         s = HistoryStore.open(f"sqlite+pysqlite:///{tmp_path / 'h.sqlite'}")
     else:
-        s = HistoryStore.open(SERVER_URL)
+        s = HistoryStore.open(request.getfixturevalue("fresh_server_db"))
     yield s
-    if request.param == "server":
-        s._backend.metadata.drop_all(s._backend.engine)
     s.close()
 
 

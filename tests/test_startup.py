@@ -43,3 +43,14 @@ def test_loading_a_robot_imports_no_numba():
     probe = "import sys; from robocal.robots import load_robot; load_robot('ur10'); print('numba' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("args", [["--help"], ["fleet", "--help"], ["fleet", "calibrate", "--help"],
+                                  ["fleet", "study", "monte-carlo", "--help"]])
+def test_help_imports_no_dask(args):
+    """dask.distributed (the fleet extra) is imported only when a fleet command runs."""
+    probe = ("import sys\nfrom click.testing import CliRunner\nimport robocal.cli\n"
+             f"r = CliRunner().invoke(robocal.cli.main, {args!r})\nassert r.exit_code == 0, r.output\n"
+             "print(sorted(m for m in ('dask', 'distributed', 'numba', 'matplotlib') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

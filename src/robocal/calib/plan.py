@@ -14,7 +14,7 @@ from .identifiability import analyse_identifiability
 from .poses import pose_jacobians, select_poses
 from .problem import CalibrationProblem, Target
 
-__all__ = ["visible_candidates", "plan_campaign", "predicted_covariance"]
+__all__ = ["visible_candidates", "plan_campaign", "predicted_covariance", "predicted_model_std"]
 
 
 def visible_candidates(points, z_axes, tracker_at, *, range_mm=(1000.0, 15000.0), max_incidence_deg=60.0):
@@ -34,6 +34,36 @@ def predicted_covariance(J_blocks, idx, cols, sigma_mm):
     return sigma_mm**2 * np.linalg.inv(J.T @ J)
 
 
+def _point_problem(model, q, tool, free, sigma_mm):
+    return CalibrationProblem(model.replace(T_world_base=np.eye(4)), q, [Target("reflector", point=tuple(tool))],
+                              free=free, base_initial=np.eye(4), point_sigma_mm=sigma_mm)
+
+
+def _plan_covariance(problem, Jb, idx, sigma_mm):
+    """Identifiability at the poses ``idx``, the identifiable columns and their covariance."""
+    ident = analyse_identifiability(Jb[idx].reshape(-1, Jb.shape[-1]), problem.names, problem.blocks)
+    cols = [problem.names.index(n) for n in ident.identifiable]
+    return ident, cols, predicted_covariance(Jb, idx, cols, sigma_mm)
+
+
+def _rms_model_std(J_other, cols, cov) -> float:
+    """RMS over poses of sqrt(trace(J C J^T)): the predicted model error [mm] at other poses."""
+    Jr = J_other[..., cols]  # (R, 3, c)
+    var = np.einsum("rij,jk,rik->r", Jr, cov, Jr)  # trace of J C J^T per pose
+    return float(np.sqrt(np.mean(var)))
+
+
+def predicted_model_std(model, q_plan, q_check, *, tool=(0.0, 0.0, 100.0), free=None, sigma_mm: float = 0.02) -> float:
+    """First-order RMS model error [mm] at the poses ``q_check`` (M, n) of a calibration from all of
+    ``q_plan`` (N, n) (point measurements with ``sigma_mm`` noise per coordinate, base frame and tool
+    point estimated): what :func:`plan_campaign` predicts for the poses it did not choose."""
+    q_plan = np.asarray(q_plan, dtype=float)
+    problem = _point_problem(model, np.vstack([q_plan, np.asarray(q_check, dtype=float)]), tool, free, sigma_mm)
+    Jb = pose_jacobians(problem)
+    _, cols, cov = _plan_covariance(problem, Jb, np.arange(len(q_plan)), sigma_mm)
+    return _rms_model_std(Jb[len(q_plan):], cols, cov)
+
+
 def plan_campaign(model, q_candidates, count: int, *, tool=(0.0, 0.0, 100.0), free=None, sigma_mm: float = 0.02):
     """Choose ``count`` of ``q_candidates`` (N, n) for a point-measurement calibration of ``model``
     (base frame and the tool point estimated too) and predict its outcome.
@@ -42,21 +72,13 @@ def plan_campaign(model, q_candidates, count: int, *, tool=(0.0, 0.0, 100.0), fr
     identifiable, dropped, holdout_model_std_mm (RMS predicted model error at the candidates not
     chosen), holdout_rms_mm (expected held-out error: model error and noise), problem}``.
     """
-    problem = CalibrationProblem(model.replace(T_world_base=np.eye(4)), q_candidates,
-                                 [Target("reflector", point=tuple(tool))], free=free, base_initial=np.eye(4),
-                                 point_sigma_mm=sigma_mm)
+    problem = _point_problem(model, q_candidates, tool, free, sigma_mm)
     Jb = pose_jacobians(problem)  # (N, 3, n): prediction derivatives, mm per unit
     sel = select_poses(Jb, count, names=problem.names, blocks=problem.blocks)
     idx = np.asarray(sel["indices"])
-    ident = analyse_identifiability(Jb[idx].reshape(-1, Jb.shape[-1]), problem.names, problem.blocks)
-    cols = [problem.names.index(n) for n in ident.identifiable]
-    cov = predicted_covariance(Jb, idx, cols, sigma_mm)
+    ident, cols, cov = _plan_covariance(problem, Jb, idx, sigma_mm)
     rest = np.setdiff1d(np.arange(len(Jb)), idx)
-    holdout = float("nan")
-    if len(rest):
-        Jr = Jb[rest][..., cols]  # (R, 3, c)
-        var = np.einsum("rij,jk,rik->r", Jr, cov, Jr)  # trace of J C J^T per pose
-        holdout = float(np.sqrt(np.mean(var)))
+    holdout = _rms_model_std(Jb[rest], cols, cov) if len(rest) else float("nan")
     return {"indices": idx, "names": list(ident.identifiable), "std": np.sqrt(np.diag(cov)), "covariance": cov,
             "units": [problem.units[c] for c in cols], "identifiable": list(ident.identifiable),
             "dropped": [(d["name"], d["why"]) for d in ident.dropped], "holdout_model_std_mm": holdout,

@@ -42,6 +42,7 @@ _COMMANDS = {
     "camera": ("camera", "camera", "Camera intrinsics and distortion from images of a board.", None),
     "handeye": ("handeye", "handeye", "Hand-eye calibration of a camera on the flange or in the cell.", None),
     "closed-chain": ("closed_chain", "closed_chain", "Calibration with a laser spot held on plate targets.", None),
+    "fleet": ("fleet", "fleet", "Many robots at once on Dask: calibrate, studies, status.", None),
 }
 
 

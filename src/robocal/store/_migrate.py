@@ -12,6 +12,9 @@ from ._validate import format_time, utc_now
 
 __all__ = ["migrate", "stored_version"]
 
+#: PostgreSQL advisory lock key taken while migrating (an arbitrary constant: "robocal" in ASCII).
+_MIGRATION_LOCK = 0x726F626F63616C
+
 
 def stored_version(backend) -> int:
     """The highest schema version recorded in the database (0 if none)."""
@@ -39,6 +42,10 @@ def _apply_missing(backend) -> None:
     transaction (closed and re-raised on any error)."""
     tx = backend.begin()
     try:
+        if backend.dialect == "postgresql":
+            # concurrent first opens (fleet workers) must not both create the tables: a lock held to
+            # the end of this transaction serialises them (SQLite's BEGIN IMMEDIATE already does)
+            tx.execute("SELECT pg_advisory_xact_lock(:key)", {"key": _MIGRATION_LOCK})
         tx.create_tables([_schema.SCHEMA_VERSION_TABLE])
         rows = tx.query("SELECT MAX(version) AS v FROM schema_version")
         have = rows[0]["v"] or 0

@@ -14,7 +14,7 @@ from ..calib.plan import plan_campaign, visible_candidates
 from ..io.programs import JointProgram, write_joint_program
 from ..robots import load_robot
 
-__all__ = ["parse_box", "plan_poses"]
+__all__ = ["candidate_poses", "parse_box", "plan_poses"]
 
 
 def parse_box(text: str) -> np.ndarray:
@@ -39,6 +39,24 @@ def plan_poses(robot, out_file, *, count: int, candidates: int = 1000, workspace
     (:func:`~robocal.calib.plan.plan_campaign`) plus ``q`` (count, n), ``n_candidates``, ``file``.
     """
     model = load_robot(robot)
+    qk = candidate_poses(model, count, candidates, seed, workspace=workspace, tracker_at=tracker_at, tool=tool,
+                         margin=margin)
+    plan = plan_campaign(model, qk, count, tool=tool, sigma_mm=sigma_mm)
+    chosen = qk[plan["indices"]]
+    names = tuple(f"P{i + 1:03d}" for i in range(count))
+    prog = JointProgram(chosen, names, tuple(model.controller_joints), {"angle_unit": "deg"})
+    note = (f"robocal plan-poses: {count} of {len(qk)} visible candidates (seed {seed}), D-optimal; "
+            f"predicted held-out RMS {plan['holdout_rms_mm']:.4f} mm at {sigma_mm} mm noise")
+    path = write_joint_program(out_file, prog, model, overwrite=overwrite, metadata={"note": note})
+    return {**plan, "q": chosen, "n_candidates": len(qk), "file": path, "model": model}
+
+
+def candidate_poses(model, count: int, candidates: int, seed: int, *, workspace=None, tracker_at=None,
+                    tool=(0.0, 0.0, 100.0), margin: float = 0.05) -> np.ndarray:
+    """The candidate configurations (M, n) of :func:`plan_poses`: ``candidates`` seeded uniform draws
+    within the joint limits (``margin`` of each range kept free), kept if the flange is in the
+    ``workspace`` box and the reflector visible from ``tracker_at``; a clear error when fewer than
+    ``count`` remain."""
     if count < 1 or candidates < count:
         raise ValueError(f"--count must be at least 1 and at most --candidates ({candidates}), got {count}")
     rng = np.random.default_rng(seed)
@@ -57,12 +75,4 @@ def plan_poses(robot, out_file, *, count: int, candidates: int = 1000, workspace
         raise ValueError(f"only {int(keep.sum())} of {candidates} candidate poses are inside the workspace box and "
                          f"visible from the tracker; need {count}: more --candidates, a larger box or another "
                          "tracker position")
-    qk = q[keep]
-    plan = plan_campaign(model, qk, count, tool=tool, sigma_mm=sigma_mm)
-    chosen = qk[plan["indices"]]
-    names = tuple(f"P{i + 1:03d}" for i in range(count))
-    prog = JointProgram(chosen, names, tuple(model.controller_joints), {"angle_unit": "deg"})
-    note = (f"robocal plan-poses: {count} of {int(keep.sum())} visible candidates (seed {seed}), D-optimal; "
-            f"predicted held-out RMS {plan['holdout_rms_mm']:.4f} mm at {sigma_mm} mm noise")
-    path = write_joint_program(out_file, prog, model, overwrite=overwrite, metadata={"note": note})
-    return {**plan, "q": chosen, "n_candidates": int(keep.sum()), "file": path, "model": model}
+    return q[keep]

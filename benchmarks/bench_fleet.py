@@ -1,0 +1,152 @@
+"""Fleet calibration on Dask against a plain serial loop (issue 19).
+
+Run from the repository root (robocal installed with the fleet extra)::
+
+    python benchmarks/bench_fleet.py                 # 200 robots x 100 poses, 3 repeats
+    python benchmarks/bench_fleet.py --robots 50 --repeat 2 --workers 2
+
+In one run, on the same simulated fleet (seeded tracker campaigns of UR10, KUKA KR150 R3100 and
+ABB IRB140 robots, each with its own hidden true parameters):
+
+* **serial loop**: ``run_calibration(model, csv, out, report=False)`` for every robot, one after
+  the other in this process (what a user would script without robocal fleet);
+* **fleet on a local cluster**: :func:`robocal.workflows.fleet.run_fleet_calibration` with a
+  ``distributed.LocalCluster`` of ``--workers`` single-threaded worker processes (the default of
+  ``robocal fleet calibrate``), no reports, no history (as the loop), into a fresh folder each
+  repeat; the cluster is started once beforehand (its start-up is printed separately);
+* **per-task overhead**: (a) the round trip of an empty task (1,000 no-op tasks through the same
+  client, wall time / 1,000 x workers), (b) in the fleet run, wall x workers minus the summed
+  in-task time, per robot;
+* an estimate for 1,000 robots from the measured per-robot time and overhead.
+
+Every figure is the median of the repeats (serial and fleet interleaved, so load changes affect both).
+BLAS and numba are held to one thread per process.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import shutil  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _machine import machine_info  # noqa: E402
+
+MODELS = ("ur10", "kuka_kr150_r3100", "abb_irb140")
+
+
+def make_fleet(d: Path, n_robots: int, n_poses: int) -> Path:
+    from robocal.workflows.simulate import simulate_tracker
+
+    lines = ["[options]", "holdout = 0.2", "seed = 0", ""]
+    for i in range(n_robots):
+        model = MODELS[i % len(MODELS)]
+        simulate_tracker(model, d / f"r{i:04d}.csv", n_poses=n_poses, noise_mm=0.02, seed=i)
+        lines += ["[[robot]]", f'id = "r{i:04d}"', f'model = "{model}"', f'measurements = "r{i:04d}.csv"', ""]
+    p = d / "fleet.toml"
+    p.write_text("\n".join(lines))
+    return p
+
+
+def serial_loop(fleet_file: Path, out: Path, limit: int | None = None) -> float:
+    from robocal.io.fleet_file import read_fleet
+    from robocal.workflows.calibrate import run_calibration
+
+    t0 = time.perf_counter()
+    for e in read_fleet(fleet_file).entries[:limit]:
+        run_calibration(e.model, e.measurements, out / e.id, report=False, **e.options)
+    return time.perf_counter() - t0
+
+
+def fleet_run(client, fleet_file: Path, out: Path):
+    from robocal.workflows.fleet import run_fleet_calibration
+
+    t0 = time.perf_counter()
+    r = run_fleet_calibration(fleet_file, out, client=client, report=False)
+    wall = time.perf_counter() - t0
+    rows = r["summary"]["robots"]
+    assert all(row["status"] == "ok" for row in rows), [row for row in rows if row["status"] != "ok"][:2]
+    return wall, sum(row["seconds"] for row in rows)
+
+
+def _noop(x):
+    return x
+
+
+def empty_task_overhead(client, n: int = 1000) -> float:
+    from distributed import wait
+
+    wait(client.map(_noop, range(50), pure=False))
+    t0 = time.perf_counter()
+    futs = client.map(_noop, range(n), pure=False)
+    wait(futs)
+    return (time.perf_counter() - t0) / n
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--robots", type=int, default=200)
+    ap.add_argument("--poses", type=int, default=100)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--workers", type=int, default=None, help="local cluster size (default: usable CPUs)")
+    args = ap.parse_args()
+    from distributed import Client, LocalCluster
+
+    from robocal.workflows.fleet_cluster import default_workers
+
+    workers = args.workers or default_workers()
+    for line in machine_info([f"fleet       {args.robots} robots x {args.poses} poses, {workers} workers, "
+                              f"{args.repeat} repeats"]):
+        print(line)
+    tmp = Path(tempfile.mkdtemp(prefix="bench-fleet-"))
+    try:
+        t0 = time.perf_counter()
+        fleet_file = make_fleet(tmp, args.robots, args.poses)
+        print(f"simulated the fleet's campaigns in {time.perf_counter() - t0:.1f} s")
+        serial_loop(fleet_file, tmp / "warm", limit=len(MODELS))  # numba kernels loaded, caches warm
+        t0 = time.perf_counter()
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                          silence_logs=40) as cluster, Client(cluster) as client:
+            client.run(lambda: __import__("robocal.workflows.calibrate"))
+            start = time.perf_counter() - t0
+            fleet_run(client, fleet_file, tmp / "fleet-warm")  # workers load the kernels from cache
+            serial, fleet, busy = [], [], []
+            for k in range(args.repeat):
+                serial.append(serial_loop(fleet_file, tmp / f"serial{k}"))
+                w, b = fleet_run(client, fleet_file, tmp / f"fleet{k}")
+                fleet.append(w)
+                busy.append(b)
+                print(f"  repeat {k + 1}: serial {serial[-1]:.2f} s, fleet {w:.2f} s")
+            empty = statistics.median(empty_task_overhead(client) for _ in range(3))
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    s, f, b = statistics.median(serial), statistics.median(fleet), statistics.median(busy)
+    n = args.robots
+    per_robot = s / n
+    per_task_overhead = (f * workers - b) / n
+    print()
+    print(f"{'':<44}{'median [s]':>12}{'per robot [ms]':>16}")
+    print(f"{'serial loop (run_calibration, no report)':<44}{s:>12.2f}{1e3 * per_robot:>16.1f}")
+    print(f"{f'fleet, local cluster ({workers} worker processes)':<44}{f:>12.2f}{1e3 * f / n:>16.1f}")
+    print(f"ratio serial / fleet: {s / f:.2f}x   (ideal {workers}x)")
+    print(f"local cluster start-up (not in the fleet time): {start:.1f} s")
+    print(f"per-task overhead: empty task {1e3 * empty * workers:.2f} ms of a worker; in the fleet run "
+          f"{1e3 * per_task_overhead:.1f} ms per robot (wall x workers - time inside the tasks) = "
+          f"{100 * per_task_overhead / (per_task_overhead + b / n):.1f} % of a task")
+    est = 1000 * (b / n + per_task_overhead) / workers
+    print(f"estimate for 1,000 robots x {args.poses} poses: {est:.0f} s on {workers} workers here; "
+          f"{1000 * (b / n + per_task_overhead) / 32:.0f} s on 32 such workers (4 machines x 8 cores), "
+          f"plus cluster start-up")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,296 @@
+"""``robocal fleet ...``: many robots at once on Dask (docs/fleet.md).
+
+Thin: parse, open the Dask client (:mod:`robocal.workflows.fleet_cluster`), call the workflow,
+print. dask is imported only when a fleet command runs.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import click
+
+from ._common import EXIT_FAILED_RESULT, _user_error
+
+__all__ = ["fleet"]
+
+fleet = click.Group(
+    "fleet",
+    help="Many robots at once on Dask (a local cluster, or --scheduler tcp://host:8786): calibrate a fleet, "
+         "run studies, list the robots that need attention (docs/fleet.md).",
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+_SCHEDULER = click.option("--scheduler", default=None, metavar="ADDRESS",
+                          help="An existing Dask cluster's scheduler (tcp://host:8786); default: a local cluster.")
+_WORKERS = click.option("--workers", type=int, default=None, metavar="N",
+                        help="Worker processes of the local cluster (default: one per CPU).")
+
+
+def _client(scheduler, workers):
+    from ..workflows.fleet_cluster import FleetClusterError, fleet_client
+
+    try:
+        return fleet_client(scheduler, workers)
+    except FleetClusterError as exc:
+        raise click.ClickException(str(exc)) from None
+
+
+def _history_target(db, no_history, out_dir):
+    if no_history:
+        return None
+    from ..store import HISTORY_DB_ENV
+
+    return db or os.environ.get(HISTORY_DB_ENV) or str(Path(out_dir) / "history.sqlite")
+
+
+@fleet.command("calibrate")
+@click.argument("fleet_file", metavar="FLEET.toml", type=click.Path(dir_okay=False))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for <id>/ per robot, summary.json, summary.html and summary.png.")
+@_SCHEDULER
+@_WORKERS
+@click.option("--db", default=None, metavar="PATH_OR_URL",
+              help="History database every result is recorded in (default: $ROBOCAL_HISTORY_DB, else "
+                   "OUT/history.sqlite).")
+@click.option("--no-history", is_flag=True, help="Do not record the results in a history database.")
+@click.option("--no-report", is_flag=True, help="No report.html per robot (the plots take longer than the solve).")
+def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_report):
+    """Calibrate every robot of FLEET.toml, one Dask task per robot.
+
+    Writes OUT/<id>/ (the files of `robocal calibrate`), OUT/summary.json (status ok or failed with
+    the reason, per robot), OUT/summary.html and .png. Robots whose inputs are unchanged since an
+    earlier run into OUT are skipped (content hash): a crashed run resumes. Exit code 3 when some
+    robots failed (the last line counts them), 1 when all did.
+    """
+    from ..workflows.fleet import run_fleet_calibration
+    from ..workflows.fleet_cluster import FleetClusterError
+
+    target = _history_target(db, no_history, out_dir)
+    bar = None
+    try:
+        with _client(scheduler, workers) as client:
+            label = f"robots ({len(client.scheduler_info().get('workers', {}))} workers)"
+            with click.progressbar(length=1, label=label, file=sys.stderr, show_pos=True) as bar:
+                def progress(done, total, row):
+                    bar.length = total
+                    bar.update(1)
+
+                r = run_fleet_calibration(fleet_file, out_dir, client=client, db=target, report=not no_report,
+                                          progress=progress)
+    except (ValueError, KeyError, OSError, FleetClusterError) as exc:
+        raise _user_error(exc) from None
+    s = r["summary"]
+    c = s["counts"]
+    for row in s["robots"]:
+        if row["status"] != "ok":
+            click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
+        elif row.get("outlier"):
+            click.echo(f"outlier {row['id']}: accuracy after calibration {row.get('holdout_rms_after_mm')} mm "
+                       f"(modified z {row.get('outlier_z')})", err=True)
+    click.echo(f"{c['robots']} robots: {c['ok']} ok, {c['failed']} failed, {c['skipped']} unchanged (skipped), "
+               f"{c['outliers']} outlier(s); {s['wall_seconds']:.1f} s")
+    click.echo("wrote " + ", ".join(str(p) for p in r["files"].values())
+               + (f"; history {s['history']}" if s["history"] else ""))
+    _exit_on_failures([row for row in s["robots"] if row["status"] != "ok"], c["robots"])
+
+
+def _exit_on_failures(failed, total) -> None:
+    """Every robot failed: one ``Error:`` line, exit 1 (nothing usable). Some failed: a last
+    ``Error:`` line counting them, exit 3. None: return."""
+    if not failed:
+        return
+    if len(failed) == total:
+        raise click.ClickException(f"all {total} robot(s) failed; the first: {failed[0]['id']}: {failed[0]['reason']}")
+    click.echo(f"Error: {len(failed)} of {total} robots failed (reasons above)", err=True)
+    sys.exit(EXIT_FAILED_RESULT)
+
+
+@fleet.command("status")
+@click.option("--db", required=True, metavar="PATH_OR_URL",
+              help="History database: an SQLite file or a URL (postgresql+psycopg://user@host/db).")
+@click.option("--max-age", "max_age_days", type=float, default=90.0, show_default=True, metavar="DAYS",
+              help="A robot whose last calibration is older is stale.")
+@click.option("--tolerance", "tolerance_mm", type=float, default=0.1, show_default=True, metavar="MM",
+              help="Flag a length parameter whose drift trend since the first calibration exceeds this.")
+@click.option("--tolerance-deg", type=float, default=0.01, show_default=True, metavar="DEG",
+              help="Flag an angle parameter whose drift trend exceeds this.")
+@click.option("--kind", default="geometric_calibration", show_default=True,
+              type=click.Choice(["geometric_calibration", "thermal_compensation", "tool_recalibration", "measurement"]),
+              help="Which cycles count as calibrations.")
+@click.option("--plots", "plot_dir", default="drift-plots", show_default=True, type=click.Path(file_okay=False),
+              help="Folder for <robot>_drift.png per flagged robot.")
+@click.option("--no-plots", is_flag=True, help="Write no drift plots.")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
+def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no_plots, as_json):
+    """Robots whose last calibration is older than --max-age or whose drift trend crosses the
+    tolerance, from the history database (SQLite or PostgreSQL). Exit code 3 when any is flagged."""
+    import json
+
+    from ..store import HistoryError
+    from ..workflows.fleet_status import fleet_status
+
+    try:
+        r = fleet_status(db, max_age_days=max_age_days, tolerance_mm=tolerance_mm, tolerance_deg=tolerance_deg,
+                         kind=kind, plot_dir=None if no_plots else plot_dir)
+    except (ValueError, OSError, HistoryError) as exc:
+        raise _user_error(exc) from None
+    if as_json:
+        click.echo(json.dumps(r, indent=2))
+    else:
+        click.echo(f"{len(r['robots'])} robots in {r['database']}: {len(r['flagged'])} need attention "
+                   f"(stale after {max_age_days:g} days; drift tolerance {tolerance_mm:g} mm, {tolerance_deg:g} deg)")
+        for row in r["robots"]:
+            state = ", ".join(s for s, on in (("STALE", row["stale"]), ("DRIFTING", row["drifting"])) if on) or "ok"
+            age = "-" if row["age_days"] is None else f"{row['age_days']:.1f} d"
+            click.echo(f"  {row['robot']:<24} {state:<16} calibrations {row['calibrations']:>3}  last {age:>9}")
+            for reason in row["reasons"]:
+                click.echo(f"      {reason}")
+            if row.get("plot"):
+                click.echo(f"      plot: {row['plot']}")
+    if r["flagged"]:
+        sys.exit(EXIT_FAILED_RESULT)
+
+
+study = click.Group("study", help="Embarrassingly parallel studies as chunked Dask tasks (task overhead under 5 %): "
+                                  "Monte-Carlo uncertainty of a pose plan, pose selection over candidate sets, "
+                                  "thermal screening per robot.",
+                    context_settings={"help_option_names": ["-h", "--help"]})
+fleet.add_command(study)
+
+
+def _write_json(data, out_file):
+    import json
+
+    from ..io.atomic import atomic_write_text
+
+    if out_file:
+        atomic_write_text(out_file, json.dumps(data, indent=2) + "\n", overwrite=True)
+        click.echo(f"wrote {out_file}")
+
+
+def _chunk_line(c):
+    click.echo(f"{c['items']} items in {c['tasks']} tasks of {c['chunk_size']} on {c['workers']} workers: "
+               f"{1e3 * c['item_seconds']:.1f} ms per item, {1e3 * c['task_overhead_seconds']:.1f} ms overhead per "
+               f"task ({100 * c['overhead_share']:.1f} % of a task; limit {100 * c['max_overhead_share']:.0f} %); "
+               f"{c['wall_seconds']:.1f} s")
+
+
+def _progress_bar(label):
+    return click.progressbar(length=1, label=label, file=sys.stderr, show_pos=True)
+
+
+def _study(label, scheduler, workers, fn, *args, **kwargs):
+    from ..workflows.fleet_cluster import FleetClusterError
+
+    try:
+        with _client(scheduler, workers) as client, _progress_bar(label) as bar:
+            def progress(done, total, _row):
+                bar.length = total
+                bar.update(1)
+
+            return fn(*args, client=client, progress=progress, **kwargs)
+    except (ValueError, KeyError, OSError, FleetClusterError) as exc:
+        raise _user_error(exc) from None
+
+
+@study.command("monte-carlo")
+@click.argument("robot")
+@click.argument("poses", type=click.Path(dir_okay=False))
+@click.option("--samples", default=200, show_default=True, help="Virtual robots (each its own true parameters).")
+@click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
+@click.option("--check-poses", default=200, show_default=True, help="Random poses where each result is checked.")
+@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
+              help="Reflector in the flange frame [mm].")
+@click.option("--seed", default=0, show_default=True)
+@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
+@_SCHEDULER
+@_WORKERS
+def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, scheduler, workers):
+    """Monte-Carlo accuracy of calibrating ROBOT from the pose plan POSES (a joint program, e.g. from
+    `robocal plan-poses`): simulated robots measured at those poses, calibrated, checked against
+    their truth."""
+    from ..io.programs.joint_table import read_joint_program
+    from ..workflows.fleet_study import monte_carlo_plan
+
+    try:
+        q = read_joint_program(poses, _robot_model(robot)).joints
+    except (ValueError, OSError) as exc:
+        raise _user_error(exc) from None
+    r = _study("samples", scheduler, workers, monte_carlo_plan, robot, q, samples=samples, noise_mm=noise_mm,
+               check_poses=check_poses, tool=tool, seed=seed)
+    b, a = r["before"], r["after"]
+    click.echo(f"{r['robot']}, {r['n_poses']} poses, {samples} virtual robots, {noise_mm} mm noise: position error "
+               f"at {check_poses} other poses [mm]")
+    click.echo(f"  nominal model     RMS median {_median(r['rms_before_mm']):.4f}  p95 {b['p95']:.4f}")
+    click.echo(f"  calibrated model  RMS median {_median(r['rms_after_mm']):.4f}  p95 {a['p95']:.4f}  "
+               f"max {a['max']:.4f}  (first-order prediction {r['predicted_model_std_mm']:.4f})")
+    if r["unconverged_samples"]:
+        click.echo(f"  {len(r['unconverged_samples'])} sample(s) stopped at the solver's iteration limit (kept): "
+                   f"{r['unconverged_samples'][:10]}")
+    _chunk_line(r["chunking"])
+    _write_json(r, out_file)
+
+
+def _median(v):
+    import statistics
+
+    return statistics.median(v)
+
+
+def _robot_model(robot):
+    from ._common import _robot
+
+    return _robot(robot)
+
+
+@study.command("pose-sets")
+@click.argument("robot")
+@click.option("--sets", default=100, show_default=True, help="Candidate sets (seeds SEED .. SEED+SETS-1).")
+@click.option("--count", default=40, show_default=True, help="Poses per plan.")
+@click.option("--candidates", default=800, show_default=True, help="Random candidate poses per set.")
+@click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
+@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z")
+@click.option("--seed", default=0, show_default=True)
+@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
+@_SCHEDULER
+@_WORKERS
+def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, scheduler, workers):
+    """Plan COUNT poses of ROBOT from each of SETS candidate sets; report the best seed
+    (`robocal plan-poses --seed <best>` writes that plan)."""
+    from ..workflows.fleet_study import pose_set_selection
+
+    r = _study("sets", scheduler, workers, pose_set_selection, robot, sets=sets, count=count, candidates=candidates,
+               sigma_mm=sigma_mm, tool=tool, seed=seed)
+    s, best = r["spread_mm"], r["best"]
+    click.echo(f"{r['robot']}: {sets} candidate sets of {candidates}, {count} poses each; predicted held-out RMS "
+               f"min {s['min']:.4f} / median {s['median']:.4f} / max {s['max']:.4f} mm")
+    click.echo(f"best: seed {best['seed']} ({best['holdout_rms_mm']:.4f} mm): robocal plan-poses {robot} --count {count} "
+               f"--candidates {candidates} --seed {best['seed']} --out poses.csv")
+    _chunk_line(r["chunking"])
+    _write_json(r, out_file)
+
+
+@study.command("thermal")
+@click.argument("runs", nargs=-1, required=True, type=click.Path(file_okay=False))
+@click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep per robot.")
+@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
+@_SCHEDULER
+@_WORKERS
+def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
+    """Thermal parameter screening (`robocal thermal screen`) of each robot's run folder RUNS
+    (the robot id is the folder name), one task per robot. Exit code 3 when some robots failed, 1
+    when all did."""
+    from ..workflows.fleet_study import thermal_screening
+
+    r = _study("robots", scheduler, workers, thermal_screening, [(Path(d).name, d) for d in runs], n_keep=n_keep)
+    for row in r["robots"]:
+        if row["status"] == "ok":
+            lam = row["lambda_percent"]
+            click.echo(f"{row['id']}: {', '.join(row['selected'])}  lambda screened {lam.get('screened', float('nan')):.1f} %")
+        else:
+            click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
+    _write_json(r, out_file)
+    _exit_on_failures([row for row in r["robots"] if row["status"] != "ok"], len(r["robots"]))

@@ -1,0 +1,119 @@
+"""``robocal fleet calibrate``: every robot of a fleet file calibrated as one Dask task.
+
+::
+
+    r = run_fleet_calibration("plant.toml", "out", client=client, db="history.sqlite")
+
+writes ``out/<id>/`` per robot (the files ``robocal calibrate`` writes, the same result.json, plus
+``fleet_inputs.json``: the robot's input hash), ``out/summary.json`` (every robot: ``status`` ``ok``
+or ``failed`` with its ``reason``), ``out/summary.html`` and ``out/summary.png`` (accuracy before and
+after per robot, outliers flagged). Entries the fleet file could not describe are failed rows too;
+one bad robot never stops the others. See :mod:`robocal.workflows.fleet_robot` for one robot.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from ..io.atomic import atomic_write_text
+from ..io.fleet_file import read_fleet
+from .fleet_cluster import run_tasks
+from .fleet_robot import calibrate_entry, failed_row
+from .outputs import ensure_writable_dir
+
+__all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "run_fleet_calibration"]
+
+SUMMARY_FORMAT = "robocal-fleet-summary/1"
+#: Modified z-score above which a robot's accuracy after calibration is an outlier (Iglewicz and
+#: Hoaglin 1993: z = 0.6745 (x - median) / MAD, flag z > 3.5).
+OUTLIER_Z = 3.5
+_OUTLIER_RULE = (f"accuracy after calibration with a modified z-score 0.6745 (x - median) / MAD above {OUTLIER_Z} "
+                 "among the robots that finished (Iglewicz and Hoaglin), at least 5 of them")
+
+
+def _after(row):
+    v = row.get("holdout_rms_after_mm")
+    return v if v is not None else row.get("rms_after_mm")
+
+
+def flag_outliers(rows) -> list:
+    """Set ``row["outlier"]`` (bool) on every row: the robot's accuracy after calibration is far
+    worse than the fleet's (modified z-score above :data:`OUTLIER_Z`; needs 5 finished robots)."""
+    vals = [(i, _after(r)) for i, r in enumerate(rows) if r["status"] == "ok" and _after(r) is not None]
+    for r in rows:
+        r["outlier"] = False
+    if len(vals) < 5:
+        return rows
+    x = np.array([v for _, v in vals], dtype=float)
+    med = float(np.median(x))
+    mad = float(np.median(np.abs(x - med)))
+    if mad <= 0:
+        return rows
+    z = 0.6745 * (x - med) / mad
+    for (i, _), zi in zip(vals, z):
+        rows[i]["outlier"] = bool(zi > OUTLIER_Z)
+        rows[i]["outlier_z"] = round(float(zi), 2)
+    return rows
+
+
+def _lost(entry, exc) -> dict:
+    """The row of a task that never returned (a worker died, the cluster went away)."""
+    return failed_row(entry.id, f"the task did not finish on the cluster: {type(exc).__name__}: {exc}")
+
+
+def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: bool = True, progress=None) -> dict:
+    """Calibrate every robot of ``fleet_file`` into ``out_dir`` (see the module docstring).
+
+    client: a ``distributed.Client`` (:func:`robocal.workflows.fleet_cluster.fleet_client`), or
+    None for a plain loop in this process. db: the history database (path or URL) every result
+    is recorded in (None: not recorded). report: each robot's report.html (the plots take longer
+    than the solve). progress(done, total, row): after each robot.
+
+    Returns ``{"summary": dict written to summary.json, "files": {...}}``.
+    """
+    t0 = time.perf_counter()
+    fleet = read_fleet(fleet_file)
+    out = ensure_writable_dir(out_dir)
+    entries = fleet.entries
+    db_target = str(db) if db is not None else None
+    if db_target is not None:  # reachable, and its tables made once, before the workers write
+        from ..store import HistoryStore
+
+        HistoryStore.open(db_target).close()
+    rows = run_tasks(client, calibrate_entry, entries, keys=[f"calibrate-{e.id}-{e.index}" for e in entries],
+                     progress=progress, on_error=_lost, out_dir=str(out.resolve()), db=db_target, report=report)
+    for e, row in zip(entries, rows):
+        row["index"] = e.index
+    rows += [failed_row(p.label(), p.reason, index=p.index, stage="fleet file") for p in fleet.problems]
+    rows.sort(key=lambda r: r["index"])
+    flag_outliers(rows)
+    counts = {"robots": len(rows), "ok": sum(r["status"] == "ok" for r in rows),
+              "failed": sum(r["status"] != "ok" for r in rows), "skipped": sum(bool(r.get("skipped")) for r in rows),
+              "outliers": sum(r["outlier"] for r in rows)}
+    summary = {"format": SUMMARY_FORMAT, "fleet": str(fleet.path), "written": _now(), "counts": counts,
+               "history": _display_db(db_target), "outlier_rule": _OUTLIER_RULE,
+               "wall_seconds": round(time.perf_counter() - t0, 3), "robots": rows}
+    files = {"summary": atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n", overwrite=True)}
+    from ..report.fleet_summary import plot_fleet_accuracy, write_fleet_summary_html
+
+    png = plot_fleet_accuracy(rows, f"{Path(fleet_file).name}: accuracy per robot before/after calibration")
+    files["html"] = write_fleet_summary_html(out / "summary.html", summary, png, "summary.png")
+    files["plot"] = out / "summary.png"
+    return {"summary": summary, "files": files}
+
+
+def _now() -> str:
+    return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _display_db(db):
+    if db is None:
+        return None
+    from ..store import redact_url
+
+    return redact_url(db)

@@ -1,0 +1,104 @@
+"""The Dask side of ``robocal fleet``: a client on a local cluster (default) or on a user's cluster
+by address, and running a list of tasks on it with progress.
+
+dask.distributed is the ``fleet`` extra and imported only here, when a fleet command runs (never by
+``robocal --help``). Tasks are plain module-level functions of small, picklable arguments (paths,
+options): what travels to a worker is the task description, not the data.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+
+__all__ = ["FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "default_workers"]
+
+FLEET_EXTRA_HINT = "pip install 'robocal[fleet]'"
+
+
+class FleetClusterError(RuntimeError):
+    """The Dask cluster cannot be used (not installed, not reachable)."""
+
+
+def import_distributed():
+    """``dask.distributed``, or a clear error naming the extra."""
+    try:
+        import distributed
+    except ImportError as exc:
+        raise FleetClusterError(f"robocal fleet needs dask.distributed (the 'fleet' extra: {FLEET_EXTRA_HINT}): "
+                                f"{exc}") from None
+    return distributed
+
+
+def default_workers() -> int:
+    """Worker processes of the default local cluster: one per CPU this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def fleet_client(scheduler: str | None = None, workers: int | None = None, *, processes: bool = True):
+    """A ``distributed.Client``: on the cluster at ``scheduler`` (``tcp://host:8786``), or on a new
+    local cluster of ``workers`` (default :func:`default_workers`) single-threaded worker processes
+    (``processes=False``: threads in this process, for tests), closed on exit. No dashboard is
+    started for a local cluster (a shared machine may have its port taken)."""
+    distributed = import_distributed()
+    if scheduler is not None and workers is not None:
+        raise FleetClusterError("give either --scheduler (an existing cluster) or --workers (a local one), not both")
+    if workers is not None and workers < 1:
+        raise FleetClusterError(f"--workers must be at least 1, got {workers}")
+    if scheduler is not None:
+        try:
+            client = distributed.Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise FleetClusterError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        with client:
+            yield client
+        return
+    n = workers or default_workers()
+    with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
+                                  silence_logs=40) as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+def run_tasks(client, fn, items, *, keys=None, progress=None, on_error=None, **kwargs) -> list:
+    """``[fn(item, **kwargs) for item in items]`` as one Dask task per item (``client`` None: a plain
+    loop in this process), in the order of ``items``.
+
+    progress(done, total, result): called as each task finishes (completion order). on_error(item,
+    exc): the result for a task whose worker died or whose function raised (default: re-raise).
+    """
+    items = list(items)
+    total = len(items)
+    results = [None] * total
+    step = progress or (lambda done, n, result: None)
+
+    def failed(i, exc):
+        if on_error is None:
+            raise exc
+        return on_error(items[i], exc)
+
+    if client is None:
+        for i, item in enumerate(items):
+            try:
+                results[i] = fn(item, **kwargs)
+            except Exception as exc:  # one failing item never stops the others
+                results[i] = failed(i, exc)
+            step(i + 1, total, results[i])
+        return results
+    distributed = import_distributed()
+    futures = client.map(fn, items, key=keys, pure=False, **kwargs)
+    where = {f.key: i for i, f in enumerate(futures)}
+    done = 0
+    for fut in distributed.as_completed(futures):
+        i = where[fut.key]
+        try:
+            results[i] = fut.result()
+        except Exception as exc:  # a worker lost (KilledWorker) or a task that raised
+            results[i] = failed(i, exc)
+        done += 1
+        step(done, total, results[i])
+        fut.release()
+    return results
