@@ -153,6 +153,20 @@ def test_charuco_marker_refinement_recovers_corners():
     assert np.sqrt(np.mean(np.sum((fit - det.image_points) ** 2, 1))) < 1.0
 
 
+def test_charuco_too_few_corners_rejected_with_reason():
+    """Real pixels with most of the board hidden (8.png outside the box x 937-1188, y 719-981 painted
+    flat grey): the 4 corners left are reported and the image is rejected with the reason."""
+    from robocal.io.detection import detect_board, read_image_gray
+
+    data = read_cal_data(ROS / "test_set_charuco" / "cal_data.yaml")
+    gray = read_image_gray(ROS / "test_set_charuco" / "images" / "8.png")
+    hidden = np.full_like(gray, int(np.median(gray)))
+    hidden[719:981, 937:1188] = gray[719:981, 937:1188]
+    det = detect_board(hidden, data.board, name="8.png")
+    assert not det.used and det.n_found == 4
+    assert det.skip_reason == "too few points: 4 of 24 found, need 6"
+
+
 def _opencv_linear(F, uv, X, camera, setup):
     from test_handeye_images import opencv_solutions  # the same OpenCV pipeline as the rendered-image test
 
