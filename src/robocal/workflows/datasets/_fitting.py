@@ -52,12 +52,14 @@ def param_names(model, link_names, kinds) -> list:
     return out
 
 
-def fit(model, q, targets, points, free, stations=None, base_initial=None, prior=0.0, **kw):
-    """``(problem, result)`` of a calibration of ``free`` parameters plus base frame(s) and targets;
+def fit(model, q, targets, points, free, stations=None, base_initial=None, prior=0.0, elastic=None, **kw):
+    """``(problem, result)`` of a calibration of ``free`` parameters plus base frame(s) and targets
+    (and the joint compliances of ``elastic``, an :class:`~robocal.calib.elastic.ElasticModel`);
     the base starts from a rigid fit of the initial model's predictions, per station."""
     if base_initial is None:
         base_initial = "fit"
-    prob = CalibrationProblem(model, q, targets, points, free=free, stations=stations, base_initial=base_initial)
+    prob = CalibrationProblem(model, q, targets, points, free=free, stations=stations, base_initial=base_initial,
+                              elastic=elastic)
     return prob, solve(prob, prior_weight=prior, **kw)
 
 

@@ -1,0 +1,138 @@
+"""What an elastic calibration identifies: which joints are compliant, where the gravity torques
+come from (a mass model or lumped parameters identified from the data), the payload, gravity.
+
+:class:`ElasticModel` is the option of :class:`~robocal.calib.problem.CalibrationProblem`
+(``elastic=``); :func:`build_deflection` turns it into the two parameter blocks and the
+:class:`~robocal.calib.residuals.deflection.Deflection` of the shared chain. docs/elastic.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .blocks.elastic import GravityParameters, JointCompliance
+from .errors import ProblemError
+from .gravity import STANDARD_GRAVITY
+from .residuals.deflection import Deflection
+
+__all__ = ["ElasticModel", "Payload", "build_deflection", "target_joints"]
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A load on an end effector: ``mass`` [kg] (scalar or per pose (N,)) with its centre of mass
+    ``com`` [mm] ((3,) or (N, 3)) in the end effector's frame."""
+
+    mass: object
+    com: tuple = (0.0, 0.0, 0.0)
+    end_effector: object = None
+
+    def checked(self) -> "Payload":
+        m = np.asarray(self.mass, dtype=float)
+        if m.size == 0 or not np.all(np.isfinite(m)):
+            raise ProblemError(f"payload: mass must be a finite number [kg], got {self.mass!r}")
+        if np.any(m <= 0):
+            raise ProblemError("payload: a payload needs a mass > 0 kg (a payload without mass has no "
+                               "gravity torque; leave the payload out instead)")
+        c = np.asarray(self.com, dtype=float)
+        if c.shape[-1:] != (3,) or not np.all(np.isfinite(c)):
+            raise ProblemError(f"payload: centre of mass must be x, y, z [mm], got {self.com!r}")
+        if np.any(np.abs(c) > 5000):
+            raise ProblemError(f"payload: centre of mass {c.tolist()} is more than 5 m from the flange: "
+                               "metres and millimetres mixed up? (it is in mm)")
+        return self
+
+
+@dataclass(frozen=True)
+class ElasticModel:
+    """The deflection model of a calibration.
+
+    joints: names of the compliant model joints (default: every moving joint carrying a target);
+    masses: the mass model, ``{link name: (mass [kg], com (3,) [mm] in the link frame)}``; None:
+    lumped gravity parameters of every moving link carrying a target are identified from the data
+    (then only ``c_j tau_j`` is identifiable, see :mod:`robocal.calib.blocks.elastic`);
+    payload: a :class:`Payload` or None; g: gravity in the robot base frame [m/s^2];
+    compliance_initial: start value [mrad/kNm | mm/kN] (lumped parameters need a non-zero start);
+    mass_initial: start mass of each lumped body [kg]; compliance_prior: optional sigma of a weak
+    prior around the start (same unit).
+    """
+
+    joints: tuple | None = None
+    masses: dict | None = None
+    payload: Payload | None = None
+    g: tuple = tuple(STANDARD_GRAVITY)
+    compliance_initial: float = 10.0
+    mass_initial: float = 10.0
+    compliance_prior: float | None = None
+
+    @property
+    def lumped(self) -> bool:
+        return self.masses is None
+
+
+def target_joints(model, end_effectors) -> list:
+    """Indices (into ``model.moving``) of the moving joints that move any of ``end_effectors``."""
+    anc = np.zeros(len(model.links), dtype=bool)
+    for e in end_effectors:
+        anc |= model._ee_ancestors[model.end_effector_index(e)]
+    return [j for j, k in enumerate(model.moving) if anc[k]]
+
+
+def _joint_indices(model, names, default):
+    if names is None:
+        return np.array(default, dtype=int)
+    moving = [model.links[int(k)].name for k in model.moving]
+    out = []
+    for n in names:
+        if n not in moving:
+            raise ProblemError(f"elastic: {n!r} is not a moving joint of {model.name}; joints: {', '.join(moving)}")
+        out.append(moving.index(n))
+    return np.array(out, dtype=int)
+
+
+def _mass_bodies(model, masses):
+    names = [L.name for L in model.links]
+    links, theta = [], []
+    for ln, entry in masses.items():
+        if ln not in names:
+            raise ProblemError(f"mass model: {ln!r} is not a link of {model.name}")
+        try:
+            m, com = float(entry[0]), np.asarray(entry[1], dtype=float).reshape(3)
+        except (TypeError, ValueError, IndexError):
+            raise ProblemError(f"mass model: {ln}: expected (mass kg, (x, y, z) mm), got {entry!r}") from None
+        if not np.isfinite(m) or m < 0 or not np.all(np.isfinite(com)):
+            raise ProblemError(f"mass model: {ln}: mass must be >= 0 kg and the centre of mass finite, got {entry!r}")
+        links.append(names.index(ln))
+        theta.append([m, *(m * com / 1000.0)])
+    return np.array(links, dtype=int), np.array(theta, dtype=float).reshape(-1, 4)
+
+
+def build_deflection(model, q, elastic: ElasticModel, end_effectors) -> Deflection:
+    """The :class:`Deflection` (with its compliance and gravity blocks) of ``elastic`` for
+    ``model`` at joints ``q``; ``end_effectors`` are those carrying targets."""
+    carrying = target_joints(model, end_effectors)
+    joints = _joint_indices(model, elastic.joints, carrying)
+    if not len(joints):
+        raise ProblemError("elastic: no compliant joint (no moving joint carries a target)")
+    prior = None
+    if elastic.compliance_prior is not None:
+        from .blocks import GaussianPrior
+
+        prior = GaussianPrior(float(elastic.compliance_prior))
+    c0 = np.full(len(joints), float(elastic.compliance_initial))
+    compliance = JointCompliance(model, joints, c0, prior=prior)
+    if elastic.lumped:
+        body_links = model.moving[carrying]
+        theta0 = np.zeros((len(body_links), 4))
+        theta0[:, 0] = elastic.mass_initial
+        gravity = GravityParameters(model, body_links, theta0)
+    else:
+        body_links, theta = _mass_bodies(model, elastic.masses)
+        gravity = GravityParameters(model, body_links, theta, free=False)
+    payload = None
+    if elastic.payload is not None:
+        p = elastic.payload.checked()
+        payload = (p.end_effector, p.mass, p.com)
+    return Deflection(model, q, compliance, gravity, payload=payload, g=np.asarray(elastic.g, dtype=float))
