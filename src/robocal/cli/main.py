@@ -38,6 +38,7 @@ _COMMANDS = {
     "history": ("history", "history_cmd", "A robot's calibration and maintenance history.", None),
     "import": ("importing", "import_cmd", "A tracker export and a joint log into a measurement file.", None),
     "plan-poses": ("plan", "plan_poses_cmd", "Measurement poses for a calibration, with the predicted sigma.", None),
+    "datasets": ("datasets", "datasets", "The real data sets: list them, rerun their protocols.", None),
 }
 
 

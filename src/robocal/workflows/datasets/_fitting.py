@@ -5,9 +5,28 @@ from __future__ import annotations
 import numpy as np
 
 from ...calib import CalibrationProblem, Target, solve
+from ...calib.elastic import ElasticModel
 
-__all__ = ["random_split", "error_stats", "points_in_base", "param_names", "fit", "with_state_targets",
+__all__ = ["MODELS", "elastic_model", "random_split", "error_stats", "points_in_base", "param_names", "fit", "with_state_targets",
            "holdout_stats"]
+
+
+#: the model choices of every protocol (``robocal datasets run NAME --model ...``)
+MODELS = ("geometric", "elastic-joint", "elastic-full")
+
+
+def elastic_model(name: str, **kw):
+    """The :class:`~robocal.calib.elastic.ElasticModel` of a model choice (None for ``geometric``):
+    ``elastic-joint`` = a torsional compliance per joint carrying the targets, lumped gravity
+    parameters identified from the data (the data sets come without a mass model)."""
+    if name not in MODELS:
+        raise ValueError(f"unknown model {name!r}; expected one of {', '.join(MODELS)}")
+    if name == "geometric":
+        return None
+    if name == "elastic-full":
+        raise NotImplementedError("model 'elastic-full' (lateral link compliance) is not implemented yet "
+                                  "(docs/elastic.md, 'Not done yet'); use elastic-joint")
+    return ElasticModel(compliance_initial=kw.get("compliance_initial", 100.0), joints=kw.get("joints"))
 
 
 def random_split(n: int, n_train: int, seed: int) -> tuple:
