@@ -1,0 +1,105 @@
+"""Elastic calibration (issue 18): gravity torques, joint compliance identified with the geometry
+on a simulated robot that deflects (with effects the model lacks), unidentifiable compliance
+reported by name, bad payloads refused."""
+
+import numpy as np
+import pytest
+from test_calibration import expected_holdout_mse
+
+from robocal.calib import CalibrationProblem, ProblemError, Target, solve
+from robocal.calib.elastic import ElasticModel, Payload
+from robocal.calib.gravity import GravityTorques
+from robocal.calib.residuals.examples import example_robot
+from robocal.robots import load_robot
+from robocal.sim import LaserTracker, VirtualRobot
+from robocal.sim.elastic import ElasticTruth
+
+SIGMA = 0.02
+TOOL = np.array([30.0, 40.0, 250.0])
+# a KR150-class mass model (simulation numbers: kg, centre of mass in each DH link frame [mm])
+MASSES = {"A1": (450.0, (0.0, 150.0, 0.0)), "A2": (280.0, (-600.0, 0.0, 150.0)),
+          "A3": (220.0, (-60.0, -40.0, 0.0)), "A4": (70.0, (0.0, 0.0, -300.0)),
+          "A5": (30.0, (0.0, 20.0, 0.0)), "A6": (8.0, (0.0, 0.0, -20.0))}
+PAYLOAD = ("flange", 120.0, (0.0, 50.0, 200.0))
+COMPLIANCE = {"A1": 0.15, "A2": 0.25, "A3": 0.4, "A4": 1.5, "A5": 2.0, "A6": 3.0}  # mrad/kNm, hidden
+
+
+def test_gravity_torques_are_the_derivative_of_the_potential_energy():
+    """tau_j = -dV/dq_j, V = -sum m g.p (bodies with offset centres of mass, a payload, tilted g)."""
+    rng = np.random.default_rng(1)
+    m = example_robot(rng)
+    q = rng.uniform(-2, 2, (5, 4))
+    theta = np.column_stack([rng.uniform(5, 30, 4), rng.normal(0, 3, (4, 3))])
+    com, g = np.array([10.0, 20.0, 30.0]), np.array([0.1, 0.2, -9.8])
+    tau = GravityTorques(m, q, m.moving, payload=("side", 3.0, com), g=g).torques(theta)
+    m0 = m.replace(T_world_base=np.eye(4))
+
+    def potential(qq):
+        _, _, fr = m0.twists(qq)
+        mp = sum(theta[b, 0] * fr[:, b, :, 3] / 1000 + fr[:, b, :, :3] @ theta[b, 1:] for b in range(4))
+        T = m0.fk_all(qq)[:, 1]
+        mp = mp + 3.0 * (T[:, :3, :3] @ com + T[:, :3, 3]) / 1000
+        return -(mp @ g)
+
+    h = 1e-6
+    fd = np.column_stack([-(potential(q + h * e) - potential(q - h * e)) / (2 * h) for e in np.eye(4)])
+    assert np.max(np.abs(fd - tau)) < 1e-5 * np.max(np.abs(tau))
+
+
+def _elastic_campaign(seed, n_train=100, n_hold=100):
+    nominal = load_robot("kuka_kr150_r3100")
+    truth = ElasticTruth(COMPLIANCE, MASSES, payload=PAYLOAD, hardening=0.0002)
+    robot = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0).with_elastic(truth)
+    tracker = LaserTracker.placed(seed + 100, reflectors=TOOL[None], sigma_mm=SIGMA)
+    rng = np.random.default_rng(seed + 200)
+    q = robot.random_configurations(n_train + n_hold, rng, margin=0.1)
+    meas = tracker.measure(robot, q, rng)
+    return nominal, robot, q, meas.points, tracker.true_points(robot, q), n_train
+
+
+def _fit(nominal, q, pts, elastic):
+    prob = CalibrationProblem(nominal, q, [Target("r1", None, (0.0, 0.0, 50.0))], pts, point_sigma_mm=SIGMA,
+                              base_initial="fit", elastic=elastic)
+    return prob, solve(prob)
+
+
+def test_simulated_elastic_robot_round_trip_reaches_the_noise_floor():
+    """Mass model and payload known, compliances hidden; the truth takes torques at the deflected
+    pose and stiffens with load by 0.2 % at 10 kNm (the model does neither; A2, the most loaded
+    joint, is determined to ~0.1 %, so a larger unmodelled stiffening shows as a bias > 3 sigma). Geometry + compliance identified
+    together: holdout at the noise floor, compliances within 3 sigma, A1 (vertical axis, no
+    gravity torque) reported as unidentifiable by name; the geometric model alone is far off."""
+    elastic = ElasticModel(masses=MASSES, payload=Payload(PAYLOAD[1], PAYLOAD[2], "flange"), compliance_initial=0.0)
+    z, floor, hold, geo = [], [], [], []
+    for seed in (0, 1):
+        nominal, robot, q, pts, truth, n = _elastic_campaign(seed)
+        prob, res = _fit(nominal, q[:n], pts[:n], elastic)
+        assert res.converged, res.summary()
+        dropped = {d["name"]: d["why"] for d in res.identifiability.dropped}
+        assert "compliance.A1" in dropped and "no effect" in dropped["compliance.A1"]
+        for j in ("A2", "A3", "A4", "A5", "A6"):
+            i = res.names.index(f"compliance.{j}")
+            z.append((res.values[i] - COMPLIANCE[j]) / res.std[i])
+        pred = prob.predict_points(res.state, q=q[n:])
+        hold.append(np.sqrt(np.mean(np.sum((pred - truth[n:]) ** 2, axis=-1))))
+        floor.append(np.sqrt(expected_holdout_mse(prob, res, q[n:], SIGMA)))  # noise-limited optimum
+        gp, gr = _fit(nominal, q[:n], pts[:n], None)
+        geo.append(np.sqrt(np.mean(np.sum((gp.predict_points(gr.state, q=q[n:]) - truth[n:]) ** 2, axis=-1))))
+    z = np.abs(np.array(z))
+    assert np.all(z < 3), z
+    # measured: 0.0130 / 0.0166 mm against optima 0.0123 / 0.0121 (a truth without the unmodelled
+    # effects gives 0.0119 / 0.0143: seed 1's 100 holdout poses alone fluctuate by ~20 %)
+    assert np.mean(hold) < 1.25 * np.mean(floor), (hold, floor)
+    assert np.mean(geo) > 5 * np.mean(hold), (geo, hold)
+
+
+def test_a_payload_without_mass_is_refused():
+    nominal = load_robot("kuka_kr150_r3100")
+    q = np.zeros((3, 6))
+    pts = np.zeros((3, 1, 3))
+    for bad in (0.0, float("nan")):
+        with pytest.raises(ProblemError, match="payload"):
+            CalibrationProblem(nominal, q, [Target("r1")], pts, base_initial=np.eye(4),
+                               elastic=ElasticModel(masses=MASSES, payload=Payload(bad, (0, 0, 100))))
+    with pytest.raises(ProblemError, match="metres and millimetres"):
+        Payload(10.0, (0.0, 0.0, 20000.0)).checked()
