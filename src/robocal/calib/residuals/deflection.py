@@ -84,6 +84,7 @@ class Deflection:
             jac[self.compliance] = J_joint * (tau_sel * s)[:, None, None, :]
         if want_g:
             D = gt.basis[:, self.compliance.joints] * (s * c)[None, :, None, None]  # (N, n_c, B, 4)
-            Jt = np.einsum("nkij,njbv->nkibv", J_joint, D)
-            jac[self.gravity] = self.gravity.variable_jacobian(Jt)
+            N, n_c = D.shape[:2]
+            Jt = J_joint @ D.reshape(N, 1, n_c, -1)  # (N, K, 3, B * 4)
+            jac[self.gravity] = self.gravity.variable_jacobian(Jt.reshape(Jt.shape[:3] + D.shape[2:]))
         return jac

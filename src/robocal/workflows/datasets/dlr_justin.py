@@ -51,7 +51,7 @@ def calibrate_justin(seed: int = 0, n_train: int = 400, data=None, root=None, pr
     for lev in levels:
         p, r = fit(model, ds.joints[tr], state_targets, ds.points[tr], free=free_sets[lev], base_initial=base,
                    prior=prior if lev in ("all", "elastic") else 0.0, elastic=elastic if lev == "elastic" else None,
-                   max_iterations=200 if lev == "elastic" else 50)
+                   max_iterations=60 if lev == "elastic" else 50)
         if lev != levels[-1]:
             # next level starts from this solution
             model = r.model.replace(T_world_base=model.T_world_base)
