@@ -12,12 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .blocks.elastic import GravityParameters, JointCompliance
+from .blocks.elastic import COMPLIANCE_UNITS, GravityParameters, JointCompliance
 from .errors import ProblemError
-from .gravity import STANDARD_GRAVITY
+from .gravity import STANDARD_GRAVITY, GravityTorques
 from .residuals.deflection import Deflection
 
-__all__ = ["ElasticModel", "Payload", "build_deflection", "target_joints"]
+__all__ = ["ElasticModel", "Payload", "build_deflection", "target_joints", "bodies_from_masses", "joint_torques",
+           "model_joint_deflection", "elastic_description", "ElasticDescription"]
 
 
 @dataclass(frozen=True)
@@ -136,3 +137,80 @@ def build_deflection(model, q, elastic: ElasticModel, end_effectors) -> Deflecti
         p = elastic.payload.checked()
         payload = (p.end_effector, p.mass, p.com)
     return Deflection(model, q, compliance, gravity, payload=payload, g=np.asarray(elastic.g, dtype=float))
+
+
+def bodies_from_masses(masses: dict) -> dict:
+    """``{link: (m [kg], hx, hy, hz [kg m])}`` from a mass model ``{link: (m [kg], com (3,) [mm])}``."""
+    out = {}
+    for ln, (m, com) in masses.items():
+        out[ln] = (float(m), *(float(m) * np.asarray(com, dtype=float).reshape(3) / 1000.0))
+    return out
+
+
+def _joints_model(model):
+    names = tuple(model.links[int(k)].name for k in model.moving)
+    n = len(names)
+    return model.replace(controller_joints=names, coupling=np.eye(n), limits=np.tile([-np.inf, np.inf], (n, 1)))
+
+
+def joint_torques(model, q_model, bodies: dict, *, payload=None, g=None) -> np.ndarray:
+    """Gravity torques (N, n_model) [N m | N] at model joints ``q_model`` (N, n_model) of the bodies
+    ``{link name: (m, hx, hy, hz)}`` and a payload ``(end_effector, mass, com)``."""
+    names = [L.name for L in model.links]
+    for ln in bodies:
+        if ln not in names:
+            raise ProblemError(f"mass model: {ln!r} is not a link of {model.name}")
+    links = np.array([names.index(ln) for ln in bodies], dtype=int)
+    theta = np.array([bodies[ln] for ln in bodies], dtype=float).reshape(-1, 4)
+    gt = GravityTorques(_joints_model(model), q_model, links, payload=payload, g=g)
+    return gt.torques(theta)
+
+
+def model_joint_deflection(model, q, compliance: dict, bodies: dict, *, payload=None, g=None) -> np.ndarray:
+    """``dtheta`` (N, n_model) [rad | mm] of the model joints at controller joints ``q`` (N, n_ctrl):
+    ``s_j c_j tau_j(q)`` with ``compliance`` ``{joint name: c [mrad/kNm | mm/kN]}``."""
+    q_model = np.atleast_2d(np.asarray(q, dtype=float)) @ model.coupling.T
+    tau = joint_torques(model, q_model, bodies, payload=payload, g=g)
+    moving = [model.links[int(k)].name for k in model.moving]
+    c = np.zeros(len(moving))
+    for n, v in compliance.items():
+        if n not in moving:
+            raise ProblemError(f"compliance: {n!r} is not a moving joint of {model.name}")
+        c[moving.index(n)] = float(v)
+    s = np.array([COMPLIANCE_UNITS[model.links[int(k)].joint_type == "revolute"][1] for k in model.moving])
+    return tau * c * s
+
+
+@dataclass(frozen=True)
+class ElasticDescription:
+    """The elastic part of a calibrated robot (the robot file's ``[elastic]`` section):
+    compliance ``{joint: c}`` [mrad/kNm | mm/kN]; bodies ``{link: (m, hx, hy, hz)}`` [kg, kg m];
+    ``mass_model``: the bodies are a given mass model (True) or identified lumped parameters;
+    g (3,) [m/s^2] in the base frame."""
+
+    compliance: dict
+    bodies: dict
+    mass_model: bool
+    g: tuple = tuple(STANDARD_GRAVITY)
+
+    def deflection(self, model, q, payload=None) -> np.ndarray:
+        """Model-joint deflections (N, n_model) at controller joints ``q`` with ``payload``."""
+        return model_joint_deflection(model, q, self.compliance, self.bodies, payload=payload, g=self.g)
+
+    def controller_deflection(self, model, q, payload=None) -> np.ndarray:
+        """The deflections as controller-joint changes (N, n_ctrl): ``pinv(coupling) dtheta`` (exact
+        for a square coupling; least squares for a passive joint)."""
+        return self.deflection(model, q, payload) @ np.linalg.pinv(model.coupling).T
+
+
+def elastic_description(problem, state) -> ElasticDescription:
+    """The :class:`ElasticDescription` of an elastic :class:`~robocal.calib.CalibrationProblem` at ``state``."""
+    d = problem.deflection
+    if d is None:
+        raise ProblemError("the problem has no elastic model")
+    model = problem.model
+    comp = {model.links[int(model.moving[j])].name: float(c) for j, c in zip(d.compliance.joints, state.compliance)}
+    theta = d.gravity.theta(state.gravity)
+    bodies = {n: tuple(float(x) for x in t) for n, t in zip(d.gravity.body_names, theta)}
+    g = STANDARD_GRAVITY if d.g is None else d.g
+    return ElasticDescription(comp, bodies, mass_model=not problem.elastic.lumped, g=tuple(float(x) for x in g))

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calib.blocks.elastic import COMPLIANCE_UNITS
-from ..calib.gravity import STANDARD_GRAVITY, GravityTorques
+from ..calib.elastic import bodies_from_masses, joint_torques
+from ..calib.gravity import STANDARD_GRAVITY
 
 __all__ = ["ElasticTruth", "deflected_model_joints"]
 
@@ -42,21 +43,14 @@ class ElasticTruth:
 
 def deflected_model_joints(model, q, truth: ElasticTruth, payload="default") -> np.ndarray:
     """Model joints (N, n_model) the robot really reaches at controller joints ``q`` (N, n_ctrl)."""
-    names = [L.name for L in model.links]
     moving = [model.links[int(k)].name for k in model.moving]
-    body_links = np.array([names.index(n) for n in truth.masses], dtype=int)
-    theta = np.array([[m, *(np.asarray(c, dtype=float) * m / 1000.0)] for m, c in truth.masses.values()])
-    c = np.zeros(len(moving))
+    bodies = bodies_from_masses(truth.masses)
+    c = np.array([float(truth.compliance.get(n, 0.0)) for n in moving])
     scale = np.array([COMPLIANCE_UNITS[model.links[int(k)].joint_type == "revolute"][1] for k in model.moving])
-    for n, v in truth.compliance.items():
-        c[moving.index(n)] = v
     payload = truth.payload if payload == "default" else payload
-    m_joints = model.replace(controller_joints=tuple(moving), coupling=np.eye(len(moving)),
-                             limits=np.tile([-np.inf, np.inf], (len(moving), 1)))
     qm = np.atleast_2d(np.asarray(q, dtype=float)) @ model.coupling.T
     q_eff = qm
     for _ in range(int(truth.equilibrium_iterations) + 1):
-        tau = GravityTorques(m_joints, q_eff, body_links, payload=payload, g=np.asarray(truth.g)).torques(theta)
-        dq = scale * c * tau * (1.0 - truth.hardening * np.abs(tau) / truth.tau_ref)
-        q_eff = qm + dq
+        tau = joint_torques(model, q_eff, bodies, payload=payload, g=np.asarray(truth.g))
+        q_eff = qm + scale * c * tau * (1.0 - truth.hardening * np.abs(tau) / truth.tau_ref)
     return q_eff
