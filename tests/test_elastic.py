@@ -192,3 +192,48 @@ def test_calibrate_elastic_then_correct_puts_the_deflecting_robot_on_target(tmp_
         err[label] = np.linalg.norm(reached[:, :3, 3] - T_goal[:, :3, 3], axis=1).max()
     # measured: elastic 0.017 mm (the calibration's own error), rigid 2.7 mm (the deflection)
     assert err["elastic"] < 0.1 and err["rigid"] > 10 * err["elastic"], err
+
+
+def test_bending_moments_are_the_weights_moments_about_the_bearing():
+    """lateral moments: e_a . sum_b (p_b - o_j) x m_b g over the bodies joint j carries, with p_b
+    the centres of mass from forward kinematics (a payload included)."""
+    rng = np.random.default_rng(4)
+    m = example_robot(rng)
+    q = rng.uniform(-2, 2, (4, 4))
+    theta = np.column_stack([rng.uniform(5, 30, 4), rng.normal(0, 3, (4, 3))])
+    com, g = np.array([10.0, -20.0, 60.0]), np.array([0.2, -0.1, -9.8])
+    gt = GravityTorques(m, q, m.moving, payload=("flange", 4.0, com), g=g, lateral=True)
+    M = gt.lateral_moments(theta)
+    m0 = m.replace(T_world_base=np.eye(4))
+    _, _, fr = m0.twists(q)
+    T_flange = m0.fk(q)
+    for j in range(4):
+        want = np.zeros((4, 2))
+        for b in range(j, 4):  # the example robot is serial: joint j carries links j..3
+            p = fr[:, b, :, 3] + fr[:, b, :, :3] @ (theta[b, 1:] * 1000 / theta[b, 0])
+            f = np.cross((p - gt.joint_origin[:, j]) / 1000, theta[b, 0] * g)
+            want += np.einsum("nai,ni->na", gt.lateral_axes[:, j], f)
+        p = T_flange[:, :3, :3] @ com + T_flange[:, :3, 3]
+        want += np.einsum("nai,ni->na", gt.lateral_axes[:, j], np.cross((p - gt.joint_origin[:, j]) / 1000, 4.0 * g))
+        assert np.allclose(M[:, j], want, rtol=1e-9, atol=1e-9)
+
+
+def test_robot_file_reach_equals_the_calibration_chain_with_lateral_compliance():
+    """What `robocal correct` uses (ElasticDescription.reached_poses, from the robot file's
+    [elastic] section) predicts the same flange positions as the calibration's chain."""
+    from robocal.calib.elastic import elastic_description
+
+    nominal = load_robot("kuka_kr150_r3100")
+    rng = np.random.default_rng(5)
+    q = VirtualRobot(nominal, nominal).random_configurations(8, rng, 0.1)
+    el = ElasticModel(lateral=True, payload=Payload(50.0, (0.0, 30.0, 100.0)))
+    prob = CalibrationProblem(nominal, q, [Target("f", None, (0.0, 0.0, 0.0))], np.zeros((8, 1, 3)),
+                              base_initial=np.eye(4), elastic=el)
+    state = prob.initial_state()._replace(compliance=rng.uniform(0, 5, 6), lateral=rng.uniform(0, 3, 12),
+                                          gravity=np.concatenate([rng.normal(0, 20, 18), rng.uniform(10, 300, 6)]))
+    desc = elastic_description(prob, state)
+    T = desc.reached_poses(prob.model_at(state), q, ("flange", 50.0, (0.0, 30.0, 100.0)))
+    p = prob.predict_points(state)[:, 0]
+    rigid = nominal.fk(q)[:, :3, 3]
+    assert np.max(np.linalg.norm(p - rigid, axis=1)) > 1.0  # the deflection is mm
+    assert np.allclose(T[:, :3, 3], p, atol=1e-9)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .blocks.elastic import COMPLIANCE_UNITS, GravityParameters, JointCompliance
+from .blocks.elastic import COMPLIANCE_UNITS, GravityParameters, JointCompliance, LateralCompliance
 from .errors import ProblemError
 from .gravity import STANDARD_GRAVITY, GravityTorques
 from .residuals.deflection import Deflection
@@ -57,7 +57,8 @@ class ElasticModel:
     payload: a :class:`Payload` or None; g: gravity in the robot base frame [m/s^2];
     compliance_initial: start value [mrad/kNm | mm/kN] (lumped parameters need a non-zero start);
     mass_initial: start mass of each lumped body [kg]; compliance_prior: optional sigma of a weak
-    prior around the start (same unit).
+    prior around the start (same unit); lateral: also two lateral (bending) compliances per
+    compliant joint (the ``full`` model, :class:`~robocal.calib.blocks.elastic.LateralCompliance`).
     """
 
     joints: tuple | None = None
@@ -67,6 +68,7 @@ class ElasticModel:
     compliance_initial: float = 10.0
     mass_initial: float = 10.0
     compliance_prior: float | None = None
+    lateral: bool = False
 
     @property
     def lumped(self) -> bool:
@@ -136,7 +138,11 @@ def build_deflection(model, q, elastic: ElasticModel, end_effectors) -> Deflecti
     if elastic.payload is not None:
         p = elastic.payload.checked()
         payload = (p.end_effector, p.mass, p.com)
-    return Deflection(model, q, compliance, gravity, payload=payload, g=np.asarray(elastic.g, dtype=float))
+    lateral = None
+    if elastic.lateral:
+        lateral = LateralCompliance(model, joints, np.full(2 * len(joints), float(elastic.compliance_initial)))
+    return Deflection(model, q, compliance, gravity, payload=payload, g=np.asarray(elastic.g, dtype=float),
+                      lateral=lateral)
 
 
 def bodies_from_masses(masses: dict) -> dict:
@@ -186,21 +192,49 @@ class ElasticDescription:
     """The elastic part of a calibrated robot (the robot file's ``[elastic]`` section):
     compliance ``{joint: c}`` [mrad/kNm | mm/kN]; bodies ``{link: (m, hx, hy, hz)}`` [kg, kg m];
     ``mass_model``: the bodies are a given mass model (True) or identified lumped parameters;
-    g (3,) [m/s^2] in the base frame."""
+    g (3,) [m/s^2] in the base frame; lateral ``{joint: (c1, c2)}`` [mrad/kNm] (the full model)."""
 
     compliance: dict
     bodies: dict
     mass_model: bool
     g: tuple = tuple(STANDARD_GRAVITY)
+    lateral: dict | None = None
 
     def deflection(self, model, q, payload=None) -> np.ndarray:
         """Model-joint deflections (N, n_model) at controller joints ``q`` with ``payload``."""
         return model_joint_deflection(model, q, self.compliance, self.bodies, payload=payload, g=self.g)
 
-    def controller_deflection(self, model, q, payload=None) -> np.ndarray:
-        """The deflections as controller-joint changes (N, n_ctrl): ``pinv(coupling) dtheta`` (exact
-        for a square coupling; least squares for a passive joint)."""
-        return self.deflection(model, q, payload) @ np.linalg.pinv(model.coupling).T
+    def reached_poses(self, model, q, payload=None, end_effector=None) -> np.ndarray:
+        """Poses (N, 4, 4) [mm] of ``end_effector`` the deflecting robot reaches at controller joints
+        ``q``: forward kinematics at the deflected joints, then the lateral rotations (as in the
+        calibration's chain: torques and bending moments at the commanded joints)."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        jm = _joints_model(model).replace(T_world_base=np.eye(4))
+        T = jm.fk(q @ model.coupling.T + self.deflection(model, q, payload), end_effector)
+        if self.lateral:
+            T = self._lateral(model, q, payload, end_effector, T)
+        return model.T_world_base @ T
+
+    def _lateral(self, model, q, payload, end_effector, T):
+        from ..transforms import so3_exp
+
+        names = [L.name for L in model.links]
+        moving = [model.links[int(k)].name for k in model.moving]
+        links = np.array([names.index(n) for n in self.bodies], dtype=int)
+        theta = np.array(list(self.bodies.values()), dtype=float).reshape(-1, 4)
+        gt = GravityTorques(_joints_model(model), q @ model.coupling.T, links, payload=payload, g=self.g, lateral=True)
+        c = np.zeros((len(moving), 2))
+        for n, v in self.lateral.items():
+            c[moving.index(n)] = v
+        ee = model.end_effector_index(end_effector)
+        carried = model._ee_ancestors[ee][model.moving].astype(float)  # (n_model,)
+        phi = np.einsum("nja,njai->nji", 1e-6 * c[None] * gt.lateral_moments(theta), gt.lateral_axes)
+        phi = phi * carried[None, :, None]
+        p = T[:, :3, 3]
+        out = T.copy()
+        out[:, :3, 3] = p + np.cross(phi, p[:, None, :] - gt.joint_origin).sum(axis=1)
+        out[:, :3, :3] = so3_exp(phi.sum(axis=1)) @ T[:, :3, :3]
+        return out
 
 
 def elastic_description(problem, state) -> ElasticDescription:
@@ -213,4 +247,9 @@ def elastic_description(problem, state) -> ElasticDescription:
     theta = d.gravity.theta(state.gravity)
     bodies = {n: tuple(float(x) for x in t) for n, t in zip(d.gravity.body_names, theta)}
     g = STANDARD_GRAVITY if d.g is None else d.g
-    return ElasticDescription(comp, bodies, mass_model=not problem.elastic.lumped, g=tuple(float(x) for x in g))
+    lateral = None
+    if d.lateral is not None:
+        vals = np.asarray(state.lateral, dtype=float).reshape(-1, 2)
+        lateral = {model.links[int(model.moving[j])].name: (float(a), float(b)) for j, (a, b) in zip(d.lateral.joints, vals)}
+    return ElasticDescription(comp, bodies, mass_model=not problem.elastic.lumped, g=tuple(float(x) for x in g),
+                              lateral=lateral)

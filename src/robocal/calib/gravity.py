@@ -42,9 +42,17 @@ class GravityTorques:
 
     Attributes: ``basis`` (N, n_model, B, 4) [N m per kg | per kg m], ``payload`` (N, n_model)
     [N m | N], ``revolute`` (n_model,) bool.
+
+    With ``lateral``: the gravity moment about the two axes perpendicular to each joint axis (the
+    bending moments), at the joint's bearing point ``o_j`` (the foot of the link frame's origin on
+    the axis; a prismatic joint: the link frame's origin, its axis the direction of travel), the
+    perpendicular axes ``e1`` (the link frame's axis most perpendicular to the joint axis, made
+    perpendicular) and ``e2 = a x e1``: ``lateral_basis`` (N, n_model, 2, B, 4) [N m per kg | per kg m],
+    ``lateral_payload`` (N, n_model, 2), ``joint_origin`` (N, n_model, 3) [mm], ``lateral_axes``
+    (N, n_model, 2, 3) -- all in the base frame.
     """
 
-    def __init__(self, model, q, body_links, *, payload=None, g=None):
+    def __init__(self, model, q, body_links, *, payload=None, g=None, lateral: bool = False):
         m0 = model.replace(T_world_base=np.eye(4))
         q = np.asarray(q, dtype=float)
         N = len(q)
@@ -71,6 +79,52 @@ class GravityTorques:
         self.payload = np.zeros((N, len(model.moving)))
         if payload is not None:
             self.payload = self._payload(model, frames, payload, w, v, g, scale[..., 0])
+        if lateral:
+            self._lateral(model, frames, w, v, g, o, R, carries, payload)
+
+    def _lateral(self, model, frames, w, v, g, o, R, carries, payload):
+        """Bending-moment bases (see the class docstring)."""
+        wj, vj = np.swapaxes(w, 1, 2), np.swapaxes(v, 1, 2)  # (N, n_model, 3)
+        axis = np.where(self.revolute[None, :, None], wj, vj)
+        Fj = frames[:, model.moving]  # (N, n_model, 3, 4): the frame turning with each joint
+        origin = Fj[..., 3]
+        foot = np.where(self.revolute[None, :, None],
+                        np.cross(wj, vj) + wj * np.einsum("nji,nji->nj", wj, origin)[..., None], origin)
+        dots = np.abs(np.einsum("njik,nji->njk", Fj[..., :3], axis))  # |column . axis|
+        col = np.argmin(dots, axis=-1)  # (N, n_model)
+        e1 = np.take_along_axis(Fj[..., :3], col[..., None, None], axis=-1)[..., 0]
+        e1 = e1 - axis * np.einsum("nji,nji->nj", e1, axis)[..., None]
+        e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)
+        e2 = np.cross(axis, e1)
+        E = np.stack([e1, e2], axis=2)  # (N, n_model, 2, 3)
+        # moment about o_j of body b: m_b ((o_b - o_j)/1000) x g + (R_b h_b) x g
+        lever = (o[:, None, :, :] - foot[:, :, None, :]) / 1000.0  # (N, n_model, B, 3) [m]
+        gN = g[:, None, None, :]
+        m_part = np.cross(lever, gN)  # (N, n_model, B, 3)
+        h_part = np.cross(np.swapaxes(R, 2, 3)[:, None], g[:, None, None, None, :])  # (N, 1, B, 3(v), 3)
+        Lm = np.einsum("njai,njbi->njab", E, m_part)  # (N, n_model, 2, B)
+        Lh = np.einsum("njai,nxbvi->njabv", E, h_part)  # (N, n_model, 2, B, 3)
+        basis = np.concatenate([Lm[..., None], Lh], axis=-1) * carries[None, :, None, :, None]
+        self.lateral_basis, self.joint_origin, self.lateral_axes = basis, foot, E
+        self.lateral_payload = np.zeros(E.shape[:3])
+        if payload is not None:
+            ee_name, mass, com = payload
+            N = len(g)
+            e = model.end_effectors[model.end_effector_index(ee_name)]
+            if e.link >= 0:
+                mass = np.broadcast_to(np.asarray(mass, dtype=float), (N,))
+                com = np.broadcast_to(np.asarray(com, dtype=float), (N, 3))
+                F = frames[:, e.link]
+                T = np.asarray(e.T_link_ee, dtype=float)
+                p = np.einsum("nij,nj->ni", F[:, :, :3], com @ T[:3, :3].T + T[:3, 3]) + F[:, :, 3]
+                mom = np.cross((p[:, None, :] - foot) / 1000.0, g[:, None, :]) * mass[:, None, None]
+                c = self._carries(model, np.array([e.link]))[:, 0]
+                self.lateral_payload = np.einsum("njai,nji->nja", E, mom) * c[None, :, None]
+
+    def lateral_moments(self, theta) -> np.ndarray:
+        """Bending moments (N, n_model, 2) [N m] about ``lateral_axes`` for body parameters (B, 4)."""
+        return np.einsum("njabv,bv->nja", self.lateral_basis, np.asarray(theta, dtype=float).reshape(-1, 4)) + \
+            self.lateral_payload
 
     @staticmethod
     def _carries(model, body_links) -> np.ndarray:

@@ -62,6 +62,7 @@ class State(NamedTuple):
     planes: np.ndarray
     compliance: np.ndarray | None = None  # (n_c,) joint compliances (elastic problems only)
     gravity: np.ndarray | None = None  # lumped gravity parameters (elastic problems only)
+    lateral: np.ndarray | None = None  # (2 n_c,) lateral compliances (the full elastic model only)
 
 
 def _checked_joints(model, q):
@@ -283,7 +284,8 @@ class CalibrationProblem(Problem):
             raise ProblemError(f"stations: expected shape ({len(q)},), got {stations.shape}")
         c = self.chain
         wants = tuple(b in self._plan for b in c.parameter_blocks) if jacobian else None
-        elastic = None if self.deflection is None else (state.compliance, state.gravity)
+        elastic = None if self.deflection is None else tuple(
+            getattr(state, b.name) for b in self.deflection.blocks)
         out = c.predict(state.params, state.bases, state.targets, q, stations, wants, elastic=elastic,
                         payload=payload)
         if not jacobian:

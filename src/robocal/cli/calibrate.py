@@ -63,7 +63,8 @@ from .swarm_progress import swarm_progress_bar
               help="Drop repeated pose ids and repeated rows (keeping the first) instead of refusing the file.")
 @click.option("--elastic", type=click.Choice(["joint", "full"]), default=None,
               help="Identify joint compliance under gravity with the geometry (docs/elastic.md): the robot file's "
-                   "mass model if it has one, else lumped gravity parameters. 'full' is not implemented yet.")
+                   "mass model if it has one, else lumped gravity parameters; 'full' adds two lateral (bending) "
+                   "compliances per joint.")
 @click.option("--payload", default=None, metavar="KG@X,Y,Z",
               help="With --elastic: the payload carried during the measurements, mass [kg] @ centre of mass "
                    "[mm] in the flange frame.")

@@ -35,7 +35,7 @@ def list_cmd(root, as_json):
 @click.argument("name")
 @click.option("--model", type=click.Choice(MODEL_CHOICES), default="geometric", show_default=True,
               help="geometric; elastic-joint (joint compliance under gravity, identified with the geometry); "
-                   "elastic-full (not implemented yet).")
+                   "elastic-full (+ lateral bending compliance of every joint).")
 @click.option("--root", type=click.Path(file_okay=False), default=None,
               help="Folder holding the data sets (default: $ROBOCAL_DATASETS or ../shared/datasets).")
 @click.option("--json", "as_json", is_flag=True, help="Print the record as JSON.")

@@ -5,6 +5,7 @@ gravity parameters, and gravity (docs/robot-files.md, docs/elastic.md).
 [elastic]
 gravity = [0.0, 0.0, -9.80665]        # m/s^2 in the robot base frame (default: base z up)
 compliance = { A2 = 0.25, A3 = 0.4 }  # per moving joint: mrad/kNm (revolute), mm/kN (prismatic)
+lateral = { A2 = [0.1, 0.05] }        # optional (the full model): bending about e1, e2 [mrad/kNm]
 
 [elastic.masses]                      # a mass model: per joint entry (its link frame)
 A2 = { mass = 280.0, com = [-600.0, 0.0, 150.0] }   # kg; centre of mass in length_unit
@@ -39,9 +40,10 @@ def parse_elastic(section, origin: str, link_names, moving_names, length_scale: 
     where = f"{origin}: [elastic]"
     if not isinstance(section, dict):
         raise ValueError(f"{where}: must be a table")
-    unknown = set(section) - {"gravity", "compliance", "masses", "lumped"}
+    unknown = set(section) - {"gravity", "compliance", "lateral", "masses", "lumped"}
     if unknown:
-        raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; expected gravity, compliance, masses, lumped")
+        raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; expected gravity, compliance, lateral, masses, "
+                         "lumped")
     g = section.get("gravity", list(STANDARD_GRAVITY))
     if not isinstance(g, list) or len(g) != 3:
         raise ValueError(f"{where}: 'gravity' must be [gx, gy, gz] in m/s^2, got {g!r}")
@@ -56,6 +58,18 @@ def parse_elastic(section, origin: str, link_names, moving_names, length_scale: 
         if n not in moving_names:
             raise ValueError(f"{where}.compliance: {n!r} is not a moving joint; joints: {', '.join(moving_names)}")
         compliance[n] = _number(f"{where}.compliance.{n}", v)
+    lateral = None
+    if "lateral" in section:
+        lat = section["lateral"]
+        if not isinstance(lat, dict):
+            raise ValueError(f"{where}: 'lateral' must map joint names to [c1, c2]")
+        lateral = {}
+        for n, v in lat.items():
+            if n not in moving_names:
+                raise ValueError(f"{where}.lateral: {n!r} is not a moving joint; joints: {', '.join(moving_names)}")
+            if not isinstance(v, list) or len(v) != 2:
+                raise ValueError(f"{where}.lateral.{n}: expected [c1, c2] in mrad/kNm, got {v!r}")
+            lateral[n] = tuple(_number(f"{where}.lateral.{n}", x) for x in v)
     if "masses" in section and "lumped" in section:
         raise ValueError(f"{where}: give either [elastic.masses] (a mass model) or [elastic.lumped], not both")
     masses = {}
@@ -83,7 +97,7 @@ def parse_elastic(section, origin: str, link_names, moving_names, length_scale: 
         if not isinstance(v, list) or len(v) != 4:
             raise ValueError(f"{w}: expected [m kg, hx, hy, hz kg m], got {v!r}")
         bodies[n] = tuple(_number(w, x) for x in v)
-    return ElasticDescription(compliance, bodies, mass_model="lumped" not in section, g=tuple(g))
+    return ElasticDescription(compliance, bodies, mass_model="lumped" not in section, g=tuple(g), lateral=lateral)
 
 
 def _num(x: float) -> str:
@@ -95,6 +109,9 @@ def elastic_lines(desc: ElasticDescription, length_scale: float) -> list:
     out = ["", "[elastic]", "gravity = [" + ", ".join(_num(x) for x in desc.g) + "]",
            "compliance = { " + ", ".join(f'"{n}" = {_num(v)}' for n, v in desc.compliance.items()) + " }"
            + "  # mrad/kNm (revolute), mm/kN (prismatic)"]
+    if desc.lateral:
+        out.append("lateral = { " + ", ".join(f'"{n}" = [{_num(a)}, {_num(b)}]' for n, (a, b) in desc.lateral.items())
+                   + " }  # bending about e1, e2 [mrad/kNm]")
     if desc.mass_model:
         out += ["", "[elastic.masses]  # kg; centre of mass in the link frame"]
         for n, (m, hx, hy, hz) in desc.bodies.items():

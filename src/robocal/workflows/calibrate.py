@@ -392,8 +392,9 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
 
 
 def deflection_of(calibrated, payload=None):
-    """The deflection function of a calibrated robot with an ``[elastic]`` section (None without
-    one) under ``payload`` (a :class:`~robocal.calib.elastic.Payload` or ``KG@x,y,z`` text)."""
+    """``reach(model, q)``: the poses a calibrated robot with an ``[elastic]`` section really reaches
+    under ``payload`` (a :class:`~robocal.calib.elastic.Payload` or ``KG@x,y,z`` text); None
+    without that section."""
     from .calibrate_elastic import parse_payload
 
     desc = calibrated.extra.get("elastic")
@@ -405,7 +406,7 @@ def deflection_of(calibrated, payload=None):
                                         "file with an [elastic] section (robocal calibrate --elastic joint)")
         return None
     load = None if payload is None else (calibrated.end_effectors[0].name, payload.mass, payload.com)
-    return lambda q: desc.controller_deflection(calibrated, q, load)
+    return lambda model, q: desc.reached_poses(model, q, load)
 
 
 def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None, overwrite: bool = False,
@@ -437,7 +438,7 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     fr = frame or tg["frame"]
     targets = tg["positions"]
     corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr,
-                                   deflection=deflection_of(calibrated, payload))
+                                   reach=deflection_of(calibrated, payload))
     write_corrected_targets(out_file, corr, calibrated, tg["names"], robot=str(robot_file), nominal=nominal_model.name,
                             targets=f"{targets_file} (frame {fr})", length_unit=tg["length_unit"],
                             angle_unit=tg["angle_unit"], orientation=tg["orientation"], overwrite=overwrite)

@@ -55,28 +55,27 @@ def elastic_option(nominal, kind: str | None, payload: Payload | None) -> Elasti
         return None
     if kind not in ELASTIC_CHOICES:
         raise ProblemError(f"--elastic {kind!r}: expected one of {', '.join(ELASTIC_CHOICES)}")
-    if kind == "full":
-        raise ProblemError("--elastic full (lateral link compliance) is not implemented yet (docs/elastic.md, "
-                           "'Not done yet'); use --elastic joint")
+    lateral = kind == "full"
     desc = nominal.extra.get("elastic")
     if desc is not None and desc.mass_model and desc.bodies:
         masses = {n: (b[0], [h * 1000.0 / b[0] if b[0] > 0 else 0.0 for h in b[1:]]) for n, b in desc.bodies.items()}
-        return ElasticModel(masses=masses, payload=payload, g=desc.g, compliance_initial=0.0)
-    return ElasticModel(payload=payload, compliance_initial=100.0)
+        return ElasticModel(masses=masses, payload=payload, g=desc.g, compliance_initial=0.0, lateral=lateral)
+    return ElasticModel(payload=payload, compliance_initial=100.0, lateral=lateral)
 
 
 def elastic_summary(problem, result) -> dict:
     """result.json's ``elastic``: compliances (value, std, unit, identifiable), dropped with reasons."""
     ident = result.identifiability.by_block()
-    dropped = {d["name"]: d["why"] for blk in ("compliance", "gravity") for d in ident.get(blk, {}).get("dropped", [])}
+    dropped = {d["name"]: d["why"] for blk in ("compliance", "lateral", "gravity")
+               for d in ident.get(blk, {}).get("dropped", [])}
     rows = []
     for i, n in enumerate(result.names):
-        if n.startswith("compliance."):
-            rows.append({"joint": n.split(".", 1)[1], "value": float(result.values[i]), "unit": result.units[i],
+        if n.startswith(("compliance.", "lateral.")):
+            rows.append({"name": n, "joint": n.split(".")[1], "value": float(result.values[i]), "unit": result.units[i],
                          "std": None if not np.isfinite(result.std[i]) else float(result.std[i]),
                          "identifiable": n not in dropped, "why": dropped.get(n)})
     el = problem.elastic
-    return {"model": "joint", "mass_model": not el.lumped,
+    return {"model": "full" if el.lateral else "joint", "mass_model": not el.lumped,
             "payload": None if el.payload is None else {"mass_kg": float(np.mean(el.payload.mass)),
                                                         "com_mm": [float(v) for v in np.ravel(el.payload.com)[:3]]},
             "compliance": rows, "not_identifiable": [{"name": k, "why": v} for k, v in dropped.items()],

@@ -85,7 +85,7 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     cart = [t for t in prog.targets if t.kind == "cartesian"]
     if cart:
         T = np.stack([t.T_frame_tcp for t in cart])
-        corr = corrected_joint_targets(calibrated, nominal_model, T, frame="base", deflection=deflection)
+        corr = corrected_joint_targets(calibrated, nominal_model, T, frame="base", reach=deflection)
         r, u = _rows(cart, corr, "cartesian")
         rows, updates = rows + r, {**updates, **u}
     joint = [t for t in prog.targets if t.kind == "joint"]
@@ -95,7 +95,7 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
             raise ValueError(f"{program_file}: joint targets have {q.shape[1]} axes, {nominal_model.name} has "
                              f"{nominal_model.n_joints}")
         T = nominal_model.replace(T_world_base=np.eye(4)).fk(q)
-        corr = corrected_joint_targets(calibrated, nominal_model, T, q_seed=q, frame="base", deflection=deflection)
+        corr = corrected_joint_targets(calibrated, nominal_model, T, q_seed=q, frame="base", reach=deflection)
         r, u = _rows(joint, corr, "joint")
         rows, updates = rows + r, {**updates, **u}
     changes = write_program(prog, updates, out_file, overwrite=overwrite)

@@ -26,7 +26,7 @@ import numpy as np
 
 from .manifolds import VectorBlock
 
-__all__ = ["JointCompliance", "GravityParameters", "COMPLIANCE_UNITS"]
+__all__ = ["JointCompliance", "LateralCompliance", "GravityParameters", "COMPLIANCE_UNITS"]
 
 #: reported unit and scale to SI (rad per N m, mm per N) of revolute / prismatic compliances
 COMPLIANCE_UNITS = {True: ("mrad/kNm", 1e-6), False: ("mm/kN", 1e-3)}
@@ -50,6 +50,22 @@ class JointCompliance(VectorBlock):
         names = [f"{name}.{L.name}" for L in links]
         initial = np.zeros(len(names)) if initial is None else initial
         super().__init__(name, names, units, initial, free=free, prior=prior)
+
+
+class LateralCompliance(VectorBlock):
+    """Lateral (bending) compliances of the model joints ``joints``: two per joint, about the axes
+    ``e1``, ``e2`` perpendicular to the joint axis (:class:`~robocal.calib.gravity.GravityTorques`,
+    ``lateral=True``): ``dphi = 1e-6 sum_a c_a M_a e_a`` [rad] with ``M_a`` the bending moment
+    [N m]. Names ``lateral.<joint>.1``, ``.2``; unit mrad/kNm; group ``compliance``."""
+
+    group = "compliance"
+
+    def __init__(self, model, joints, initial=None, *, free=True, prior=None, name="lateral"):
+        self.joints = np.asarray(joints, dtype=int)
+        links = [model.links[int(model.moving[j])] for j in self.joints]
+        names = [f"{name}.{L.name}.{a}" for L in links for a in (1, 2)]
+        initial = np.zeros(len(names)) if initial is None else initial
+        super().__init__(name, names, ["mrad/kNm"] * len(names), initial, free=free, prior=prior)
 
 
 class GravityParameters(VectorBlock):

@@ -128,11 +128,16 @@ class TargetChain:
         return ChainPoints(pts, jac)
 
     def _predict_elastic(self, params, bases, points_ee, q, stations, wants, elastic, payload) -> ChainPoints:
-        """:meth:`predict` with joint deflections: FK at the deflected model joints."""
+        """:meth:`predict` with joint deflections: FK at the deflected model joints (torsion), then
+        the lateral rotations of the joints carrying each point (when the deflection has them)."""
         d = self.deflection
-        c, grav = (np.asarray(v, dtype=float) for v in elastic)
+        blocks = self.parameter_blocks
+        want = dict(zip(blocks, wants)) if wants is not None else {}
+        values = dict(zip(d.blocks, (np.asarray(v, dtype=float) for v in elastic)))
+        c, grav = values[d.compliance], values[d.gravity]
         jacobian = wants is not None
-        want_g, want_b, want_t, want_c, want_m = (tuple(wants) + (False, False))[:5] if jacobian else (False,) * 5
+        want_g, want_b, want_t = (want.get(b, False) for b in (self.geometry, self.frames, self.targets))
+        want_c, want_m = want.get(d.compliance, False), want.get(d.gravity, False)
         dq, gt, tau_sel = d.deflections(q, c, grav, payload)
         qm = np.asarray(q, dtype=float) @ self.model.coupling.T + dq
         need_joint = want_c or want_m
@@ -141,16 +146,18 @@ class TargetChain:
         union = np.unique(np.concatenate([g_index, j_index])).astype(np.int64)
         g_cols, j_cols = np.searchsorted(union, g_index), np.searchsorted(union, j_index)
         ee = self.ee_of_target
-        one = self.frames.n_frames == 1
+        in_base = self.frames.n_frames > 1 or d.lateral is not None
         pts, R_ee, J = d.model_joints.target_points(qm, params, points_ee, ee, union, jacobian,
-                                                    root=bases[0] if one else None)
+                                                    root=None if in_base else bases[0])
         jac = {}
         if jacobian:
             if want_g:
                 jac[self.geometry] = J[..., g_cols]
             if need_joint:
                 jac.update(d.jacobians(J[..., j_cols], gt, tau_sel, c, want_c, want_m))
-        if not one:
+        if d.lateral is not None:
+            pts, jac, R_ee = d.lateral_deflection(pts, jac, R_ee, gt, values, grav, ee, want)
+        if in_base:
             Rb = bases[stations, :3, :3]
             pts = np.einsum("nij,nkj->nki", Rb, pts) + bases[stations, :3, 3][:, None]
             jac = {b: np.einsum("nij,nkjf->nkif", Rb, Jb) for b, Jb in jac.items()}
