@@ -271,11 +271,13 @@ class CalibrationProblem(Problem):
                 c += 3
         self._sl_planes = slice(c, c + 3 * len(self.planes_initial))
 
-    def predict_points(self, state: State, q=None, stations=None, jacobian: bool = False, payload="default"):
+    def predict_points(self, state: State, q=None, stations=None, jacobian: bool = False, payload="default",
+                       gravity=None):
         """Predicted target positions (N, K, 3) in the instrument frame, and optionally their
         Jacobian (N, K, 3, n_variables). Without ``q`` the problem's poses and stations are used;
         with ``q`` the stations default to 0 (the first base frame). ``payload``: for an elastic
-        problem at new poses, ``(end_effector, mass, com)`` or None (default: the problem's)."""
+        problem at new poses, ``(end_effector, mass, com)`` or None (default: the problem's);
+        ``gravity``: (3,) or (N, 3) [m/s^2] in the robot base frame (default: the problem's)."""
         if q is None:
             q, stations = self.q, self.stations if stations is None else stations
         q = np.asarray(q, dtype=float)
@@ -287,7 +289,7 @@ class CalibrationProblem(Problem):
         elastic = None if self.deflection is None else tuple(
             getattr(state, b.name) for b in self.deflection.blocks)
         out = c.predict(state.params, state.bases, state.targets, q, stations, wants, elastic=elastic,
-                        payload=payload)
+                        payload=payload, gravity=gravity)
         if not jacobian:
             return out.points
         return out.points, self.scatter_columns(out.jac, out.points.shape)

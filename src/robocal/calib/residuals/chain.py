@@ -90,16 +90,17 @@ class TargetChain:
                             wants if ev.jacobian else None, elastic=elastic)
 
     def predict(self, params, bases, points_ee, q, stations, wants=None, *, elastic=None,
-                payload="default") -> ChainPoints:
+                payload="default", gravity=None) -> ChainPoints:
         """Target points (N, K, 3) at joints ``q`` (N, n_ctrl) and ``stations`` (N,), for block values
         ``params`` (P,), ``bases`` (G, 4, 4), ``points_ee`` (K, 3); ``wants``: None (no Jacobians)
         or one bool per parameter block (geometry, frames, targets[, compliance, gravity]).
         ``elastic``: the (compliance, gravity) block values of a chain with a deflection (default:
-        the blocks' initial values); ``payload``: that of the deflection, or one for new poses."""
+        the blocks' initial values); ``payload``: that of the deflection, or one for new poses;
+        ``gravity``: (3,) or (N, 3) [m/s^2] in the base frame for new poses (default the deflection's)."""
         if self.deflection is not None:
             if elastic is None:
                 elastic = tuple(b.initial for b in self.deflection.blocks)
-            return self._predict_elastic(params, bases, points_ee, q, stations, wants, elastic, payload)
+            return self._predict_elastic(params, bases, points_ee, q, stations, wants, elastic, payload, gravity)
         jacobian = wants is not None
         want_g, want_b, want_t = wants[:3] if jacobian else (False, False, False)
         index = self.geometry.index if want_g else self._no_columns
@@ -127,7 +128,8 @@ class TargetChain:
             jac[self.targets] = Jt
         return ChainPoints(pts, jac)
 
-    def _predict_elastic(self, params, bases, points_ee, q, stations, wants, elastic, payload) -> ChainPoints:
+    def _predict_elastic(self, params, bases, points_ee, q, stations, wants, elastic, payload,
+                         gravity=None) -> ChainPoints:
         """:meth:`predict` with joint deflections: FK at the deflected model joints (torsion), then
         the lateral rotations of the joints carrying each point (when the deflection has them)."""
         d = self.deflection
@@ -138,7 +140,7 @@ class TargetChain:
         jacobian = wants is not None
         want_g, want_b, want_t = (want.get(b, False) for b in (self.geometry, self.frames, self.targets))
         want_c, want_m = want.get(d.compliance, False), want.get(d.gravity, False)
-        dq, gt, tau_sel = d.deflections(q, c, grav, payload)
+        dq, gt, tau_sel = d.deflections(q, c, grav, payload, gravity)
         qm = np.asarray(q, dtype=float) @ self.model.coupling.T + dq
         need_joint = want_c or want_m
         g_index = self.geometry.index if want_g else self._no_columns

@@ -61,22 +61,27 @@ class Deflection:
         """(compliance, gravity[, lateral]): the parameter blocks the deflection reads."""
         return (self.compliance, self.gravity) + (() if self.lateral is None else (self.lateral,))
 
-    def torques_at(self, q, payload="default") -> GravityTorques:
-        """The torque basis at the chain's poses (cached) or at other joints ``q``."""
+    def torques_at(self, q, payload="default", gravity=None) -> GravityTorques:
+        """The torque basis at the chain's poses (cached) or at other joints ``q`` (with another
+        ``payload`` or ``gravity`` (3,) or (N, 3) [m/s^2] in the base frame, if given)."""
         q = np.asarray(q, dtype=float)
-        if q is self.q or (q.shape == self.q.shape and np.array_equal(q, self.q) and payload == "default"):
+        if gravity is None and (q is self.q or (q.shape == self.q.shape and np.array_equal(q, self.q)
+                                                and isinstance(payload, str))):
             return self._own
-        if payload == "default":
+        if isinstance(payload, str):
             payload = self.payload
             if payload is not None and (np.ndim(payload[1]) or np.ndim(payload[2]) > 1):
                 raise ProblemError("payload given per pose: pass the payload of the new poses")
-        return GravityTorques(self.model, q, self.gravity.body_links, payload=payload, g=self.g,
+        g = self.g if gravity is None else gravity
+        if gravity is None and np.ndim(g) == 2 and len(g) != len(q):
+            raise ProblemError("gravity given per pose: pass the gravity of the new poses")
+        return GravityTorques(self.model, q, self.gravity.body_links, payload=payload, g=g,
                               lateral=self.lateral is not None)
 
-    def deflections(self, q, c, grav, payload="default"):
+    def deflections(self, q, c, grav, payload="default", gravity=None):
         """``(dq (N, n_model) [rad | mm], gt, tau_sel (N, n_c))`` for compliance values ``c`` and
         gravity-block value ``grav``."""
-        gt = self.torques_at(q, payload)
+        gt = self.torques_at(q, payload, gravity)
         tau = gt.torques(self.gravity.theta(grav))
         tau_sel = tau[:, self.compliance.joints]
         dq = np.zeros(tau.shape)

@@ -34,15 +34,14 @@ def calibrate_justin(seed: int = 0, n_train: int = 400, data=None, root=None, pr
     ``all`` = + every modified-DH parameter (alpha, a, theta, d; beta where consecutive axes are
     parallel) of the torso and both arms, weak prior; with ``model="elastic-joint"`` one more
     level ``elastic`` = the same geometry + a torsional compliance per joint of the torso and both
-    arms with lumped gravity parameters, identified together; ``model="elastic-full"`` one more
-    level ``full`` from there: + two lateral (bending) compliances per joint. Returns ``{level: holdout stats}``
+    arms with lumped gravity parameters, identified together; ``model="elastic-full"`` the
+    level ``full`` instead: the same + two lateral (bending) compliances per joint (LM needs
+    ~170 iterations here: the lumped model is bilinear). Returns ``{level: holdout stats}``
     plus ``calibrated`` (the last level), ``results`` (per level) and the split."""
     elastic = elastic_model(model)
-    if elastic is not None and "elastic" not in levels:
-        levels = tuple(levels) + ("elastic",)
-    if elastic is not None and elastic.lateral and "full" not in levels:
-        levels = tuple(levels) + ("full",)
-    joint = None if elastic is None else elastic_model("elastic-joint")
+    extra_level = None if elastic is None else ("full" if elastic.lateral else "elastic")
+    if extra_level is not None and extra_level not in levels:
+        levels = tuple(levels) + (extra_level,)
     ds = read_dlr_justin(root) if data is None else data
     tr, te = random_split(ds.n_poses, n_train, seed)
     model = load_robot("dlr_justin19")
@@ -53,13 +52,10 @@ def calibrate_justin(seed: int = 0, n_train: int = 400, data=None, root=None, pr
     out = {"train": tr, "test": te, "results": {}}
     base, state_targets = None, targets
     for lev in levels:
-        el = {"elastic": joint, "full": elastic}.get(lev)
-        start = None
-        if lev == "full":  # from the joint-compliance solution: compliances and lumped gravity
-            start = {"compliance": r.state.compliance, "gravity": r.state.gravity}
+        el = elastic if lev in ("elastic", "full") else None
         p, r = fit(model, ds.joints[tr], state_targets, ds.points[tr], free=free_sets[lev], base_initial=base,
-                   prior=prior if lev in ("all", "elastic", "full") else 0.0, elastic=el, start=start,
-                   max_iterations=60 if el is not None else 50)
+                   prior=prior if lev in ("all", "elastic", "full") else 0.0, elastic=el,
+                   max_iterations={"elastic": 60, "full": 200}.get(lev, 50))
         if lev != levels[-1]:
             # next level starts from this solution
             model = r.model.replace(T_world_base=model.T_world_base)
