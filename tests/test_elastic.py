@@ -2,6 +2,8 @@
 on a simulated robot that deflects (with effects the model lacks), unidentifiable compliance
 reported by name, bad payloads refused."""
 
+import json
+
 import numpy as np
 import pytest
 from test_calibration import expected_holdout_mse
@@ -103,6 +105,13 @@ def test_a_payload_without_mass_is_refused():
                                elastic=ElasticModel(masses=MASSES, payload=Payload(bad, (0, 0, 100))))
     with pytest.raises(ProblemError, match="metres and millimetres"):
         Payload(10.0, (0.0, 0.0, 20000.0)).checked()
+    from robocal.workflows.calibrate_elastic import parse_payload
+
+    for text, why in (("@0,0,100", "the mass is missing"), ("0@0,0,100", "mass > 0"), ("abc@1,2,3", "not a number"),
+                      ("5@1,2", "three numbers")):
+        with pytest.raises(ProblemError, match=why):
+            parse_payload(text)
+    assert parse_payload("12.5@0,50,200").mass == 12.5
 
 
 def _robot_with_masses(tmp_path):
@@ -160,10 +169,15 @@ def test_calibrate_elastic_then_correct_puts_the_deflecting_robot_on_target(tmp_
     q = robot.random_configurations(120, rng, margin=0.1)
     write_measurements(tmp_path / "m.csv", tracker.measure(robot, q, rng))
     run = CliRunner().invoke(main, ["calibrate", str(path), str(tmp_path / "m.csv"), "--out", str(tmp_path / "cal"),
-                                    "--elastic", "joint", "--payload", "120@0,50,200", "--sigma", "0.02",
-                                    "--no-report"])
+                                    "--elastic", "joint", "--payload", "120@0,50,200", "--sigma", "0.02"])
     assert run.exit_code == 0, run.output
     assert "not identifiable: compliance.A1" in run.output
+    report = (tmp_path / "cal" / "report.html").read_text()
+    assert "Residuals against the gravity torque of A2" in report  # the most loaded joint
+    res = json.loads((tmp_path / "cal" / "result.json").read_text())["elastic"]
+    assert res["mass_model"] and res["payload"]["mass_kg"] == 120.0
+    a2 = next(r for r in res["compliance"] if r["name"] == "compliance.A2")
+    assert abs(a2["value"] - COMPLIANCE["A2"]) < 3 * a2["std"]
     cal = load_robot(tmp_path / "cal" / "calibrated_robot.toml")
     comp = cal.extra["elastic"].compliance
     for j in ("A2", "A3"):
