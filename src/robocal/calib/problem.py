@@ -239,15 +239,13 @@ class CalibrationProblem(Problem):
         self.rotation_weight = float(rotation_weight)
         if self.rotations is not None:
             residuals.append(RotationResidual(model, q, geometry, frames, self.rotations, end_effector=self.rotation_ee,
-                                              stations=self.stations, weight_mm_per_rad=rotation_weight, sigma=sigma))
+                                              stations=self.stations, weight_mm_per_rad=rotation_weight, sigma=sigma,
+                                              deflection=self.deflection))
         self.distances = [] if distances is None else [tuple(d) for d in distances]
         self.on_plane = [] if on_plane is None else [tuple(p) for p in on_plane]
         dist = DistanceResidual(self.chain, self.distances, sigma)
         plane = PointOnPlaneResidual(self.chain, planes, self.on_plane, sigma)
         residuals += [rb for rb in (dist, plane) if rb.n_rows]
-        if self.rotations is not None and self.deflection is not None:
-            raise ProblemError("elastic calibration with measured orientations is not supported yet "
-                               "(docs/elastic.md, 'Not done yet'); fit positions only")
         extra = [] if self.deflection is None else list(self.deflection.blocks)
         super().__init__([geometry, frames, targets, planes] + extra, residuals, n_poses=N, kinds=LEGACY_KINDS)
         self._make_state = _state
