@@ -69,6 +69,7 @@ class ElasticModel:
     mass_initial: float = 10.0
     compliance_prior: float | None = None
     lateral: bool = False
+    lateral_joints: tuple | None = None
 
     @property
     def lumped(self) -> bool:
@@ -140,7 +141,8 @@ def build_deflection(model, q, elastic: ElasticModel, end_effectors) -> Deflecti
         payload = (p.end_effector, p.mass, p.com)
     lateral = None
     if elastic.lateral:
-        lateral = LateralCompliance(model, joints, np.full(2 * len(joints), float(elastic.compliance_initial)))
+        lj = joints if elastic.lateral_joints is None else _joint_indices(model, elastic.lateral_joints, ())
+        lateral = LateralCompliance(model, lj, np.full(2 * len(lj), float(elastic.compliance_initial)))
     return Deflection(model, q, compliance, gravity, payload=payload, g=np.asarray(elastic.g, dtype=float),
                       lateral=lateral)
 

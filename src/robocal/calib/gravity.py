@@ -46,8 +46,8 @@ class GravityTorques:
     With ``lateral``: the gravity moment about the two axes perpendicular to each joint axis (the
     bending moments), at the joint's bearing point ``o_j`` (the foot of the link frame's origin on
     the axis; a prismatic joint: the link frame's origin, its axis the direction of travel), the
-    perpendicular axes ``e1`` (the link frame's axis most perpendicular to the joint axis, made
-    perpendicular) and ``e2 = a x e1``: ``lateral_basis`` (N, n_model, 2, B, 4) [N m per kg | per kg m],
+    perpendicular axes ``e1`` (the first of the link frame's x, y, z axes at more than ~45 deg from
+    the joint axis, made perpendicular: x for DH, modified DH and URDF frames) and ``e2 = a x e1``: ``lateral_basis`` (N, n_model, 2, B, 4) [N m per kg | per kg m],
     ``lateral_payload`` (N, n_model, 2), ``joint_origin`` (N, n_model, 3) [mm], ``lateral_axes``
     (N, n_model, 2, 3) -- all in the base frame.
     """
@@ -91,7 +91,8 @@ class GravityTorques:
         foot = np.where(self.revolute[None, :, None],
                         np.cross(wj, vj) + wj * np.einsum("nji,nji->nj", wj, origin)[..., None], origin)
         dots = np.abs(np.einsum("njik,nji->njk", Fj[..., :3], axis))  # |column . axis|
-        col = np.argmin(dots, axis=-1)  # (N, n_model)
+        col = np.argmax(dots < 0.7, axis=-1)  # the first of x, y, z clearly off the axis: a choice that
+        # does not flip between nearly equal columns (DH and URDF frames: x)
         e1 = np.take_along_axis(Fj[..., :3], col[..., None, None], axis=-1)[..., 0]
         e1 = e1 - axis * np.einsum("nji,nji->nj", e1, axis)[..., None]
         e1 /= np.linalg.norm(e1, axis=-1, keepdims=True)

@@ -188,14 +188,15 @@ class VirtualRobot:
     def _fk(self, q2, end_effector):
         if self.elastic is None:
             return self.true_model.fk(q2, end_effector)
-        from .elastic import deflected_model_joints
+        from .elastic import deflected_model_joints, lateral_bending
 
         qm = deflected_model_joints(self.true_model, q2, self.elastic)
         n_m = qm.shape[1]
         names = tuple(self.true_model.links[int(k)].name for k in self.true_model.moving)
         m = self.true_model.replace(controller_joints=names, coupling=np.eye(n_m),
-                                    limits=np.tile([-np.inf, np.inf], (n_m, 1)))
-        return m.fk(qm, end_effector)
+                                    limits=np.tile([-np.inf, np.inf], (n_m, 1)), T_world_base=np.eye(4))
+        T = lateral_bending(self.true_model, qm, self.elastic, end_effector, m.fk(qm, end_effector))
+        return self.true_model.T_world_base @ T
 
     def true_poses(self, q, end_effector=None) -> np.ndarray:
         """Noise-free true poses ``T_world_ee`` for joints ``q`` (no limit check)."""
