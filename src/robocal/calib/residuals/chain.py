@@ -118,15 +118,7 @@ class TargetChain:
                 jac[self.geometry] = np.einsum("nij,nkjf->nkif", Rb, Jg)
             if want_t:
                 R_inst_ee = np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
-        if want_b:
-            jac[self.frames] = self._frames_jacobian(pts, stations)
-        if want_t:
-            K = len(ee)
-            Jt = np.zeros(pts.shape + (3 * K,))
-            for k in range(K):
-                Jt[:, k, :, 3 * k:3 * k + 3] = R_inst_ee[:, k]
-            jac[self.targets] = Jt
-        return ChainPoints(pts, jac)
+        return self._with_frame_and_target_jacobians(pts, jac, R_inst_ee if want_t else None, stations, want_b)
 
     def _predict_elastic(self, params, bases, points_ee, q, stations, wants, elastic, payload,
                          gravity=None) -> ChainPoints:
@@ -165,13 +157,18 @@ class TargetChain:
             jac = {b: np.einsum("nij,nkjf->nkif", Rb, Jb) for b, Jb in jac.items()}
             if want_t:
                 R_ee = np.einsum("nij,nkjl->nkil", Rb, R_ee)
+        return self._with_frame_and_target_jacobians(pts, jac, R_ee if want_t else None, stations, want_b)
+
+    def _with_frame_and_target_jacobians(self, pts, jac, R_inst_ee, stations, want_b) -> ChainPoints:
+        """The chain's output with the base-frame Jacobian (``want_b``) and the target-point one
+        (``R_inst_ee`` (N, K, 3, 3) given: a point moves with its end effector's orientation)."""
         if want_b:
             jac[self.frames] = self._frames_jacobian(pts, stations)
-        if want_t:
-            K = len(ee)
+        if R_inst_ee is not None:
+            K = R_inst_ee.shape[1]
             Jt = np.zeros(pts.shape + (3 * K,))
             for k in range(K):
-                Jt[:, k, :, 3 * k:3 * k + 3] = R_ee[:, k]
+                Jt[:, k, :, 3 * k:3 * k + 3] = R_inst_ee[:, k]
             jac[self.targets] = Jt
         return ChainPoints(pts, jac)
 
