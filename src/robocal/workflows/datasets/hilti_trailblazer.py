@@ -122,7 +122,7 @@ def calibrate_hilti(root=None, sets=HILTI_SETS, prior: float = 1e-2, data=None, 
             elastic = dataclasses.replace(elastic, g=g_flat)
         prob, res_e = fit(model.with_params(res.state.params), flat.joints, prism, flat.points, free=free,
                           stations=stations, base_initial=res.state.bases, prior=prior, elastic=elastic,
-                          max_iterations=max_iterations)
+                          max_iterations=4 * max_iterations)  # bilinear lumped parameters: LM needs more
         in_base = res_e.state._replace(bases=np.eye(4)[None])
 
         def predict(q, gravity=None):
