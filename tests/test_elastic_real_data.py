@@ -45,17 +45,17 @@ def test_boby_fanuc_joint_compliance_below_0_40_mm():
 
 
 @_need("hilti_trailblazer")
-def test_hilti_elastic_full_beats_every_set_from_the_command_line():
-    """elastic-full (joint + lateral compliance, lumped gravity) on every set: measured 2.36-5.49 mm
-    RMS against 3.63-6.15 geometric (elastic-joint: 2.68-5.49, docs/elastic.md)."""
+def test_hilti_elastic_joint_beats_every_set_from_the_command_line():
+    """elastic-joint on every set: measured 2.68-5.49 mm RMS against 3.63-6.15 geometric
+    (elastic-full, ~10x slower here: 2.36-5.49, docs/elastic.md)."""
     pytest.importorskip("yaml", reason="the Hilti files need PyYAML (extra 'yaml')")
-    out = CliRunner().invoke(main, ["datasets", "run", "hilti_trailblazer", "--model", "elastic-full", "--json"])
+    out = CliRunner().invoke(main, ["datasets", "run", "hilti_trailblazer", "--model", "elastic-joint", "--json"])
     assert out.exit_code == 0, out.output
     rec = json.loads(out.output)
     assert "warnings" not in rec  # the solver converged
-    assert rec["model"] == "elastic-full" and [s["set"] for s in rec["sets"]] == list(HILTI_SETS)
+    assert rec["model"] == "elastic-joint" and [s["set"] for s in rec["sets"]] == list(HILTI_SETS)
     for s in rec["sets"]:
-        assert s["holdout_rms_mm"] < HILTI_GEOMETRIC[s["set"]] - 0.4, s  # measured 0.58-1.46 mm lower
+        assert s["holdout_rms_mm"] < HILTI_GEOMETRIC[s["set"]] - 0.5, s  # measured 0.58-1.06 mm lower
         assert s["geometric"]["rms"] == pytest.approx(HILTI_GEOMETRIC[s["set"]], abs=0.01)
         assert s["holdout_mean_mm"] < s["holdout_rms_mm"] < s["holdout_max_mm"]
 
