@@ -315,3 +315,15 @@ def test_simulated_full_elastic_round_trip():
     # measured: full 0.0108 mm against the optimum 0.0109; joint-only 0.082 mm
     assert out["full"][0] < 1.25 * out["full"][1], out
     assert out["joint"][0] > 2 * out["full"][0], out
+
+
+def test_correct_with_a_payload_needs_an_elastic_robot_file(tmp_path):
+    from click.testing import CliRunner
+
+    from robocal.cli.main import main
+
+    (tmp_path / "t.csv").write_text("# format: robocal-targets/1\n# length_unit: mm\n# angle_unit: deg\n# frame: base\n"
+                                    "name,x,y,z\nP1,500,100,600\n")
+    r = CliRunner().invoke(main, ["correct", "ur10", str(tmp_path / "t.csv"), "--out", str(tmp_path / "c.csv"),
+                                  "--payload", "5@0,0,100"])
+    assert r.exit_code == 1 and "--payload needs a robot file with an [elastic] section" in r.output, r.output
