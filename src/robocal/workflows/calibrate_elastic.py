@@ -109,5 +109,5 @@ def torque_plot(problem, res0, result) -> dict:
     from ..report.elastic_plot import plot_residuals_vs_torque
 
     unit = "N m" if d.compliance.units[j] == "mrad/kNm" else "N"
-    png = plot_residuals_vs_torque(tau[:, j], before, after, joint=name, unit=unit)
-    return {f"Residuals against the gravity torque of {name}": png} if png else {}
+    svg = plot_residuals_vs_torque(tau[:, j], before, after, joint=name, unit=unit)
+    return {f"Residuals against the gravity torque of {name}": svg} if svg else {}
