@@ -317,7 +317,7 @@ def _ik_with_restarts(model, T, q0, n_restarts, **kw):
 def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets, rotations=None, *,
                             q_seed=None, end_effector=None, frame: str = "world", tol_mm: float = 1e-7,
                             tol_rad: float = 1e-10, max_iterations: int = 200,
-                            n_restarts: int = 16) -> CorrectedTargets:
+                            n_restarts: int = 16, reach=None) -> CorrectedTargets:
     """Joints that put the calibrated robot exactly on Cartesian targets ("program filtering").
 
     calibrated: the identified model (how the robot really moves); nominal: the model its
@@ -334,7 +334,11 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
         (OPW-class nominal models) or a numeric solve from there.
 
     The nominal solution seeds ``ik_numeric`` on the calibrated model (so the corrected joints stay
-    on the same branch). Returns :class:`CorrectedTargets`.
+    on the same branch). reach: optional ``reach(model, q) -> (N, 4, 4)``, the poses a deflecting
+    robot really reaches at the commanded joints (gravity and payload;
+    :meth:`robocal.calib.elastic.ElasticDescription.reached_poses`): the targets given to the rigid
+    solution are then moved by the remaining error until the deflected robot lands on the true
+    targets (a few fixed-point passes). Returns :class:`CorrectedTargets`.
     """
     if tuple(calibrated.controller_joints) != tuple(nominal.controller_joints):
         raise ValueError(f"calibrated and nominal models have different controller joints: "
@@ -366,7 +370,16 @@ def corrected_joint_targets(calibrated: RobotModel, nominal: RobotModel, targets
 
     # 2. the calibrated model from there (same branch)
     q, conv, status, iters = _calibrated_solution(calibrated, T, q_nom, n_restarts, position_only, kw)
-    T_reached = calibrated.fk(q, end_effector)
+    if reach is None:
+        T_reached = calibrated.fk(q, end_effector)
+    else:  # aim the rigid solution so that the deflected robot lands on the target
+        T_aim = T.copy()
+        for _ in range(5):
+            T_reached = reach(calibrated, q)
+            T_aim[:, :3, 3] += T[:, :3, 3] - T_reached[:, :3, 3]
+            T_aim[:, :3, :3] = T[:, :3, :3] @ np.swapaxes(T_reached[:, :3, :3], 1, 2) @ T_aim[:, :3, :3]
+            q, conv, status, iters = _calibrated_solution(calibrated, T_aim, q, n_restarts, position_only, kw)
+        T_reached = reach(calibrated, q)
     dp, dr = pose_errors(T_reached, T)
     pos_err, rot_err = np.linalg.norm(dp, axis=1), np.linalg.norm(dr, axis=1)
     T_filtered_world = nominal.fk(q, end_effector)

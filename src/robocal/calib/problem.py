@@ -60,6 +60,9 @@ class State(NamedTuple):
     bases: np.ndarray
     targets: np.ndarray
     planes: np.ndarray
+    compliance: np.ndarray | None = None  # (n_c,) joint compliances (elastic problems only)
+    gravity: np.ndarray | None = None  # lumped gravity parameters (elastic problems only)
+    lateral: np.ndarray | None = None  # (2 n_c,) lateral compliances (the full elastic model only)
 
 
 def _checked_joints(model, q):
@@ -136,6 +139,10 @@ def _initial_bases(model, base_initial, points, pred_fn, stations, G):
     return np.broadcast_to(T0, (G, 4, 4)).copy()
 
 
+def _state(values) -> State:
+    return State(*values)
+
+
 class CalibrationProblem(Problem):
     """Measurements of a robot and the parameters to identify from them.
 
@@ -161,6 +168,9 @@ class CalibrationProblem(Problem):
     on_plane: optional sequence of (pose, target_index, plane_index); ``planes_initial`` (L, 3).
     geometry_prior: optional :class:`~robocal.calib.blocks.GaussianPrior` on the ``free``
         parameters (e.g. :func:`robocal.calib.pose_problem.geometry_prior`, a weak prior around nominal).
+    elastic: optional :class:`~robocal.calib.elastic.ElasticModel`: gravity-induced joint deflection
+        identified with the geometry (two more blocks, ``compliance`` and ``gravity``; the state
+        then has the fields ``compliance`` and ``gravity``; docs/elastic.md).
 
     States are :class:`State` tuples; ``evaluate``'s label kind codes follow :data:`LEGACY_KINDS`.
     """
@@ -168,8 +178,9 @@ class CalibrationProblem(Problem):
     def __init__(self, model: RobotModel, q, targets, points=None, *, free=None, stations=None,
                  estimate_base: bool = True, base_initial=None, point_sigma_mm: float | None = None,
                  rotations=None, rotation_end_effector=None, rotation_weight: float = 1000.0,
-                 distances=None, on_plane=None, planes_initial=None, geometry_prior=None):
+                 distances=None, on_plane=None, planes_initial=None, geometry_prior=None, elastic=None):
         self.model = model
+        self.elastic = elastic
         self.geometry_prior = geometry_prior
         self.q = q = _checked_joints(model, q)
         N = len(q)
@@ -210,7 +221,13 @@ class CalibrationProblem(Problem):
                                free=[bool(t.free) for t in self.targets])
         planes = Planes(planes_initial)
         self.planes_initial = np.array(planes.initial)
-        self.chain = TargetChain(model, q, geometry, frames, targets, stations=self.stations)
+        self.deflection = None
+        if self.elastic is not None:
+            from .elastic import build_deflection
+
+            self.deflection = build_deflection(model, q, self.elastic, [t.end_effector for t in self.targets])
+        self.chain = TargetChain(model, q, geometry, frames, targets, stations=self.stations,
+                                 deflection=self.deflection)
         sigma = self.point_sigma
         residuals = []
         if self.points is not None:
@@ -222,19 +239,21 @@ class CalibrationProblem(Problem):
         self.rotation_weight = float(rotation_weight)
         if self.rotations is not None:
             residuals.append(RotationResidual(model, q, geometry, frames, self.rotations, end_effector=self.rotation_ee,
-                                              stations=self.stations, weight_mm_per_rad=rotation_weight, sigma=sigma))
+                                              stations=self.stations, weight_mm_per_rad=rotation_weight, sigma=sigma,
+                                              deflection=self.deflection))
         self.distances = [] if distances is None else [tuple(d) for d in distances]
         self.on_plane = [] if on_plane is None else [tuple(p) for p in on_plane]
         dist = DistanceResidual(self.chain, self.distances, sigma)
         plane = PointOnPlaneResidual(self.chain, planes, self.on_plane, sigma)
         residuals += [rb for rb in (dist, plane) if rb.n_rows]
-        super().__init__([geometry, frames, targets, planes], residuals, n_poses=N, kinds=LEGACY_KINDS)
-        self._make_state = State._make
+        extra = [] if self.deflection is None else list(self.deflection.blocks)
+        super().__init__([geometry, frames, targets, planes] + extra, residuals, n_poses=N, kinds=LEGACY_KINDS)
+        self._make_state = _state
         self._legacy_slices()
 
     def _legacy_slices(self):
         """Column slices of the four blocks (``_sl_geom``, ``_sl_base``, ``_target_cols``, ``_sl_planes``)."""
-        geometry, frames, targets, planes = self.parameter_blocks
+        geometry, frames, targets, planes = self.parameter_blocks[:4]
 
         def sl(blk, start):
             p = self._plan.get(blk)
@@ -250,10 +269,13 @@ class CalibrationProblem(Problem):
                 c += 3
         self._sl_planes = slice(c, c + 3 * len(self.planes_initial))
 
-    def predict_points(self, state: State, q=None, stations=None, jacobian: bool = False):
+    def predict_points(self, state: State, q=None, stations=None, jacobian: bool = False, payload="default",
+                       gravity=None):
         """Predicted target positions (N, K, 3) in the instrument frame, and optionally their
         Jacobian (N, K, 3, n_variables). Without ``q`` the problem's poses and stations are used;
-        with ``q`` the stations default to 0 (the first base frame)."""
+        with ``q`` the stations default to 0 (the first base frame). ``payload``: for an elastic
+        problem at new poses, ``(end_effector, mass, com)`` or None (default: the problem's);
+        ``gravity``: (3,) or (N, 3) [m/s^2] in the robot base frame (default: the problem's)."""
         if q is None:
             q, stations = self.q, self.stations if stations is None else stations
         q = np.asarray(q, dtype=float)
@@ -262,7 +284,10 @@ class CalibrationProblem(Problem):
             raise ProblemError(f"stations: expected shape ({len(q)},), got {stations.shape}")
         c = self.chain
         wants = tuple(b in self._plan for b in c.parameter_blocks) if jacobian else None
-        out = c.predict(state.params, state.bases, state.targets, q, stations, wants)
+        elastic = None if self.deflection is None else tuple(
+            getattr(state, b.name) for b in self.deflection.blocks)
+        out = c.predict(state.params, state.bases, state.targets, q, stations, wants, elastic=elastic,
+                        payload=payload, gravity=gravity)
         if not jacobian:
             return out.points
         return out.points, self.scatter_columns(out.jac, out.points.shape)

@@ -61,10 +61,17 @@ from .swarm_progress import swarm_progress_bar
               help="Write the calibrated robot files even when the result fails the sanity gates (exit code 3).")
 @click.option("--drop-duplicates", is_flag=True,
               help="Drop repeated pose ids and repeated rows (keeping the first) instead of refusing the file.")
+@click.option("--elastic", type=click.Choice(["joint", "full"]), default=None,
+              help="Identify joint compliance under gravity with the geometry (docs/elastic.md): the robot file's "
+                   "mass model if it has one, else lumped gravity parameters; 'full' adds two lateral (bending) "
+                   "compliances per joint.")
+@click.option("--payload", default=None, metavar="KG@X,Y,Z",
+              help="With --elastic: the payload carried during the measurements, mass [kg] @ centre of mass "
+                   "[mm] in the flange frame.")
 @import_options
 def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, particles, generations, loss, sigma_mm, tool, overwrite,
               rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
-              allow_unconverged, no_report, force, drop_duplicates, **imp):
+              allow_unconverged, no_report, force, drop_duplicates, elastic, payload, **imp):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA.
 
     DATA is robocal's measurement file, or with --format a tracker export paired with --joints.
@@ -83,7 +90,8 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
                             measurements=meas, max_iterations=max_iterations,
                             report=not no_report, force=force, drop_duplicates=drop_duplicates,
                             method=method, particles=particles, generations=generations,
-                            swarm_progress=swarm_progress_bar(method, generations))
+                            swarm_progress=swarm_progress_bar(method, generations), elastic=elastic,
+                            payload=payload)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
@@ -103,6 +111,9 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
                  ("held-out poses, after", res["validation"]["after"])]
     for label, s in rows:
         click.echo(f"{label:<30}{s['rms']:9.4f}{s['mean']:9.4f}{s['p95']:9.4f}{s['max']:9.4f}")
+    for row in res.get("elastic", {}).get("not_identifiable", []):
+        if row["name"].startswith("compliance."):
+            click.echo(f"not identifiable: {row['name']}: {row['why']}")
     finish_calibration(r, allow_unconverged)
 
 
@@ -116,7 +127,10 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
 @click.option("--frame", type=click.Choice(["world", "base"]), default=None,
               help="Targets CSV only: frame of the targets (default: the file's '# frame:', else world).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
-def correct(robot_file, targets, out_file, nominal, frame, overwrite):
+@click.option("--payload", default=None, metavar="KG@X,Y,Z",
+              help="A robot file with an [elastic] section: compensate the deflection under this payload, mass [kg] "
+                   "@ centre of mass [mm] in the flange frame (default: the robot's own weight only).")
+def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
     """Correct targets with the calibrated model ROBOT_FILE ("program filtering").
 
     TARGETS is a robot program (KRL .src/.dat, RAPID .mod, FANUC .ls, UR .script; decided by the
@@ -130,10 +144,11 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite):
     from ..io.programs import SUFFIXES
 
     if Path(targets).suffix.lower() in SUFFIXES:
-        return _correct_program(robot_file, targets, out_file, nominal, frame, overwrite)
+        return _correct_program(robot_file, targets, out_file, nominal, frame, overwrite, payload)
     from ..workflows.calibrate import run_correct
     try:
-        r = run_correct(robot_file, targets, out_file, nominal=nominal, frame=frame, overwrite=overwrite)
+        r = run_correct(robot_file, targets, out_file, nominal=nominal, frame=frame, overwrite=overwrite,
+                        payload=payload)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     c = r["corrected"]
@@ -147,13 +162,13 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite):
 
 
 
-def _correct_program(robot_file, program, out_file, nominal, frame, overwrite):
+def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, payload=None):
     from ..workflows.correct_program import run_correct_program
 
     if frame is not None:
         raise click.ClickException("--frame is for targets CSV files; program targets are in the robot base frame")
     try:
-        r = run_correct_program(robot_file, program, out_file, nominal=nominal, overwrite=overwrite)
+        r = run_correct_program(robot_file, program, out_file, nominal=nominal, overwrite=overwrite, payload=payload)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     click.echo(f"{'target':<14}{'kind':<10}{'status':<16}{'corr. [mm]':>11}{'[deg]':>9}{'joints [deg]':>13}")

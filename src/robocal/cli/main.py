@@ -43,6 +43,7 @@ _COMMANDS = {
     "handeye": ("handeye", "handeye", "Hand-eye calibration of a camera on the flange or in the cell.", None),
     "closed-chain": ("closed_chain", "closed_chain", "Calibration with a laser spot held on plate targets.", None),
     "fleet": ("fleet", "fleet", "Many robots at once on Dask: calibrate, studies, status.", None),
+    "datasets": ("datasets", "datasets", "The real data sets: list them, rerun their protocols.", None),
 }
 
 

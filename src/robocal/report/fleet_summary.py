@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.atomic import atomic_write_bytes, atomic_write_text
-from ._figures import _figure, figure_png
+from ._mpl import _figure, figure_png
 
 __all__ = ["plot_fleet_accuracy", "write_fleet_summary_html"]
 

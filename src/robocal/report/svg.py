@@ -139,6 +139,8 @@ class Panel:
         ok = np.isfinite(x) & np.isfinite(y)
         if values is None:
             colours = [self._fill(colour)] * int(ok.sum())
+            if label:
+                self._legend.append((label, colour, opacity))
         else:
             span = (vmax - vmin) or 1.0
             colours = viridis((np.asarray(values, dtype=float)[ok] - vmin) / span)

@@ -123,12 +123,21 @@ def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
                                  if L.joint_type == "revolute" and L.name in limits_by_name], lu, au)
     T_world_base = _frame(f"{origin}: [base]", data.get("base"), ls, as_)
     ees = _end_effectors(data, origin, names, len(links), ls, as_)
+    extra = {"length_unit": lu, "angle_unit": au, "origin": origin}
+    if "elastic" in data:
+        from .elastic_section import parse_elastic
+
+        try:
+            extra["elastic"] = parse_elastic(data["elastic"], origin, names,
+                                             [L.name for L in links if L.moves], ls)
+        except ValueError as exc:
+            raise RobotFileError(str(exc)) from None
     try:
         return RobotModel(
             name=str(data.get("name", Path(origin).stem)), kind=kind, links=links, controller_joints=ctrl,
             coupling=coupling, limits=limits, T_world_base=T_world_base, end_effectors=ees,
             title=str(data.get("title", "")), source=str(data.get("source", "")),
-            extra={"length_unit": lu, "angle_unit": au, "origin": origin},
+            extra=extra,
         )
     except ValueError as exc:
         raise RobotFileError(f"{origin}: {exc}") from None

@@ -109,6 +109,10 @@ def robot_to_toml(model: RobotModel, *, length_unit: str | None = None, angle_un
     if not np.array_equal(model.T_world_base, np.eye(4)):
         out += ["", "[base]"] + _frame_lines(model.T_world_base, ls, as_)
     out += _end_effector_lines(model, ls, as_)
+    if model.extra.get("elastic") is not None:
+        from .elastic_section import elastic_lines
+
+        out += elastic_lines(model.extra["elastic"], ls)
     return "\n".join(out) + "\n"
 
 

@@ -61,9 +61,12 @@ class VirtualRobot:
     nominal: the nominal :class:`RobotModel` (what the user believes).
     true_model: the model the simulated robot really follows.
     joint_noise: (n_ctrl,) encoder noise standard deviation per controller joint [rad | mm].
+    elastic: optional :class:`~robocal.sim.elastic.ElasticTruth`: the robot deflects under gravity
+    and payload (hidden compliances; :meth:`reach` and :meth:`true_poses` include it).
     """
 
-    def __init__(self, nominal: RobotModel, true_model: RobotModel, joint_noise=0.0):
+    def __init__(self, nominal: RobotModel, true_model: RobotModel, joint_noise=0.0, elastic=None):
+        self.elastic = elastic
         if true_model.params.names != nominal.params.names or true_model.controller_joints != nominal.controller_joints:
             raise ValueError("true_model must have the same parameters and controller joints as nominal")
         self.nominal = nominal
@@ -176,12 +179,29 @@ class VirtualRobot:
         """
         self.check_limits(q_commanded)
         q_true = self.encoder_noise(q_commanded, rng)
-        return self.true_model.fk(q_true, end_effector)
+        return self._fk(q_true, end_effector)
+
+    def with_elastic(self, elastic) -> "VirtualRobot":
+        """The same robot deflecting under gravity as ``elastic`` (an :class:`~robocal.sim.elastic.ElasticTruth`)."""
+        return VirtualRobot(self.nominal, self.true_model, self.joint_noise, elastic=elastic)
+
+    def _fk(self, q2, end_effector):
+        if self.elastic is None:
+            return self.true_model.fk(q2, end_effector)
+        from .elastic import deflected_model_joints, lateral_bending
+
+        qm = deflected_model_joints(self.true_model, q2, self.elastic)
+        n_m = qm.shape[1]
+        names = tuple(self.true_model.links[int(k)].name for k in self.true_model.moving)
+        m = self.true_model.replace(controller_joints=names, coupling=np.eye(n_m),
+                                    limits=np.tile([-np.inf, np.inf], (n_m, 1)), T_world_base=np.eye(4))
+        T = lateral_bending(self.true_model, qm, self.elastic, end_effector, m.fk(qm, end_effector))
+        return self.true_model.T_world_base @ T
 
     def true_poses(self, q, end_effector=None) -> np.ndarray:
         """Noise-free true poses ``T_world_ee`` for joints ``q`` (no limit check)."""
         q2, single = self._joints(q)
-        T = self.true_model.fk(q2, end_effector)
+        T = self._fk(q2, end_effector)
         return T[0] if single else T
 
     def __repr__(self) -> str:

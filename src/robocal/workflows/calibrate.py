@@ -114,7 +114,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
                     max_iterations: int = 50, report: bool = True, force: bool = False,
                     drop_duplicates: bool = False, particles: int = 20, generations: int = 2000,
-                    swarm_progress=None) -> dict:
+                    swarm_progress=None, elastic: str | None = None, payload=None) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -137,7 +137,11 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     (``data`` then only names it). max_iterations: of the solver; a solve that stops there is
     reported (``result["solver"]["warning"]``, ``NotConvergedWarning``). method: ``lm``, ``svd``,
     ``ipso`` or ``ipso+lm`` (:mod:`robocal.workflows.calibrate_swarm`: particles, generations,
-    ``swarm_progress(generation, best_f)``; ``seed`` seeds the swarm too).
+    ``swarm_progress(generation, best_f)``; ``seed`` seeds the swarm too). elastic: ``"joint"``
+    identifies a torsional compliance per joint under gravity together with the geometry (the
+    robot file's mass model if it has one, else lumped gravity parameters; docs/elastic.md);
+    payload: a :class:`~robocal.calib.elastic.Payload` (or ``KG@x,y,z`` text) carried during the
+    measurements.
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
     naming the file, checked before any work); the files are written into a temporary folder and
@@ -152,6 +156,11 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     names = [n for k, n in OUTPUT_FILES.items() if report or k != "report"]
     _check_options(out, names, overwrite, loss, sigma_mm, method)
     nominal = load_robot(robot)
+    from .calibrate_elastic import elastic_option, parse_payload
+
+    if isinstance(payload, str):
+        payload = parse_payload(payload)
+    elastic_model = elastic_option(nominal, elastic, payload)
     if measurements is None:
         size_mb = Path(data).stat().st_size / 1e6 if Path(data).is_file() else 0.0
         if size_mb > 10.0:  # a large file takes seconds to read: say so (small files stay silent on errors)
@@ -165,7 +174,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     step(1, total, f"read {meas.n_poses} poses of {nominal.name} from {data}: {len(train)} to calibrate, "
                    f"{len(hold)} held out ({protocol})")
     setup = build_problems(nominal, meas, train, free_names=free_names, sigma_mm=sigma_mm, tool=tool,
-                           use_orientation=use_orientation, rotation_weight=rotation_weight, prior=prior)
+                           use_orientation=use_orientation, rotation_weight=rotation_weight, prior=prior,
+                           elastic=elastic_model)
     swarm = {"seed": seed, "particles": particles, "generations": generations, "progress": swarm_progress}
     res0, result, convergence_warnings = _solve(setup, step, total, len(train), len(free_names), meas.n_targets,
                                                 loss, method, max_iterations, swarm)
@@ -194,15 +204,23 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         "frame": meas.metadata.get("frame"), "written": stamp, "measurement_kind": setup["description"],
         "rotation_weight_mm_per_rad": setup["rotation_weight"],
         "prior_sigma_mm_deg": None if prior is None else [float(v) for v in prior],
-        "split": protocol, "max_iterations": max_iterations,
+        "split": protocol, "max_iterations": max_iterations, "elastic": elastic,
     }
     rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
+    elastic_out = None
+    if elastic_model is not None:
+        from .calibrate_elastic import elastic_summary, torque_plot, with_elastic
+
+        rdict["elastic"] = json_ready(elastic_summary(setup["problem"], result))
+        elastic_out = (lambda m: with_elastic(m, setup["problem"], result),
+                       (lambda: torque_plot(setup["problem"], res0, result)) if report else None)
     if report:
         step(6, total, "writing report.html; moving the outputs into place together")
     with staged_outputs(out, names, overwrite) as stage:
         files = _write_outputs(output_paths(stage), rdict, result, nominal, meas, data, train, validation, stamp,
-                               list(setup["problem"].targets), accuracy, write_robot, notes, report)
+                               list(setup["problem"].targets), accuracy, write_robot, notes, report,
+                               elastic=elastic_out)
     files = {k: out / p.name for k, p in files.items()}
     return {"result": rdict, "files": files, "notes": notes, "calibration_result": result,
             "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
@@ -255,11 +273,14 @@ def _solve(setup, step, total, n_train, n_free, K, loss, method, max_iterations,
     step(3, total, f"identifying {n_free} parameter(s) + base + {K} target point(s) ({loss} loss)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotConvergedWarning)
+        start = res0.state
+        if getattr(setup["problem"], "deflection", None) is not None:  # the baseline has no elastic blocks
+            start = start._replace(**{b.name: b.initial for b in setup["problem"].deflection.blocks})
         if method in ("lm", "svd"):
-            result = solve(setup["problem"], loss=loss, method=method, state0=res0.state,
+            result = solve(setup["problem"], loss=loss, method=method, state0=start,
                            max_iterations=max_iterations, progress=solver_progress(step, 3, total))
         else:
-            result = identify(setup["problem"], res0.state, method=method, loss=loss, max_iterations=max_iterations,
+            result = identify(setup["problem"], start, method=method, loss=loss, max_iterations=max_iterations,
                               **swarm)
     return res0, result, [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
 
@@ -314,9 +335,11 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
 
 
 def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation, stamp, targets, accuracy,
-                   write_robot, notes, report) -> dict:
+                   write_robot, notes, report, elastic=None) -> dict:
     """Write result.json, the calibrated robot (TOML, URDF; only with ``write_robot``) and the
-    report (with ``report``) into ``paths`` (a staging folder); returns {kind: path}."""
+    report (with ``report``) into ``paths`` (a staging folder); returns {kind: path}. elastic:
+    None or (function adding the ``[elastic]`` section to the model, function giving the report's
+    torque plots or None)."""
     if not write_robot:
         notes.append("calibrated_robot.toml/.urdf not written: the result FAILED the sanity gates "
                      "(pass --force to write them anyway)")
@@ -325,6 +348,8 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
         title=f"{nominal.title or nominal.name} (calibrated)",
         source=f"robocal calibrate of {Path(str(data)).name} ({len(train)} poses, {stamp}) from nominal: "
                f"{nominal.source}")
+    if elastic is not None:
+        calibrated = elastic[0](calibrated)
     comment = (f"Calibrated by robocal from {data} ({len(train)} of {N} poses; held-out RMS "
                + (f"{validation['before']['rms']:.4f} -> {validation['after']['rms']:.4f} mm" if validation else "n/a")
                + ").\n[base] is the robot base in the measurement instrument's frame "
@@ -355,7 +380,8 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
                     "(J Cov J^T over the identified variables, base frame included)."}
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap,
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}",
-                                   extra_plots=convergence_plots(result))
+                                   extra_plots={**convergence_plots(result),
+                                                **(elastic[1]() if elastic is not None and elastic[1] else {})})
     return files
 
 
@@ -365,7 +391,26 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
 
 
 
-def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None, overwrite: bool = False) -> dict:
+def deflection_of(calibrated, payload=None):
+    """``reach(model, q)``: the poses a calibrated robot with an ``[elastic]`` section really reaches
+    under ``payload`` (a :class:`~robocal.calib.elastic.Payload` or ``KG@x,y,z`` text); None
+    without that section."""
+    from .calibrate_elastic import parse_payload
+
+    desc = calibrated.extra.get("elastic")
+    if isinstance(payload, str):
+        payload = parse_payload(payload)
+    if desc is None:
+        if payload is not None:
+            raise CalibrationInputError(f"{calibrated.extra.get('origin', calibrated.name)}: --payload needs a robot "
+                                        "file with an [elastic] section (robocal calibrate --elastic joint)")
+        return None
+    load = None if payload is None else (calibrated.end_effectors[0].name, payload.mass, payload.com)
+    return lambda model, q: desc.reached_poses(model, q, load)
+
+
+def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None, overwrite: bool = False,
+                payload=None) -> dict:
     """Corrected joint targets for the targets in ``targets_file`` with the calibrated robot
     ``robot_file``; writes ``out_file`` (CSV, ``robocal-corrected-targets/1``).
 
@@ -377,6 +422,8 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     nominal-model controller in the robot base frame (``x, y, z`` and orientation columns in the
     input's convention, ``quaternion`` if it had none), ``converged``, ``status``,
     ``position_error_mm``, ``rotation_error_deg`` (of the calibrated model at the joints).
+    A robot file with an ``[elastic]`` section: the joint deflection under gravity and ``payload``
+    (``KG@x,y,z`` or a :class:`~robocal.calib.elastic.Payload`) is compensated (docs/elastic.md).
     """
     out_file = Path(out_file)
     if out_file.exists() and not overwrite:
@@ -390,7 +437,8 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     tg = read_targets(targets_file, calibrated)
     fr = frame or tg["frame"]
     targets = tg["positions"]
-    corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr)
+    corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr,
+                                   reach=deflection_of(calibrated, payload))
     write_corrected_targets(out_file, corr, calibrated, tg["names"], robot=str(robot_file), nominal=nominal_model.name,
                             targets=f"{targets_file} (frame {fr})", length_unit=tg["length_unit"],
                             angle_unit=tg["angle_unit"], orientation=tg["orientation"], overwrite=overwrite)

@@ -58,10 +58,12 @@ def _rows(targets, corr, kind):
     return rows, updates
 
 
-def run_correct_program(model_file, program_file, out_file, *, nominal=None, overwrite: bool = False) -> dict:
+def run_correct_program(model_file, program_file, out_file, *, nominal=None, overwrite: bool = False,
+                        payload=None) -> dict:
     """Correct every target of ``program_file`` with the calibrated robot ``model_file``.
 
-    nominal: the robot the controller runs (default the one named in the model file).
+    nominal: the robot the controller runs (default the one named in the model file). payload:
+    ``KG@x,y,z`` for a model file with an ``[elastic]`` section (deflection compensated).
     Returns ``{rows, changes, file, report, n_corrected, n_targets}``; ``rows`` one dict per
     target (:data:`robocal.io.correction_report.REPORT_COLUMNS`).
     """
@@ -73,6 +75,9 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
                 raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
     calibrated = load_robot(model_file)
     nominal_model = load_robot(nominal if nominal is not None else calibrated.name)
+    from .calibrate import deflection_of
+
+    deflection = deflection_of(calibrated, payload)
     prog = read_program(program_file)
     if not prog.targets:
         raise ValueError(f"{program_file}: no targets found ({len(prog.skipped)} declaration(s) skipped)")
@@ -80,7 +85,7 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     cart = [t for t in prog.targets if t.kind == "cartesian"]
     if cart:
         T = np.stack([t.T_frame_tcp for t in cart])
-        corr = corrected_joint_targets(calibrated, nominal_model, T, frame="base")
+        corr = corrected_joint_targets(calibrated, nominal_model, T, frame="base", reach=deflection)
         r, u = _rows(cart, corr, "cartesian")
         rows, updates = rows + r, {**updates, **u}
     joint = [t for t in prog.targets if t.kind == "joint"]
@@ -90,7 +95,7 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
             raise ValueError(f"{program_file}: joint targets have {q.shape[1]} axes, {nominal_model.name} has "
                              f"{nominal_model.n_joints}")
         T = nominal_model.replace(T_world_base=np.eye(4)).fk(q)
-        corr = corrected_joint_targets(calibrated, nominal_model, T, q_seed=q, frame="base")
+        corr = corrected_joint_targets(calibrated, nominal_model, T, q_seed=q, frame="base", reach=deflection)
         r, u = _rows(joint, corr, "joint")
         rows, updates = rows + r, {**updates, **u}
     changes = write_program(prog, updates, out_file, overwrite=overwrite)

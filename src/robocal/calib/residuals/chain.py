@@ -50,11 +50,14 @@ class TargetChain:
     ``geometry``); q (N, n_ctrl) [rad | mm]; stations (N,) station index per pose (default 0);
     geometry: a :class:`~robocal.calib.blocks.RobotGeometry`; frames: a
     :class:`~robocal.calib.blocks.StationFrames` (one frame per station); targets: a
-    :class:`~robocal.calib.blocks.TargetPoints` (its end effectors resolved on ``model``).
+    :class:`~robocal.calib.blocks.TargetPoints` (its end effectors resolved on ``model``);
+    deflection: optional :class:`~robocal.calib.residuals.deflection.Deflection` (gravity-induced
+    joint deflection; its compliance and gravity blocks join the chain's parameter blocks).
     """
 
-    def __init__(self, model, q, geometry, frames, targets, stations=None):
+    def __init__(self, model, q, geometry, frames, targets, stations=None, deflection=None):
         self.model = model
+        self.deflection = deflection
         self.q = np.asarray(q, dtype=float)
         N = len(self.q)
         self.stations = np.zeros(N, dtype=int) if stations is None else np.asarray(stations, dtype=int)
@@ -68,7 +71,8 @@ class TargetChain:
 
     @property
     def parameter_blocks(self) -> tuple:
-        return (self.geometry, self.frames, self.targets)
+        base = (self.geometry, self.frames, self.targets)
+        return base if self.deflection is None else base + self.deflection.blocks
 
     @property
     def n_points(self) -> int:
@@ -79,16 +83,26 @@ class TargetChain:
         return ev.shared(self, self._evaluate)
 
     def _evaluate(self, ev) -> ChainPoints:
-        wants = (ev.wants(self.geometry), ev.wants(self.frames), ev.wants(self.targets))
+        blocks = self.parameter_blocks
+        wants = tuple(ev.wants(b) for b in blocks)
+        elastic = None if self.deflection is None else tuple(ev[b] for b in self.deflection.blocks)
         return self.predict(ev[self.geometry], ev[self.frames], ev[self.targets], self.q, self.stations,
-                            wants if ev.jacobian else None)
+                            wants if ev.jacobian else None, elastic=elastic)
 
-    def predict(self, params, bases, points_ee, q, stations, wants=None) -> ChainPoints:
+    def predict(self, params, bases, points_ee, q, stations, wants=None, *, elastic=None,
+                payload="default", gravity=None) -> ChainPoints:
         """Target points (N, K, 3) at joints ``q`` (N, n_ctrl) and ``stations`` (N,), for block values
         ``params`` (P,), ``bases`` (G, 4, 4), ``points_ee`` (K, 3); ``wants``: None (no Jacobians)
-        or three bools (geometry, frames, targets)."""
+        or one bool per parameter block (geometry, frames, targets[, compliance, gravity]).
+        ``elastic``: the (compliance, gravity) block values of a chain with a deflection (default:
+        the blocks' initial values); ``payload``: that of the deflection, or one for new poses;
+        ``gravity``: (3,) or (N, 3) [m/s^2] in the base frame for new poses (default the deflection's)."""
+        if self.deflection is not None:
+            if elastic is None:
+                elastic = tuple(b.initial for b in self.deflection.blocks)
+            return self._predict_elastic(params, bases, points_ee, q, stations, wants, elastic, payload, gravity)
         jacobian = wants is not None
-        want_g, want_b, want_t = wants if jacobian else (False, False, False)
+        want_g, want_b, want_t = wants[:3] if jacobian else (False, False, False)
         index = self.geometry.index if want_g else self._no_columns
         model, ee = self.model, self.ee_of_target
         jac = {}
@@ -104,10 +118,54 @@ class TargetChain:
                 jac[self.geometry] = np.einsum("nij,nkjf->nkif", Rb, Jg)
             if want_t:
                 R_inst_ee = np.einsum("nij,nkjl->nkil", Rb, R_base_ee)
+        return self._with_frame_and_target_jacobians(pts, jac, R_inst_ee if want_t else None, stations, want_b)
+
+    def _predict_elastic(self, params, bases, points_ee, q, stations, wants, elastic, payload,
+                         gravity=None) -> ChainPoints:
+        """:meth:`predict` with joint deflections: FK at the deflected model joints (torsion), then
+        the lateral rotations of the joints carrying each point (when the deflection has them)."""
+        d = self.deflection
+        blocks = self.parameter_blocks
+        want = dict(zip(blocks, wants)) if wants is not None else {}
+        values = dict(zip(d.blocks, (np.asarray(v, dtype=float) for v in elastic)))
+        c, grav = values[d.compliance], values[d.gravity]
+        jacobian = wants is not None
+        want_g, want_b, want_t = (want.get(b, False) for b in (self.geometry, self.frames, self.targets))
+        want_c, want_m = want.get(d.compliance, False), want.get(d.gravity, False)
+        dq, gt, tau_sel = d.deflections(q, c, grav, payload, gravity)
+        qm = np.asarray(q, dtype=float) @ self.model.coupling.T + dq
+        need_joint = want_c or want_m
+        g_index = self.geometry.index if want_g else self._no_columns
+        j_index = d.motion_param if need_joint else self._no_columns
+        union = np.unique(np.concatenate([g_index, j_index])).astype(np.int64)
+        g_cols, j_cols = np.searchsorted(union, g_index), np.searchsorted(union, j_index)
+        ee = self.ee_of_target
+        in_base = self.frames.n_frames > 1 or d.lateral is not None
+        pts, R_ee, J = d.model_joints.target_points(qm, params, points_ee, ee, union, jacobian,
+                                                    root=None if in_base else bases[0])
+        jac = {}
+        if jacobian:
+            if want_g:
+                jac[self.geometry] = J[..., g_cols]
+            if need_joint:
+                jac.update(d.jacobians(J[..., j_cols], gt, tau_sel, c, want_c, want_m))
+        if d.lateral is not None:
+            pts, jac, R_ee = d.lateral_deflection(pts, jac, R_ee, gt, values, grav, ee, want)
+        if in_base:
+            Rb = bases[stations, :3, :3]
+            pts = np.einsum("nij,nkj->nki", Rb, pts) + bases[stations, :3, 3][:, None]
+            jac = {b: np.einsum("nij,nkjf->nkif", Rb, Jb) for b, Jb in jac.items()}
+            if want_t:
+                R_ee = np.einsum("nij,nkjl->nkil", Rb, R_ee)
+        return self._with_frame_and_target_jacobians(pts, jac, R_ee if want_t else None, stations, want_b)
+
+    def _with_frame_and_target_jacobians(self, pts, jac, R_inst_ee, stations, want_b) -> ChainPoints:
+        """The chain's output with the base-frame Jacobian (``want_b``) and the target-point one
+        (``R_inst_ee`` (N, K, 3, 3) given: a point moves with its end effector's orientation)."""
         if want_b:
             jac[self.frames] = self._frames_jacobian(pts, stations)
-        if want_t:
-            K = len(ee)
+        if R_inst_ee is not None:
+            K = R_inst_ee.shape[1]
             Jt = np.zeros(pts.shape + (3 * K,))
             for k in range(K):
                 Jt[:, k, :, 3 * k:3 * k + 3] = R_inst_ee[:, k]

@@ -45,8 +45,8 @@ class DistanceResidual(ResidualBlock):
 
     @classmethod
     def example(cls, rng):
-        from .examples import example_chain
+        from .examples import example_chain, example_elastic_chain, example_full_elastic_chain
 
-        chain = example_chain(rng, n_poses=6, n_stations=1)
         pairs = [(0, 1, 0, 500.0), (2, 5, 1, 800.0), (4, 3, 0, 100.0)]
-        return cls(chain, pairs, sigma=0.01)
+        return [cls(factory(rng, n_poses=6, n_stations=1), pairs, sigma=0.01)
+                for factory in (example_chain, example_elastic_chain, example_full_elastic_chain)]

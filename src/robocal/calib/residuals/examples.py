@@ -12,9 +12,12 @@ from ...kinematics.links import Link
 from ...kinematics.model import EndEffector, RobotModel
 from ...transforms import so3_exp
 from ..blocks import RobotGeometry, StationFrames, TargetPoints
+from ..blocks.elastic import GravityParameters, JointCompliance, LateralCompliance
 from .chain import TargetChain
+from .deflection import Deflection
 
-__all__ = ["example_robot", "example_frames", "example_chain"]
+__all__ = ["example_robot", "example_frames", "example_chain", "example_elastic_chain",
+           "example_full_elastic_chain"]
 
 
 def example_robot(rng, n_joints: int = 4) -> RobotModel:
@@ -53,3 +56,28 @@ def example_chain(rng, n_poses: int = 6, n_stations: int = 2, n_targets: int = 2
                            end_effectors=ees[:n_targets])
     stations = np.arange(n_poses) % n_stations
     return TargetChain(model, q, geometry, frames, targets, stations=stations)
+
+
+def example_elastic_chain(rng, n_poses: int = 6, n_stations: int = 2, n_targets: int = 2,
+                          lateral: bool = False) -> TargetChain:
+    """:func:`example_chain` with a gravity-induced joint deflection: every joint compliant
+    (~50-500 mrad/kNm: deflections of a few mrad), lumped gravity parameters of every link free
+    (~5-30 kg, first moments ~1-5 kg m) and a payload on the flange, all free; with ``lateral``
+    also two lateral compliances per joint (~20-200 mrad/kNm)."""
+    chain = example_chain(rng, n_poses, n_stations, n_targets)
+    model = chain.model
+    n = len(model.moving)
+    compliance = JointCompliance(model, np.arange(n), rng.uniform(50.0, 500.0, n))
+    theta = np.column_stack([rng.uniform(5.0, 30.0, n), rng.normal(0.0, 3.0, (n, 3))])
+    gravity = GravityParameters(model, model.moving, theta)
+    payload = ("flange", rng.uniform(1.0, 10.0, n_poses), rng.normal(0.0, 100.0, (n_poses, 3)))
+    g = rng.normal(0.0, 0.3, 3) + np.array([0.0, 0.0, -9.81])
+    lat = LateralCompliance(model, np.arange(n), rng.uniform(20.0, 200.0, 2 * n)) if lateral else None
+    deflection = Deflection(model, chain.q, compliance, gravity, payload=payload, g=g, lateral=lat)
+    return TargetChain(model, chain.q, chain.geometry, chain.frames, chain.targets, stations=chain.stations,
+                       deflection=deflection)
+
+
+def example_full_elastic_chain(rng, n_poses: int = 6, n_stations: int = 2, n_targets: int = 2) -> TargetChain:
+    """:func:`example_elastic_chain` with lateral compliances too (the ``full`` elastic model)."""
+    return example_elastic_chain(rng, n_poses, n_stations, n_targets, lateral=True)

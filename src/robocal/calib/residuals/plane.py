@@ -55,9 +55,8 @@ class PointOnPlaneResidual(ResidualBlock):
 
     @classmethod
     def example(cls, rng):
-        from .examples import example_chain
+        from .examples import example_chain, example_elastic_chain, example_full_elastic_chain
 
-        chain = example_chain(rng, n_poses=6, n_stations=2)
-        planes = Planes([[0.3, 1.2, 800.0], [-2.0, 0.2, -100.0]])
         contacts = [(0, 0, 0), (1, 1, 0), (3, 0, 1), (5, 1, 1)]
-        return cls(chain, planes, contacts, sigma=0.02)
+        return [cls(factory(rng, n_poses=6, n_stations=2), Planes([[0.3, 1.2, 800.0], [-2.0, 0.2, -100.0]]),
+                    contacts, sigma=0.02) for factory in (example_chain, example_elastic_chain, example_full_elastic_chain)]

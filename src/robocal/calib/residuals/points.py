@@ -53,11 +53,13 @@ class PointResidual(ResidualBlock):
 
     @classmethod
     def example(cls, rng):
-        from .examples import example_chain
+        from .examples import example_chain, example_elastic_chain, example_full_elastic_chain
 
         out = []
-        for n_stations in (1, 2):
-            chain = example_chain(rng, n_stations=n_stations)
+        for n_stations, factory in ((1, example_chain), (2, example_chain), (1, example_elastic_chain),
+                                    (2, example_elastic_chain), (1, example_full_elastic_chain),
+                                    (2, example_full_elastic_chain)):
+            chain = factory(rng, n_stations=n_stations)
             meas = rng.normal(0, 1000, (len(chain.q), chain.n_points, 3))
             meas[1, 0] = np.nan
             out.append(cls(chain, meas, sigma=0.05))

@@ -5,9 +5,27 @@ from __future__ import annotations
 import numpy as np
 
 from ...calib import CalibrationProblem, Target, solve
+from ...calib.elastic import ElasticModel
 
-__all__ = ["random_split", "error_stats", "points_in_base", "param_names", "fit", "with_state_targets",
+__all__ = ["MODELS", "elastic_model", "random_split", "error_stats", "points_in_base", "param_names", "fit", "with_state_targets",
            "holdout_stats"]
+
+
+#: the model choices of every protocol (``robocal datasets run NAME --model ...``)
+MODELS = ("geometric", "elastic-joint", "elastic-full")
+
+
+def elastic_model(name: str, **kw):
+    """The :class:`~robocal.calib.elastic.ElasticModel` of a model choice (None for ``geometric``):
+    ``elastic-joint`` = a torsional compliance per joint carrying the targets, lumped gravity
+    parameters identified from the data (the data sets come without a mass model);
+    ``elastic-full`` = the same plus two lateral (bending) compliances per joint."""
+    if name not in MODELS:
+        raise ValueError(f"unknown model {name!r}; expected one of {', '.join(MODELS)}")
+    if name == "geometric":
+        return None
+    return ElasticModel(compliance_initial=kw.get("compliance_initial", 100.0), joints=kw.get("joints"),
+                        lateral=name == "elastic-full")
 
 
 def random_split(n: int, n_train: int, seed: int) -> tuple:
@@ -52,12 +70,19 @@ def param_names(model, link_names, kinds) -> list:
     return out
 
 
-def fit(model, q, targets, points, free, stations=None, base_initial=None, prior=0.0, **kw):
-    """``(problem, result)`` of a calibration of ``free`` parameters plus base frame(s) and targets;
+def fit(model, q, targets, points, free, stations=None, base_initial=None, prior=0.0, elastic=None, start=None,
+        **kw):
+    """``(problem, result)`` of a calibration of ``free`` parameters plus base frame(s) and targets
+    (and the joint compliances of ``elastic``, an :class:`~robocal.calib.elastic.ElasticModel`;
+    ``start``: {state field: value} overriding the initial state, e.g. the compliances of a
+    previous level);
     the base starts from a rigid fit of the initial model's predictions, per station."""
     if base_initial is None:
         base_initial = "fit"
-    prob = CalibrationProblem(model, q, targets, points, free=free, stations=stations, base_initial=base_initial)
+    prob = CalibrationProblem(model, q, targets, points, free=free, stations=stations, base_initial=base_initial,
+                              elastic=elastic)
+    if start:
+        kw["state0"] = prob.initial_state()._replace(**start)
     return prob, solve(prob, prior_weight=prior, **kw)
 
 

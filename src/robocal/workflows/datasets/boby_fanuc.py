@@ -8,7 +8,7 @@ from ...calib import Target
 from ...io.datasets import read_boby_fanuc
 from ...kinematics.links import Link
 from ...robots import load_robot
-from ._fitting import fit, holdout_stats, random_split, with_state_targets
+from ._fitting import elastic_model, fit, holdout_stats, random_split, with_state_targets
 
 __all__ = ["boby_model", "calibrate_boby", "calibrate_boby_seeds"]
 
@@ -25,14 +25,20 @@ def boby_model():
     return m.with_free([n in free for n in m.params.names])
 
 
-def calibrate_boby(seed: int = 0, n_train: int = 24, data=None, root=None, prior: float = 1e-3) -> dict:
+def calibrate_boby(seed: int = 0, n_train: int = 24, data=None, root=None, prior: float = 1e-3,
+                   model: str = "geometric") -> dict:
     """The boby_fanuc protocol for one seed: random ``n_train`` training poses, the rest held out.
 
     ``nominal``: nominal DH, base + 3 tool points fitted on the training poses; ``calibrated``:
     plus the DH parameters of :func:`boby_model` (auto-identifiable set, Tikhonov ``prior``).
-    Returns ``{"seed", "nominal": stats, "calibrated": stats, "train_rms", "result"}`` with
-    holdout statistics over the 3 SMR points of every held-out pose
+    ``model="elastic-joint"``: then, from the geometric solution, the geometry and a joint
+    compliance per joint with lumped gravity parameters, identified together
+    (:func:`~robocal.workflows.datasets._fitting.elastic_model`); ``geometric`` keeps the geometric
+    figures and ``calibrated`` is the elastic one.
+    Returns ``{"seed", "nominal": stats, "calibrated": stats, "geometric": stats, "train_rms",
+    "result"}`` with holdout statistics over the 3 SMR points of every held-out pose
     (:func:`~robocal.workflows.datasets.error_stats`)."""
+    elastic = elastic_model(model)
     ds = read_boby_fanuc(root) if data is None else data
     tr, te = random_split(ds.n_poses, n_train, seed)
     model = boby_model()
@@ -45,6 +51,12 @@ def calibrate_boby(seed: int = 0, n_train: int = 24, data=None, root=None, prior
            "nominal_train_rms": r0.rms_after}
     for key, p, r in (("nominal", p0, r0), ("calibrated", p1, r1)):
         out[key] = holdout_stats(p, r, ds, te)
+    out["geometric"] = out["calibrated"]
+    if elastic is not None:
+        p2, r2 = fit(model.with_params(r1.state.params), ds.joints[tr], with_state_targets(targets, r1.state),
+                     ds.points[tr], free=None, base_initial=r1.state.bases, prior=prior, elastic=elastic,
+                     max_iterations=200)
+        out.update(result=r2, train_rms=r2.rms_after, calibrated=holdout_stats(p2, r2, ds, te))
     return out
 
 
@@ -54,7 +66,7 @@ def calibrate_boby_seeds(seeds=range(5), root=None, **kw) -> dict:
     ds = read_boby_fanuc(root)
     runs = [calibrate_boby(s, data=ds, **kw) for s in seeds]
     out = {"runs": runs}
-    for key in ("nominal", "calibrated"):
+    for key in ("nominal", "geometric", "calibrated"):
         out[key] = {s: float(np.mean([r[key][s] for r in runs])) for s in ("rms", "mean", "max")}
     out["train_rms"] = [r["train_rms"] for r in runs]
     return out

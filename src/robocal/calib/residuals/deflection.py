@@ -1,0 +1,138 @@
+"""Gravity-induced joint deflection for the shared robot chain (docs/elastic.md).
+
+``q_model_eff = coupling q + D dtheta``, ``dtheta_j = s_j c_j tau_j(q)`` with
+``tau = GravityTorques(q).torques(theta)`` (:mod:`robocal.calib.gravity`): the deflected joints
+enter forward kinematics *before* any measurement model, so every residual reading the
+:class:`~robocal.calib.residuals.TargetChain` (points, several reflectors, distances, planes, the
+6-D tool point) sees them. Derivatives:
+
+* w.r.t. compliance: ``dp/dc_j = (dp/dq_j) s_j tau_j``;
+* w.r.t. the lumped gravity parameters: ``dp/dtheta_b = sum_j (dp/dq_j) s_j c_j T[:, j, b]``;
+* ``dp/dq_j`` is the identification Jacobian column of joint j's motion parameter (its offset),
+  from the same kernel call as the geometry columns.
+
+Torques are computed at the commanded joints on the chain model's own (nominal) geometry and
+treated as data (a second-order approximation: a geometry change of a few mm changes a torque by
+~1e-3 relative).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ProblemError
+from ..gravity import GravityTorques
+
+__all__ = ["Deflection"]
+
+
+class Deflection:
+    """The joint-deflection part of a chain.
+
+    model: the robot model (nominal geometry for the torques); q (N, n_ctrl); compliance: a
+    :class:`~robocal.calib.blocks.JointCompliance`; gravity: a
+    :class:`~robocal.calib.blocks.GravityParameters` (fixed for a mass model, free for lumped
+    parameters); payload: None or ``(end_effector, mass [kg], com (3,) [mm])`` (mass and com may be
+    per pose, (N,) and (N, 3), for the chain's own poses); g: gravity in the base frame [m/s^2];
+    lateral: optional :class:`~robocal.calib.blocks.elastic.LateralCompliance` (bending of the
+    joints under the gravity moment about the axes perpendicular to theirs, first order).
+    """
+
+    def __init__(self, model, q, compliance, gravity, *, payload=None, g=None, lateral=None):
+        self.model, self.compliance, self.gravity, self.lateral = model, compliance, gravity, lateral
+        self.payload, self.g = payload, g
+        self.q = np.asarray(q, dtype=float)
+        n_m = len(model.moving)
+        if np.any(compliance.joints >= n_m) or np.any(compliance.joints < 0):
+            raise ProblemError(f"compliance: joint index out of range 0..{n_m - 1}")
+        self.motion_param = np.array([int(model._op_param[np.flatnonzero(model._op_joint == j)[0]])
+                                      for j in compliance.joints], dtype=np.int64)
+        names = tuple(model.links[int(k)].name for k in model.moving)
+        self.model_joints = model.replace(controller_joints=names, coupling=np.eye(n_m),
+                                          limits=np.tile([-np.inf, np.inf], (n_m, 1)))
+        self._own = GravityTorques(model, self.q, gravity.body_links, payload=payload, g=g,
+                                   lateral=lateral is not None)
+        if lateral is not None:
+            anc = model._ee_ancestors  # (n_ee, n_links)
+            self._carries_ee = anc[:, model.moving[lateral.joints]]  # (n_ee, n_lateral)
+
+    @property
+    def blocks(self) -> tuple:
+        """(compliance, gravity[, lateral]): the parameter blocks the deflection reads."""
+        return (self.compliance, self.gravity) + (() if self.lateral is None else (self.lateral,))
+
+    def torques_at(self, q, payload="default", gravity=None) -> GravityTorques:
+        """The torque basis at the chain's poses (cached) or at other joints ``q`` (with another
+        ``payload`` or ``gravity`` (3,) or (N, 3) [m/s^2] in the base frame, if given)."""
+        q = np.asarray(q, dtype=float)
+        if gravity is None and (q is self.q or (q.shape == self.q.shape and np.array_equal(q, self.q)
+                                                and isinstance(payload, str))):
+            return self._own
+        if isinstance(payload, str):
+            payload = self.payload
+            if payload is not None and (np.ndim(payload[1]) or np.ndim(payload[2]) > 1):
+                raise ProblemError("payload given per pose: pass the payload of the new poses")
+        g = self.g if gravity is None else gravity
+        if gravity is None and np.ndim(g) == 2 and len(g) != len(q):
+            raise ProblemError("gravity given per pose: pass the gravity of the new poses")
+        return GravityTorques(self.model, q, self.gravity.body_links, payload=payload, g=g,
+                              lateral=self.lateral is not None)
+
+    def deflections(self, q, c, grav, payload="default", gravity=None):
+        """``(dq (N, n_model) [rad | mm], gt, tau_sel (N, n_c))`` for compliance values ``c`` and
+        gravity-block value ``grav``."""
+        gt = self.torques_at(q, payload, gravity)
+        tau = gt.torques(self.gravity.theta(grav))
+        tau_sel = tau[:, self.compliance.joints]
+        dq = np.zeros(tau.shape)
+        dq[:, self.compliance.joints] = tau_sel * (self.compliance.scale * c)
+        return dq, gt, tau_sel
+
+    def jacobians(self, J_joint, gt, tau_sel, c, want_c, want_g) -> dict:
+        """Chain Jacobians of the compliance and gravity blocks from ``J_joint`` (N, K, 3, n_c), the
+        point derivatives w.r.t. the compliant joints."""
+        jac = {}
+        s = self.compliance.scale
+        if want_c:
+            jac[self.compliance] = J_joint * (tau_sel * s)[:, None, None, :]
+        if want_g:
+            D = gt.basis[:, self.compliance.joints] * (s * c)[None, :, None, None]  # (N, n_c, B, 4)
+            N, n_c = D.shape[:2]
+            Jt = J_joint @ D.reshape(N, 1, n_c, -1)  # (N, K, 3, B * 4)
+            jac[self.gravity] = self.gravity.variable_jacobian(Jt.reshape(Jt.shape[:3] + D.shape[2:]))
+        return jac
+
+    def lateral_deflection(self, pts, jac, R_ee, gt, values, grav, ee_of_target, want):
+        """Points (N, K, 3) in the base frame moved by the joints' lateral rotations
+        ``dphi_j = 1e-6 sum_a c_ja M_ja e_ja`` about their bearing points ``o_j`` (first order:
+        ``dp = sum_j dphi_j x (p - o_j)`` over the joints carrying the point), the Jacobians of the
+        blocks moving ``p`` carried along (``(I + [Phi]x) J``), and those of the lateral compliances
+        and the gravity parameters added. Returns (points, jac, R_ee)."""
+        lat = self.lateral
+        c_lat = values[lat].reshape(-1, 2)  # (n_l, 2)
+        jl = lat.joints
+        M = gt.lateral_moments(self.gravity.theta(grav))[:, jl]  # (N, n_l, 2) [N m]
+        E = gt.lateral_axes[:, jl]  # (N, n_l, 2, 3)
+        o = gt.joint_origin[:, jl]  # (N, n_l, 3) [mm]
+        A = self._carries_ee[ee_of_target].T.astype(float)  # (n_l, K)
+        phi = np.einsum("nja,njai->nji", 1e-6 * c_lat[None] * M, E)  # (N, n_l, 3) [rad]
+        r = pts[:, None, :, :] - o[:, :, None, :]  # (N, n_l, K, 3)
+        dp = np.einsum("jk,njki->nki", A, np.cross(phi[:, :, None, :], r))
+        Phi = np.einsum("jk,nji->nki", A, phi)  # (N, K, 3) total small rotation of each point
+        S = np.zeros(Phi.shape + (3,))
+        S[..., 0, 1], S[..., 0, 2] = -Phi[..., 2], Phi[..., 1]
+        S[..., 1, 0], S[..., 1, 2] = Phi[..., 2], -Phi[..., 0]
+        S[..., 2, 0], S[..., 2, 1] = -Phi[..., 1], Phi[..., 0]
+        jac = {b: Jb + S @ Jb for b, Jb in jac.items()}
+        R_ee = R_ee + S @ R_ee
+        if want.get(lat, False) or want.get(self.gravity, False):
+            ExR = np.cross(E[:, :, :, None, :], r[:, :, None, :, :])  # (N, n_l, 2, K, 3)
+            ExR = ExR * A[None, :, None, :, None]
+            if want.get(lat, False):
+                Jl = 1e-6 * M[:, :, :, None, None] * ExR  # (N, n_l, 2, K, 3)
+                jac[lat] = np.moveaxis(Jl.reshape(Jl.shape[0], -1, *Jl.shape[3:]), 1, -1)  # (N, K, 3, 2 n_l)
+            if want.get(self.gravity, False):
+                Lb = gt.lateral_basis[:, jl] * (1e-6 * c_lat)[None, :, :, None, None]  # (N, n_l, 2, B, 4)
+                Jg = np.einsum("njabv,njaki->nkibv", Lb, ExR)
+                jac[self.gravity] = jac.get(self.gravity, 0.0) + self.gravity.variable_jacobian(Jg)
+        return pts + dp, jac, R_ee

@@ -1,0 +1,75 @@
+"""``robocal datasets``: list the real data sets and rerun their protocols (docs/datasets.md)."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+MODEL_CHOICES = ("geometric", "elastic-joint", "elastic-full")
+
+
+@click.group("datasets")
+def datasets():
+    """The real measured data sets (docs/datasets.md): list them, rerun a protocol."""
+
+
+@datasets.command("list")
+@click.option("--root", type=click.Path(file_okay=False), default=None,
+              help="Folder holding the data sets (default: $ROBOCAL_DATASETS or ../shared/datasets).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def list_cmd(root, as_json):
+    """The known data sets, their robots and protocols, and whether they are present."""
+    from ..workflows.datasets.run import list_datasets
+
+    rows = list_datasets(root)
+    if as_json:
+        click.echo(json.dumps(rows, indent=2))
+        return
+    for r in rows:
+        click.echo(f"{r['name']:18s} {'present' if r['present'] else 'ABSENT ':7s}  robot {r['robot']}")
+        click.echo(f"{'':18s} {r['protocol']}")
+
+
+@datasets.command("run")
+@click.argument("name")
+@click.option("--model", type=click.Choice(MODEL_CHOICES), default="geometric", show_default=True,
+              help="geometric; elastic-joint (joint compliance under gravity, identified with the geometry); "
+                   "elastic-full (+ lateral bending compliance of every joint).")
+@click.option("--root", type=click.Path(file_okay=False), default=None,
+              help="Folder holding the data sets (default: $ROBOCAL_DATASETS or ../shared/datasets).")
+@click.option("--json", "as_json", is_flag=True, help="Print the record as JSON.")
+def run_cmd(name, model, root, as_json):
+    """Run the protocol of data set NAME (see `robocal datasets list`) with --model; holdout errors in mm."""
+    import warnings
+
+    from ..io.datasets import DatasetError
+    from ..workflows.datasets.run import DATASETS, list_datasets, run_dataset
+
+    if name not in DATASETS:
+        raise click.ClickException(f"unknown data set {name!r}; known: {', '.join(DATASETS)}")
+    entry = next(r for r in list_datasets(root) if r["name"] == name)
+    if not entry["present"]:
+        raise click.ClickException(f"data set {name}: folder {entry['folder']}/raw not found (give --root DIR)")
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            rec = run_dataset(name, model, root)
+    except NotImplementedError as exc:
+        raise click.ClickException(str(exc)) from None
+    except DatasetError as exc:
+        raise click.ClickException(str(exc)) from None
+    notes = sorted({str(w.message).splitlines()[0] for w in caught if "converge" in str(w.message).lower()})
+    if notes:
+        rec["warnings"] = notes
+    if as_json:
+        click.echo(json.dumps(rec, indent=2))
+        return
+    rows = rec["sets"] if "sets" in rec else [dict(rec, set=name)]
+    click.echo(f"{name} ({model}): {rec['protocol']}")
+    click.echo(f"{'':18s}{'holdout RMS':>12}{'mean':>8}{'max':>8}   geometric RMS   nominal RMS  [mm]")
+    for r in rows:
+        click.echo(f"{r['set']:18s}{r['holdout_rms_mm']:12.3f}{r['holdout_mean_mm']:8.3f}{r['holdout_max_mm']:8.2f}"
+                   f"   {r['geometric']['rms']:13.3f}   {r['nominal']['rms']:11.3f}")
+    for n in notes:
+        click.echo(f"Warning: {n}")
