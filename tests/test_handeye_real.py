@@ -23,8 +23,12 @@ from robocal.io.ros_calibration import read_cal_data
 ROS = datasets_root() / "ros_industrial_handeye" / "raw"
 pytestmark = pytest.mark.skipif(not ROS.is_dir(), reason=f"real data folder {ROS} absent (tests read "
                                                          "../shared/datasets relative to the repository root)")
-# the source library's reprojection RMS per corner on these images (issue 14)
-SOURCE_RMS_PX = {"test_set_charuco": 2.4, "test_set_10x10": 2.3}
+# the source library's reprojection RMS per corner (norm of the 2-vector) on these images, measured by
+# running industrial_calibration fe62b7c (OpenCV 4.6, Ceres 2.1) on them: twice its printed "final
+# cost per observation" (1.20829 and 1.14589; docs/datasets.md). Its ChArUco figure is over the 14
+# images its detection can use (it finds 4 and 6 corners in 2.png and 15.png and drops both).
+SOURCE_RMS_PX = {"test_set_charuco": 2.41658, "test_set_10x10": 2.29178}
+SOURCE_CHARUCO_IMAGES = [f"{i}.png" for i in range(16) if i not in (2, 15)]
 
 
 @pytest.fixture(scope="module")
@@ -55,12 +59,13 @@ def runs(tmp_path_factory):
 def test_charuco_eye_to_hand_end_to_end(runs):
     s, det, folder = runs["test_set_charuco"]
     assert s["setup"] == "eye_to_hand" and s["camera_pose"]["frame"] == "base"
-    skipped = {r["name"]: r["skip_reason"] for r in s["images"] if not r["used"]}
-    assert list(skipped) == ["2.png"] and "too few points: 4 of 24 found" in skipped["2.png"]
-    assert s["n_images_used"] == 15 and s["converged"]
-    # fixed (given) intrinsics without distortion, flange poses exact, as the source: 2.66 px per corner,
-    # above the source's ~2.4 px (docs/datasets.md discusses it); refined intrinsics below
-    assert 2.5 < s["reprojection_rms_px"] < 2.75
+    # with the ArUco markers re-searched from the board layout every image is usable (2.png: 24 corners,
+    # 4 without the re-search); the source uses 14 images, 274 corners
+    assert s["n_images_used"] == 16 and s["n_corners"] == 382 and s["converged"]
+    assert all(r["n_points"] >= 22 for r in s["images"])
+    # fixed (given) intrinsics without distortion, flange poses exact, as the source: 2.62 px per corner
+    # over all 16 images (15.png, which the source cannot use, fits worst: 3.9 px)
+    assert 2.55 < s["reprojection_rms_px"] < 2.7
     assert abs(s["backprojection_rms_px"] - s["reprojection_rms_px"]) < 1e-6  # exact poses: the same chain
     # the solution sits near the layout's own initial guess of the camera (about 1.28 m from the base)
     guess = read_cal_data(ROS / "test_set_charuco" / "cal_data.yaml").camera_guess
@@ -71,7 +76,7 @@ def test_charuco_eye_to_hand_end_to_end(runs):
     assert min(d["reprojection_rms_px"] for d in lin.values()) > s["reprojection_rms_px"] + 1.0
     report = (folder / "report.html").read_text()
     assert report.count('aria-label="back-projection"') >= 4 and 'aria-label="RMS per image"' in report
-    assert report.count("data:image/png;base64") >= 4 and "2.png" in report and "too few points" in report
+    assert report.count("data:image/png;base64") >= 4 and "2.png" in report
     yaml_text = (folder / "handeye.yaml").read_text()
     assert "parent_frame: base_link" in yaml_text and "child_frame: camera" in yaml_text
 
@@ -80,7 +85,8 @@ def test_circle_grid_eye_in_hand_end_to_end(runs):
     s, det, _ = runs["test_set_10x10"]
     assert s["setup"] == "eye_in_hand" and s["camera_pose"]["frame"] == "flange"
     assert s["n_images_used"] == 15 and s["n_corners"] == 1500 and s["converged"]
-    assert s["reprojection_rms_px"] <= SOURCE_RMS_PX["test_set_10x10"]
+    # the same 1500 dots as the source (centres within 0.03 px median): the same RMS to 0.0005 px
+    assert abs(s["reprojection_rms_px"] - SOURCE_RMS_PX["test_set_10x10"]) < 0.002
     lin = s["linear"]
     assert max(d["difference_position_mm"] for d in lin.values()) > 20.0  # tens of mm
 
@@ -109,6 +115,56 @@ def test_detections_real_ids_and_orientation(runs):
         kp = blobs.detect(cv2.imread(str(det.paths[i]), cv2.IMREAD_GRAYSCALE))
         big = np.array(kp[int(np.argmax([k.size for k in kp]))].pt)
         assert np.linalg.norm(det.image_points[i, 90] - big) < 1.0, det.names[i]
+
+
+def test_charuco_on_the_source_images_at_or_below_the_source(runs):
+    """On the 14 images the source uses, with the given intrinsics and exact poses as the source,
+    robocal's fit over its corners (334, the source 274) is at or below the source's 2.4166 px."""
+    s, det, _ = runs["test_set_charuco"]
+    data = read_cal_data(ROS / "test_set_charuco" / "cal_data.yaml")
+    keep = np.isin(det.names, SOURCE_CHARUCO_IMAGES) & det.used
+    assert keep.sum() == 14
+    res = refine_hand_eye(data.T_base_flange[keep], det.image_points[keep], det.board.object_points(),
+                          data.camera, setup=data.setup, robot_pose_sigma=None)
+    n = int(np.isfinite(det.image_points[keep][..., 0]).sum())
+    print("charuco, source's 14 images:", n, "corners", round(res.rms_px, 4), "px")
+    assert res.converged and n == 334
+    assert res.rms_px <= SOURCE_RMS_PX["test_set_charuco"]
+
+
+def test_charuco_marker_refinement_recovers_corners():
+    """2.png: the first ArUco pass finds 6 markers (4 corners); the layout-guided re-search finds all
+    17 markers and all 24 corners, which fit one PnP pose with the given intrinsics to < 1 px."""
+    from robocal.io.detection import detect_board, read_image_gray
+
+    data = read_cal_data(ROS / "test_set_charuco" / "cal_data.yaml")
+    gray = read_image_gray(ROS / "test_set_charuco" / "images" / "2.png")
+    b = data.board
+    plain = cv2.aruco.CharucoDetector(cv2.aruco.CharucoBoard(
+        (b.cols, b.rows), b.pitch_mm, b.marker_mm, cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_6X6_250)))
+    ids = plain.detectBoard(gray)[1]
+    assert ids is not None and len(ids) == 4
+    det = detect_board(gray, b)
+    assert det.used and det.n_found == 24
+    K = np.array([[1352.02747, 0, 789.67065], [0, 1356.14287, 627.2995], [0, 0, 1]])
+    X = b.object_points()
+    _, r, t = cv2.solvePnP(X, det.image_points, K, None)
+    fit = cv2.projectPoints(X, r, t, K, None)[0].reshape(-1, 2)
+    assert np.sqrt(np.mean(np.sum((fit - det.image_points) ** 2, 1))) < 1.0
+
+
+def test_charuco_too_few_corners_rejected_with_reason():
+    """Real pixels with most of the board hidden (8.png outside the box x 937-1188, y 719-981 painted
+    flat grey): the 4 corners left are reported and the image is rejected with the reason."""
+    from robocal.io.detection import detect_board, read_image_gray
+
+    data = read_cal_data(ROS / "test_set_charuco" / "cal_data.yaml")
+    gray = read_image_gray(ROS / "test_set_charuco" / "images" / "8.png")
+    hidden = np.full_like(gray, int(np.median(gray)))
+    hidden[719:981, 937:1188] = gray[719:981, 937:1188]
+    det = detect_board(hidden, data.board, name="8.png")
+    assert not det.used and det.n_found == 4
+    assert det.skip_reason == "too few points: 4 of 24 found, need 6"
 
 
 def _opencv_linear(F, uv, X, camera, setup):
