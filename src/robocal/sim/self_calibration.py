@@ -264,11 +264,11 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
     for c in chains:
         if world:
             qf, qp = world_board_configurations(nominal, true, cam, X, b.front_z, T_board[c], T_cee, n_images_per_chain,
-                                                n_part, rng_views, camera_ee=camera_end_effector)
+                                                n_part, rng_views, camera_ee=camera_end_effector, pitch_mm=b.pitch_mm)
         else:
             qf, qp = hand_configurations(true, cam, c, X, b.front_z, T_board[c], n_images_per_chain, n_part, rng_views,
                                          camera_ee=camera_end_effector, T_cee_camera=T_cee,
-                                         limits=ViewLimits(margin_px=20.0, depth_mm=(100.0, 450.0)))
+                                         limits=ViewLimits(margin_px=20.0, depth_mm=(100.0, 450.0)), pitch_mm=b.pitch_mm)
         q = np.vstack([qf, qp])
         flags = np.r_[np.ones(len(qf), bool), np.zeros(len(qp), bool)]
         order = rng_views.permutation(len(q))  # partial views interleaved with the others

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..camera import Camera
-from ..transforms import compose, invert_transforms, so3_exp, transforms_from
+from ..transforms import compose, invert_transforms
 
 __all__ = ["ViewLimits", "classify_views", "nao_head_pitch_limits", "aim_nao_head", "hand_configurations",
            "world_board_configurations"]
@@ -47,12 +47,26 @@ class ViewLimits:
         self.max_tilt_deg = float(max_tilt_deg)
 
 
+def board_outline(object_points: np.ndarray, pitch_mm: float) -> np.ndarray:
+    """(4, 3) [mm] the corners of the printed pattern around the object points: their bounding box
+    grown by one pitch (a checkerboard's or ChArUco board's outer squares; a dot grid's dots)."""
+    X = np.asarray(object_points, dtype=float)
+    (x0, y0), (x1, y1) = X[:, :2].min(axis=0) - pitch_mm, X[:, :2].max(axis=0) + pitch_mm
+    return np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]])
+
+
 def classify_views(camera: Camera, object_points: np.ndarray, front_z: int, T_camera_board: np.ndarray,
-                   limits: ViewLimits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                   limits: ViewLimits, pitch_mm: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(full (N,) bool, partial (N,) bool, pixels (N, P, 2))`` of board poses ``T_camera_board``
-    (N, 4, 4) [mm]; ``object_points`` (P, 3) [mm]; ``front_z`` the board's printed-face side."""
+    (N, 4, 4) [mm]; ``object_points`` (P, 3) [mm]; ``front_z`` the board's printed-face side.
+    With ``pitch_mm`` a full view also needs the pattern's outline (:func:`board_outline`) inside
+    the image (a detector needs the outer squares, not just the inner corners)."""
     T = np.asarray(T_camera_board, dtype=float).reshape(-1, 4, 4)
     X = np.asarray(object_points, dtype=float)
+    if pitch_mm is not None:
+        full, _, _ = classify_views(camera, np.vstack([X, board_outline(X, pitch_mm)]), front_z, T, limits)
+        _, partial, px = classify_views(camera, X, front_z, T, limits)
+        return full, partial & ~full, px
     p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
     depth = p[..., 2]
     safe = np.where(depth[..., None] > 1.0, p, np.array([0.0, 0.0, 1.0]))
@@ -126,7 +140,7 @@ def _chain_joints(model, end_effector: str) -> np.ndarray:
 def hand_configurations(true_model, camera: Camera, chain: str, object_points: np.ndarray, front_z: int,
                         T_ee_board: np.ndarray, n_full: int, n_partial: int, rng, *, camera_ee: str = "camera_top",
                         T_cee_camera=None, limits: ViewLimits | None = None, aim_sigma_deg: float = 4.0,
-                        max_batches: int = 60, batch: int = 4000):
+                        pitch_mm: float | None = None, max_batches: int = 60, batch: int = 4000):
     """``(q_full (n_full, n), q_partial (n_partial, n))`` controller joints [rad] of ``true_model`` at
     which the board held by end effector ``chain`` is fully / partly seen by the camera.
 
@@ -134,7 +148,8 @@ def hand_configurations(true_model, camera: Camera, chain: str, object_points: n
     (4, 4) [mm]: the board in the ``chain`` end-effector frame; T_cee_camera (4, 4): the true camera
     in the camera end-effector frame (default identity). Arm joints are uniform within the limits
     (5 % margin); the other joints rest; the head looks at the board centre with a Gaussian aim
-    error ``aim_sigma_deg``. ``RuntimeError`` if too few views are found.
+    error ``aim_sigma_deg``; pitch_mm: the board's pitch, to require its outline in the image too
+    (:func:`classify_views`). ``RuntimeError`` if too few views are found.
     """
     limits = limits or ViewLimits()
     T_cc = np.eye(4) if T_cee_camera is None else np.asarray(T_cee_camera, dtype=float)
@@ -167,27 +182,24 @@ def hand_configurations(true_model, camera: Camera, chain: str, object_points: n
             q[:, head] = rng.uniform(lo[head], hi[head], size=(len(q), len(head)))
         T_cam = compose(true_model.fk(q, camera_ee), T_cc)
         T_camera_board = compose(invert_transforms(T_cam), T_ee, T_ee_board)
-        is_full, is_part, _ = classify_views(camera, X, front_z, T_camera_board, limits)
+        is_full, is_part, _ = classify_views(camera, X, front_z, T_camera_board, limits, pitch_mm)
         full.extend(q[is_full])
         part.extend(q[is_part & ~is_full])
         if len(full) >= n_full and len(part) >= n_partial:
             break
+    return _pick(full, part, n_full, n_partial, rng, true_model,
+                 f"views of the board in {chain!r}; check the board size and mount")
+
+
+def _pick(full: list, part: list, n_full: int, n_partial: int, rng, model, what: str):
+    """``n_full`` and ``n_partial`` configurations drawn at random from the found ones, as arrays;
+    ``RuntimeError`` naming ``what`` when too few were found."""
     if len(full) < n_full or len(part) < n_partial:
-        raise RuntimeError(f"{true_model.name}: only {len(full)} full and {len(part)} partial views of the board in "
-                           f"{chain!r} found (need {n_full} and {n_partial}); check the board size and mount")
+        raise RuntimeError(f"{model.name}: only {len(full)} full and {len(part)} partial {what} "
+                           f"(need {n_full} and {n_partial})")
     full = np.array(full)[rng.permutation(len(full))[:n_full]]
-    part = np.array(part)[rng.permutation(len(part))[:n_partial]] if n_partial else np.empty((0, true_model.n_joints))
+    part = np.array(part)[rng.permutation(len(part))[:n_partial]] if n_partial else np.empty((0, model.n_joints))
     return full, part
-
-
-def _look_at(eye: np.ndarray, centre: np.ndarray, roll: float) -> np.ndarray:
-    z = centre - eye
-    z = z / np.linalg.norm(z)
-    helper = np.array([0.0, 1.0, 0.0]) if abs(z[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    return transforms_from(np.stack([x, y, z], axis=1) @ so3_exp(np.array([0.0, 0.0, roll])), eye)
 
 
 def _newton_joints(model, q0: np.ndarray, T_target: np.ndarray, end_effector, iterations: int = 8) -> np.ndarray:
@@ -209,14 +221,14 @@ def _newton_joints(model, q0: np.ndarray, T_target: np.ndarray, end_effector, it
 def world_board_configurations(nominal, true_model, camera: Camera, object_points: np.ndarray, front_z: int,
                                T_world_board: np.ndarray, T_flange_camera: np.ndarray, n_full: int, n_partial: int,
                                rng, *, camera_ee: str = "flange", limits: ViewLimits | None = None,
-                               max_tilt_deg: float = 40.0):
+                               max_tilt_deg: float = 40.0, pitch_mm: float | None = None):
     """``(q_full, q_partial)`` [rad] of a 6R arm (``true_model``) whose flange camera
     (``T_flange_camera``, true) sees the board fixed at ``T_world_board`` [mm] fully / partly.
 
     Views are drawn around the board normal (tilt 5..``max_tilt_deg``, distance so the board spans
     45-75 % of the image), the flange pose follows, the joints are the closed-form IK of ``nominal``
     refined by Newton steps on ``true_model``; unreachable or misclassified views are redrawn."""
-    from .camera_cell import _ik_branches
+    from .camera_cell import _ik_branches, _look_at
 
     limits = limits or ViewLimits(margin_px=20.0, depth_mm=(100.0, 5000.0), max_tilt_deg=60.0)
     X = np.asarray(object_points, dtype=float)
@@ -248,12 +260,9 @@ def world_board_configurations(nominal, true_model, camera: Camera, object_point
         q = q[true_model.within_limits(q)]
         T_cam = compose(true_model.fk(q, camera_ee), T_flange_camera)
         is_full, is_part, _ = classify_views(camera, X, front_z, compose(invert_transforms(T_cam), T_world_board),
-                                             limits)
+                                             limits, pitch_mm)
         full.extend(q[is_full])
         part.extend(q[is_part & ~is_full])
         if len(full) >= n_full and len(part) >= n_partial:
             break
-    if len(full) < n_full or len(part) < n_partial:
-        raise RuntimeError(f"{true_model.name}: only {len(full)} full and {len(part)} partial reachable views of the "
-                           f"board found (need {n_full} and {n_partial}); check the board placement")
-    return np.array(full[:n_full]), (np.array(part[:n_partial]) if n_partial else np.empty((0, true_model.n_joints)))
+    return _pick(full, part, n_full, n_partial, rng, true_model, "reachable views of the board; check its placement")
