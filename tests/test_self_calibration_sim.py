@@ -182,3 +182,50 @@ def test_checkerboard_orientation_under_any_lighting(nao_run):
         det = detect_board(img, r.board)
         assert det.used
         assert np.max(np.linalg.norm(det.image_points - r.image_points_true[k], axis=1)) < 0.3
+
+
+def test_nao_null_directions_are_head_pitch_and_wrist_yaws(nao_run):
+    """Corner projections vs 12 joint offsets + camera mount + two board mounts: exactly three
+    null directions, each a joint offset against the rigid transform right after it (HeadPitch vs
+    the camera mount, L/RWristYaw vs the board mounts; docs/self-calibration-simulator.md)."""
+    from robocal.transforms import so3_exp, transforms_from
+
+    r = nao_run
+    m = r.true_robot
+    X = r.board.object_points()
+    k_full = np.flatnonzero(r.fully_visible)
+    theta = [m.params.index(f"theta{k + 1}") for k, link in enumerate(m.links) if link.moves]
+    joints = [link.name for link in m.links if link.moves]
+    chains = np.array(r.chain_of_image)[k_full]
+
+    def small(v):
+        return transforms_from(so3_exp(v[3:]), v[:3])
+
+    def pixels(p):
+        values = m.params.values.copy()
+        values[theta] += p[:12]
+        mm = m.with_params(values)
+        out = []
+        for c, off in (("left_hand", 18), ("right_hand", 24)):
+            q = r.q_true[k_full[chains == c]]
+            T_cam = compose(mm.fk(q, "camera_top"), r.T_ee_camera, small(p[12:18]))
+            T = compose(invert_transforms(T_cam), mm.fk(q, c), r.T_ee_board[c], small(p[off:off + 6]))
+            pts = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
+            out.append(r.camera.project(pts.reshape(-1, 3)).pixels.ravel())
+        return np.concatenate(out)
+
+    f0 = pixels(np.zeros(30))
+    J = np.stack([(pixels(np.eye(30)[j] * 1e-6) - f0) / 1e-6 for j in range(30)], axis=1)
+    _, s, vt = np.linalg.svd(J / np.linalg.norm(J, axis=0), full_matrices=False)
+    assert s[-3:].max() < 1e-4 * s[0] and s[-4] > 1e-2 * s[0]
+    labels = joints + [f"camera{i}" for i in range(6)] + [f"left_board{i}" for i in range(6)] \
+        + [f"right_board{i}" for i in range(6)]
+    null = vt[-3:]
+    for joint, mount in (("HeadPitch", "camera"), ("LWristYaw", "left_board"), ("RWristYaw", "right_board")):
+        j = labels.index(joint)
+        # the offset's (scaled) unit vector has a large part in the null space ...
+        assert np.linalg.norm(null[:, j]) > 0.5
+        # ... made up with its own mount's parameters only
+        v = null.T @ null[:, j]  # projection of the offset's unit vector onto the null space
+        partners = [labels[i] for i in np.argsort(-np.abs(v))[:4] if i != j and abs(v[i]) > 0.05]
+        assert partners and all(p.startswith(mount) or p == joint for p in partners), (joint, partners)
