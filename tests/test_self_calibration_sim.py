@@ -229,3 +229,15 @@ def test_nao_null_directions_are_head_pitch_and_wrist_yaws(nao_run):
         v = null.T @ null[:, j]  # projection of the offset's unit vector onto the null space
         partners = [labels[i] for i in np.argsort(-np.abs(v))[:4] if i != j and abs(v[i]) > 0.05]
         assert partners and all(p.startswith(mount) or p == joint for p in partners), (joint, partners)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--chains", "left_foot"], "left_foot"),
+    (["--chains", "world,left_hand"], "world"),
+    (["--board", "checkerboard:7x4"], "board"),
+])
+def test_cli_bad_input_is_a_clear_error(tmp_path, extra, message):
+    r = CliRunner().invoke(main, ["simulate", "self-calibration", "nao_h25", "--out", str(tmp_path / "o"),
+                                  "--images-per-chain", "1", *extra])
+    assert r.exit_code != 0 and message in r.output and "Traceback" not in r.output
+    assert not (tmp_path / "o" / "truth.json").exists()
