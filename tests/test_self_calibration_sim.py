@@ -68,7 +68,7 @@ def test_frames_round_trip_and_duplicates(tmp_path):
     assert f.images == ("a.png", "b.png") and f.clock == "camera"
     np.testing.assert_allclose(f.times, [1.25, 2.5])
     p.write_text(p.read_text() + "a.png,3.0\n")
-    with pytest.raises(FileFormatError, match=r"line 7.*'a.png' listed twice"):
+    with pytest.raises(FileFormatError, match=r"line 7, column 'image': duplicate image 'a.png' \(first on line 5\)"):
         read_frames(p)
 
 

@@ -37,7 +37,7 @@ from .atomic import atomic_write_text
 from .header import FileFormatError, declared_unit, read_header_block, read_text
 from .importers.joint_log import JointLog
 from .plausibility import angle_unit_problem
-from .table import check_field_counts, csv_cells, data_rows, number_columns
+from .table import check_field_counts, check_unique_labels, csv_cells, data_rows, number_columns
 
 __all__ = ["JOINT_LOG_FORMAT", "FRAMES_FORMAT", "TIME_UNITS", "JointLogFileError", "Frames", "write_joint_log",
            "read_joint_log_file", "write_frames", "read_frames"]
@@ -232,13 +232,7 @@ def read_frames(path) -> Frames:
     if not rows:
         fail("no data rows")
     check_field_counts(rows, 2, i + 1, fail)
-    seen = {}
-    for line, cells in rows:
-        if not cells[0]:
-            fail("empty image name", line, "image")
-        if cells[0] in seen:
-            fail(f"image {cells[0]!r} listed twice (first on line {seen[cells[0]]})", line, "image")
-        seen[cells[0]] = line
+    check_unique_labels(rows, "image", "image", fail)
     t = number_columns(rows, [1], lambda msg, line, j: fail(msg, line, _TIME_COLUMN))[:, 0] * ts
     md = {k: v for k, v in values.items() if k != "format"}
     return Frames(images=tuple(c[0] for _, c in rows), times=t, lines=tuple(ln for ln, _ in rows), path=str(path),
