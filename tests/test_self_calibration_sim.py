@@ -128,6 +128,14 @@ def test_truth_file_rebuilds_the_true_views(tmp_path, nao):
         values[nao.params.index(name)] += np.radians(v) if nao.params.units[nao.params.index(name)] == "rad" else v
     true = nao.with_params(values)
     T_cee = np.array(doc["camera_mount"]["T_ee_camera"])
+    # the camera in the HeadPitch frame: the documented (58.71, 0, 63.64) mm up to the mount error
+    assert doc["camera_mount"]["joint"] == "HeadPitch"
+    T_head_camera = np.array(doc["camera_mount"]["T_head_camera"])
+    assert np.linalg.norm(T_head_camera[:3, 3] - [58.71, 0.0, 63.64]) < 5.0
+    q = np.radians(doc["images"][0]["q_true_deg"])
+    k = list(nao.controller_joints).index("HeadPitch")
+    np.testing.assert_allclose(compose(true.link_frames(q)[k], T_head_camera),
+                               compose(true.fk(q, "camera_top"), T_cee), atol=1e-9)
     for im in doc["images"]:
         q = np.radians(im["q_true_deg"])
         T_cam = compose(true.fk(q, "camera_top"), T_cee)

@@ -327,8 +327,20 @@ def truth_document(run: SelfCalibrationRun) -> dict:
     m = run.robot
     cam = run.camera
     link_of_cee = m.end_effectors[m.end_effector_index(run.camera_end_effector)]
-    # the true camera in the frame of the link carrying the camera end effector (NAO: CameraTop)
+    # the true camera in the frame of the link carrying the camera end effector (NAO: CameraTop),
+    # and in the frame of the last moving joint before it (NAO: HeadPitch, after its motion)
     T_link_camera = compose(link_of_cee.T_link_ee, run.T_ee_camera)
+    k = link_of_cee.link
+    while k >= 0 and not m.links[k].moves:
+        k = m.links[k].parent
+    if k >= 0:
+        q0 = np.clip(np.zeros(m.n_joints), m.limits[:, 0], m.limits[:, 1])
+        tm = run.true_robot
+        T_joint_world = invert_transforms(tm.link_frames(q0)[int(np.searchsorted(m.moving, k))])
+        T_joint_camera = compose(T_joint_world, tm.fk(q0, run.camera_end_effector), run.T_ee_camera)
+    else:
+        T_joint_camera = compose(invert_transforms(m.T_world_base), m.fk(np.zeros(m.n_joints), run.camera_end_effector),
+                                 run.T_ee_camera)
     return {
         "format": TRUTH_FORMAT, "robot": m.name, "setup": "board_in_world" if run.chains == ("world",) else "board_in_hand",
         "chains": list(run.chains), "camera_end_effector": run.camera_end_effector, "board": run.board.spec,
@@ -341,7 +353,9 @@ def truth_document(run: SelfCalibrationRun) -> dict:
         "camera_mount": {"end_effector": run.camera_end_effector, "T_ee_camera": _matrix(run.T_ee_camera),
                          "T_ee_camera_nominal": _matrix(run.T_ee_camera_nominal),
                          "link": m.links[link_of_cee.link].name if link_of_cee.link >= 0 else "base",
-                         "T_link_camera": _matrix(T_link_camera)},
+                         "T_link_camera": _matrix(T_link_camera),
+                         "joint": m.links[k].name if k >= 0 else "base", "T_joint_camera": _matrix(T_joint_camera),
+                         "T_head_camera": _matrix(T_joint_camera)},
         "boards": {c: {"T_ee_board": _matrix(run.T_ee_board[c]), "T_ee_board_nominal": _matrix(run.T_ee_board_nominal[c]),
                        "frame": "world" if c == "world" else c} for c in run.chains},
         "clock": {"offset_s": run.settings["clock_offset_s"], "jitter_s": run.settings["jitter_s"],
