@@ -99,6 +99,9 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
 @click.option("--joint-noise-deg", default=0.05, show_default=True, help="Joint reading noise per log row [deg].")
 @click.option("--partial-fraction", default=0.1, show_default=True,
               help="Extra images per chain showing the board only partly, as a fraction of --images-per-chain.")
+@click.option("--board-bow-mm", default=0.0, show_default=True,
+              help="Bend the board: its middle this far out of the plane of its ends [mm] (a flat-board model "
+                   "does not contain it; 0.4 mm moves NAO corners by ~2 px).")
 @click.option("--clock-offset-s", default=0.035, show_default=True,
               help="Camera clock minus robot clock [s] (frames.csv vs joint_log.csv).")
 @click.option("--jitter-s", default=0.004, show_default=True, help="Capture time jitter [s].")
@@ -106,8 +109,8 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
 @click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses, the noise and the images.")
 @click.option("--overwrite", is_flag=True, help="Replace the files of an earlier run in the folder.")
 def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint_offsets_deg, length_sigma_mm,
-                                  joint_noise_deg, partial_fraction, clock_offset_s, jitter_s, log_rate_hz, seed,
-                                  overwrite):
+                                  joint_noise_deg, partial_fraction, board_bow_mm, clock_offset_s, jitter_s,
+                                  log_rate_hz, seed, overwrite):
     """Simulate a camera self-calibration run of ROBOT: its own camera photographs a board held in a
     hand (nao_h25) or fixed in the world (a 6R arm, camera on the flange); rendered PNG images, a
     time-stamped joint log, the frames' capture times, the camera and the hidden truth."""
@@ -122,7 +125,8 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
         r = simulate_self_calibration_files(
             robot, out_dir, chains=chain_list, board=board, n_images_per_chain=n_images,
             joint_offsets_deg=joint_offsets_deg, length_sigma_mm=length_sigma_mm, joint_noise_deg=joint_noise_deg,
-            partial_fraction=partial_fraction, clock_offset_s=clock_offset_s, jitter_s=jitter_s,
+            partial_fraction=partial_fraction, board_bow_mm=board_bow_mm, clock_offset_s=clock_offset_s,
+            jitter_s=jitter_s,
             log_rate_hz=log_rate_hz, seed=seed, overwrite=overwrite,
             progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
     except (ValueError, KeyError, OSError, RuntimeError) as exc:

@@ -51,7 +51,7 @@ from .robot import parameter_kinds
 from .self_calibration_views import ViewLimits, hand_configurations, world_board_configurations
 
 __all__ = ["SelfCalibrationRun", "simulate_self_calibration", "write_self_calibration_files", "nao_top_camera",
-           "nominal_hand_board_mount", "DEFAULT_BOARD", "DEFAULT_WORLD_BOARD", "OUTPUT_NAMES", "TRUTH_FORMAT"]
+           "nominal_hand_board_mount", "board_surface", "DEFAULT_BOARD", "DEFAULT_WORLD_BOARD", "OUTPUT_NAMES", "TRUTH_FORMAT"]
 
 #: a checkerboard a NAO hand can hold: 7 x 4 inner corners (8 x 5 squares, COLS + ROWS odd so its
 #: orientation is unique), 12 mm squares: 96 x 60 mm pattern
@@ -209,7 +209,8 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
                               joint_noise_deg: float = 0.05, pixel_noise: float = 0.3,
                               board: str | Board | None = None, camera: Camera | None = None,
                               camera_mount_error=(1.0, 0.5), board_mount_error=(2.0, 1.5),
-                              partial_fraction: float = 0.1, clock_offset_s: float = 0.035, jitter_s: float = 0.004,
+                              partial_fraction: float = 0.1, board_bow_mm: float = 0.0,
+                              clock_offset_s: float = 0.035, jitter_s: float = 0.004,
                               log_rate_hz: float = 20.0, move_s: float = 1.0, dwell_s: float = 1.0,
                               render: RenderSettings | None = None, seed: int = 0, out_dir=None,
                               overwrite: bool = False, progress=None) -> SelfCalibrationRun:
@@ -223,7 +224,10 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
     joint offsets [deg] or {joint name: deg}; joint_noise_deg: reading noise per log row [deg];
     pixel_noise: sigma of ``image_points`` [px] (the images carry the renderer's effects instead);
     camera_mount_error / board_mount_error: (mm, deg) sigmas of the true mounts around the nominal;
-    camera: default :func:`nao_top_camera` (hands) or :func:`~robocal.sim.camera_cell.default_camera`.
+    camera: default :func:`nao_top_camera` (hands) or :func:`~robocal.sim.camera_cell.default_camera`;
+    board_bow_mm: the board is bent (a cylinder along its x axis) so that its middle lies this far
+    from the plane of its ends, along the board's +z (:func:`board_surface`): the true corners and the
+    images follow the bent board, a calibration model with a flat board does not.
     """
     nominal = load_robot(robot) if isinstance(robot, (str, Path)) else robot
     chains = tuple(chains)
@@ -284,7 +288,9 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
     else:
         T_wb = np.stack([compose(true.fk(q_img[k], c), T_board[c]) for k, c in enumerate(chain_of)])
     T_cb = compose(invert_transforms(T_cam), T_wb)
-    p = np.einsum("nij,pj->npi", T_cb[:, :3, :3], X) + T_cb[:, None, :3, 3]
+    surface = board_surface(b, board_bow_mm)
+    X_true = X if surface is None else np.column_stack([X[:, :2], surface(X[:, 0], X[:, 1])])
+    p = np.einsum("nij,pj->npi", T_cb[:, :3, :3], X_true) + T_cb[:, None, :3, 3]
     px = cam.project(np.where(p[..., 2:] > 1.0, p, [0.0, 0.0, 1.0]).reshape(-1, 3)).pixels.reshape(len(q_img), len(X), 2)
     px[p[..., 2] <= 1.0] = np.nan
     noisy = px + rng_noise.normal(0.0, pixel_noise, px.shape)
@@ -297,6 +303,7 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
     frame_t = capture + clock_offset_s + rng_time.normal(0.0, jitter_s, len(capture))
     names = tuple(f"img_{k:03d}.png" for k in range(len(q_img)))
     settings = {"seed": int(seed), "n_images_per_chain": int(n_images_per_chain), "partial_fraction": partial_fraction,
+                "board_bow_mm": float(board_bow_mm),
                 "joint_offsets_deg": joint_offsets_deg if not isinstance(joint_offsets_deg, dict) else "given",
                 "length_sigma_mm": length_sigma_mm, "joint_noise_deg": joint_noise_deg, "pixel_noise_px": pixel_noise,
                 "camera_mount_error_mm_deg": list(camera_mount_error), "board_mount_error_mm_deg": list(board_mount_error),
@@ -312,6 +319,22 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
     if out_dir is not None:
         write_self_calibration_files(run, out_dir, render=render, overwrite=overwrite, progress=progress)
     return run
+
+
+def board_surface(board: Board, bow_mm: float):
+    """``surface(x, y) -> z`` [mm, board frame] of a board bent into a cylinder along its x axis:
+    z = bow (1 - ((x - xc) / hx)^2) with xc, hx the middle and half length of the printed pattern
+    (the object points' extent plus one pitch each side); ``None`` for a flat board (bow 0)."""
+    if bow_mm == 0.0:
+        return None
+    X = board.object_points()
+    x0, x1 = X[:, 0].min() - board.pitch_mm, X[:, 0].max() + board.pitch_mm
+    xc, hx, bow = 0.5 * (x0 + x1), 0.5 * (x1 - x0), float(bow_mm)
+
+    def surface(x, y):
+        return bow * (1.0 - ((x - xc) / hx) ** 2) + 0.0 * y
+
+    return surface
 
 
 def _texel_mm(board: Board) -> float:
@@ -384,7 +407,8 @@ def write_self_calibration_files(run: SelfCalibrationRun, out_dir, *, render: Re
                 raise FileExistsError(f"{out / name}: exists; pass overwrite=True to replace it")
     (out / "images").mkdir(parents=True, exist_ok=True)
     texture, affine = board_image(run.board, _texel_mm(run.board))
-    renderer = BoardRenderer(run.camera, texture, affine, render or RenderSettings(blur_px=0.8))
+    renderer = BoardRenderer(run.camera, texture, affine, render or RenderSettings(blur_px=0.8),
+                             surface=board_surface(run.board, run.settings.get("board_bow_mm", 0.0)))
     rng = np.random.default_rng(np.random.SeedSequence([run.settings["seed"], 7]))
     for i, (name, T) in enumerate(zip(run.images, run.T_camera_board), 1):
         write_png(out / "images" / name, renderer.render(T, rng), overwrite=overwrite)
