@@ -13,7 +13,7 @@ import numpy as np
 
 from .stream import check_cell
 
-__all__ = ["csv_cells", "data_rows", "check_field_counts", "parse_number", "number_columns"]
+__all__ = ["csv_cells", "data_rows", "check_field_counts", "check_unique_labels", "parse_number", "number_columns"]
 
 
 def csv_cells(line: str) -> list:
@@ -36,6 +36,19 @@ def check_field_counts(rows, n_columns: int, header_line: int, fail) -> None:
     for line, cells in rows:
         if len(cells) != n_columns:
             fail(f"{len(cells)} fields, expected {n_columns} (one per column of line {header_line})", line)
+
+
+def check_unique_labels(rows, what: str, column: str, fail) -> dict:
+    """The first cell of every row of ``rows`` (from :func:`data_rows`) is a non-empty label given
+    once; returns ``{label: line}``. ``what`` names the labels in messages (``"pose"``, ``"image"``)."""
+    seen: dict = {}
+    for line, cells in rows:
+        if not cells[0]:
+            fail(f"empty {what} label", line, column)
+        if cells[0] in seen:
+            fail(f"duplicate {what} {cells[0]!r} (first on line {seen[cells[0]]})", line, column)
+        seen[cells[0]] = line
+    return seen
 
 
 def parse_number(cell: str) -> float:

@@ -27,7 +27,7 @@ from ..tcp.sensor import SENSOR_POINT_LABELS
 from .plausibility import angle_unit_problem, length_unit_problem
 from ..transforms import ANGLE_UNITS, LENGTH_UNITS, POSE_CONVENTIONS, transform_from_pose
 from .header import FileFormatError, declared_unit, read_header_block, read_text
-from .table import check_field_counts, csv_cells, data_rows, number_columns
+from .table import check_field_counts, check_unique_labels, csv_cells, data_rows, number_columns
 
 __all__ = [
     "TcpFileError",
@@ -214,14 +214,9 @@ def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
     header = _pose_columns(lines[i], i + 1, conv, fail)
     rows = data_rows(lines, i + 1)
     check_field_counts(rows, len(header), i + 1, fail)
-    labels: dict = {}
+    labels = check_unique_labels(rows, "pose", "pose", fail)
     poses, values = [], []
     for line, cells in rows:
-        if not cells[0]:
-            fail("empty pose label", line, "pose")
-        if cells[0] in labels:
-            fail(f"duplicate pose {cells[0]!r} (first on line {labels[cells[0]]})", line, "pose")
-        labels[cells[0]] = line
         vals = number_columns([(line, cells)], range(1, len(header)), lambda p, ln, j: fail(p, ln, header[j]))
         values.append(vals[0])
         try:

@@ -67,14 +67,18 @@ class BoardRenderer:
     """Renders a board texture for one camera.
 
     camera: the true camera (its ``image_size`` is required); texture: (Ht, Wt) uint8 printed
-    board; affine: (2, 3) board [mm] -> texel (column, row) (:func:`robocal.io.boards.board_image`).
+    board; affine: (2, 3) board [mm] -> texel (column, row) (:func:`robocal.io.boards.board_image`);
+    surface: optional ``surface(x, y) -> z`` [mm, board frame] of a slightly bent board (default flat).
     """
 
     def __init__(self, camera: Camera, texture: np.ndarray, affine: np.ndarray, settings: RenderSettings | None = None,
-                 ray_grid_px: float = 8.0):
+                 ray_grid_px: float = 8.0, surface=None):
         if camera.image_size is None:
             raise ValueError("camera.image_size (width, height) is needed to render images")
         self.camera = camera
+        # optional board surface z = surface(x, y) [mm, board frame] (a slightly bent board); the
+        # ray is moved from the plane to that height once (error second order in the slope)
+        self._surface = surface
         self.settings = settings or RenderSettings()
         self.texture = np.asarray(texture, dtype=np.float32) / 255.0
         self.affine = np.asarray(affine, dtype=float).reshape(2, 3)
@@ -134,6 +138,11 @@ class BoardRenderer:
         Y += r2[2]
         Y *= s
         Y -= np.float32(r2 @ t)
+        if self._surface is not None:
+            # the ray at board height h: s' = s (1 + h / (r3 . t)), so (X + r1.t) scales by the same factor
+            f = 1.0 + np.asarray(self._surface(X, Y), dtype=np.float32) / np.float32(r3 @ t)
+            X = (X + np.float32(r1 @ t)) * f - np.float32(r1 @ t)
+            Y = (Y + np.float32(r2 @ t)) * f - np.float32(r2 @ t)
         A = self.affine.astype(np.float32)
         col = A[0, 0] * X
         col += A[0, 1] * Y
