@@ -1,0 +1,238 @@
+"""Camera-based kinematic self-calibration of one or several chains at once (issue 15; METHODS.md
+section 3, "Camera self-calibration": a robot's own camera photographs a board carried by one of
+its end effectors, or fixed in the world, and Levenberg-Marquardt minimises the reprojection error
+over the joint offsets of every chain involved).
+
+For image i with the board on carrier ``b_i`` (an end effector, or the world) the board's corners
+``X`` are seen at ``u = project(C^-1 A_i^-1 B_i T_b X)`` with ``A_i`` the camera's end effector
+and ``B_i`` the carrier (identity for the world), both from forward kinematics at the reported
+joints with one geometry block, ``C`` = ``T_ee_camera`` (the camera mount) and ``T_b`` the board
+on its carrier (:class:`~robocal.calib.residuals.FlangeReprojectionResidual` with
+``target_end_effector``). All chains are solved jointly in one problem on the calibration core.
+
+1. Per image the board pose by PnP (:func:`.pnp.solve_pnp`); images without a pose are skipped.
+2. Start: the camera mount as given, else Shah's AX = ZB on the largest carrier's images with
+   ``B_i^-1 A_i`` as the "flange" poses; each board transform the chordal mean of
+   ``B_i^-1 A_i C T_camera_board_i``.
+3. One problem: joint offsets of every joint on a path from the base to the camera or to a carrier
+   (plus ``link_parameters``), the camera mount, one board transform per carrier, optionally the
+   intrinsics. What the images cannot determine is held and named by the core's identifiability
+   analysis; :attr:`SelfCalibration.joint_report` says per joint which chains it is on and why a
+   held one is held (a joint on the path to the camera and to every board -- a torso joint -- cancels;
+   the last joint of a board's arm trades against that board's transform; the last joint before
+   the camera against the camera mount).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..calib import Problem, solve
+from ..calib.blocks import FramesBlock, RobotGeometry
+from ..calib.residuals import FlangeReprojectionResidual
+from ..calib.solve import NotConvergedWarning
+from ..camera import Camera
+from ..kinematics.links import link_operations
+from ..transforms import invert_transforms
+from .motions import HandEyeError
+from .pnp import solve_pnp
+from .refine import _intrinsics_block, _pixel_sigma, mean_transform
+from .solve import solve_robot_world_hand_eye
+
+__all__ = ["SelfCalibration", "solve_self_calibration", "WORLD"]
+
+#: carrier name of a board fixed in the robot's base frame
+WORLD = "world"
+
+
+@dataclass(frozen=True)
+class SelfCalibration:
+    """The result of :func:`solve_self_calibration` (transforms (4, 4) [mm]).
+
+    model: the calibrated robot model; joint_offset_names (k,) the estimated parameters (``theta<k>``,
+    link parameters) and joint_offsets (k,) their corrections [rad | mm], 0 for held ones;
+    joint_offset_sigma (k,) their 1-sigma (NaN where held); camera_mount: T_ee_camera;
+    boards: {carrier: T_carrier_board}; camera: refined or as given; residuals_px (N, P, 2)
+    detected minus projected with the calibrated model (NaN where not detected / skipped);
+    rms_px; per_image_rms_px (N,); pixel_sigma [px] used to weight corners; identifiability: the
+    core's report; joint_report: one dict per candidate joint offset (name, joint, chains,
+    identifiable, why); converged; message; skipped {image index: reason}; variable_names,
+    values, std: every free variable of the solve.
+    """
+
+    model: object
+    joint_offset_names: tuple
+    joint_offsets: np.ndarray
+    joint_offset_sigma: np.ndarray
+    camera_mount: np.ndarray
+    boards: dict
+    camera: Camera
+    residuals_px: np.ndarray
+    rms_px: float
+    per_image_rms_px: np.ndarray
+    pixel_sigma: float
+    identifiability: object
+    joint_report: list
+    converged: bool
+    message: str
+    skipped: dict
+    variable_names: tuple
+    values: np.ndarray
+    std: np.ndarray
+    iterations: int = 0
+
+
+def _chain_parameters(model, end_effectors) -> dict:
+    """{parameter index: [end effectors it moves]} over ``end_effectors`` (names)."""
+    idx = [model.end_effector_index(e) for e in end_effectors]
+    masks = model.kinematics_with(np.zeros((1, model.n_joints)), T_world_base=np.eye(4), end_effectors=idx)[3]
+    out: dict = {}
+    for name, m in zip(end_effectors, masks):
+        for p in np.flatnonzero(m):
+            out.setdefault(int(p), []).append(name)
+    return out
+
+
+def _offset_candidates(model) -> list:
+    """[(parameter name, joint/link name)] of every moving joint's offset."""
+    out = []
+    for k, link in enumerate(model.links):
+        for _code, pname, moves in link_operations(link):
+            if moves:
+                out.append((f"{pname}{k + 1}", link.name))
+    return out
+
+
+def solve_self_calibration(model, joints, image_points, target_points, camera: Camera, carriers, *,
+                           camera_end_effector: str, camera_mount=None, link_parameters=(),
+                           refine_intrinsics=False, pixel_sigma: float | None = None,
+                           min_points: int = 6) -> SelfCalibration:
+    """Joint offsets of every chain involved, the camera mount and the board transforms from images.
+
+    model: a :class:`~robocal.kinematics.model.RobotModel` (a tree is fine); joints (N, n) [rad |
+    mm] the controller joints at each image; image_points (N, P, 2) [px], NaN where not detected
+    (an image with NaN rows only is skipped); target_points (P, 3) [mm]; camera: the intrinsics;
+    carriers: N names, the end effector holding the board in each image or ``"world"``;
+    camera_end_effector: the end effector that carries the camera; camera_mount (4, 4) [mm]:
+    nominal T_ee_camera (default: from the images, Shah's AX = ZB); link_parameters: further
+    parameter names of the model to estimate (e.g. ``["a2", "d4"]``); refine_intrinsics: as
+    :func:`~robocal.handeye.refine.refine_hand_eye`; pixel_sigma [px]: the corner noise (default:
+    from the PnP residuals).
+
+    Raises :class:`HandEyeError` naming the problem (counts that differ, unknown end effectors,
+    fewer than 3 usable images of a carrier, joints that look like degrees).
+    """
+    q_all = np.asarray(joints, dtype=float)
+    uv_all = np.asarray(image_points, dtype=float)
+    X = np.asarray(target_points, dtype=float)
+    carriers = [str(c) for c in carriers]
+    N = len(uv_all)
+    if q_all.shape != (N, model.n_joints):
+        raise HandEyeError(f"joints: expected ({N}, {model.n_joints}) [rad] for {N} images, got {q_all.shape}")
+    if len(carriers) != N:
+        raise HandEyeError(f"{len(carriers)} carriers for {N} images: one per image")
+    if np.nanmax(np.abs(q_all)) > 4 * np.pi:
+        raise HandEyeError("joints exceed two turns: they look like degrees; the solver takes radians")
+    ee_names = [e.name for e in model.end_effectors]
+    for name in {camera_end_effector, *carriers} - {WORLD}:
+        if name not in ee_names:
+            raise HandEyeError(f"robot {model.name} has no end effector {name!r}; it has {', '.join(ee_names)}")
+    T_ct, _, reasons = solve_pnp(camera, X, uv_all, min_points=min_points)
+    good = np.all(np.isfinite(T_ct), axis=(1, 2))
+    skipped = {int(i): reasons[i] or "no pose of the board found in this image" for i in np.flatnonzero(~good)}
+    groups = {c: np.flatnonzero(good & (np.array(carriers) == c)) for c in dict.fromkeys(carriers)}
+    for c, idx in groups.items():
+        if len(idx) < 3:
+            raise HandEyeError(f"board on {c!r}: {len(idx)} usable images, need at least 3")
+
+    cam_ee = model.end_effector_index(camera_end_effector)
+
+    def frames(q, carrier):
+        A = model.kinematics_with(q, T_world_base=np.eye(4), end_effectors=[cam_ee])[0][:, 0]
+        if carrier == WORLD:
+            return A, np.tile(np.eye(4), (len(q), 1, 1))
+        return A, model.kinematics_with(q, T_world_base=np.eye(4),
+                                        end_effectors=[model.end_effector_index(carrier)])[0][:, 0]
+
+    if camera_mount is None:
+        c0 = max(groups, key=lambda c: len(groups[c]))
+        A, B = frames(q_all[groups[c0]], c0)
+        C0 = solve_robot_world_hand_eye(invert_transforms(B) @ A, T_ct[groups[c0]], setup="eye_in_hand")[0]
+    else:
+        C0 = np.asarray(camera_mount, dtype=float)
+    boards0 = {}
+    for c, idx in groups.items():
+        A, B = frames(q_all[idx], c)
+        boards0[c] = mean_transform(invert_transforms(B) @ A @ C0 @ T_ct[idx])
+
+    # the joint offsets of every chain involved
+    chains = [camera_end_effector] + [c for c in groups if c != WORLD]
+    moved = _chain_parameters(model, chains)
+    pnames = model.params.names
+    candidates = [(n, j) for n, j in _offset_candidates(model) if pnames.index(n) in moved]
+    names = [n for n, _ in candidates] + [p for p in link_parameters if p not in dict(candidates)]
+    geometry = RobotGeometry(model, names, name="joint_offsets")
+    cam = _intrinsics_block(camera, refine_intrinsics)
+    mount = FramesBlock("camera_mount", C0, group="base")
+    board_blocks = {c: FramesBlock(f"board_{c}", boards0[c], group="targets") for c in groups}
+    sigma = float(pixel_sigma) if pixel_sigma is not None else _pixel_sigma(uv_all[good], T_ct[good], camera, X)
+    residuals = []
+    for c, idx in groups.items():
+        kw = dict(target_end_effector=c) if c != WORLD else {}
+        residuals.append(FlangeReprojectionResidual(cam, mount, board_blocks[c], uv_all[idx], X, model=model,
+                                                    q=q_all[idx], geometry=geometry, end_effector=cam_ee,
+                                                    invert=True, sigma=sigma, **kw))
+    problem = Problem([cam, mount, *board_blocks.values(), geometry], residuals)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotConvergedWarning)
+        result = solve(problem)
+    state = dict(zip([b.name for b in problem.parameter_blocks], result.state))
+    params = state["joint_offsets"]
+    calibrated = model.with_params(params)
+    value = state["cam"]
+    refined = Camera(*value[:4], tuple(value[4:]), camera.model, camera.image_size)
+    C, boards = state["camera_mount"][0], {c: state[f"board_{c}"][0] for c in groups}
+
+    # back-projection with the calibrated model at the reported joints
+    res_px = np.full_like(uv_all, np.nan)
+    for c, idx in groups.items():
+        A, B = (calibrated.kinematics_with(q_all[idx], T_world_base=np.eye(4), end_effectors=[cam_ee])[0][:, 0],
+                np.tile(np.eye(4), (len(idx), 1, 1)) if c == WORLD else calibrated.kinematics_with(
+                    q_all[idx], T_world_base=np.eye(4), end_effectors=[calibrated.end_effector_index(c)])[0][:, 0])
+        T = invert_transforms(C)[None] @ invert_transforms(A) @ B @ boards[c][None]
+        p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
+        res_px[idx] = uv_all[idx] - refined.project(p.reshape(-1, 3)).pixels.reshape(len(idx), -1, 2)
+    norms = np.linalg.norm(res_px, axis=2)
+    ok = np.isfinite(norms)
+    rms = float(np.sqrt(np.mean(norms[ok] ** 2))) if ok.any() else float("nan")
+    with np.errstate(invalid="ignore"):
+        per_image = np.sqrt(np.nanmean(np.where(ok, norms ** 2, np.nan), axis=1))
+
+    offsets = params[geometry.index] - geometry.initial[geometry.index]
+    std_of = dict(zip(result.names, result.std))
+    sig = np.array([std_of.get(n, np.nan) for n in geometry.names])
+    dropped = {d["name"]: d for d in result.identifiability.dropped}
+    report = []
+    for n, joint in candidates:
+        on = moved[pnames.index(n)]
+        d = dropped.get(n)
+        why = None
+        if d is not None:
+            why = d["why"]
+            if set(on) >= set(chains) and len(chains) > 1:
+                why = f"on the path to the camera and to every board ({', '.join(on)}): it cancels; " + why
+        report.append({"name": n, "joint": joint, "chains": list(on), "identifiable": d is None, "why": why})
+    msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
+           f"{result.iterations} iterations; {int(good.sum())} of {N} images on {len(groups)} carrier(s), "
+           f"RMS {rms:.3f} px")
+    if dropped:
+        msg += "; not identifiable (held): " + ", ".join(dropped)
+    return SelfCalibration(
+        model=calibrated, joint_offset_names=tuple(geometry.names), joint_offsets=offsets, joint_offset_sigma=sig,
+        camera_mount=C, boards=boards, camera=refined, residuals_px=res_px, rms_px=rms, per_image_rms_px=per_image,
+        pixel_sigma=sigma, identifiability=result.identifiability, joint_report=report,
+        converged=bool(result.converged), message=msg, skipped=skipped, variable_names=tuple(result.names),
+        values=np.asarray(result.values), std=np.asarray(result.std), iterations=int(result.iterations))
