@@ -58,8 +58,8 @@ class SelfCalibration:
     boards: {carrier: T_carrier_board}; camera: refined or as given; residuals_px (N, P, 2)
     detected minus projected with the calibrated model (NaN where not detected / skipped);
     rms_px; per_image_rms_px (N,); pixel_sigma [px] used to weight corners; identifiability: the
-    core's report; joint_report: one dict per candidate joint offset (name, joint, chains,
-    identifiable, why); converged; message; skipped {image index: reason}; variable_names,
+    core's report; joint_report: one dict per candidate joint offset (name, joint, chains: the end
+    effectors it moves, loops: the carriers whose images it affects, identifiable, why); converged; message; skipped {image index: reason}; variable_names,
     values, std: every free variable of the solve.
     """
 
@@ -224,7 +224,9 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
             why = d["why"]
             if set(on) >= set(chains) and len(chains) > 1:
                 why = f"on the path to the camera and to every board ({', '.join(on)}): it cancels; " + why
-        report.append({"name": n, "joint": joint, "chains": list(on), "identifiable": d is None, "why": why})
+        loops = [c for c in groups if (camera_end_effector in on) != (c in on)]
+        report.append({"name": n, "joint": joint, "chains": list(on), "loops": loops, "identifiable": d is None,
+                       "why": why})
     msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
            f"{result.iterations} iterations; {int(good.sum())} of {N} images on {len(groups)} carrier(s), "
            f"RMS {rms:.3f} px")
