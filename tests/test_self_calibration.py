@@ -36,7 +36,7 @@ def justin():
             offsets[n] = np.radians(rng.uniform(-3.0, 3.0))
             truth[pn.index(n)] += offsets[n]
     true_model = m.with_params(truth)
-    board = parse_board("checkerboard:7x5:25mm")
+    board = parse_board("checkerboard:7x4:25mm")
     X = board.object_points()
     q, carriers, uv = [], [], []
     for c in ("left", "right"):

@@ -27,7 +27,7 @@ from .importers.joint_log import read_joint_log
 from .importers.table import read_table
 from .importers.timestamps import time_cell
 
-__all__ = ["read_frames", "read_timed_joint_log", "match_capture_times", "JOINT_LOG_FORMAT", "MATCH_MODES"]
+__all__ = ["read_frames", "read_timed_joint_log", "match_capture_times", "write_timed_joint_log", "write_frames", "JOINT_LOG_FORMAT", "MATCH_MODES"]
 
 JOINT_LOG_FORMAT = "robocal-joint-log/1"
 MATCH_MODES = ("nearest", "interpolate")
@@ -120,3 +120,25 @@ def match_capture_times(image_times, log_times, log_joints, *, tolerance: float,
                           f"{dt[i]:+.3f} s away; log {tl.min():.3f}..{tl.max():.3f} s)")
     q[bad] = np.nan
     return q, dt, reasons
+
+
+def write_timed_joint_log(path, times, joints, joint_names, *, angle_unit: str = "rad", overwrite: bool = False):
+    """Write a ``robocal-joint-log/1`` file (atomic): times (M,) [s], joints (M, n) [rad]."""
+    from .atomic import atomic_write_text
+
+    if angle_unit not in ("rad", "deg"):
+        raise ValueError(f"angle_unit: expected rad or deg, got {angle_unit!r}")
+    q = np.degrees(joints) if angle_unit == "deg" else np.asarray(joints, dtype=float)
+    lines = [f"# format: {JOINT_LOG_FORMAT}", f"# angle_unit: {angle_unit}", ",".join(["time_s", *joint_names])]
+    lines += [",".join([f"{t:.4f}"] + [f"{v:.9g}" for v in row]) for t, row in zip(times, q)]
+    return atomic_write_text(path, "\n".join(lines) + "\n", overwrite=overwrite)
+
+
+def write_frames(path, images, times, board_on=None, *, overwrite: bool = False):
+    """Write a frames file (atomic): image names, capture times [s], optional carriers."""
+    from .atomic import atomic_write_text
+
+    head = "image,time_s" + (",board_on" if board_on is not None else "")
+    rows = [f"{n},{t:.4f}" + (f",{board_on[i]}" if board_on is not None else "")
+            for i, (n, t) in enumerate(zip(images, times))]
+    return atomic_write_text(path, "\n".join([head, *rows]) + "\n", overwrite=overwrite)
