@@ -11,9 +11,11 @@ on its carrier (:class:`~robocal.calib.residuals.FlangeReprojectionResidual` wit
 ``target_end_effector``). All chains are solved jointly in one problem on the calibration core.
 
 1. Per image the board pose by PnP (:func:`.pnp.solve_pnp`); images without a pose are skipped.
-2. Start: the camera mount as given, else Shah's AX = ZB on the largest carrier's images with
-   ``B_i^-1 A_i`` as the "flange" poses; each board transform the chordal mean of
-   ``B_i^-1 A_i C T_camera_board_i``.
+2. Start: the camera mount as given, else the better (smaller initial reprojection cost, every
+   corner in front of the camera) of the identity (the end effector is the camera's optical
+   frame) and Shah's AX = ZB per carrier with ``B_i^-1 A_i`` as the "flange" poses (with several
+   degrees of joint-offset error the nominal chain can put Shah's mount half a metre off); each
+   board transform the chordal mean of ``B_i^-1 A_i C T_camera_board_i``.
 3. One problem: joint offsets of every joint on a path from the base to the camera or to a carrier
    (plus ``link_parameters``), the camera mount, one board transform per carrier, optionally the
    intrinsics. What the images cannot determine is held and named by the core's identifiability
@@ -117,7 +119,7 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
     (an image with NaN rows only is skipped); target_points (P, 3) [mm]; camera: the intrinsics;
     carriers: N names, the end effector holding the board in each image or ``"world"``;
     camera_end_effector: the end effector that carries the camera; camera_mount (4, 4) [mm]:
-    nominal T_ee_camera (default: from the images, Shah's AX = ZB); link_parameters: further
+    nominal T_ee_camera (default: the identity or Shah's AX = ZB, whichever fits better); link_parameters: further
     parameter names of the model to estimate (e.g. ``["a2", "d4"]``); refine_intrinsics: as
     :func:`~robocal.handeye.refine.refine_hand_eye`; pixel_sigma [px]: the corner noise (default:
     from the PnP residuals).
@@ -157,16 +159,20 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
         return A, model.kinematics_with(q, T_world_base=np.eye(4),
                                         end_effectors=[model.end_effector_index(carrier)])[0][:, 0]
 
-    if camera_mount is None:
-        c0 = max(groups, key=lambda c: len(groups[c]))
-        A, B = frames(q_all[groups[c0]], c0)
-        C0 = solve_robot_world_hand_eye(invert_transforms(B) @ A, T_ct[groups[c0]], setup="eye_in_hand")[0]
+    if camera_mount is None:  # candidates: the end effector is the optical frame, or Shah per carrier
+        starts = [np.eye(4)]
+        for c, idx in groups.items():
+            A, B = frames(q_all[idx], c)
+            starts.append(solve_robot_world_hand_eye(invert_transforms(B) @ A, T_ct[idx], setup="eye_in_hand")[0])
     else:
-        C0 = np.asarray(camera_mount, dtype=float)
-    boards0 = {}
-    for c, idx in groups.items():
-        A, B = frames(q_all[idx], c)
-        boards0[c] = mean_transform(invert_transforms(B) @ A @ C0 @ T_ct[idx])
+        starts = [np.asarray(camera_mount, dtype=float)]
+
+    def boards_for(C0):
+        out = {}
+        for c, idx in groups.items():
+            A, B = frames(q_all[idx], c)
+            out[c] = mean_transform(invert_transforms(B) @ A @ C0 @ T_ct[idx])
+        return out
 
     # the joint offsets of every chain involved
     chains = [camera_end_effector] + [c for c in groups if c != WORLD]
@@ -176,16 +182,26 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
     names = [n for n, _ in candidates] + [p for p in link_parameters if p not in dict(candidates)]
     geometry = RobotGeometry(model, names, name="joint_offsets")
     cam = _intrinsics_block(camera, refine_intrinsics)
-    mount = FramesBlock("camera_mount", C0, group="base")
-    board_blocks = {c: FramesBlock(f"board_{c}", boards0[c], group="targets") for c in groups}
     sigma = float(pixel_sigma) if pixel_sigma is not None else _pixel_sigma(uv_all[good], T_ct[good], camera, X)
-    residuals = []
-    for c, idx in groups.items():
-        kw = dict(target_end_effector=c) if c != WORLD else {}
-        residuals.append(FlangeReprojectionResidual(cam, mount, board_blocks[c], uv_all[idx], X, model=model,
-                                                    q=q_all[idx], geometry=geometry, end_effector=cam_ee,
-                                                    invert=True, sigma=sigma, **kw))
-    problem = Problem([cam, mount, *board_blocks.values(), geometry], residuals)
+
+    def build(C0):
+        mount = FramesBlock("camera_mount", C0, group="base")
+        boards = {c: FramesBlock(f"board_{c}", T, group="targets") for c, T in boards_for(C0).items()}
+        residuals = []
+        for c, idx in groups.items():
+            kw = dict(target_end_effector=c) if c != WORLD else {}
+            residuals.append(FlangeReprojectionResidual(cam, mount, boards[c], uv_all[idx], X, model=model,
+                                                        q=q_all[idx], geometry=geometry, end_effector=cam_ee,
+                                                        invert=True, sigma=sigma, **kw))
+        problem = Problem([cam, mount, *boards.values(), geometry], residuals)
+        r = problem.evaluate(problem.initial_state(), jacobian=False)[0]
+        cost = float(np.mean(r ** 2)) if np.all(np.isfinite(r)) else np.inf
+        return cost, problem
+
+    cost, problem = min((build(C0) for C0 in starts), key=lambda t: t[0])
+    if not np.isfinite(cost):
+        raise HandEyeError("no start puts the board in front of the camera in every image: check the robot file, "
+                           "the joints (radians) and which end effector carries the camera and the board")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)
         result = solve(problem)
