@@ -1,0 +1,104 @@
+"""Issue 15 acceptance on the NAO H25 (head camera ``camera_top``, a board in each hand): 40 images
+per arm, joint offsets up to +-3 deg on head and both arms, 0.3 px corner noise; every identifiable
+joint offset within 3 reported sigma, reprojection RMS within 10 % of the noise, and both arms
+together at least as accurate as each arm alone. Corners from :mod:`robocal.sim.camera_chain`
+(projection + noise; the rendered path is covered by test_self_calibration_pipeline.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robocal.camera import Camera
+from robocal.handeye.refine import joint_offset_names
+from robocal.handeye.self_calibration import solve_self_calibration
+from robocal.io.boards import parse_board
+from robocal.robots import load_robot
+from robocal.sim.camera_chain import camera_board_poses, visible_configurations
+from robocal.transforms import so3_exp, transforms_from
+
+NOISE_PX = 0.3
+N_PER_ARM = 40
+# NAO top camera (VGA, 60.9 deg horizontal field of view: fx = 320 / tan(30.45 deg) = 556.8 px)
+CAM = Camera(556.8, 556.8, 319.5, 239.5, (0.0, 0.0, 0.0, 0.0, 0.0), "brown", (640, 480))
+HANDS = ("left_hand", "right_hand")
+
+
+def _nao():
+    try:
+        return load_robot("nao_h25")
+    except Exception as exc:  # noqa: BLE001 - the robot file comes from the nao-model branch
+        pytest.skip(f"nao_h25 robot file not available in this branch ({exc}); merge nao-model")
+
+
+@pytest.fixture(scope="module")
+def nao():
+    m = _nao()
+    rng = np.random.default_rng(25)
+    pn = list(m.params.names)
+    truth = m.params.values.copy()
+    offsets = {n: np.radians(rng.uniform(-3.0, 3.0)) for n in joint_offset_names(m)}
+    for n, v in offsets.items():
+        truth[pn.index(n)] += v
+    true_model = m.with_params(truth)
+    board = parse_board("checkerboard:5x4:12mm")
+    X = board.object_points()
+    # the board 20 mm beyond the hand, printed side towards the body; a small camera mount error
+    mounts = {h: transforms_from(so3_exp(np.array([0.02, np.pi / 2, -0.03])), np.array([20.0, 2.0, -1.0]))
+              for h in HANDS}
+    T_ee_camera = transforms_from(so3_exp(np.array([0.005, -0.01, 0.008])), np.array([1.0, -0.5, 0.8]))
+    q, on, uv = [], [], []
+    for h in HANDS:
+        qh = visible_configurations(true_model, CAM, X, camera_end_effector="camera_top", T_ee_camera=T_ee_camera,
+                                    carrier=h, T_carrier_board=mounts[h], n=N_PER_ARM, rng=rng,
+                                    q_center=np.zeros(m.n_joints), q_spread=np.pi, front_z=board.front_z,
+                                    max_batches=300)
+        T = camera_board_poses(true_model, qh, "camera_top", T_ee_camera, h, mounts[h])
+        p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
+        uv.append(CAM.project(p.reshape(-1, 3)).pixels.reshape(len(qh), -1, 2))
+        q.append(qh)
+        on += [h] * len(qh)
+    uv = np.concatenate(uv)
+    uv += rng.normal(0.0, NOISE_PX, uv.shape)
+    q, on = np.concatenate(q), np.array(on)
+    both = solve_self_calibration(m, q, uv, X, CAM, on, camera_end_effector="camera_top", pixel_sigma=NOISE_PX)
+    alone = {h: solve_self_calibration(m, q[on == h], uv[on == h], X, CAM, on[on == h],
+                                       camera_end_effector="camera_top", pixel_sigma=NOISE_PX) for h in HANDS}
+    return offsets, both, alone
+
+
+def _z(res, offsets):
+    held = {r["name"] for r in res.joint_report if not r["identifiable"]}
+    return {n: (v - offsets[n]) / s for n, v, s in zip(res.joint_offset_names, res.joint_offsets,
+                                                       res.joint_offset_sigma) if n not in held}
+
+
+def test_every_identifiable_nao_joint_offset_within_three_sigma(nao):
+    offsets, both, _ = nao
+    z = _z(both, offsets)
+    assert len(z) == 9  # 12 joints; HeadPitch (camera mount) and both WristYaw (board transforms) held
+    assert max(abs(v) for v in z.values()) < 3.0
+    assert abs(both.rms_px / np.sqrt(2) / NOISE_PX - 1.0) < 0.1
+
+
+def test_held_nao_joints_are_named_with_what_they_trade_against(nao):
+    _, both, _ = nao
+    by_joint = {r["joint"]: r for r in both.joint_report}
+    assert "camera_mount" in by_joint["HeadPitch"]["why"]
+    assert "board_left_hand" in by_joint["LWristYaw"]["why"]
+    assert "board_right_hand" in by_joint["RWristYaw"]["why"]
+    assert by_joint["HeadYaw"]["identifiable"] and by_joint["HeadYaw"]["loops"] == list(HANDS)
+
+
+def test_both_arms_together_at_least_as_accurate_as_each_arm_alone(nao):
+    offsets, both, alone = nao
+    s_both = dict(zip(both.joint_offset_names, both.joint_offset_sigma))
+    for h, res in alone.items():
+        for n, s in zip(res.joint_offset_names, res.joint_offset_sigma):
+            if np.isfinite(s):
+                assert s_both[n] <= s * 1.0001, (h, n)
+    # the shared head joint: error with both arms below 3 sigma of either arm alone
+    k = both.joint_offset_names.index("theta1")
+    for res in alone.values():
+        j = res.joint_offset_names.index("theta1")
+        assert abs(both.joint_offsets[k] - offsets["theta1"]) < 3 * res.joint_offset_sigma[j]
