@@ -14,7 +14,7 @@ from robocal.handeye.self_calibration import solve_self_calibration
 from robocal.io.boards import parse_board
 from robocal.io.capture_times import match_capture_times
 from robocal.robots import load_robot
-from robocal.sim.camera_chain import camera_board_poses, visible_configurations
+from robocal.sim.camera_chain import simulate_corner_views
 from robocal.transforms import so3_exp, transforms_from
 
 NOISE_PX = 0.3
@@ -38,19 +38,10 @@ def justin():
     true_model = m.with_params(truth)
     board = parse_board("checkerboard:7x4:25mm")
     X = board.object_points()
-    q, carriers, uv = [], [], []
-    for c in ("left", "right"):
-        qc = visible_configurations(true_model, CAM, X, camera_end_effector="head", T_ee_camera=MOUNT, carrier=c,
-                                    T_carrier_board=BOARDS[c], n=25, rng=rng, q_center=np.zeros(19),
-                                    q_spread=np.pi, front_z=board.front_z)
-        T = camera_board_poses(true_model, qc, "head", MOUNT, c, BOARDS[c])
-        p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
-        uv.append(CAM.project(p.reshape(-1, 3)).pixels.reshape(len(qc), -1, 2))
-        q.append(qc)
-        carriers += [c] * len(qc)
-    uv = np.concatenate(uv)
-    uv += rng.normal(0.0, NOISE_PX, uv.shape)
-    return m, np.concatenate(q), uv, X, carriers, offsets
+    q, carriers, uv = simulate_corner_views(true_model, CAM, X, camera_end_effector="head", T_ee_camera=MOUNT,
+                                            boards=BOARDS, n_per_carrier=25, rng=rng, pixel_noise=NOISE_PX,
+                                            front_z=board.front_z)
+    return m, q, uv, X, list(carriers), offsets
 
 
 def test_joint_offsets_of_head_and_both_arms_recovered_within_three_sigma(justin):

@@ -14,7 +14,7 @@ from robocal.handeye.refine import joint_offset_names
 from robocal.handeye.self_calibration import solve_self_calibration
 from robocal.io.boards import parse_board
 from robocal.robots import load_robot
-from robocal.sim.camera_chain import camera_board_poses, visible_configurations
+from robocal.sim.camera_chain import simulate_corner_views
 from robocal.transforms import so3_exp, transforms_from
 
 NOISE_PX = 0.3
@@ -47,20 +47,9 @@ def nao():
     mounts = {h: transforms_from(so3_exp(np.array([0.02, np.pi / 2, -0.03])), np.array([20.0, 2.0, -1.0]))
               for h in HANDS}
     T_ee_camera = transforms_from(so3_exp(np.array([0.005, -0.01, 0.008])), np.array([1.0, -0.5, 0.8]))
-    q, on, uv = [], [], []
-    for h in HANDS:
-        qh = visible_configurations(true_model, CAM, X, camera_end_effector="camera_top", T_ee_camera=T_ee_camera,
-                                    carrier=h, T_carrier_board=mounts[h], n=N_PER_ARM, rng=rng,
-                                    q_center=np.zeros(m.n_joints), q_spread=np.pi, front_z=board.front_z,
-                                    max_batches=300)
-        T = camera_board_poses(true_model, qh, "camera_top", T_ee_camera, h, mounts[h])
-        p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
-        uv.append(CAM.project(p.reshape(-1, 3)).pixels.reshape(len(qh), -1, 2))
-        q.append(qh)
-        on += [h] * len(qh)
-    uv = np.concatenate(uv)
-    uv += rng.normal(0.0, NOISE_PX, uv.shape)
-    q, on = np.concatenate(q), np.array(on)
+    q, on, uv = simulate_corner_views(true_model, CAM, X, camera_end_effector="camera_top", T_ee_camera=T_ee_camera,
+                                      boards=mounts, n_per_carrier=N_PER_ARM, rng=rng, pixel_noise=NOISE_PX,
+                                      front_z=board.front_z)
     both = solve_self_calibration(m, q, uv, X, CAM, on, camera_end_effector="camera_top", pixel_sigma=NOISE_PX)
     alone = {h: solve_self_calibration(m, q[on == h], uv[on == h], X, CAM, on[on == h],
                                        camera_end_effector="camera_top", pixel_sigma=NOISE_PX) for h in HANDS}

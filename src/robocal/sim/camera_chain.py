@@ -17,7 +17,7 @@ import numpy as np
 from ..camera import Camera
 from ..transforms import invert_transforms
 
-__all__ = ["visible_configurations", "camera_board_poses", "capture_schedule"]
+__all__ = ["visible_configurations", "camera_board_poses", "capture_schedule", "simulate_corner_views"]
 
 
 def camera_board_poses(model, q, camera_end_effector, T_ee_camera, carrier, T_carrier_board) -> np.ndarray:
@@ -75,3 +75,26 @@ def capture_schedule(n_images: int, rng, *, dwell_s: float = 1.0, move_s: float 
     pose = np.where(at, k, -1)
     image_t = t_pose + clock_offset_s + rng.normal(0.0, jitter_s, n_images)
     return image_t, log_t, pose
+
+
+def simulate_corner_views(true_model, camera: Camera, object_points, *, camera_end_effector: str, T_ee_camera,
+                          boards: dict, n_per_carrier: int, rng, pixel_noise: float, front_z: int = -1,
+                          max_batches: int = 300):
+    """Corner observations without rendering: ``(q (N, n) [rad], carriers (N,), image_points (N, P, 2)
+    [px])`` of ``n_per_carrier`` views per board (``boards``: {carrier: T_carrier_board}), the
+    projections through the true robot plus Gaussian noise ``pixel_noise`` [px] per coordinate;
+    joints drawn anywhere within the limits (:func:`visible_configurations`)."""
+    X = np.asarray(object_points, dtype=float)
+    q, on, uv = [], [], []
+    centre, spread = np.zeros(true_model.n_joints), np.full(true_model.n_joints, np.pi)
+    for c, T_cb in boards.items():
+        qc = visible_configurations(true_model, camera, X, camera_end_effector=camera_end_effector,
+                                    T_ee_camera=T_ee_camera, carrier=c, T_carrier_board=T_cb, n=n_per_carrier, rng=rng,
+                                    q_center=centre, q_spread=spread, front_z=front_z, max_batches=max_batches)
+        T = camera_board_poses(true_model, qc, camera_end_effector, T_ee_camera, c, T_cb)
+        p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
+        uv.append(camera.project(p.reshape(-1, 3)).pixels.reshape(len(qc), -1, 2))
+        q.append(qc)
+        on += [c] * len(qc)
+    uv = np.concatenate(uv)
+    return np.concatenate(q), np.array(on), uv + rng.normal(0.0, pixel_noise, uv.shape)
