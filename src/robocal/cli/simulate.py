@@ -79,3 +79,55 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
     click.echo(f"rendered {r['n_images']} images of {r['board']} ({r['setup']}, seed {seed})")
     joints = "" if r["joints"] is None else f"{r['joints']}, "
     click.echo(f"wrote {r['images']}/, {r['poses']}, {joints}{r['camera']} and {r['truth']}")
+
+
+@simulate.command("self-calibration")
+@click.argument("robot")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for images/, joint_log.csv, frames.csv, camera.json and truth.json.")
+@click.option("--images-per-chain", "n_images", default=40, show_default=True,
+              help="Images with the full board per chain (board-holding hand, or the fixed board).")
+@click.option("--chains", default=None,
+              help="Comma-separated end effectors holding a board, or 'world' (board fixed, camera on the "
+                   "flange). Default: left_hand,right_hand for a robot with camera_top (nao_h25), else world.")
+@click.option("--board", default=None,
+              help="Board spec (docs/handeye.md). Default checkerboard:7x4:12mm in a hand, checkerboard:9x6:25mm "
+                   "fixed in the world.")
+@click.option("--joint-offsets-deg", default=3.0, show_default=True,
+              help="True joint zero offsets: uniform within +- this [deg], on every joint moving the camera or a board.")
+@click.option("--length-sigma-mm", default=0.0, show_default=True, help="Spread of true link lengths [mm].")
+@click.option("--joint-noise-deg", default=0.05, show_default=True, help="Joint reading noise per log row [deg].")
+@click.option("--partial-fraction", default=0.1, show_default=True,
+              help="Extra images per chain showing the board only partly, as a fraction of --images-per-chain.")
+@click.option("--clock-offset-s", default=0.035, show_default=True,
+              help="Camera clock minus robot clock [s] (frames.csv vs joint_log.csv).")
+@click.option("--jitter-s", default=0.004, show_default=True, help="Capture time jitter [s].")
+@click.option("--log-rate-hz", default=20.0, show_default=True, help="Joint log sampling rate [Hz].")
+@click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses, the noise and the images.")
+@click.option("--overwrite", is_flag=True, help="Replace the files of an earlier run in the folder.")
+def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint_offsets_deg, length_sigma_mm,
+                                  joint_noise_deg, partial_fraction, clock_offset_s, jitter_s, log_rate_hz, seed,
+                                  overwrite):
+    """Simulate a camera self-calibration run of ROBOT: its own camera photographs a board held in a
+    hand (nao_h25) or fixed in the world (a 6R arm, camera on the flange); rendered PNG images, a
+    time-stamped joint log, the frames' capture times, the camera and the hidden truth."""
+    from ..workflows.self_calibration_simulate import simulate_self_calibration_files
+
+    if n_images < 1:
+        raise click.ClickException(f"--images-per-chain must be at least 1, got {n_images}")
+    if log_rate_hz <= 0:
+        raise click.ClickException(f"--log-rate-hz must be positive, got {log_rate_hz}")
+    chain_list = None if chains is None else tuple(c.strip() for c in chains.split(",") if c.strip())
+    try:
+        r = simulate_self_calibration_files(
+            robot, out_dir, chains=chain_list, board=board, n_images_per_chain=n_images,
+            joint_offsets_deg=joint_offsets_deg, length_sigma_mm=length_sigma_mm, joint_noise_deg=joint_noise_deg,
+            partial_fraction=partial_fraction, clock_offset_s=clock_offset_s, jitter_s=jitter_s,
+            log_rate_hz=log_rate_hz, seed=seed, overwrite=overwrite,
+            progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+    except (ValueError, KeyError, OSError, RuntimeError) as exc:
+        raise _user_error(exc) from None
+    where = "fixed in the world" if r["chains"] == ("world",) else "held by " + ", ".join(r["chains"])
+    click.echo(f"rendered {r['n_images']} images ({r['n_full']} with the full board) of {r['board']} {where} "
+               f"({r['robot']}, seed {seed})")
+    click.echo(f"wrote {out_dir}/images/, joint_log.csv, frames.csv, camera.json and truth.json")

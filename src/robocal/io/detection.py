@@ -95,12 +95,15 @@ def _checkerboard(gray, board: Board):
                                (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-3))
     pts = corners.reshape(board.rows, board.cols, 2).astype(float)
     if (board.cols + board.rows) % 2 == 1:
-        # the outer square diagonal to corner 0 is black by convention; if white, turn by 180 degrees
+        # the two squares diagonal to corner 0 are black by convention (the last corner's are white);
+        # the two squares beside it have the other colour. Diagonal brighter than beside: turn by
+        # 180 degrees. (Diagonal squares of a checkerboard share their colour: comparing the outer
+        # with the inner diagonal square tells nothing.)
         p0 = pts[0, 0]
-        outer = p0 + 0.5 * (p0 - pts[0, 1]) + 0.5 * (p0 - pts[1, 0])
-        inner = p0 + 0.5 * (pts[0, 1] - p0) + 0.5 * (pts[1, 0] - p0)
-        a, b = _sample(gray, outer), _sample(gray, inner)
-        if np.isfinite(a) and np.isfinite(b) and a > b:
+        ex, ey = 0.5 * (pts[0, 1] - p0), 0.5 * (pts[1, 0] - p0)
+        diagonal = [_sample(gray, p0 - ex - ey), _sample(gray, p0 + ex + ey)]
+        beside = [_sample(gray, p0 + ex - ey), _sample(gray, p0 - ex + ey)]
+        if np.all(np.isfinite(diagonal + beside)) and np.mean(diagonal) > np.mean(beside):
             pts = pts[::-1, ::-1]
     return pts.reshape(-1, 2), None
 
