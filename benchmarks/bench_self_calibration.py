@@ -35,7 +35,7 @@ from robocal.handeye.refine import joint_offset_names  # noqa: E402
 from robocal.handeye.self_calibration import solve_self_calibration  # noqa: E402
 from robocal.io.boards import board_image, parse_board  # noqa: E402
 from robocal.io.camera_files import write_camera_json  # noqa: E402
-from robocal.io.capture_times import write_frames, write_timed_joint_log  # noqa: E402
+from robocal.io.joint_log_files import write_frames, write_joint_log  # noqa: E402
 from robocal.io.detection import detect_board  # noqa: E402
 from robocal.io.images import read_image_gray, write_png  # noqa: E402
 from robocal.robots import load_robot  # noqa: E402
@@ -74,9 +74,9 @@ def make_set(root: Path, n_per_arm: int = 40, seed: int = 0):
     for n, Ti in zip(names, T):
         write_png(root / "images" / n, renderer.render(Ti, rng))
     t_img, t_log, pose = capture_schedule(len(q), rng)
-    write_timed_joint_log(root / "joints.csv", t_log, np.where(pose[:, None] >= 0, q[np.clip(pose, 0, None)], 0.0),
+    write_joint_log(root / "joints.csv", t_log, np.where(pose[:, None] >= 0, q[np.clip(pose, 0, None)], 0.0),
                           m.controller_joints)
-    write_frames(root / "frames.csv", names, t_img, on)
+    write_frames(root / "frames.csv", names, t_img)
     write_camera_json(root / "camera.json", CAM)
     return m, q, on, names
 
@@ -109,7 +109,7 @@ def main():
         rows = [
             ("pipeline: match + detect + solve", lambda: self_calibrate(
                 "dlr_justin19", images=root / "images", joints=root / "joints.csv", frames=root / "frames.csv",
-                board=BOARD, camera_end_effector="head", camera_file=root / "camera.json")),
+                board=BOARD, camera_end_effector="head", board_on=["left", "right"], camera_file=root / "camera.json")),
             ("detection alone (80 images)", detect),
             ("solve alone (all chains, 80 images)", lambda: solve_self_calibration(
                 m, q, uv, X, CAM, on, camera_end_effector="head")),

@@ -24,16 +24,9 @@ CAM = Camera(556.8, 556.8, 319.5, 239.5, (0.0, 0.0, 0.0, 0.0, 0.0), "brown", (64
 HANDS = ("left_hand", "right_hand")
 
 
-def _nao():
-    try:
-        return load_robot("nao_h25")
-    except Exception as exc:  # noqa: BLE001 - the robot file comes from the nao-model branch
-        pytest.skip(f"nao_h25 robot file not available in this branch ({exc}); merge nao-model")
-
-
 @pytest.fixture(scope="module")
 def nao():
-    m = _nao()
+    m = load_robot("nao_h25")
     rng = np.random.default_rng(25)
     pn = list(m.params.names)
     truth = m.params.values.copy()
@@ -91,3 +84,41 @@ def test_both_arms_together_at_least_as_accurate_as_each_arm_alone(nao):
     for res in alone.values():
         j = res.joint_offset_names.index("theta1")
         assert abs(both.joint_offsets[k] - offsets["theta1"]) < 3 * res.joint_offset_sigma[j]
+
+
+@pytest.fixture(scope="module")
+def simulated_run():
+    from robocal.sim.self_calibration import simulate_self_calibration
+
+    return simulate_self_calibration("nao_h25", n_images_per_chain=N_PER_ARM, pixel_noise=NOISE_PX,
+                                     joint_noise_deg=0.0, seed=3)
+
+
+def test_nao_model_simulator_run_end_to_end_without_rendering(simulated_run):
+    """nao-model's simulator (offsets +-3 deg, mount errors, clock offset 35 ms and jitter, partial
+    views): frames matched to the 20 Hz log by time stamp, partial views rejected, each view
+    assigned to the hand that holds the board, then the joint solve."""
+    from robocal.handeye.self_calibration import assign_carriers
+    from robocal.io.capture_times import match_capture_times
+
+    run = simulated_run
+    q, dt, why = match_capture_times(run.frame_times, run.log_times, run.log_joints, tolerance=0.06)
+    assert all(w is None for w in why)
+    uv = run.image_points.copy()
+    w, h = run.camera.image_size
+    uv[~((uv[..., 0] >= 0) & (uv[..., 0] <= w - 1) & (uv[..., 1] >= 0) & (uv[..., 1] <= h - 1))] = np.nan
+    full = np.all(np.isfinite(uv[..., 0]), axis=1)
+    assert np.array_equal(full, run.fully_visible)
+    idx = np.flatnonzero(full)
+    X = run.board.object_points()
+    on, _, reasons = assign_carriers(run.robot, q[idx], uv[idx], X, run.camera, HANDS,
+                                     camera_end_effector="camera_top")
+    assert list(on) == [run.chain_of_image[i] for i in idx] and not any(reasons)
+    res = solve_self_calibration(run.robot, q[idx], uv[idx], X, run.camera, on, camera_end_effector="camera_top",
+                                 pixel_sigma=NOISE_PX)
+    z = []
+    for r, v, s in zip(res.joint_report, res.joint_offsets, res.joint_offset_sigma):
+        if r["identifiable"]:
+            z.append((v - run.joint_offsets[r["joint"]]) / s)  # the simulator's truth is in rad
+    assert len(z) == 9 and max(abs(x) for x in z) < 3.0  # measured 1.06
+    assert abs(res.rms_px / np.sqrt(2) / NOISE_PX - 1.0) < 0.1  # measured 0.304 px

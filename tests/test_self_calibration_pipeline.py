@@ -14,7 +14,7 @@ from click.testing import CliRunner
 from robocal.cli.main import main as cli
 from robocal.io.boards import board_image, parse_board
 from robocal.io.camera_files import write_camera_json
-from robocal.io.capture_times import write_frames, write_timed_joint_log
+from robocal.io.joint_log_files import write_frames, write_joint_log
 from robocal.io.images import write_png
 from robocal.robots import load_robot
 from robocal.sim.camera_chain import camera_board_poses, capture_schedule, visible_configurations
@@ -62,21 +62,21 @@ def capture(tmp_path_factory):
         write_png(images / n, renderer.render(Ti, rng))
     t_img, t_log, pose = capture_schedule(len(q), rng)
     q_log = np.where(pose[:, None] >= 0, q[np.clip(pose, 0, None)], 0.0)
-    write_timed_joint_log(root / "joints.csv", t_log, q_log, m.controller_joints)
-    write_frames(root / "frames.csv", names, t_img, on)
+    write_joint_log(root / "joints.csv", t_log, q_log, m.controller_joints)
+    write_frames(root / "frames.csv", names, t_img)
     write_camera_json(root / "camera.json", CAM)
-    return root, offsets, names
+    return root, offsets, names, t_img, t_log, q_log
 
 
 def _run(root, *extra, joints="joints.csv", frames="frames.csv"):
     args = ["self-calibrate", "dlr_justin19", "--images", str(root / "images"), "--joints", str(root / joints),
-            "--frames", str(root / frames), "--board", BOARD, "--camera-on", "head", "--camera",
+            "--frames", str(root / frames), "--board", BOARD, "--camera-on", "head", "--board-on", "left,right", "--camera",
             str(root / "camera.json"), *extra]
     return CliRunner().invoke(cli, args)
 
 
 def test_command_recovers_offsets_from_rendered_images_and_writes_the_outputs(capture, tmp_path):
-    root, offsets, names = capture
+    root, offsets, names, *_ = capture
     r = _run(root, "--json", "--out", str(tmp_path / "out"))
     assert r.exit_code == 0, r.output
     s = json.loads(r.stdout[r.stdout.index("{"):])
@@ -92,26 +92,25 @@ def test_command_recovers_offsets_from_rendered_images_and_writes_the_outputs(ca
 
 
 def test_a_log_on_another_clock_matches_nothing(capture, tmp_path):
-    root, _, _ = capture
-    text = (root / "joints.csv").read_text().splitlines()
-    shifted = text[:3] + [",".join([f"{float(x.split(',')[0]) + 500:.4f}"] + x.split(",")[1:]) for x in text[3:]]
-    (root / "late.csv").write_text("\n".join(shifted) + "\n")
+    root, _, _, _, t_log, q_log = capture
+    write_joint_log(root / "late.csv", t_log + 500.0, q_log, load_robot("dlr_justin19").controller_joints,
+                    overwrite=True)
     r = _run(root, joints="late.csv")
     assert r.exit_code != 0
     assert "no joint reading within 0.05 s of any capture time" in r.output
 
 
 def test_a_board_never_fully_visible_is_a_clear_error(capture):
-    root, _, _ = capture
+    root, _, _, _, t_log, q_log = capture
     r = CliRunner().invoke(cli, ["self-calibrate", "dlr_justin19", "--images", str(root / "images"), "--joints",
                                  str(root / "joints.csv"), "--frames", str(root / "frames.csv"), "--board",
-                                 "checkerboard:9x7:25mm", "--camera-on", "head", "--camera", str(root / "camera.json")])
+                                 "checkerboard:9x7:25mm", "--camera-on", "head", "--board-on", "left,right", "--camera", str(root / "camera.json")])
     assert r.exit_code != 0
     assert "is not fully visible in any matched image" in r.output
 
 
 def test_an_image_of_another_size_and_an_unmatched_image_get_per_image_reasons(capture, tmp_path):
-    root, _, names = capture
+    root, _, names, t_img, *_ = capture
     alt = tmp_path / "alt"
     (alt / "images").mkdir(parents=True)
     for n in names:
@@ -119,10 +118,9 @@ def test_an_image_of_another_size_and_an_unmatched_image_get_per_image_reasons(c
     write_png(alt / "images" / names[2], np.zeros((240, 320), np.uint8), overwrite=True)
     (alt / "joints.csv").write_text((root / "joints.csv").read_text())
     (alt / "camera.json").write_text((root / "camera.json").read_text())
-    lines = (root / "frames.csv").read_text().splitlines()
-    parts = lines[6].split(",")
-    lines[6] = ",".join([parts[0], f"{float(parts[1]) + 900:.4f}", parts[2]])  # image 5 after the log ends
-    (alt / "frames.csv").write_text("\n".join(lines) + "\n")
+    late = t_img.copy()
+    late[5] += 900.0  # image 5 after the log ends
+    write_frames(alt / "frames.csv", names, late)
     r = _run(alt, "--json")
     assert r.exit_code == 0, r.output
     rows = {x["name"]: x for x in json.loads(r.stdout[r.stdout.index("{"):])["images"]}

@@ -14,21 +14,20 @@ from .camera import BOARD_HELP
 @click.argument("robot")
 @click.option("--images", required=True, type=click.Path(path_type=str), help="Folder of the images.")
 @click.option("--joints", "joints_file", required=True, type=click.Path(path_type=str),
-              help="Joint log (robocal-joint-log/1: time_s and one column per controller joint, unit in the header).")
+              help="Joint log (robocal-joint-log/1, docs/joint-log-files.md).")
 @click.option("--frames", "frames_file", required=True, type=click.Path(path_type=str),
-              help="Capture times: CSV with image,time_s[,board_on].")
+              help="Capture times of the images (robocal-frames/1: image,time_s).")
 @click.option("--board", required=True, help=BOARD_HELP)
 @click.option("--camera-on", "camera_ee", required=True, help="The end effector that carries the camera.")
-@click.option("--board-on", default=None, help="The end effector holding the board in every image, or 'world' "
-                                              "(default: the frames file's board_on column).")
+@click.option("--board-on", required=True,
+              help="The end effector holding the board, 'world' for a fixed board, or several separated by commas "
+                   "(e.g. left_hand,right_hand: each image goes to the nearest).")
 @click.option("--camera", "camera_file", default=None, type=click.Path(path_type=str),
               help="Camera intrinsics file (default: calibrated on the same images).")
 @click.option("--tolerance", type=float, default=0.05, show_default=True,
               help="Largest time difference [s] between an image and its joint reading.")
 @click.option("--match", type=click.Choice(["nearest", "interpolate"]), default="nearest", show_default=True,
               help="Take the nearest joint reading or interpolate between the two around the capture time.")
-@click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default=None,
-              help="Unit of the joint log (if its header does not say).")
 @click.option("--link-parameter", "link_parameters", multiple=True,
               help="A further robot parameter to estimate (repeatable, e.g. a2).")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics too.")
@@ -37,14 +36,15 @@ from .camera import BOARD_HELP
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, board_on, camera_file, tolerance, match,
-                   angle_unit, link_parameters, refine_intrinsics, out_dir, overwrite, as_json):
+                   link_parameters, refine_intrinsics, out_dir, overwrite, as_json):
     """Calibrate ROBOT's joint offsets from images of a board taken by its own camera."""
     from ..handeye import HandEyeError
     from ..workflows.self_calibration import self_calibrate as run
 
     try:
         s = run(robot, images=images, joints=joints_file, frames=frames_file, board=board, camera_end_effector=camera_ee,
-                camera_file=camera_file, board_on=board_on, tolerance=tolerance, match=match, angle_unit=angle_unit,
+                camera_file=camera_file, board_on=[c.strip() for c in board_on.split(",") if c.strip()],
+                tolerance=tolerance, match=match,
                 link_parameters=link_parameters, refine_intrinsics=refine_intrinsics, out_dir=out_dir,
                 overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
     except (ValueError, HandEyeError, OSError) as exc:

@@ -44,7 +44,7 @@ from .pnp import solve_pnp
 from .refine import _intrinsics_block, _pixel_sigma, mean_transform
 from .solve import solve_robot_world_hand_eye
 
-__all__ = ["SelfCalibration", "solve_self_calibration", "WORLD"]
+__all__ = ["SelfCalibration", "solve_self_calibration", "assign_carriers", "WORLD"]
 
 #: carrier name of a board fixed in the robot's base frame
 WORLD = "world"
@@ -62,7 +62,10 @@ class SelfCalibration:
     rms_px; per_image_rms_px (N,); pixel_sigma [px] used to weight corners; identifiability: the
     core's report; joint_report: one dict per candidate joint offset (name, joint, chains: the end
     effectors it moves, loops: the carriers whose images it affects, identifiable, why); converged; message; skipped {image index: reason}; variable_names,
-    values, std: every free variable of the solve.
+    values, std: every free variable of the solve; variance_factor: sqrt(weighted residual sum /
+    redundancy), 1 when the corners scatter as ``pixel_sigma`` says; above 1 the reported sigmas
+    are scaled by it (a posteriori), and above 1.5 the message says so: unmodelled effects such as
+    joint-reading noise, which moves a whole image at once, make even those sigmas too small.
     """
 
     model: object
@@ -85,6 +88,7 @@ class SelfCalibration:
     values: np.ndarray
     std: np.ndarray
     iterations: int = 0
+    variance_factor: float = float("nan")
 
 
 def _chain_parameters(model, end_effectors) -> dict:
@@ -228,7 +232,12 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
         per_image = np.sqrt(np.nanmean(np.where(ok, norms ** 2, np.nan), axis=1))
 
     offsets = params[geometry.index] - geometry.initial[geometry.index]
-    std_of = dict(zip(result.names, result.std))
+    r_after = np.asarray(result.residuals_after)
+    redundancy = max(len(r_after) - int(result.rank), 1)
+    s0 = float(np.sqrt(np.sum(r_after ** 2) / redundancy))
+    scale = max(1.0, s0)
+    std_all = np.asarray(result.std) * scale
+    std_of = dict(zip(result.names, std_all))
     sig = np.array([std_of.get(n, np.nan) for n in geometry.names])
     dropped = {d["name"]: d for d in result.identifiability.dropped}
     report = []
@@ -246,6 +255,9 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
     msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
            f"{result.iterations} iterations; {int(good.sum())} of {N} images on {len(groups)} carrier(s), "
            f"RMS {rms:.3f} px")
+    if s0 > 1.5:
+        msg += (f"; residuals {s0:.1f}x the corner noise {sigma:.3g} px: joint-reading noise or effects the model "
+                "lacks (sigmas scaled by it, still optimistic)")
     if dropped:
         msg += "; not identifiable (held): " + ", ".join(dropped)
     return SelfCalibration(
@@ -253,4 +265,51 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
         camera_mount=C, boards=boards, camera=refined, residuals_px=res_px, rms_px=rms, per_image_rms_px=per_image,
         pixel_sigma=sigma, identifiability=result.identifiability, joint_report=report,
         converged=bool(result.converged), message=msg, skipped=skipped, variable_names=tuple(result.names),
-        values=np.asarray(result.values), std=np.asarray(result.std), iterations=int(result.iterations))
+        values=np.asarray(result.values), std=std_all, iterations=int(result.iterations), variance_factor=s0)
+
+
+def assign_carriers(model, joints, image_points, target_points, camera: Camera, carriers, *,
+                    camera_end_effector: str, camera_mount=None, min_points: int = 6, max_distance_mm: float = 250.0,
+                    min_ratio: float = 1.5):
+    """Which end effector holds the board in each image, when several may: ``(names (N,) or None,
+    distances (N, C) [mm], reasons (N,) None or why no carrier was assigned)``.
+
+    The board's centre is placed by PnP and the nominal kinematics (``camera_mount`` default the
+    identity: the end effector is the camera's optical frame) and assigned to the nearest carrier
+    origin if it is within ``max_distance_mm`` and ``min_ratio`` times nearer than the next one
+    (joint offsets of a few degrees move it by tens of millimetres, the hands are further apart).
+    """
+    carriers = [str(c) for c in carriers]
+    if WORLD in carriers:
+        raise HandEyeError("a board in the world and a board in a hand cannot be told apart automatically; "
+                           "give one carrier")
+    q = np.asarray(joints, dtype=float)
+    X = np.asarray(target_points, dtype=float)
+    T_ct, _, why = solve_pnp(camera, X, np.asarray(image_points, dtype=float), min_points=min_points)
+    C0 = np.eye(4) if camera_mount is None else np.asarray(camera_mount, dtype=float)
+    ees = [model.end_effector_index(camera_end_effector)] + [model.end_effector_index(c) for c in carriers]
+    T = model.kinematics_with(q, T_world_base=np.eye(4), end_effectors=ees)[0]
+    centre = np.append(X.mean(axis=0), 1.0)
+    board_in_base = (T[:, 0] @ C0 @ T_ct @ centre)[:, :3]
+    dist = np.linalg.norm(board_in_base[:, None, :] - T[:, 1:, :3, 3], axis=2)
+    names, reasons = [], []
+    for i in range(len(q)):
+        if not np.all(np.isfinite(dist[i])):
+            names.append(None)
+            reasons.append(why[i] or "no pose of the board found in this image")
+            continue
+        order = np.argsort(dist[i])
+        near = dist[i, order[0]]
+        second = dist[i, order[1]] if len(order) > 1 else np.inf
+        if near > max_distance_mm:
+            names.append(None)
+            reasons.append(f"the board is {near:.0f} mm from the nearest carrier ({carriers[order[0]]}); more than "
+                           f"{max_distance_mm:g} mm: which end effector holds it?")
+        elif second < min_ratio * near:
+            names.append(None)
+            reasons.append(f"the board is {near:.0f} mm from {carriers[order[0]]} and {second:.0f} mm from "
+                           f"{carriers[order[1]]}: cannot tell which holds it")
+        else:
+            names.append(carriers[order[0]])
+            reasons.append(None)
+    return names, dist, reasons

@@ -1,8 +1,10 @@
 """``robocal self-calibrate``: joint offsets from a robot's own camera images (issue 15).
 
-Inputs: the robot file, an image folder, a ``robocal-joint-log/1`` joint log and a frames file
-(``image,time_s[,board_on]``, :mod:`robocal.io.capture_times`), a board spec, the camera (a camera
-file, else calibrated on the same images). Steps, no manual ones:
+Inputs: the robot file, an image folder, a ``robocal-joint-log/1`` joint log and a
+``robocal-frames/1`` frames file (:mod:`robocal.io.joint_log_files`), a board spec, the end
+effector(s) that may hold the board (several: each image is assigned to the nearest one,
+:func:`robocal.handeye.self_calibration.assign_carriers`), the camera (a camera file, else
+calibrated on the same images). Steps, no manual ones:
 
 1. every image listed in the frames file gets its joints by time stamp (``tolerance`` [s],
    ``nearest`` or ``interpolate``); unmatched images are reported with the reason;
@@ -26,9 +28,10 @@ import numpy as np
 from ..calib.outputs import json_ready
 from ..io.boards import parse_board
 from ..io.camera_files import read_camera
-from ..io.capture_times import match_capture_times, read_frames, read_timed_joint_log
+from ..io.capture_times import match_capture_times
 from ..io.detection import detect_board
 from ..io.images import read_image_gray
+from ..io.joint_log_files import read_frames, read_joint_log_file
 from ..robots import load_robot
 from ..robots.writer import save_robot
 from .camera_common import DetectedSet, identifiability_lines, overlay_figures
@@ -68,38 +71,36 @@ def _detect(paths, board, progress):
     return uv, reasons, size
 
 
-def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effector: str, camera_file=None,
-                   board_on: str | None = None, tolerance: float = 0.05, match: str = "nearest",
-                   angle_unit: str | None = None, link_parameters=(), refine_intrinsics: bool = False,
-                   out_dir=None, overwrite: bool = False, progress=None) -> dict:
+def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effector: str, board_on,
+                   camera_file=None, tolerance: float = 0.05, match: str = "nearest", link_parameters=(),
+                   refine_intrinsics: bool = False, out_dir=None, overwrite: bool = False, progress=None) -> dict:
     """Run the pipeline (module docstring); returns the JSON summary.
 
     robot: shipped name or robot file; images: folder; joints: the joint log; frames: the frames
     file; board: board spec; camera_end_effector: the end effector carrying the camera;
-    board_on: the board's carrier for every image (else the frames file's ``board_on`` column);
-    tolerance [s]; match: ``nearest`` | ``interpolate``; progress(i, n, text) per image.
+    board_on: the end effector holding the board (``"world"`` for a fixed board), or a sequence of
+    them (each image is assigned to the nearest); tolerance [s]; match: ``nearest`` | ``interpolate``; progress(i, n, text) per image.
     """
     from ..handeye.camera_calibration import calibrate_camera
-    from ..handeye.self_calibration import solve_self_calibration
+    from ..handeye.self_calibration import assign_carriers, solve_self_calibration
 
     model = load_robot(robot)
     b = parse_board(board)
     if out_dir is not None:
         check_outputs_free(out_dir, SELF_CALIBRATION_OUTPUTS, overwrite)
-    names, t_img, on = read_frames(frames)
-    if on is None:
-        if board_on is None:
-            raise ValueError(f"{frames}: no board_on column; say which end effector holds the board (--board-on)")
-        on = [board_on] * len(names)
-    elif board_on is not None:
-        on = [board_on] * len(names)
+    carriers = [board_on] if isinstance(board_on, str) else list(board_on)
+    if not carriers:
+        raise ValueError("say which end effector holds the board (--board-on; 'world' for a fixed board)")
+    fr = read_frames(frames)
+    names, t_img = list(fr.images), np.asarray(fr.times, dtype=float)
     folder = Path(images)
     if not folder.is_dir():
         raise ValueError(f"{folder}: not an image folder")
     missing = [n for n in names if not (folder / n).is_file()]
     if missing:
         raise ValueError(f"{frames}: {len(missing)} listed image(s) not in {folder}: {', '.join(missing[:5])}")
-    t_log, q_log, _ = read_timed_joint_log(joints, model.controller_joints, angle_unit)
+    log = read_joint_log_file(joints, robot=model)
+    t_log, q_log = log.times, log.joints
     q, dt, reasons = match_capture_times(t_img, t_log, q_log, tolerance=tolerance, mode=match)
     matched = [r is None for r in reasons]
     if not any(matched):
@@ -120,6 +121,14 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
     else:
         camera = calibrate_camera(uv[used], X, size, min_points=b.min_points).camera
         camera_source = "calibrated on the same images"
+    on = [carriers[0]] * len(names)
+    if len(carriers) > 1:
+        idx = np.flatnonzero(used)
+        assigned, _, why = assign_carriers(model, q[idx], uv[idx], X, camera, carriers,
+                                           camera_end_effector=camera_end_effector, min_points=b.min_points)
+        for k, i in enumerate(idx):
+            on[i], reasons[i] = (assigned[k], None) if assigned[k] else (None, why[k])
+        used = np.array([r is None for r in reasons])
     idx = np.flatnonzero(used)
     res = solve_self_calibration(model, q[idx], uv[idx], X, camera, [on[i] for i in idx],
                                  camera_end_effector=camera_end_effector, link_parameters=link_parameters,
@@ -148,6 +157,7 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
         "camera_mount": {"matrix": res.camera_mount.tolist(), "frame": camera_end_effector},
         "boards": {c: {"matrix": T.tolist(), "frame": c} for c, T in res.boards.items()},
         "reprojection_rms_px": res.rms_px, "pixel_sigma_px": res.pixel_sigma,
+        "variance_factor": res.variance_factor,
         "n_images": len(names), "n_images_used": int(used.sum() - len(res.skipped)),
         "converged": res.converged, "message": res.message,
         "identifiability": identifiability_lines(res.identifiability), "images": rows,

@@ -23,7 +23,7 @@ __all__ = ["TIME_COLUMNS", "TIME_KINDS", "parse_time", "time_cell", "time_column
 
 TIME_KINDS = ("seconds", "datetime", "clock")
 #: Accepted names (lower case, unit removed) of a time-stamp column.
-TIME_COLUMNS = ("time", "time_s", "timestamp", "time stamp", "date/time", "datetime", "date time", "zeit", "zeitstempel")
+TIME_COLUMNS = ("time", "timestamp", "time stamp", "date/time", "datetime", "date time", "zeit", "zeitstempel")
 _FRACTION = r"(?:[.,]\d+)?"
 _ISO = re.compile(rf"^\d{{4}}-\d{{2}}-\d{{2}}[T ]\d{{2}}:\d{{2}}(?::\d{{2}}{_FRACTION})?(?:Z|[+-]\d{{2}}:?\d{{2}})?$")
 _GERMAN = re.compile(rf"^(\d{{1,2}})\.(\d{{1,2}})\.(\d{{4}})[ T]+(\d{{1,2}}:\d{{2}}(?::\d{{2}}{_FRACTION})?)$")
