@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calib import Problem, solve
-from ..calib.blocks import FramesBlock, RobotGeometry
+from ..calib.blocks import FramesBlock, GaussianPrior, RobotGeometry, VectorBlock
 from ..calib.residuals import FlangeReprojectionResidual
 from ..calib.solve import NotConvergedWarning
 from ..camera import Camera
@@ -112,10 +112,27 @@ def _offset_candidates(model) -> list:
     return out
 
 
+def _correctable_joints(model, geometry) -> tuple:
+    """(controller columns, positions in ``geometry``'s variables) of the joints whose reading
+    drives exactly one model joint with factor 1 and whose offset the block holds."""
+    cols, pos = [], []
+    names = list(geometry.names)
+    for c in range(model.n_joints):
+        rows = np.flatnonzero(model.coupling[:, c])
+        if len(rows) != 1 or model.coupling[rows[0], c] != 1.0 or np.count_nonzero(model.coupling[rows[0]]) != 1:
+            continue
+        k = int(model.moving[rows[0]])
+        for _code, pname, moves in link_operations(model.links[k]):
+            if moves and f"{pname}{k + 1}" in names:
+                cols.append(c)
+                pos.append(names.index(f"{pname}{k + 1}"))
+    return np.array(cols, dtype=int), np.array(pos, dtype=int)
+
+
 def solve_self_calibration(model, joints, image_points, target_points, camera: Camera, carriers, *,
                            camera_end_effector: str, camera_mount=None, link_parameters=(),
                            refine_intrinsics=False, pixel_sigma: float | None = None,
-                           min_points: int = 6) -> SelfCalibration:
+                           min_points: int = 6, joint_noise_deg: float | None = None) -> SelfCalibration:
     """Joint offsets of every chain involved, the camera mount and the board transforms from images.
 
     model: a :class:`~robocal.kinematics.model.RobotModel` (a tree is fine); joints (N, n) [rad |
@@ -126,7 +143,10 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
     nominal T_ee_camera (default: the identity or Shah's AX = ZB, whichever fits better); link_parameters: further
     parameter names of the model to estimate (e.g. ``["a2", "d4"]``); refine_intrinsics: as
     :func:`~robocal.handeye.refine.refine_hand_eye`; pixel_sigma [px]: the corner noise (default:
-    from the PnP residuals).
+    from the PnP residuals); joint_noise_deg: 1-sigma of each joint reading [deg]: every image gets
+    a correction of each joint of the chains involved with that Gaussian prior (errors in
+    variables; a reading's noise moves a whole image at once, which corner weights alone cannot
+    describe); ``None``: readings exact.
 
     Raises :class:`HandEyeError` naming the problem (counts that differ, unknown end effectors,
     fewer than 3 usable images of a carrier, joints that look like degrees).
@@ -188,16 +208,30 @@ def solve_self_calibration(model, joints, image_points, target_points, camera: C
     cam = _intrinsics_block(camera, refine_intrinsics)
     sigma = float(pixel_sigma) if pixel_sigma is not None else _pixel_sigma(uv_all[good], T_ct[good], camera, X)
 
+    corrections = {}
+    if joint_noise_deg is not None:
+        if not joint_noise_deg > 0:
+            raise HandEyeError(f"joint_noise_deg: expected a positive number, got {joint_noise_deg!r}")
+        cols, pos = _correctable_joints(model, geometry)
+        for c, idx in groups.items():
+            names_c = [f"dq_{c}{i}.{model.controller_joints[j]}" for i in range(len(idx)) for j in cols]
+            corrections[c] = (VectorBlock(f"dq_{c}", names_c, ["rad"] * len(names_c), np.zeros((len(idx), len(cols))),
+                                          prior=GaussianPrior(np.radians(joint_noise_deg)), group="corrections"),
+                              dict(correction_columns=cols, correction_params=pos))
+
     def build(C0):
         mount = FramesBlock("camera_mount", C0, group="base")
         boards = {c: FramesBlock(f"board_{c}", T, group="targets") for c, T in boards_for(C0).items()}
         residuals = []
         for c, idx in groups.items():
             kw = dict(target_end_effector=c) if c != WORLD else {}
+            if c in corrections:
+                kw.update(joint_corrections=corrections[c][0], **corrections[c][1])
             residuals.append(FlangeReprojectionResidual(cam, mount, boards[c], uv_all[idx], X, model=model,
                                                         q=q_all[idx], geometry=geometry, end_effector=cam_ee,
                                                         invert=True, sigma=sigma, **kw))
-        problem = Problem([cam, mount, *boards.values(), geometry], residuals)
+        problem = Problem([cam, mount, *boards.values(), geometry, *(b for b, _ in corrections.values())],
+                          residuals)
         r = problem.evaluate(problem.initial_state(), jacobian=False)[0]
         cost = float(np.mean(r ** 2)) if np.all(np.isfinite(r)) else np.inf
         return cost, problem

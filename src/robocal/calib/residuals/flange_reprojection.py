@@ -14,6 +14,11 @@ Gaussian prior it models the robot's pose noise, the errors-in-variables form of
   self-calibration, METHODS.md section 3): ``M_i = A_i^-1 B_i`` with ``A_i`` the camera's end
   effector and ``B_i`` the target's, both from forward kinematics with the same geometry block, so
   the joints of both chains (and those they share) are in the loop: ``p_camera = C^-1 A_i^-1 B_i T X``.
+  Optionally (``joint_corrections``, a VectorBlock (N, k) with a Gaussian prior) each image's
+  joint readings get corrections (errors in variables for joint-reading noise): the kinematics
+  use ``q_i + dq_i`` on the controller columns ``correction_columns``; the derivative w.r.t.
+  ``dq_i[j]`` is that image's column of the joint's offset parameter (``correction_params``, its
+  position in the geometry block), since an offset adds to the joint angle.
 
 Derivatives (frames left-perturbed, ``F <- [exp(w) | v] F`` with the spatial twist ``xi`` of the
 end effector from :meth:`~robocal.kinematics.model.RobotModel.kinematics_with`; ``y = T X``):
@@ -57,7 +62,8 @@ class FlangeReprojectionResidual(ReprojectionResidual):
 
     def __init__(self, camera, camera_poses, target_poses, image_points, target_points, *, model=None, q=None,
                  geometry=None, flange_poses=None, corrections=None, end_effector=None, invert: bool = True,
-                 camera_index=None, target_index=None, sigma: float | None = None, target_end_effector=None):
+                 camera_index=None, target_index=None, sigma: float | None = None, target_end_effector=None,
+                 joint_corrections=None, correction_columns=None, correction_params=None):
         super().__init__(camera, camera_poses, target_poses, image_points, target_points,
                          camera_index=camera_index, target_index=target_index, sigma=sigma)
         N = len(self.image_points)
@@ -77,10 +83,20 @@ class FlangeReprojectionResidual(ReprojectionResidual):
                     raise ProblemError("flange reprojection: a target on an end effector needs the camera on the "
                                        "robot (invert=True) and no per-image corrections")
                 self.target_ee = model.end_effector_index(target_end_effector)
+            self.joint_corrections = joint_corrections
+            if joint_corrections is not None:
+                self.correction_columns = np.asarray(correction_columns, dtype=int)
+                self.correction_params = np.asarray(correction_params, dtype=int)
+                k = len(self.correction_columns)
+                if joint_corrections.initial.shape != (N, k) or self.correction_params.shape != (k,):
+                    raise ProblemError(f"flange reprojection: joint corrections must be ({N}, {k}) with {k} "
+                                       "columns and parameters")
+                extra += (joint_corrections,)
         else:
             F = np.asarray(flange_poses, dtype=float) if flange_poses is not None else None
-            if target_end_effector is not None:
-                raise ProblemError("flange reprojection: target_end_effector needs a robot model")
+            if target_end_effector is not None or joint_corrections is not None:
+                raise ProblemError("flange reprojection: target_end_effector and joint corrections need a robot model")
+            self.joint_corrections = None
             self.target_ee = None
             if F is None or F.shape != (N, 4, 4):
                 raise ProblemError(f"flange reprojection: flange_poses must be ({N}, 4, 4) without a robot model")
@@ -103,7 +119,11 @@ class FlangeReprojectionResidual(ReprojectionResidual):
         target's, (N, 4, 4) and (N, 6, k), computed once per evaluation."""
         def compute(ev):
             ees = [self.ee] if self.target_ee is None else [self.ee, self.target_ee]
-            T, ptw, _, masks = self.model.kinematics_with(self.q, ev[self.geometry], T_world_base=np.eye(4),
+            q = self.q
+            if self.joint_corrections is not None:
+                q = q.copy()
+                q[:, self.correction_columns] += ev[self.joint_corrections]
+            T, ptw, _, masks = self.model.kinematics_with(q, ev[self.geometry], T_world_base=np.eye(4),
                                                           end_effectors=ees)
             tw = [(ptw * m)[:, :, self.geometry.index] for m in masks]
             if self.target_ee is None:
@@ -126,16 +146,25 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             return r, jac
         RCt = np.swapaxes(RC, 1, 2)
         w = self.weight
-        if self.model is not None and self.target_ee is not None and ev.wants(self.geometry):
+        wants_dq = self.model is not None and self.joint_corrections is not None and ev.wants(self.joint_corrections)
+        Jg = None
+        if self.model is not None and self.target_ee is not None and (ev.wants(self.geometry) or wants_dq):
             A, xi_a, B, xi_b = self._kinematics(ev)
             Bi = B[img]
             z = np.einsum("nij,nj->ni", Bi[:, :3, :3], y) + Bi[:, :3, 3]
             dp = (RCt @ np.swapaxes(A[img][:, :3, :3], 1, 2)) @ _frame_rows(z)
-            jac[self.geometry] = (d_point @ dp @ (xi_b[img] - xi_a[img])).reshape(len(r), -1) * w
-        elif self.model is not None and ev.wants(self.geometry):
+            Jg = d_point @ dp @ (xi_b[img] - xi_a[img])
+        elif self.model is not None and (ev.wants(self.geometry) or wants_dq):
             xi = self._flange(ev)[1][img]  # (n, 6, k)
             dp = -(RCt @ RM) @ _frame_rows(y) if self.invert else RCt @ _frame_rows(q)
-            jac[self.geometry] = (d_point @ dp @ xi).reshape(len(r), -1) * w
+            Jg = d_point @ dp @ xi
+        if Jg is not None and ev.wants(self.geometry):
+            jac[self.geometry] = Jg.reshape(len(r), -1) * w
+        if Jg is not None and wants_dq:
+            N, k = self.joint_corrections.initial.shape
+            J = np.zeros((len(p), 2, N, k))
+            J[np.arange(len(p)), :, img, :] = Jg[:, :, self.correction_params]
+            jac[self.joint_corrections] = J.reshape(len(r), -1) * w
         if self.corrections is not None and ev.wants(self.corrections):
             F = self._flange(ev)[0][img]
             E = ev[self.corrections][img]
@@ -209,5 +238,12 @@ class FlangeReprojectionResidual(ReprojectionResidual):
         T_ct = example_frames(rng, N)
         T_ct[:, :3, 3] = np.column_stack([rng.normal(0, 40, (N, 2)), rng.uniform(400, 700, N)])
         C = invert_transforms(F[:, 0]) @ F[:, 1] @ T @ invert_transforms(T_ct)  # one camera frame per image, in view
+        from ..blocks import GaussianPrior, VectorBlock
+
+        dq = VectorBlock("dq", [f"dq{i}.{j}" for i in range(N) for j in range(2)], ["rad"] * (2 * N),
+                         rng.normal(0, 0.01, (N, 2)), prior=GaussianPrior(0.01, np.zeros((N, 2))))
+        params = [model.params.names.index(f"theta{j}") for j in (3, 4)]
         return cls(cam, FramesBlock("camera", C), FramesBlock("target", T), uv, X, camera_index=np.arange(N),
-                   model=model, q=q, geometry=geometry, end_effector="side", target_end_effector="flange", sigma=0.3)
+                   model=model, q=q, geometry=geometry, end_effector="side", target_end_effector="flange", sigma=0.3,
+                   joint_corrections=dq, correction_columns=[2, 3],
+                   correction_params=[list(geometry.index).index(i) for i in params])
