@@ -89,6 +89,18 @@ def test_command_recovers_offsets_from_rendered_images_and_writes_the_outputs(ca
     for f in ("robot.toml", "self_calibration.json", "report.html"):
         assert (tmp_path / "out" / f).is_file()
     assert "<svg" in (tmp_path / "out" / "report.html").read_text()
+    # the images went to the hand that holds the board (frames 0-3 left, 4-7 right)
+    assert [r["board_on"] for r in s["images"]] == ["left"] * 4 + ["right"] * 4
+
+
+def test_command_with_per_image_joint_corrections(capture):
+    root, offsets, *_ = capture
+    r = _run(root, "--json", "--joint-noise-deg", "0.01")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout[r.stdout.index("{"):])
+    got = {j["name"]: j for j in s["joint_offsets"]}
+    for n, v in offsets.items():
+        assert abs(got[n]["value"] - v) < max(4 * got[n]["sigma"], np.radians(0.05)), n
 
 
 def test_a_log_on_another_clock_matches_nothing(capture, tmp_path):

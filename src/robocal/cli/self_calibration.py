@@ -31,12 +31,14 @@ from .camera import BOARD_HELP
 @click.option("--link-parameter", "link_parameters", multiple=True,
               help="A further robot parameter to estimate (repeatable, e.g. a2).")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics too.")
+@click.option("--joint-noise-deg", type=float, default=None,
+              help="1-sigma of a joint reading [deg]: per-image joint corrections (errors in variables).")
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Folder for robot.toml, self_calibration.json, report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, board_on, camera_file, tolerance, match,
-                   link_parameters, refine_intrinsics, out_dir, overwrite, as_json):
+                   link_parameters, refine_intrinsics, joint_noise_deg, out_dir, overwrite, as_json):
     """Calibrate ROBOT's joint offsets from images of a board taken by its own camera."""
     from ..handeye import HandEyeError
     from ..workflows.self_calibration import self_calibrate as run
@@ -45,7 +47,8 @@ def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, bo
         s = run(robot, images=images, joints=joints_file, frames=frames_file, board=board, camera_end_effector=camera_ee,
                 camera_file=camera_file, board_on=[c.strip() for c in board_on.split(",") if c.strip()],
                 tolerance=tolerance, match=match,
-                link_parameters=link_parameters, refine_intrinsics=refine_intrinsics, out_dir=out_dir,
+                link_parameters=link_parameters, refine_intrinsics=refine_intrinsics,
+                joint_noise_deg=joint_noise_deg, out_dir=out_dir,
                 overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None

@@ -73,7 +73,8 @@ def _detect(paths, board, progress):
 
 def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effector: str, board_on,
                    camera_file=None, tolerance: float = 0.05, match: str = "nearest", link_parameters=(),
-                   refine_intrinsics: bool = False, out_dir=None, overwrite: bool = False, progress=None) -> dict:
+                   refine_intrinsics: bool = False, joint_noise_deg: float | None = None, out_dir=None,
+                   overwrite: bool = False, progress=None) -> dict:
     """Run the pipeline (module docstring); returns the JSON summary.
 
     robot: shipped name or robot file; images: folder; joints: the joint log; frames: the frames
@@ -132,7 +133,8 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
     idx = np.flatnonzero(used)
     res = solve_self_calibration(model, q[idx], uv[idx], X, camera, [on[i] for i in idx],
                                  camera_end_effector=camera_end_effector, link_parameters=link_parameters,
-                                 refine_intrinsics=refine_intrinsics, min_points=b.min_points)
+                                 refine_intrinsics=refine_intrinsics, min_points=b.min_points,
+                                 joint_noise_deg=joint_noise_deg)
     res_px = np.full_like(uv, np.nan)
     res_px[idx] = res.residuals_px
     for k, r in res.skipped.items():
@@ -157,7 +159,7 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
         "camera_mount": {"matrix": res.camera_mount.tolist(), "frame": camera_end_effector},
         "boards": {c: {"matrix": T.tolist(), "frame": c} for c, T in res.boards.items()},
         "reprojection_rms_px": res.rms_px, "pixel_sigma_px": res.pixel_sigma,
-        "variance_factor": res.variance_factor,
+        "variance_factor": res.variance_factor, "joint_noise_deg": joint_noise_deg,
         "n_images": len(names), "n_images_used": int(used.sum() - len(res.skipped)),
         "converged": res.converged, "message": res.message,
         "identifiability": identifiability_lines(res.identifiability), "images": rows,
