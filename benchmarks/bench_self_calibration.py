@@ -11,7 +11,11 @@ process, one BLAS thread, median of ``--runs``):
 * the solve alone (``handeye.self_calibration.solve_self_calibration`` on the detected corners);
 * for scale, OpenCV ``calibrateCamera`` on the same corners (intrinsics only, no kinematics).
 
-Run: ``python benchmarks/bench_self_calibration.py [--runs 3]``.
+With ``--nao`` the data are nao-model's simulated NAO run instead (``sim.self_calibration``: 40 views
+per hand + 8 partial ones, 1280x960, 0.05 deg joint-reading noise, rendered), the pipeline with
+``--board-on left_hand,right_hand`` (automatic hand assignment) and joint corrections.
+
+Run: ``python benchmarks/bench_self_calibration.py [--runs 3] [--nao]``.
 """
 
 from __future__ import annotations
@@ -94,7 +98,10 @@ def timed(fn, runs):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--nao", action="store_true", help="nao-model's simulated NAO run instead of Justin")
     args = ap.parse_args()
+    if args.nao:
+        return main_nao(args.runs)
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         m, q, on, names = make_set(root)
@@ -121,6 +128,40 @@ def main():
     print(f"{'row':40s} {'median s':>9s} {'/ OpenCV calibrateCamera':>25s}")
     for name, t in times.items():
         print(f"{name:40s} {t:9.3f} {t / ref:25.2f}")
+
+
+def main_nao(runs):
+    from robocal.sim.self_calibration import simulate_self_calibration
+
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        run = simulate_self_calibration("nao_h25", n_images_per_chain=40, seed=0, out_dir=root)
+        b = run.board
+        paths = [root / "images" / n for n in run.images]
+
+        def pipeline():
+            return self_calibrate("nao_h25", images=root / "images", joints=root / "joint_log.csv",
+                                  frames=root / "frames.csv", board=b.spec, camera_end_effector="camera_top",
+                                  board_on=["left_hand", "right_hand"], camera_file=root / "camera.json",
+                                  joint_noise_deg=0.05)
+
+        s = pipeline()
+        print(f"NAO: {s['n_images']} images, {s['n_images_used']} used, RMS {s['reprojection_rms_px']:.3f} px, "
+              f"{s['message'][:120]}")
+        times = {
+            "pipeline: match + detect + assign + solve": timed(pipeline, runs),
+            "detection alone": timed(lambda: [detect_board(read_image_gray(p), b) for p in paths], runs),
+        }
+        uv = np.array([detect_board(read_image_gray(p), b).image_points for p in paths])
+        full = np.all(np.isfinite(uv[..., 0]), axis=1)
+        X = b.object_points()
+        times["OpenCV calibrateCamera, same corners"] = timed(lambda: cv2.calibrateCamera(
+            [X.astype(np.float32)] * int(full.sum()), [u.astype(np.float32) for u in uv[full]], run.camera.image_size,
+            None, None), runs)
+    ref = times["OpenCV calibrateCamera, same corners"]
+    print(f"{'row':45s} {'median s':>9s} {'/ OpenCV calibrateCamera':>25s}")
+    for name, t in times.items():
+        print(f"{name:45s} {t:9.3f} {t / ref:25.2f}")
 
 
 if __name__ == "__main__":
