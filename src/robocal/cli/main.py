@@ -41,6 +41,8 @@ _COMMANDS = {
     "plan-poses": ("plan", "plan_poses_cmd", "Measurement poses for a calibration, with the predicted sigma.", None),
     "camera": ("camera", "camera", "Camera intrinsics and distortion from images of a board.", None),
     "handeye": ("handeye", "handeye", "Hand-eye calibration of a camera on the flange or in the cell.", None),
+    "self-calibrate": ("self_calibration", "self_calibrate", "Joint offsets from the robot's own camera images.",
+                       None),
     "closed-chain": ("closed_chain", "closed_chain", "Calibration with a laser spot held on plate targets.", None),
     "fleet": ("fleet", "fleet", "Many robots at once on Dask: calibrate, studies, status.", None),
     "datasets": ("datasets", "datasets", "The real data sets: list them, rerun their protocols.", None),

@@ -9,7 +9,16 @@ FramesBlock near the identity, in the flange frame: the true flange pose is ``F_
 Gaussian prior it models the robot's pose noise, the errors-in-variables form of the problem):
 
 * eye-in-hand (``invert=True``): ``M_i = (F_i E_i)^-1``, ``p_camera = C^-1 E_i^-1 F_i^-1 T X``;
-* eye-to-hand (``invert=False``): ``M_i = F_i E_i``, ``p_camera = C^-1 F_i E_i T X``.
+* eye-to-hand (``invert=False``): ``M_i = F_i E_i``, ``p_camera = C^-1 F_i E_i T X``;
+* camera and target on two end effectors of one robot (``target_end_effector``; issue 15, camera
+  self-calibration, METHODS.md section 3): ``M_i = A_i^-1 B_i`` with ``A_i`` the camera's end
+  effector and ``B_i`` the target's, both from forward kinematics with the same geometry block, so
+  the joints of both chains (and those they share) are in the loop: ``p_camera = C^-1 A_i^-1 B_i T X``.
+  Optionally (``joint_corrections``, a VectorBlock (N, k) with a Gaussian prior) each image's
+  joint readings get corrections (errors in variables for joint-reading noise): the kinematics
+  use ``q_i + dq_i`` on the controller columns ``correction_columns``; the derivative w.r.t.
+  ``dq_i[j]`` is that image's column of the joint's offset parameter (``correction_params``, its
+  position in the geometry block), since an offset adds to the joint angle.
 
 Derivatives (frames left-perturbed, ``F <- [exp(w) | v] F`` with the spatial twist ``xi`` of the
 end effector from :meth:`~robocal.kinematics.model.RobotModel.kinematics_with`; ``y = T X``):
@@ -17,7 +26,10 @@ end effector from :meth:`~robocal.kinematics.model.RobotModel.kinematics_with`; 
 * geometry, eye-to-hand: ``q = M_i y`` moves by ``-[q]x w + v``, ``dp = R_C^T (-[q]x w + v)``;
   eye-in-hand: ``dp = -R_C^T R_M (-[y]x w + v)``;
 * correction, eye-to-hand: ``E y`` moves by ``-[E y]x w + v`` in the flange, ``dp = R_C^T R_F (...)``;
-  eye-in-hand: with ``g = F^-1 y``, ``dp = -R_C^T R_E^T (-[g]x w + v)``.
+  eye-in-hand: with ``g = F^-1 y``, ``dp = -R_C^T R_E^T (-[g]x w + v)``;
+* geometry, two end effectors: with ``z = B_i y`` (base frame) and the spatial twists ``xi_A``,
+  ``xi_B`` of the two end effectors, ``dp = R_C^T R_A^T [-[z]x | I] (xi_B - xi_A)`` -- a joint on
+  the path to both (a shared torso joint) moves both frames alike and cancels.
 """
 
 from __future__ import annotations
@@ -43,12 +55,15 @@ class FlangeReprojectionResidual(ReprojectionResidual):
     :class:`~robocal.calib.blocks.RobotGeometry` on the model; ``end_effector`` names the frame,
     default the model's first) or ``flange_poses`` (N, 4, 4) [mm] fixed; ``corrections``: an
     optional FramesBlock of N per-image flange corrections; ``invert``: eye-in-hand. Other
-    arguments as :class:`ReprojectionResidual` (no ``links``).
+    arguments as :class:`ReprojectionResidual` (no ``links``). ``target_end_effector``: the end
+    effector that carries the target (``T`` is then the target in that end effector's frame and
+    ``end_effector`` the one that carries the camera, ``invert`` must be True, no corrections).
     """
 
     def __init__(self, camera, camera_poses, target_poses, image_points, target_points, *, model=None, q=None,
                  geometry=None, flange_poses=None, corrections=None, end_effector=None, invert: bool = True,
-                 camera_index=None, target_index=None, sigma: float | None = None):
+                 camera_index=None, target_index=None, sigma: float | None = None, target_end_effector=None,
+                 joint_corrections=None, correction_columns=None, correction_params=None):
         super().__init__(camera, camera_poses, target_poses, image_points, target_points,
                          camera_index=camera_index, target_index=target_index, sigma=sigma)
         N = len(self.image_points)
@@ -62,8 +77,27 @@ class FlangeReprojectionResidual(ReprojectionResidual):
                 raise ProblemError(f"flange reprojection: {len(self.q)} joint rows for {N} images")
             self.ee = model.end_effector_index(end_effector)
             extra += (geometry,)
+            self.target_ee = None
+            if target_end_effector is not None:
+                if not invert or corrections is not None:
+                    raise ProblemError("flange reprojection: a target on an end effector needs the camera on the "
+                                       "robot (invert=True) and no per-image corrections")
+                self.target_ee = model.end_effector_index(target_end_effector)
+            self.joint_corrections = joint_corrections
+            if joint_corrections is not None:
+                self.correction_columns = np.asarray(correction_columns, dtype=int)
+                self.correction_params = np.asarray(correction_params, dtype=int)
+                k = len(self.correction_columns)
+                if joint_corrections.initial.shape != (N, k) or self.correction_params.shape != (k,):
+                    raise ProblemError(f"flange reprojection: joint corrections must be ({N}, {k}) with {k} "
+                                       "columns and parameters")
+                extra += (joint_corrections,)
         else:
             F = np.asarray(flange_poses, dtype=float) if flange_poses is not None else None
+            if target_end_effector is not None or joint_corrections is not None:
+                raise ProblemError("flange reprojection: target_end_effector and joint corrections need a robot model")
+            self.joint_corrections = None
+            self.target_ee = None
             if F is None or F.shape != (N, 4, 4):
                 raise ProblemError(f"flange reprojection: flange_poses must be ({N}, 4, 4) without a robot model")
             self.flange_poses = F
@@ -78,13 +112,29 @@ class FlangeReprojectionResidual(ReprojectionResidual):
         if self.model is None:
             return self.flange_poses, None
 
+        return self._kinematics(ev)[:2]
+
+    def _kinematics(self, ev):
+        """(A, twists of A, B or None, twists of B or None): the camera's end effector and the
+        target's, (N, 4, 4) and (N, 6, k), computed once per evaluation."""
         def compute(ev):
-            T, ptw, _, masks = self.model.kinematics_with(self.q, ev[self.geometry], T_world_base=np.eye(4),
-                                                          end_effectors=[self.ee])
-            return T[:, 0], (ptw * masks[0])[:, :, self.geometry.index]
+            ees = [self.ee] if self.target_ee is None else [self.ee, self.target_ee]
+            q = self.q
+            if self.joint_corrections is not None:
+                q = q.copy()
+                q[:, self.correction_columns] += ev[self.joint_corrections]
+            T, ptw, _, masks = self.model.kinematics_with(q, ev[self.geometry], T_world_base=np.eye(4),
+                                                          end_effectors=ees)
+            tw = [(ptw * m)[:, :, self.geometry.index] for m in masks]
+            if self.target_ee is None:
+                return T[:, 0], tw[0], None, None
+            return T[:, 0], tw[0], T[:, 1], tw[1]
         return ev.shared((self, "kinematics"), compute)
 
     def _links(self, ev):
+        if self.target_ee is not None:
+            A, _, B, _ = self._kinematics(ev)
+            return invert_transforms(A) @ B
         F = self._flange(ev)[0]
         if self.corrections is not None:
             F = F @ ev[self.corrections]
@@ -96,10 +146,25 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             return r, jac
         RCt = np.swapaxes(RC, 1, 2)
         w = self.weight
-        if self.model is not None and ev.wants(self.geometry):
+        wants_dq = self.model is not None and self.joint_corrections is not None and ev.wants(self.joint_corrections)
+        Jg = None
+        if self.model is not None and self.target_ee is not None and (ev.wants(self.geometry) or wants_dq):
+            A, xi_a, B, xi_b = self._kinematics(ev)
+            Bi = B[img]
+            z = np.einsum("nij,nj->ni", Bi[:, :3, :3], y) + Bi[:, :3, 3]
+            dp = (RCt @ np.swapaxes(A[img][:, :3, :3], 1, 2)) @ _frame_rows(z)
+            Jg = d_point @ dp @ (xi_b[img] - xi_a[img])
+        elif self.model is not None and (ev.wants(self.geometry) or wants_dq):
             xi = self._flange(ev)[1][img]  # (n, 6, k)
             dp = -(RCt @ RM) @ _frame_rows(y) if self.invert else RCt @ _frame_rows(q)
-            jac[self.geometry] = (d_point @ dp @ xi).reshape(len(r), -1) * w
+            Jg = d_point @ dp @ xi
+        if Jg is not None and ev.wants(self.geometry):
+            jac[self.geometry] = Jg.reshape(len(r), -1) * w
+        if Jg is not None and wants_dq:
+            N, k = self.joint_corrections.initial.shape
+            J = np.zeros((len(p), 2, N, k))
+            J[np.arange(len(p)), :, img, :] = Jg[:, :, self.correction_params]
+            jac[self.joint_corrections] = J.reshape(len(r), -1) * w
         if self.corrections is not None and ev.wants(self.corrections):
             F = self._flange(ev)[0][img]
             E = ev[self.corrections][img]
@@ -118,7 +183,8 @@ class FlangeReprojectionResidual(ReprojectionResidual):
     @classmethod
     def example(cls, rng):
         """On the 4-joint example robot (eye-in-hand and eye-to-hand, every parameter and a
-        correction per image free) and with fixed flange poses and corrections."""
+        correction per image free) and with fixed flange poses and corrections; and a camera and a
+        target on two end effectors of one robot."""
         from ..blocks import CameraIntrinsics, FramesBlock, RobotGeometry
         from .examples import example_frames, example_robot
 
@@ -147,4 +213,37 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             kw = dict(model=model, q=q, geometry=geometry) if robot else dict(flange_poses=F)
             out.append(cls(cam, FramesBlock("camera", C), FramesBlock("target", T), uv, X, invert=invert,
                            corrections=FramesBlock("corrections", E), target_index=np.arange(N), sigma=0.3, **kw))
+        out.append(cls._two_end_effector_example(rng))
         return out
+
+    @classmethod
+    def _two_end_effector_example(cls, rng):
+        """Camera on the example robot's ``side`` end effector, target on its ``flange``."""
+        from ..blocks import CameraIntrinsics, FramesBlock, RobotGeometry
+        from .examples import example_frames, example_robot
+
+        grid = np.stack(np.meshgrid(np.arange(4.0), np.arange(3.0)), -1).reshape(-1, 2) * 30.0
+        X = np.column_stack([grid - 45.0, np.zeros(len(grid))])
+        N = 4
+        model = example_robot(rng)
+        q = rng.uniform(-1.0, 1.0, (N, model.n_joints))
+        geometry = RobotGeometry(model)
+        cam = CameraIntrinsics(rng.uniform([900, 900, 600, 450], [1100, 1100, 700, 550]),
+                               rng.normal(0, [0.1, 0.05, 0.002, 0.002, 0.02]))
+        uv = np.full((N, len(X), 2), 500.0) + rng.normal(0, 50, (N, len(X), 2))
+        uv[1, 3] = np.nan
+        T = example_frames(rng, 1)
+        T[0, :3, 3] = rng.normal(0, 30, 3)
+        F = model.kinematics_with(q, geometry.initial, T_world_base=np.eye(4), end_effectors=[1, 0])[0]
+        T_ct = example_frames(rng, N)
+        T_ct[:, :3, 3] = np.column_stack([rng.normal(0, 40, (N, 2)), rng.uniform(400, 700, N)])
+        C = invert_transforms(F[:, 0]) @ F[:, 1] @ T @ invert_transforms(T_ct)  # one camera frame per image, in view
+        from ..blocks import GaussianPrior, VectorBlock
+
+        dq = VectorBlock("dq", [f"dq{i}.{j}" for i in range(N) for j in range(2)], ["rad"] * (2 * N),
+                         rng.normal(0, 0.01, (N, 2)), prior=GaussianPrior(0.01, np.zeros((N, 2))))
+        params = [model.params.names.index(f"theta{j}") for j in (3, 4)]
+        return cls(cam, FramesBlock("camera", C), FramesBlock("target", T), uv, X, camera_index=np.arange(N),
+                   model=model, q=q, geometry=geometry, end_effector="side", target_end_effector="flange", sigma=0.3,
+                   joint_corrections=dq, correction_columns=[2, 3],
+                   correction_params=[list(geometry.index).index(i) for i in params])

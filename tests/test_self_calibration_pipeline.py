@@ -1,0 +1,141 @@
+"""The self-calibration pipeline from files (issue 15): rendered head-camera images of a board in
+each hand of the DLR Justin tree, a time-stamped joint log on another clock, a frames file; the
+command's outputs and its bad-input handling (no matching time stamps, board never fully visible,
+an image of another size)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from robocal.cli.main import main as cli
+from robocal.io.boards import board_image, parse_board
+from robocal.io.camera_files import write_camera_json
+from robocal.io.joint_log_files import write_frames, write_joint_log
+from robocal.io.images import write_png
+from robocal.robots import load_robot
+from robocal.sim.camera_chain import camera_board_poses, capture_schedule, visible_configurations
+from robocal.camera import Camera
+from robocal.sim.camera_render import BoardRenderer
+from robocal.transforms import so3_exp, transforms_from
+
+CAM = Camera(800.0, 800.0, 319.5, 239.5, (-0.1, 0.05, 0.0, 0.0, 0.0), "brown", (640, 480))
+BOARDS = {"left": transforms_from(so3_exp(np.array([0.1, -0.2, 0.3])), np.array([10.0, 20.0, 120.0])),
+          "right": transforms_from(so3_exp(np.array([-0.2, 0.1, 2.0])), np.array([-15.0, 5.0, 110.0]))}
+MOUNT = transforms_from(so3_exp(np.array([0.01, -0.02, 0.015])), np.array([3.0, -2.0, 5.0]))
+
+
+BOARD = "checkerboard:7x4:25mm"
+N_PER_ARM = 4
+
+
+@pytest.fixture(scope="module")
+def capture(tmp_path_factory):
+    root = tmp_path_factory.mktemp("selfcal")
+    m = load_robot("dlr_justin19")
+    rng = np.random.default_rng(7)
+    offsets = {"theta23": np.radians(1.5), "theta15": np.radians(-2.0), "theta7": np.radians(1.0)}
+    truth = m.params.values.copy()
+    for n, v in offsets.items():
+        truth[m.params.names.index(n)] += v
+    true_model = m.with_params(truth)
+    board = parse_board(BOARD)
+    X = board.object_points()
+    texture, affine = board_image(board, 1.0)
+    renderer = BoardRenderer(CAM, texture, affine)
+    q, on, T = [], [], []
+    for c in ("left", "right"):
+        qc = visible_configurations(true_model, CAM, X, camera_end_effector="head", T_ee_camera=MOUNT, carrier=c,
+                                    T_carrier_board=BOARDS[c], n=N_PER_ARM, rng=rng, q_center=np.zeros(19),
+                                    q_spread=np.pi, front_z=board.front_z, margin_px=30.0)
+        q.append(qc)
+        on += [c] * N_PER_ARM
+        T.append(camera_board_poses(true_model, qc, "head", MOUNT, c, BOARDS[c]))
+    q, T = np.concatenate(q), np.concatenate(T)
+    images = root / "images"
+    images.mkdir()
+    names = [f"frame_{i:03d}.png" for i in range(len(q))]
+    for n, Ti in zip(names, T):
+        write_png(images / n, renderer.render(Ti, rng))
+    t_img, t_log, pose = capture_schedule(len(q), rng)
+    q_log = np.where(pose[:, None] >= 0, q[np.clip(pose, 0, None)], 0.0)
+    write_joint_log(root / "joints.csv", t_log, q_log, m.controller_joints)
+    write_frames(root / "frames.csv", names, t_img)
+    write_camera_json(root / "camera.json", CAM)
+    return root, offsets, names, t_img, t_log, q_log
+
+
+def _run(root, *extra, joints="joints.csv", frames="frames.csv"):
+    args = ["self-calibrate", "dlr_justin19", "--images", str(root / "images"), "--joints", str(root / joints),
+            "--frames", str(root / frames), "--board", BOARD, "--camera-on", "head", "--board-on", "left,right", "--camera",
+            str(root / "camera.json"), *extra]
+    return CliRunner().invoke(cli, args)
+
+
+def test_command_recovers_offsets_from_rendered_images_and_writes_the_outputs(capture, tmp_path):
+    root, offsets, names, *_ = capture
+    r = _run(root, "--json", "--out", str(tmp_path / "out"))
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout[r.stdout.index("{"):])
+    assert s["n_images_used"] == len(names)
+    assert s["reprojection_rms_px"] < 0.5
+    got = {j["name"]: j for j in s["joint_offsets"]}
+    for n, v in offsets.items():
+        assert abs(got[n]["value"] - v) < max(4 * got[n]["sigma"], np.radians(0.05)), n
+    assert "[8/8]" in r.stderr
+    for f in ("robot.toml", "self_calibration.json", "report.html"):
+        assert (tmp_path / "out" / f).is_file()
+    assert "<svg" in (tmp_path / "out" / "report.html").read_text()
+    # the images went to the hand that holds the board (frames 0-3 left, 4-7 right)
+    assert [r["board_on"] for r in s["images"]] == ["left"] * 4 + ["right"] * 4
+
+
+def test_command_with_per_image_joint_corrections(capture):
+    root, offsets, *_ = capture
+    r = _run(root, "--json", "--joint-noise-deg", "0.01")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout[r.stdout.index("{"):])
+    got = {j["name"]: j for j in s["joint_offsets"]}
+    for n, v in offsets.items():
+        assert abs(got[n]["value"] - v) < max(4 * got[n]["sigma"], np.radians(0.05)), n
+
+
+def test_a_log_on_another_clock_matches_nothing(capture, tmp_path):
+    root, _, _, _, t_log, q_log = capture
+    write_joint_log(root / "late.csv", t_log + 500.0, q_log, load_robot("dlr_justin19").controller_joints,
+                    overwrite=True)
+    r = _run(root, joints="late.csv")
+    assert r.exit_code != 0
+    assert "no joint reading within 0.05 s of any capture time" in r.output
+
+
+def test_a_board_never_fully_visible_is_a_clear_error(capture):
+    root, _, _, _, t_log, q_log = capture
+    r = CliRunner().invoke(cli, ["self-calibrate", "dlr_justin19", "--images", str(root / "images"), "--joints",
+                                 str(root / "joints.csv"), "--frames", str(root / "frames.csv"), "--board",
+                                 "checkerboard:9x7:25mm", "--camera-on", "head", "--board-on", "left,right", "--camera", str(root / "camera.json")])
+    assert r.exit_code != 0
+    assert "is not fully visible in any matched image" in r.output
+
+
+def test_an_image_of_another_size_and_an_unmatched_image_get_per_image_reasons(capture, tmp_path):
+    root, _, names, t_img, *_ = capture
+    alt = tmp_path / "alt"
+    (alt / "images").mkdir(parents=True)
+    for n in names:
+        (alt / "images" / n).write_bytes((root / "images" / n).read_bytes())
+    write_png(alt / "images" / names[2], np.zeros((240, 320), np.uint8), overwrite=True)
+    (alt / "joints.csv").write_text((root / "joints.csv").read_text())
+    (alt / "camera.json").write_text((root / "camera.json").read_text())
+    late = t_img.copy()
+    late[5] += 900.0  # image 5 after the log ends
+    write_frames(alt / "frames.csv", names, late)
+    r = _run(alt, "--json")
+    assert r.exit_code == 0, r.output
+    rows = {x["name"]: x for x in json.loads(r.stdout[r.stdout.index("{"):])["images"]}
+    assert "320x240 px, the first image is 640x480 px" in rows[names[2]]["skip_reason"]
+    assert "no joint reading within 0.05 s" in rows[names[5]]["skip_reason"]
+    assert sum(x["used"] for x in rows.values()) == len(names) - 2
