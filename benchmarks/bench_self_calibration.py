@@ -2,7 +2,7 @@
 
 Data: the DLR Justin tree (head camera, a 7x4 checkerboard in each hand, offsets on head and arms
 up to 3 deg), 80 images rendered by :class:`robocal.sim.camera_render.BoardRenderer` at 640x480,
-a 20 Hz joint log and a frames file on another clock (:mod:`robocal.sim.camera_chain`). Rows (one
+a 20 Hz joint log and a frames file on another clock (:mod:`robocal.sim.self_calibration_views`). Rows (one
 process, one BLAS thread, median of ``--runs``):
 
 * the whole pipeline ``workflows.self_calibration.self_calibrate`` (read files, match time stamps,
@@ -43,7 +43,8 @@ from robocal.io.joint_log_files import write_frames, write_joint_log  # noqa: E4
 from robocal.io.detection import detect_board  # noqa: E402
 from robocal.io.images import read_image_gray, write_png  # noqa: E402
 from robocal.robots import load_robot  # noqa: E402
-from robocal.sim.camera_chain import camera_board_poses, capture_schedule, visible_configurations  # noqa: E402
+from robocal.sim.self_calibration import capture_schedule  # noqa: E402
+from robocal.sim.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations  # noqa: E402
 from robocal.sim.camera_render import BoardRenderer  # noqa: E402
 from robocal.transforms import so3_exp, transforms_from  # noqa: E402
 from robocal.workflows.self_calibration import self_calibrate  # noqa: E402
@@ -68,7 +69,8 @@ def make_set(root: Path, n_per_arm: int = 40, seed: int = 0):
     for c in HANDS:
         qc = visible_configurations(true_model, CAM, b.object_points(), camera_end_effector="head",
                                     T_ee_camera=np.eye(4), carrier=c, T_carrier_board=HANDS[c], n=n_per_arm, rng=rng,
-                                    q_center=np.zeros(19), q_spread=np.pi, front_z=b.front_z, margin_px=30.0)
+                                    q_center=np.zeros(19), q_spread=np.pi, front_z=b.front_z, pitch_mm=b.pitch_mm,
+                                    limits=ViewLimits(margin_px=30.0, depth_mm=(50.0, np.inf), max_tilt_deg=55.0))
         q.append(qc)
         on += [c] * n_per_arm
         T.append(camera_board_poses(true_model, qc, "head", np.eye(4), c, HANDS[c]))

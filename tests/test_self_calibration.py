@@ -14,7 +14,7 @@ from robocal.handeye.self_calibration import solve_self_calibration
 from robocal.io.boards import parse_board
 from robocal.io.capture_times import match_capture_times
 from robocal.robots import load_robot
-from robocal.sim.camera_chain import simulate_corner_views
+from robocal.sim.self_calibration_views import simulate_corner_views
 from robocal.transforms import so3_exp, transforms_from
 
 NOISE_PX = 0.3
@@ -40,7 +40,7 @@ def justin():
     X = board.object_points()
     q, carriers, uv = simulate_corner_views(true_model, CAM, X, camera_end_effector="head", T_ee_camera=MOUNT,
                                             boards=BOARDS, n_per_carrier=25, rng=rng, pixel_noise=NOISE_PX,
-                                            front_z=board.front_z)
+                                            front_z=board.front_z, pitch_mm=board.pitch_mm)
     return m, q, uv, X, list(carriers), offsets
 
 

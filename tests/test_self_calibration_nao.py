@@ -1,7 +1,7 @@
 """Issue 15 acceptance on the NAO H25 (head camera ``camera_top``, a board in each hand): 40 images
 per arm, joint offsets up to +-3 deg on head and both arms, 0.3 px corner noise; every identifiable
 joint offset within 3 reported sigma, reprojection RMS within 10 % of the noise, and both arms
-together at least as accurate as each arm alone. Corners from :mod:`robocal.sim.camera_chain`
+together at least as accurate as each arm alone. Corners from :mod:`robocal.sim.self_calibration_views`
 (projection + noise; the rendered path is covered by test_self_calibration_pipeline.py)."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from robocal.handeye.refine import joint_offset_names
 from robocal.handeye.self_calibration import solve_self_calibration
 from robocal.io.boards import parse_board
 from robocal.robots import load_robot
-from robocal.sim.camera_chain import simulate_corner_views
+from robocal.sim.self_calibration_views import simulate_corner_views
 from robocal.transforms import so3_exp, transforms_from
 
 NOISE_PX = 0.3
@@ -42,7 +42,7 @@ def nao():
     T_ee_camera = transforms_from(so3_exp(np.array([0.005, -0.01, 0.008])), np.array([1.0, -0.5, 0.8]))
     q, on, uv = simulate_corner_views(true_model, CAM, X, camera_end_effector="camera_top", T_ee_camera=T_ee_camera,
                                       boards=mounts, n_per_carrier=N_PER_ARM, rng=rng, pixel_noise=NOISE_PX,
-                                      front_z=board.front_z)
+                                      front_z=board.front_z, pitch_mm=board.pitch_mm)
     both = solve_self_calibration(m, q, uv, X, CAM, on, camera_end_effector="camera_top", pixel_sigma=NOISE_PX)
     alone = {h: solve_self_calibration(m, q[on == h], uv[on == h], X, CAM, on[on == h],
                                        camera_end_effector="camera_top", pixel_sigma=NOISE_PX) for h in HANDS}
@@ -119,7 +119,7 @@ def test_nao_model_simulator_run_end_to_end_without_rendering(simulated_run):
     z = []
     for r, v, s in zip(res.joint_report, res.joint_offsets, res.joint_offset_sigma):
         if r["identifiable"]:
-            z.append((v - run.joint_offsets[r["joint"]]) / s)  # the simulator's truth is in rad
+            z.append((v - run.joint_offsets_rad[r["joint"]]) / s)
     assert len(z) == 9 and max(abs(x) for x in z) < 3.0  # measured 1.06
     assert abs(res.rms_px / np.sqrt(2) / NOISE_PX - 1.0) < 0.1  # measured 0.304 px
 
@@ -141,7 +141,7 @@ def test_joint_reading_noise_needs_the_per_image_joint_corrections():
     for noise in (None, 0.05):
         res = solve_self_calibration(run.robot, q, run.image_points, X, run.camera, run.chain_of_image,
                                      camera_end_effector="camera_top", pixel_sigma=NOISE_PX, joint_noise_deg=noise)
-        worst[noise] = max(abs(v - run.joint_offsets[r["joint"]]) / s for r, v, s in
+        worst[noise] = max(abs(v - run.joint_offsets_rad[r["joint"]]) / s for r, v, s in
                            zip(res.joint_report, res.joint_offsets, res.joint_offset_sigma) if r["identifiable"])
     assert worst[None] > 5.0
     assert worst[0.05] < 3.0

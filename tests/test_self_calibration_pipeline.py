@@ -17,7 +17,8 @@ from robocal.io.camera_files import write_camera_json
 from robocal.io.joint_log_files import write_frames, write_joint_log
 from robocal.io.images import write_png
 from robocal.robots import load_robot
-from robocal.sim.camera_chain import camera_board_poses, capture_schedule, visible_configurations
+from robocal.sim.self_calibration import capture_schedule
+from robocal.sim.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations
 from robocal.camera import Camera
 from robocal.sim.camera_render import BoardRenderer
 from robocal.transforms import so3_exp, transforms_from
@@ -50,7 +51,8 @@ def capture(tmp_path_factory):
     for c in ("left", "right"):
         qc = visible_configurations(true_model, CAM, X, camera_end_effector="head", T_ee_camera=MOUNT, carrier=c,
                                     T_carrier_board=BOARDS[c], n=N_PER_ARM, rng=rng, q_center=np.zeros(19),
-                                    q_spread=np.pi, front_z=board.front_z, margin_px=30.0)
+                                    q_spread=np.pi, front_z=board.front_z, pitch_mm=board.pitch_mm,
+                                    limits=ViewLimits(margin_px=30.0, depth_mm=(50.0, np.inf), max_tilt_deg=55.0))
         q.append(qc)
         on += [c] * N_PER_ARM
         T.append(camera_board_poses(true_model, qc, "head", MOUNT, c, BOARDS[c]))

@@ -86,7 +86,7 @@ def test_nao_configurations_respect_limits_and_head_collision_table(nao, nao_run
     frac = inside[~r.fully_visible].mean(axis=1)
     assert np.all((frac >= 0.25) & (frac <= 0.85))
     # the offsets are within the stated +-3 deg and act on every head and arm joint
-    offs = np.degrees(list(r.joint_offsets.values()))
+    offs = np.degrees(list(r.joint_offsets_rad.values()))
     assert len(offs) == 12 and np.abs(offs).max() <= 3.0 and np.abs(offs).max() > 1.0
 
 
@@ -155,7 +155,7 @@ def test_industrial_variant_camera_on_the_flange():
     px = r.image_points_true[r.fully_visible]
     assert np.all((px[..., 0] > 0) & (px[..., 0] < w - 1) & (px[..., 1] > 0) & (px[..., 1] < h - 1))
     # the truth differs from the robot file: offsets on all 6 joints and link lengths
-    assert len(r.joint_offsets) == 6 and any(not k.startswith("theta") for k in r.parameter_errors)
+    assert len(r.joint_offsets_rad) == 6 and any(not k.startswith("theta") for k in r.parameter_errors)
     # the camera really sees the board through the true robot, not the nominal one
     T_nominal = compose(invert_transforms(compose(m.fk(r.q_true, "flange"), r.T_ee_camera)), r.T_ee_board["world"])
     assert np.max(np.linalg.norm(T_nominal[:, :3, 3] - r.T_camera_board[:, :3, 3], axis=1)) > 5.0

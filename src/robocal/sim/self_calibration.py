@@ -50,7 +50,7 @@ from .camera_render import BoardRenderer, RenderSettings
 from .robot import parameter_kinds
 from .self_calibration_views import ViewLimits, hand_configurations, world_board_configurations
 
-__all__ = ["SelfCalibrationRun", "simulate_self_calibration", "write_self_calibration_files", "nao_top_camera",
+__all__ = ["SelfCalibrationRun", "simulate_self_calibration", "capture_schedule", "write_self_calibration_files", "nao_top_camera",
            "nominal_hand_board_mount", "board_surface", "DEFAULT_BOARD", "DEFAULT_WORLD_BOARD", "OUTPUT_NAMES", "TRUTH_FORMAT"]
 
 #: a checkerboard a NAO hand can hold: 7 x 4 inner corners (8 x 5 squares, COLS + ROWS odd so its
@@ -90,8 +90,9 @@ class SelfCalibrationRun:
     robot / true_robot: nominal and true models; camera: the true camera; camera_end_effector;
     chains; board; T_ee_camera_nominal / T_ee_camera (4, 4): the camera in its end-effector frame;
     T_ee_board_nominal / T_ee_board: {chain: (4, 4)} the board in the chain's end-effector frame
-    (``"world"``: in the world frame); joint_offsets: {joint: true - nominal offset};
-    parameter_errors: {parameter: true - nominal}. Per image (N): ``images`` names, ``chain_of_image``,
+    (``"world"``: in the world frame); joint_offsets_rad: {joint: true - nominal zero offset}
+    [rad] (``truth.json`` has them in degrees, ``joint_offsets_deg``); parameter_errors:
+    {parameter: true - nominal} [mm or rad]. Per image (N): ``images`` names, ``chain_of_image``,
     ``fully_visible``, ``q_true`` (N, n) controller joints at capture (noise-free readings),
     ``T_camera_board`` (N, 4, 4), ``image_points_true`` (N, P, 2) [px] (NaN behind the camera),
     ``image_points`` (N, P, 2): those plus Gaussian ``pixel_noise`` (an image-free stand-in for a
@@ -110,7 +111,7 @@ class SelfCalibrationRun:
     T_ee_camera: np.ndarray
     T_ee_board_nominal: dict
     T_ee_board: dict
-    joint_offsets: dict
+    joint_offsets_rad: dict
     parameter_errors: dict
     images: tuple
     chain_of_image: tuple
@@ -204,6 +205,23 @@ def _timeline(q_images: np.ndarray, q_start: np.ndarray, rng, *, move_s, dwell_s
     return np.array(capture), times, joints, pose
 
 
+def capture_schedule(n_images: int, rng, *, dwell_s: float = 1.0, move_s: float = 2.0, rate_hz: float = 20.0,
+                     clock_offset_s: float = 0.012, jitter_s: float = 0.004):
+    """The timing of a simple capture run (fixed move and dwell times, for tests and benchmarks that
+    draw their own views; :func:`simulate_self_calibration` has its own travel-dependent timeline):
+    the robot moves to each pose, dwells, the camera fires in the middle of the dwell. Returns
+    ``(image_times (N,) on the camera clock, log_times (M,) on the controller clock, log_pose (M,)
+    the pose index the robot is at, -1 while moving)`` [s]."""
+    period = dwell_s + move_s
+    t_pose = 1.0 + np.arange(n_images) * period
+    log_t = np.arange(0.0, t_pose[-1] + dwell_s + 1.0, 1.0 / rate_hz)
+    k = np.floor((log_t - 1.0 + dwell_s / 2) / period).astype(int)
+    at = (k >= 0) & (k < n_images) & (np.abs(log_t - t_pose[np.clip(k, 0, n_images - 1)]) <= dwell_s / 2)
+    pose = np.where(at, k, -1)
+    image_t = t_pose + clock_offset_s + rng.normal(0.0, jitter_s, n_images)
+    return image_t, log_t, pose
+
+
 def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), camera_end_effector: str | None = None,
                               n_images_per_chain: int = 40, joint_offsets_deg=3.0, length_sigma_mm: float = 0.0,
                               joint_noise_deg: float = 0.05, pixel_noise: float = 0.3,
@@ -248,7 +266,7 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
     rng_truth, rng_views, rng_time, rng_noise = (np.random.default_rng(s) for s in ss.spawn(4))
 
     moved = _joints_moving(nominal, (camera_end_effector,) + (() if world else chains))
-    true, joint_offsets, errors = _true_model(nominal, moved, joint_offsets_deg, length_sigma_mm, rng_truth)
+    true, joint_offsets_rad, errors = _true_model(nominal, moved, joint_offsets_deg, length_sigma_mm, rng_truth)
     X = b.object_points()
     n_part = int(round(partial_fraction * n_images_per_chain))
     if world:
@@ -312,7 +330,7 @@ def simulate_self_calibration(robot, *, chains=("left_hand", "right_hand"), came
     run = SelfCalibrationRun(
         robot=nominal, true_robot=true, camera=cam, camera_end_effector=camera_end_effector, chains=chains, board=b,
         T_ee_camera_nominal=T_cee_nom, T_ee_camera=T_cee, T_ee_board_nominal=T_board_nom, T_ee_board=T_board,
-        joint_offsets=joint_offsets, parameter_errors=errors, images=names, chain_of_image=tuple(chain_of),
+        joint_offsets_rad=joint_offsets_rad, parameter_errors=errors, images=names, chain_of_image=tuple(chain_of),
         fully_visible=fully, q_true=q_img, T_camera_board=T_cb, image_points_true=px, image_points=noisy,
         capture_times=capture, frame_times=frame_t, log_times=log_t, log_joints=log_q, log_pose=log_pose,
         settings=settings)
@@ -368,7 +386,7 @@ def truth_document(run: SelfCalibrationRun) -> dict:
         "format": TRUTH_FORMAT, "robot": m.name, "setup": "board_in_world" if run.chains == ("world",) else "board_in_hand",
         "chains": list(run.chains), "camera_end_effector": run.camera_end_effector, "board": run.board.spec,
         "units": "lengths mm, angles deg, times s; matrices are 4x4 homogeneous [mm]",
-        "joint_offsets_deg": {k: math.degrees(v) for k, v in run.joint_offsets.items()},
+        "joint_offsets_deg": {k: math.degrees(v) for k, v in run.joint_offsets_rad.items()},
         "parameter_errors": {k: (math.degrees(v) if m.params.units[m.params.index(k)] == "rad" else v)
                              for k, v in run.parameter_errors.items()},
         "camera": {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy, "distortion": list(cam.distortion),

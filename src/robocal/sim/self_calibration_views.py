@@ -1,20 +1,28 @@
-"""Robot configurations for camera self-calibration: where the robot's camera sees a board fully
-(or, on purpose, only partly) -- the geometry part of :mod:`.self_calibration` (issue 15).
+"""Robot configurations for camera self-calibration: where a camera on one end effector sees a
+board held by another end effector, or fixed in the world, fully (or, on purpose, only partly) --
+the one view simulator behind :mod:`.self_calibration`, the pipeline's tests and
+benchmarks/bench_self_calibration.py (issue 15).
 
-Two set-ups:
+Three ways to draw configurations, one test of a view (:func:`classify_views`):
 
-* **board in a hand** (humanoid, e.g. ``nao_h25``): arm configurations are drawn uniformly within
-  the joint limits (a margin kept), the head is aimed at the board centre (NAO: HeadYaw/HeadPitch,
-  with the published yaw-dependent head-pitch anti-collision limits) plus a random aim error, and
-  the view is classified;
-* **board fixed in the world** (an industrial 6R arm with the camera on its flange): camera views
-  of the board are drawn (:func:`robocal.sim.camera_cell` style), the flange pose follows, the joints
-  come from the closed-form inverse kinematics of the nominal model refined by Newton steps on the
-  true model.
+* **any tree, joints in a box** (:func:`visible_configurations`, :func:`simulate_corner_views`):
+  joints uniform in a box around ``q_center`` (``q_spread`` per joint, clipped to the limits), full
+  views kept; a NAO-style head (HeadYaw/HeadPitch) is aimed at the board instead of drawn;
+* **board in a hand** (humanoid, e.g. ``nao_h25``; :func:`hand_configurations`): arm configurations
+  are drawn uniformly within the joint limits (a margin kept), the head is aimed at the board centre
+  (NAO: HeadYaw/HeadPitch, with the published yaw-dependent head-pitch anti-collision limits) plus a
+  random aim error, and full and partial views are both collected;
+* **board fixed in the world** (an industrial 6R arm with the camera on its flange;
+  :func:`world_board_configurations`): camera views of the board are drawn
+  (:func:`robocal.sim.camera_cell` style), the flange pose follows, the joints come from the
+  closed-form inverse kinematics of the nominal model refined on the true model
+  (:func:`robocal.kinematics.ik.ik_numeric`).
 
 A view is *full* when every board point projects inside the image with ``margin_px``, lies at a
-depth in ``depth_mm`` and the printed face is turned to the camera within ``max_tilt_deg``; it is
-*partial* when it faces the camera and 25-85 % of the points are inside the image.
+depth in ``depth_mm`` and the printed face is turned to the camera within ``max_tilt_deg``; given
+the board's pitch, the printed pattern's outline must be inside the image too (a detector needs the
+outer squares). It is *partial* when it faces the camera and 25-85 % of the points are inside the
+image.
 """
 
 from __future__ import annotations
@@ -24,10 +32,11 @@ import math
 import numpy as np
 
 from ..camera import Camera
+from ..kinematics.ik import ik_numeric
 from ..transforms import compose, invert_transforms
 
-__all__ = ["ViewLimits", "classify_views", "nao_head_pitch_limits", "aim_nao_head", "hand_configurations",
-           "world_board_configurations"]
+__all__ = ["ViewLimits", "classify_views", "camera_board_poses", "visible_configurations", "simulate_corner_views",
+           "nao_head_pitch_limits", "aim_nao_head", "hand_configurations", "world_board_configurations"]
 
 # "H25 - Joints V5 & V4", head anti-collision: HeadYaw [deg] -> HeadPitch min, max [deg]
 _HEAD_YAW = np.array([-119.52, -87.49, -62.45, -51.74, -43.32, -27.85, 0.0, 27.85, 43.32, 51.74, 62.45, 87.49, 119.52])
@@ -115,6 +124,97 @@ def aim_nao_head(model, target_mm: np.ndarray, camera_ee: str = "camera_top", it
     return q[:, [j_yaw, j_pitch]]
 
 
+def _has_nao_head(model) -> bool:
+    return {"HeadYaw", "HeadPitch"} <= set(model.controller_joints)
+
+
+def _aim_head(model, q: np.ndarray, target_mm: np.ndarray, camera_ee: str, rng, aim_sigma_deg: float) -> None:
+    """Set the HeadYaw/HeadPitch columns of ``q`` (N, n) [rad] in place to look at ``target_mm``
+    (N, 3) [mm] (:func:`aim_nao_head`) plus a Gaussian aim error ``aim_sigma_deg``, within the joint
+    limits and the yaw-dependent pitch limits (:func:`nao_head_pitch_limits`)."""
+    lo, hi = model.limits[:, 0], model.limits[:, 1]
+    hq = aim_nao_head(model, target_mm, camera_ee) + rng.normal(0.0, math.radians(aim_sigma_deg), (len(q), 2))
+    jy, jp = model.controller_joints.index("HeadYaw"), model.controller_joints.index("HeadPitch")
+    hq[:, 0] = np.clip(hq[:, 0], lo[jy], hi[jy])
+    plo, phi = nao_head_pitch_limits(hq[:, 0])
+    hq[:, 1] = np.clip(hq[:, 1], np.maximum(plo, lo[jp]), np.minimum(phi, hi[jp]))
+    q[:, jy], q[:, jp] = hq[:, 0], hq[:, 1]
+
+
+def camera_board_poses(model, q, camera_end_effector: str, T_ee_camera, carrier: str, T_carrier_board) -> np.ndarray:
+    """(N, 4, 4) T_camera_board [mm] at joints q (N, n) [rad] of ``model``: the camera at
+    ``T_ee_camera`` in ``camera_end_effector``'s frame, the board at ``T_carrier_board`` in the
+    ``carrier`` end effector's frame, or in the world frame when ``carrier == "world"``."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    T_world_camera = compose(model.fk(q, camera_end_effector), T_ee_camera)
+    if carrier == "world":
+        T_world_board = np.broadcast_to(np.asarray(T_carrier_board, dtype=float), (len(q), 4, 4))
+    else:
+        T_world_board = compose(model.fk(q, carrier), T_carrier_board)
+    return compose(invert_transforms(T_world_camera), T_world_board)
+
+
+#: what :func:`visible_configurations` accepts by default: 15 px from the border, every point more
+#: than 50 mm in front of the camera, the printed face within 55 deg of the viewing direction
+BOX_VIEW_LIMITS = dict(margin_px=15.0, depth_mm=(50.0, math.inf), max_tilt_deg=55.0)
+
+
+def visible_configurations(model, camera: Camera, object_points, *, camera_end_effector: str, T_ee_camera,
+                           carrier: str, T_carrier_board, n: int, rng, q_center, q_spread, front_z: int = -1,
+                           limits: ViewLimits | None = None, pitch_mm: float | None = None,
+                           aim_sigma_deg: float = 4.0, batch: int = 4000, max_batches: int = 100) -> np.ndarray:
+    """(n, n_joints) configurations [rad] of ``model`` (the true robot) showing the whole board.
+
+    Joints are uniform in ``q_center +- q_spread`` (clipped to the limits); on a model with a NAO
+    head (HeadYaw/HeadPitch) and a board in a hand, the head is aimed at the board centre
+    (:func:`aim_nao_head`, aim error ``aim_sigma_deg``). A configuration is kept when
+    :func:`classify_views` calls its view full (``limits``, default :data:`BOX_VIEW_LIMITS`; with
+    ``pitch_mm`` the board's outline in the image too). ``ValueError`` when fewer than ``n`` are
+    found in ``max_batches`` batches of ``batch``."""
+    limits = limits or ViewLimits(**BOX_VIEW_LIMITS)
+    X = np.asarray(object_points, dtype=float)
+    lo, hi = model.limits[:, 0], model.limits[:, 1]
+    aim = carrier != "world" and _has_nao_head(model)
+    centre_carrier = np.asarray(T_carrier_board, dtype=float)[:3] @ np.r_[X.mean(axis=0), 1.0]
+    out = []
+    for _ in range(max_batches):
+        q = np.clip(q_center + rng.uniform(-1.0, 1.0, (batch, len(q_center))) * q_spread, lo, hi)
+        if aim:
+            T_carrier = model.fk(q, carrier)
+            _aim_head(model, q, T_carrier[:, :3, :3] @ centre_carrier + T_carrier[:, :3, 3], camera_end_effector,
+                      rng, aim_sigma_deg)
+        T = camera_board_poses(model, q, camera_end_effector, T_ee_camera, carrier, T_carrier_board)
+        full, _, _ = classify_views(camera, X, front_z, T, limits, pitch_mm)
+        out.extend(q[full])
+        if len(out) >= n:
+            return np.array(out[:n])
+    raise ValueError(f"only {len(out)} of {n} configurations show the whole board; widen q_spread or move the board")
+
+
+def simulate_corner_views(true_model, camera: Camera, object_points, *, camera_end_effector: str, T_ee_camera,
+                          boards: dict, n_per_carrier: int, rng, pixel_noise: float, front_z: int = -1,
+                          pitch_mm: float | None = None, max_batches: int = 300):
+    """Corner observations without rendering: ``(q (N, n) [rad], carriers (N,), image_points (N, P, 2)
+    [px])`` of ``n_per_carrier`` views per board (``boards``: {carrier: T_carrier_board}), the
+    projections through the true robot plus Gaussian noise ``pixel_noise`` [px] per coordinate;
+    joints drawn anywhere within the limits (:func:`visible_configurations`)."""
+    X = np.asarray(object_points, dtype=float)
+    q, on, uv = [], [], []
+    centre, spread = np.zeros(true_model.n_joints), np.full(true_model.n_joints, np.pi)
+    for c, T_cb in boards.items():
+        qc = visible_configurations(true_model, camera, X, camera_end_effector=camera_end_effector,
+                                    T_ee_camera=T_ee_camera, carrier=c, T_carrier_board=T_cb, n=n_per_carrier, rng=rng,
+                                    q_center=centre, q_spread=spread, front_z=front_z, pitch_mm=pitch_mm,
+                                    max_batches=max_batches)
+        T = camera_board_poses(true_model, qc, camera_end_effector, T_ee_camera, c, T_cb)
+        p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
+        uv.append(camera.project(p.reshape(-1, 3)).pixels.reshape(len(qc), -1, 2))
+        q.append(qc)
+        on += [c] * len(qc)
+    uv = np.concatenate(uv)
+    return np.concatenate(q), np.array(on), uv + rng.normal(0.0, pixel_noise, uv.shape)
+
+
 def _rest_configuration(model) -> np.ndarray:
     """(n,) a configuration with the arms hanging down beside the body (NAO), else the middle of
     the limits."""
@@ -159,7 +259,7 @@ def hand_configurations(true_model, camera: Camera, chain: str, object_points: n
     lo, hi = true_model.limits[:, 0], true_model.limits[:, 1]
     span = hi - lo
     rest = _rest_configuration(true_model)
-    nao_head = {"HeadYaw", "HeadPitch"} <= set(true_model.controller_joints)
+    nao_head = _has_nao_head(true_model)
     X = np.asarray(object_points, dtype=float)
     centre_ee = T_ee_board[:3, :3] @ X.mean(axis=0) + T_ee_board[:3, 3]
     full, part = [], []
@@ -169,19 +269,12 @@ def hand_configurations(true_model, camera: Camera, chain: str, object_points: n
         T_ee = true_model.fk(q, chain)
         centre = (T_ee[:, :3, :3] @ centre_ee) + T_ee[:, :3, 3]
         ok = centre[:, 0] > 80.0  # the board in front of the face, not in the torso
-        q, T_ee = q[ok], T_ee[ok]
+        q = q[ok]
         if nao_head:
-            hq = aim_nao_head(true_model, centre[ok], camera_ee) + rng.normal(0.0, math.radians(aim_sigma_deg),
-                                                                             (len(q), 2))
-            jy, jp = true_model.controller_joints.index("HeadYaw"), true_model.controller_joints.index("HeadPitch")
-            hq[:, 0] = np.clip(hq[:, 0], lo[jy], hi[jy])
-            plo, phi = nao_head_pitch_limits(hq[:, 0])
-            hq[:, 1] = np.clip(hq[:, 1], np.maximum(plo, lo[jp]), np.minimum(phi, hi[jp]))
-            q[:, jy], q[:, jp] = hq[:, 0], hq[:, 1]
+            _aim_head(true_model, q, centre[ok], camera_ee, rng, aim_sigma_deg)
         else:
             q[:, head] = rng.uniform(lo[head], hi[head], size=(len(q), len(head)))
-        T_cam = compose(true_model.fk(q, camera_ee), T_cc)
-        T_camera_board = compose(invert_transforms(T_cam), T_ee, T_ee_board)
+        T_camera_board = camera_board_poses(true_model, q, camera_ee, T_cc, chain, T_ee_board)
         is_full, is_part, _ = classify_views(camera, X, front_z, T_camera_board, limits, pitch_mm)
         full.extend(q[is_full])
         part.extend(q[is_part & ~is_full])
@@ -202,22 +295,6 @@ def _pick(full: list, part: list, n_full: int, n_partial: int, rng, model, what:
     return full, part
 
 
-def _newton_joints(model, q0: np.ndarray, T_target: np.ndarray, end_effector, iterations: int = 8) -> np.ndarray:
-    """Refine joints (N, n) so that ``model``'s ``end_effector`` reaches ``T_target`` (N, 4, 4):
-    Gauss-Newton steps with the geometric Jacobian (6 x 6 for a 6R arm)."""
-    from ..transforms import so3_log
-
-    q = np.array(q0, dtype=float)
-    for _ in range(iterations):
-        T = model.fk(q, end_effector)
-        dp = T_target[:, :3, 3] - T[:, :3, 3]
-        dw = np.array([so3_log(Rt @ R.T) for Rt, R in zip(T_target[:, :3, :3], T[:, :3, :3])])
-        J = model.jacobian(q, end_effector)
-        err = np.concatenate([dp, dw], axis=1)
-        q = q + np.stack([np.linalg.lstsq(J[k], err[k], rcond=None)[0] for k in range(len(q))])
-    return q
-
-
 def world_board_configurations(nominal, true_model, camera: Camera, object_points: np.ndarray, front_z: int,
                                T_world_board: np.ndarray, T_flange_camera: np.ndarray, n_full: int, n_partial: int,
                                rng, *, camera_ee: str = "flange", limits: ViewLimits | None = None,
@@ -227,7 +304,8 @@ def world_board_configurations(nominal, true_model, camera: Camera, object_point
 
     Views are drawn around the board normal (tilt 5..``max_tilt_deg``, distance so the board spans
     45-75 % of the image), the flange pose follows, the joints are the closed-form IK of ``nominal``
-    refined by Newton steps on ``true_model``; unreachable or misclassified views are redrawn."""
+    refined on ``true_model`` (:func:`robocal.kinematics.ik.ik_numeric`); unreachable or misclassified views
+    are redrawn."""
     from .camera_cell import _ik_branches, _look_at
 
     limits = limits or ViewLimits(margin_px=20.0, depth_mm=(100.0, 5000.0), max_tilt_deg=60.0)
@@ -256,11 +334,10 @@ def world_board_configurations(nominal, true_model, camera: Camera, object_point
         q0, ok = _ik_branches(nominal, T_base_flange)
         if not ok.any():
             continue
-        q = _newton_joints(true_model, q0[ok], T_world_flange[ok], camera_ee)
+        q = ik_numeric(true_model, T_world_flange[ok], q0[ok], end_effector=camera_ee, respect_limits=False).q
         q = q[true_model.within_limits(q)]
-        T_cam = compose(true_model.fk(q, camera_ee), T_flange_camera)
-        is_full, is_part, _ = classify_views(camera, X, front_z, compose(invert_transforms(T_cam), T_world_board),
-                                             limits, pitch_mm)
+        T_camera_board = camera_board_poses(true_model, q, camera_ee, T_flange_camera, "world", T_world_board)
+        is_full, is_part, _ = classify_views(camera, X, front_z, T_camera_board, limits, pitch_mm)
         full.extend(q[is_full])
         part.extend(q[is_part & ~is_full])
         if len(full) >= n_full and len(part) >= n_partial:
