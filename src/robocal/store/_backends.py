@@ -12,6 +12,7 @@ features), inserts through :meth:`Tx.insert`, tables created from one schema des
 from __future__ import annotations
 
 import sqlite3
+import time
 from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
 
@@ -111,6 +112,14 @@ class _SqliteTx:
             self.conn.execute("ROLLBACK")
 
 
+def _is_busy(exc: sqlite3.Error) -> bool:
+    """True for SQLITE_BUSY (any extended code): another connection holds a lock we need."""
+    code = getattr(exc, "sqlite_errorcode", None)
+    if code is not None:
+        return code & 0xFF == sqlite3.SQLITE_BUSY
+    return "database is locked" in str(exc)
+
+
 class SqliteBackend:
     """``sqlite3`` in autocommit mode; each write transaction is an explicit ``BEGIN IMMEDIATE``."""
 
@@ -138,11 +147,36 @@ class SqliteBackend:
         self.conn.row_factory = sqlite3.Row
         try:
             self.conn.execute("PRAGMA foreign_keys = ON")
-            self.journal_mode = self.conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            self.journal_mode = self._switch_to_wal(timeout)
             self.conn.execute("PRAGMA synchronous = FULL")
         except sqlite3.DatabaseError as exc:
             self.conn.close()
+            if _is_busy(exc):
+                raise HistoryBusyError(f"history database {path} stayed locked by another connection for "
+                                       f"{timeout:g} s while being opened ({exc})") from None
             raise HistoryError(f"{path} is not an SQLite database ({exc})") from None
+
+    def _switch_to_wal(self, timeout: float) -> str:
+        """``PRAGMA journal_mode = WAL``, retried while SQLITE_BUSY for up to ``timeout`` [s].
+
+        Switching a database that is not in WAL mode yet (a fresh file) writes its header from
+        inside a read transaction; when another connection holds the file's write lock (another
+        first open doing the same switch, fleet workers racing), SQLite returns SQLITE_BUSY at once,
+        WITHOUT calling the busy handler, since waiting while holding a read lock could deadlock.
+        SQLite's remedy is to end the statement and try again, which this does with a short
+        back-off until ``timeout`` has passed (then the last SQLITE_BUSY is raised).
+        """
+        deadline = time.monotonic() + timeout
+        pause = 0.001
+        while True:
+            try:
+                return self.conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            except sqlite3.OperationalError as exc:
+                left = deadline - time.monotonic()
+                if not _is_busy(exc) or left <= 0:
+                    raise
+            time.sleep(min(pause, left))
+            pause = min(2 * pause, 0.05)
 
     def begin(self) -> _SqliteTx:
         try:
