@@ -525,7 +525,8 @@ def test_first_open_waits_for_another_first_open_instead_of_failing(tmp_path):
     assert 0.29 < time.monotonic() - t0 < 3.0
 
 
-def test_many_first_opens_of_a_fresh_file_at_once(tmp_path):
+@pytest.mark.parametrize("driver", ["sqlite3", "sqlalchemy"])
+def test_many_first_opens_of_a_fresh_file_at_once(tmp_path, driver):
     # the fleet race in small: threads open one fresh file together, each writes cycles
     # (before the fix about one round in seven failed with "database is locked")
     problems = []
@@ -540,10 +541,13 @@ def test_many_first_opens_of_a_fresh_file_at_once(tmp_path):
             except Exception as exc:  # noqa: BLE001 - collected and asserted below
                 problems.append(f"{type(exc).__name__}: {exc}")
 
-    for r in range(30):
+    if driver == "sqlalchemy":
+        pytest.importorskip("sqlalchemy", reason="the 'db' extra (SQLAlchemy) is not installed")
+    for r in range(30 if driver == "sqlite3" else 10):
         db = tmp_path / f"h{r}.sqlite"
+        target = db if driver == "sqlite3" else f"sqlite+pysqlite:///{db}"
         barrier = threading.Barrier(3)
-        threads = [threading.Thread(target=worker, args=(db, w, barrier)) for w in range(3)]
+        threads = [threading.Thread(target=worker, args=(target, w, barrier)) for w in range(3)]
         for t in threads:
             t.start()
         for t in threads:
