@@ -491,6 +491,73 @@ def test_sqlite_file_settings_and_schema(tmp_path):
         assert s._read("SELECT COUNT(*) AS n FROM schema_version")[0]["n"] == 1
 
 
+
+def test_first_open_waits_for_another_first_open_instead_of_failing(tmp_path):
+    # Switching a fresh file to WAL upgrades a read lock to a write lock; while another connection
+    # holds the write lock SQLite returns SQLITE_BUSY at once, without the busy handler (it was the
+    # fleet test's intermittent "database is locked"). The store must wait, up to its timeout.
+    db = tmp_path / "h.sqlite"
+    other = sqlite3.connect(db, isolation_level=None, check_same_thread=False)  # another first open,
+    other.execute("BEGIN IMMEDIATE")  # mid-way: rollback journal, holding the write lock
+    release = threading.Timer(0.3, lambda: other.execute("COMMIT"))
+    release.start()
+    t0 = time.monotonic()
+    try:
+        with HistoryStore.open(db, timeout=10.0) as s:
+            waited = time.monotonic() - t0
+            assert s._backend.journal_mode == "wal"
+            write_cycle(s, 1)
+            assert len(s.cycles("kr150-cell3")) == 1
+    finally:
+        release.join()
+        other.close()
+    assert 0.25 < waited < 5.0
+    # a lock held longer than the timeout is reported as busy, after the timeout, not at once
+    db2 = tmp_path / "h2.sqlite"
+    other = sqlite3.connect(db2, isolation_level=None)
+    other.execute("BEGIN IMMEDIATE")
+    t0 = time.monotonic()
+    try:
+        with pytest.raises(HistoryBusyError, match="stayed locked by another connection for 0.3 s"):
+            HistoryStore.open(db2, timeout=0.3)
+    finally:
+        other.close()
+    assert 0.29 < time.monotonic() - t0 < 3.0
+
+
+@pytest.mark.parametrize("driver", ["sqlite3", "sqlalchemy"])
+def test_many_first_opens_of_a_fresh_file_at_once(tmp_path, driver):
+    # the fleet race in small: threads open one fresh file together, each writes cycles
+    # (before the fix about one round in seven failed with "database is locked")
+    problems = []
+
+    def worker(db, w, barrier):
+        barrier.wait()
+        for i in range(2):
+            try:
+                with HistoryStore.open(db, timeout=30.0) as s:
+                    with s.cycle(f"w{w}", "measurement", meta={"i": i}) as c:
+                        c.add_metric("index", float(i), "1")
+            except Exception as exc:  # noqa: BLE001 - collected and asserted below
+                problems.append(f"{type(exc).__name__}: {exc}")
+
+    if driver == "sqlalchemy":
+        pytest.importorskip("sqlalchemy", reason="the 'db' extra (SQLAlchemy) is not installed")
+    for r in range(30 if driver == "sqlite3" else 10):
+        db = tmp_path / f"h{r}.sqlite"
+        target = db if driver == "sqlite3" else f"sqlite+pysqlite:///{db}"
+        barrier = threading.Barrier(3)
+        threads = [threading.Thread(target=worker, args=(target, w, barrier)) for w in range(3)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        if not problems:
+            with HistoryStore.open(db, create=False) as s:
+                assert sum(len(s.cycles(f"w{w}")) for w in range(3)) == 6
+    assert problems == []
+
+
 @pytest.mark.parametrize("form", ["path", "relative_url", "absolute_url"])
 def test_sqlite_url_forms(tmp_path, monkeypatch, form):
     monkeypatch.chdir(tmp_path)

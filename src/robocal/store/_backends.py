@@ -12,6 +12,7 @@ features), inserts through :meth:`Tx.insert`, tables created from one schema des
 from __future__ import annotations
 
 import sqlite3
+import time
 from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
 
@@ -111,6 +112,38 @@ class _SqliteTx:
             self.conn.execute("ROLLBACK")
 
 
+def _is_busy(exc: sqlite3.Error) -> bool:
+    """True for SQLITE_BUSY (any extended code): another connection holds a lock we need."""
+    code = getattr(exc, "sqlite_errorcode", None)
+    if code is not None:
+        return code & 0xFF == sqlite3.SQLITE_BUSY
+    return "database is locked" in str(exc)
+
+
+def switch_to_wal(conn, timeout: float) -> str:
+    """``PRAGMA journal_mode = WAL`` on the DB-API ``sqlite3`` connection ``conn``, retried while
+    SQLITE_BUSY for up to ``timeout`` [s]; returns the journal mode now in force.
+
+    Switching a database that is not in WAL mode yet (a fresh file) writes its header from
+    inside a read transaction; when another connection holds the file's write lock (another
+    first open doing the same switch, fleet workers racing), SQLite returns SQLITE_BUSY at once,
+    WITHOUT calling the busy handler, since waiting while holding a read lock could deadlock.
+    SQLite's remedy is to end the statement and try again, which this does with a short
+    back-off until ``timeout`` has passed (then the last SQLITE_BUSY is raised).
+    """
+    deadline = time.monotonic() + timeout
+    pause = 0.001
+    while True:
+        try:
+            return conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+        except sqlite3.OperationalError as exc:
+            left = deadline - time.monotonic()
+            if not _is_busy(exc) or left <= 0:
+                raise
+        time.sleep(min(pause, left))
+        pause = min(2 * pause, 0.05)
+
+
 class SqliteBackend:
     """``sqlite3`` in autocommit mode; each write transaction is an explicit ``BEGIN IMMEDIATE``."""
 
@@ -138,10 +171,13 @@ class SqliteBackend:
         self.conn.row_factory = sqlite3.Row
         try:
             self.conn.execute("PRAGMA foreign_keys = ON")
-            self.journal_mode = self.conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            self.journal_mode = switch_to_wal(self.conn, timeout)
             self.conn.execute("PRAGMA synchronous = FULL")
         except sqlite3.DatabaseError as exc:
             self.conn.close()
+            if _is_busy(exc):
+                raise HistoryBusyError(f"history database {path} stayed locked by another connection for "
+                                       f"{timeout:g} s while being opened ({exc})") from None
             raise HistoryError(f"{path} is not an SQLite database ({exc})") from None
 
     def begin(self) -> _SqliteTx:
@@ -263,7 +299,7 @@ class SqlAlchemyBackend:
             cur.execute("PRAGMA foreign_keys = ON")
             cur.execute(f"PRAGMA busy_timeout = {int(timeout * 1000)}")
             if self.engine.url.database not in (None, "", ":memory:"):
-                cur.execute("PRAGMA journal_mode = WAL")
+                switch_to_wal(dbapi_conn, timeout)  # a fresh file's first opens race (SQLITE_BUSY, no busy handler)
                 cur.execute("PRAGMA synchronous = FULL")
             cur.close()
 

@@ -91,8 +91,9 @@ def build_problems(nominal, meas, train, *, free_names, sigma_mm, tool=None, use
     prior_rad = None if prior is None else (float(prior[0]), math.radians(float(prior[1])))
     notes = []
     if elastic is not None and six_d:
-        raise ValueError("--elastic with measured orientations is not supported yet (the rotation residuals do not "
-                         "read the deflected chain; docs/elastic.md): pass --no-orientation to fit positions")
+        raise ValueError("--elastic with measured orientations is not supported yet (the 6-D tool-frame residuals do "
+                         "not read the deflection; docs/elastic.md, 'Not done yet'): pass --no-orientation to fit "
+                         "positions")
     if not six_d:
         gp = None if prior_rad is None or not free_names else geometry_prior(nominal, free_names, *prior_rad)
         p0 = CalibrationProblem(nominal, q, targets, p, free=[], base_initial="fit", point_sigma_mm=sigma_mm)
