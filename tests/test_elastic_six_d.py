@@ -8,6 +8,7 @@ import json
 import numpy as np
 from click.testing import CliRunner
 from test_elastic import COMPLIANCE, MASSES, PAYLOAD
+from test_six_d_cli import true_tool
 
 from robocal.calib import solve
 from robocal.calib.elastic import ElasticModel, Payload
@@ -24,13 +25,6 @@ W_MM_PER_RAD = 100.0  # rotation noise SIGMA_MM / W rad (~0.01 deg), the CLI's d
 ROBOT = "kuka_kr150_r3100"
 
 
-def _tool():
-    T = np.eye(4)
-    T[:3, :3] = so3_exp([0.25, -0.15, 0.6])
-    T[:3, 3] = [35.0, -20.0, 180.0]
-    return T
-
-
 def elastic_six_d_campaign(seed, n):
     """(nominal, q (n, 6), T_true (n, 4, 4) of the probe in the instrument frame, measured points
     (n, 3) [mm] and rotations (n, 3, 3)): a 6-D probe on a 38 deg tool of a KR150 carrying 120 kg,
@@ -43,7 +37,7 @@ def elastic_six_d_campaign(seed, n):
     T_inst = np.eye(4)
     T_inst[:3, :3] = so3_exp([0.05, -0.1, 2.0])
     T_inst[:3, 3] = [3200.0, -400.0, -600.0]
-    T = T_inst @ robot.true_poses(q) @ _tool()
+    T = T_inst @ robot.true_poses(q) @ true_tool()
     p = T[:, :3, 3] + rng.normal(0, SIGMA_MM, (n, 3))
     R = so3_exp(rng.normal(0, SIGMA_MM / W_MM_PER_RAD, (n, 3))) @ T[:, :3, :3]
     return nominal, q, T, p, R
