@@ -46,6 +46,9 @@ class PoseState(NamedTuple):
     params: np.ndarray
     bases: np.ndarray
     tool: np.ndarray
+    compliance: np.ndarray | None = None  # (n_c,) joint compliances (elastic problems only)
+    gravity: np.ndarray | None = None  # gravity parameters (elastic problems only)
+    lateral: np.ndarray | None = None  # (2 n_l,) lateral compliances (the full elastic model only)
 
     @property
     def targets(self) -> np.ndarray:
@@ -59,6 +62,17 @@ class MultiPoseState(NamedTuple):
     bases: np.ndarray
     targets: np.ndarray
     tool: np.ndarray
+    compliance: np.ndarray | None = None
+    gravity: np.ndarray | None = None
+    lateral: np.ndarray | None = None
+
+
+def _pose_state(values) -> PoseState:
+    return PoseState(*values)
+
+
+def _multi_pose_state(values) -> MultiPoseState:
+    return MultiPoseState(*values)
 
 
 def geometry_prior(model, names, sigma_mm: float, sigma_rad: float) -> GaussianPrior:
@@ -77,12 +91,17 @@ class PoseCalibrationProblem(Problem):
     default one target at the origin); free: geometry parameter names; point_sigma_mm [mm];
     rotation_weight [mm per rad]; prior_sigma: ``(mm, rad)`` for a weak prior on the geometry, or
     ``None``; base_initial: (4, 4) or ``"fit"``; tool_rotation0: (3, 3) initial tool rotation
-    (default: estimated from the data).
+    (default: estimated from the data); elastic: optional
+    :class:`~robocal.calib.elastic.ElasticModel` (gravity-induced joint deflection, read by the
+    point and the rotation residuals; the state then has ``compliance``, ``gravity`` (and
+    ``lateral``); docs/elastic.md).
     """
 
     def __init__(self, model, q, points, rotations, *, targets=None, free=None, point_sigma_mm=None,
-                 rotation_weight: float = 1000.0, prior_sigma=None, base_initial="fit", tool_rotation0=None):
+                 rotation_weight: float = 1000.0, prior_sigma=None, base_initial="fit", tool_rotation0=None,
+                 elastic=None):
         self.model = model
+        self.elastic = elastic
         self.q = q = np.asarray(q, dtype=float)
         N = len(q)
         pts = np.asarray(points, dtype=float)
@@ -110,23 +129,29 @@ class PoseCalibrationProblem(Problem):
         frames = StationFrames(self.base_initial)
         tool = ToolFrame(T_tool, end_effector=self.targets[0].end_effector,
                          free=True if self.single else ["tool.rx", "tool.ry", "tool.rz"])
+        self.deflection = None
+        if elastic is not None:
+            from .elastic import build_deflection
+
+            self.deflection = build_deflection(model, q, elastic, [t.end_effector for t in self.targets])
         blocks, residuals = self._blocks(geometry, frames, tool)
+        blocks += [] if self.deflection is None else list(self.deflection.blocks)
         super().__init__(blocks, residuals, n_poses=N, kinds=("point", "rotation", "prior"))
-        self._make_state = PoseState._make if self.single else MultiPoseState._make
+        self._make_state = _pose_state if self.single else _multi_pose_state
 
     def _blocks(self, geometry, frames, tool):
         sigma = self.point_sigma
         if self.single:
-            self.chain = tool_chain(self.model, self.q, geometry, frames, tool)
+            self.chain = tool_chain(self.model, self.q, geometry, frames, tool, deflection=self.deflection)
             pts = ToolPointResidual(self.chain, tool, self.points[:, 0], sigma)
             blocks = [geometry, frames, tool]
         else:
             targets = TargetPoints([t.name for t in self.targets], [t.point for t in self.targets],
                                    end_effectors=[t.end_effector for t in self.targets])
-            self.chain = TargetChain(self.model, self.q, geometry, frames, targets)
+            self.chain = TargetChain(self.model, self.q, geometry, frames, targets, deflection=self.deflection)
             pts = PointResidual(self.chain, self.points, sigma)
             blocks = [geometry, frames, targets, tool]
-        rot_chain = tool_chain(self.model, self.q, geometry, frames, tool)
+        rot_chain = tool_chain(self.model, self.q, geometry, frames, tool, deflection=self.deflection)
         rot = ToolRotationResidual(rot_chain, tool, self.rotations, weight_mm_per_rad=self.rotation_weight,
                                    sigma=sigma)
         self.tool_block = tool
@@ -159,17 +184,24 @@ class PoseCalibrationProblem(Problem):
         T_tool[:3, 3] = P0[0] if self.single else 0.0
         return T_base, T_tool, how
 
-    def predict_points(self, state, q=None, stations=None, jacobian: bool = False):
+    def predict_points(self, state, q=None, stations=None, jacobian: bool = False, payload="default",
+                       gravity=None):
         """Predicted points (N, K, 3) in the instrument frame (the tool origin for one target), and
-        optionally their Jacobian (N, K, 3, n_variables). Only one station: ``stations`` is ignored."""
+        optionally their Jacobian (N, K, 3, n_variables). Only one station: ``stations`` is ignored.
+        ``payload`` / ``gravity``: for an elastic problem at new poses, as
+        :meth:`~robocal.calib.problem.CalibrationProblem.predict_points`."""
         q = self.q if q is None else np.asarray(q, dtype=float)
         c, st = self.chain, np.zeros(len(q), dtype=int)
+        d = self.deflection
+        elastic = None if d is None else tuple(getattr(state, b.name) for b in d.blocks)
+        kw = {"elastic": elastic, "payload": payload, "gravity": gravity}
         if not self.single:
             wants = tuple(b in self._plan for b in c.parameter_blocks) if jacobian else None
-            out = c.predict(state.params, state.bases, state.targets, q, st, wants)
+            out = c.predict(state.params, state.bases, state.targets, q, st, wants, **kw)
             return out.points if not jacobian else (out.points, self.scatter_columns(out.jac, out.points.shape))
-        wants = (c.geometry in self._plan, c.frames in self._plan, True)
-        out = c.predict(state.params, state.bases, state.targets, q, st, wants if jacobian else None)
+        others = () if d is None else tuple(b in self._plan for b in d.blocks)
+        wants = (c.geometry in self._plan, c.frames in self._plan, True) + others
+        out = c.predict(state.params, state.bases, state.targets, q, st, wants if jacobian else None, **kw)
         if not jacobian:
             return out.points
         R = out.jac.pop(c.targets)[..., :3]  # (N, 1, 3, 3) = R_inst_ee

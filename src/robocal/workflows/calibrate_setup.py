@@ -72,6 +72,11 @@ def split_by_ids(pose_ids, train_ids=(), holdout_ids=()) -> tuple:
     return np.array(sorted(tr), dtype=int), np.array(sorted(ho), dtype=int), notes
 
 
+def _elastic_words(elastic) -> str:
+    return "; joint compliance under gravity (" + ("mass model" if not elastic.lumped else
+                                                   "lumped gravity parameters") + ")"
+
+
 def build_problems(nominal, meas, train, *, free_names, sigma_mm, tool=None, use_orientation: bool = True,
                    rotation_weight: float | None = None, prior=None, elastic=None) -> dict:
     """The calibration problems of the training poses ``train`` of ``meas``.
@@ -80,7 +85,7 @@ def build_problems(nominal, meas, train, *, free_names, sigma_mm, tool=None, use
     orientations when it has them. rotation_weight: mm per rad (default
     :data:`DEFAULT_ROTATION_WEIGHT`). prior: ``(sigma_mm, sigma_deg)`` of a Gaussian prior on
     the geometry around nominal, or ``None``. elastic: an
-    :class:`~robocal.calib.elastic.ElasticModel` (positions only) or ``None``.
+    :class:`~robocal.calib.elastic.ElasticModel` (3-D and 6-D files) or ``None``.
 
     Returns ``{problem0, problem, six_d, description, rotation_weight, notes}``.
     """
@@ -90,10 +95,6 @@ def build_problems(nominal, meas, train, *, free_names, sigma_mm, tool=None, use
     six_d = use_orientation and meas.rotations is not None
     prior_rad = None if prior is None else (float(prior[0]), math.radians(float(prior[1])))
     notes = []
-    if elastic is not None and six_d:
-        raise ValueError("--elastic with measured orientations is not supported yet (the 6-D tool-frame residuals do "
-                         "not read the deflection; docs/elastic.md, 'Not done yet'): pass --no-orientation to fit "
-                         "positions")
     if not six_d:
         gp = None if prior_rad is None or not free_names else geometry_prior(nominal, free_names, *prior_rad)
         p0 = CalibrationProblem(nominal, q, targets, p, free=[], base_initial="fit", point_sigma_mm=sigma_mm)
@@ -103,8 +104,7 @@ def build_problems(nominal, meas, train, *, free_names, sigma_mm, tool=None, use
             notes.append("the file's orientation columns were NOT used (--no-orientation)")
         what = f"positions of {len(targets)} target(s)"
         if elastic is not None:
-            what += "; joint compliance under gravity (" + ("mass model" if not elastic.lumped else
-                                                            "lumped gravity parameters") + ")"
+            what += _elastic_words(elastic)
         return {"problem0": p0, "problem": p1, "six_d": False, "rotation_weight": None, "notes": notes,
                 "description": what}
     w = DEFAULT_ROTATION_WEIGHT if rotation_weight is None else float(rotation_weight)
@@ -115,11 +115,13 @@ def build_problems(nominal, meas, train, *, free_names, sigma_mm, tool=None, use
                                 rotation_weight=w)
     p1 = PoseCalibrationProblem(nominal, q, p, R, targets=targets, free=free_names, point_sigma_mm=sigma_mm,
                                 rotation_weight=w, prior_sigma=prior_rad, base_initial=p0.base_initial[0],
-                                tool_rotation0=p0.tool_block.initial[0, :3, :3])
+                                tool_rotation0=p0.tool_block.initial[0, :3, :3], elastic=elastic)
     if p0.base_start == "orientations":
         notes.append("the measured points are (nearly) collinear: the base frame was started from the measured "
                      "orientations")
     what = "the tool frame (6 DoF)" if len(targets) == 1 else f"{len(targets)} target point(s) + tool rotation"
+    if elastic is not None:
+        what += _elastic_words(elastic)
     return {"problem0": p0, "problem": p1, "six_d": True, "rotation_weight": w, "notes": notes,
             "description": f"6-D: positions and orientations, rotation weight {w:g} mm/rad; {what}"}
 

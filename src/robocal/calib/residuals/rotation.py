@@ -9,7 +9,7 @@ from ..blocks.manifolds import so3_right_jacobian_inverse
 from ..errors import ProblemError
 from .base import ResidualBlock
 
-__all__ = ["RotationResidual"]
+__all__ = ["RotationResidual", "deflected_rotation"]
 
 
 def _left_jacobian(phi) -> np.ndarray:
@@ -21,6 +21,47 @@ def _left_jacobian(phi) -> np.ndarray:
     a = np.where(small, 0.5, (1.0 - np.cos(ths)) / ths**2)
     b = np.where(small, 1.0 / 6.0, (ths - np.sin(ths)) / ths**3)
     return np.eye(3) + a * K + b * (K @ K)
+
+
+def deflected_rotation(model, q, ee, geometry, deflection, ev, jacobian):
+    """The rotation (N, 3, 3) in the base frame of end effector ``ee`` (index) at joints ``q``
+    (N, n_ctrl) with the ``deflection`` (torsion at the deflected joints, then ``exp(Phi)`` of the
+    lateral rotations), and the rotation Jacobians (N, 3, size) in the base frame (a left rotation
+    ``d`` of the result) of the geometry and deflection blocks the evaluation ``ev`` wants."""
+    d = deflection
+    values = {b: ev[b] for b in d.blocks}
+    c, grav = values[d.compliance], values[d.gravity]
+    dq, gt, tau_sel = d.deflections(q, c, grav)
+    qm = q @ model.coupling.T + dq
+    T_all, ptw, jtw, masks = d.model_joints.kinematics_with(qm, ev[geometry], np.eye(4), [ee])
+    R = T_all[:, 0, :3, :3]
+    carried = model._ee_ancestors[ee][model.moving].astype(float)  # (n_model,)
+    jac = {}
+    if jacobian and ev.wants(geometry):
+        jac[geometry] = (ptw[:, :3] * masks[0])[..., geometry.index]
+    W = jtw[:, :3, d.compliance.joints] * carried[d.compliance.joints]  # (N, 3, n_c) joint axes
+    if jacobian:
+        jj = d.jacobians(W[:, None], gt, tau_sel, c, ev.wants(d.compliance), ev.wants(d.gravity))
+        jac.update({b: J[:, 0] for b, J in jj.items()})
+    if d.lateral is not None:
+        lat = d.lateral
+        jl = lat.joints
+        c_lat = values[lat].reshape(-1, 2)
+        E = gt.lateral_axes[:, jl] * carried[jl][None, :, None, None]  # (N, n_l, 2, 3)
+        M = gt.lateral_moments(d.gravity.theta(grav))[:, jl]
+        Phi = np.einsum("nja,njai->ni", 1e-6 * c_lat[None] * M, E)
+        Rx = so3_exp(Phi)
+        R = Rx @ R  # a rotation d of R before the lateral one turns the result by Rx d
+        jac = {b: Rx @ J for b, J in jac.items()}
+        Jl = _left_jacobian(Phi)  # d exp(Phi) = [Jl dPhi] exp(Phi)
+        if jacobian and ev.wants(lat):
+            jac[lat] = Jl @ np.swapaxes((1e-6 * M[..., None] * E).reshape(len(R), -1, 3), 1, 2)
+        if jacobian and ev.wants(d.gravity):
+            Lb = gt.lateral_basis[:, jl] * (1e-6 * c_lat)[None, :, :, None, None]
+            Jg = np.einsum("njabv,njai->nibv", Lb, E)
+            Jg = d.gravity.variable_jacobian(Jg)
+            jac[d.gravity] = jac.get(d.gravity, 0.0) + Jl @ Jg
+    return R, jac
 
 
 class RotationResidual(ResidualBlock):
@@ -84,42 +125,7 @@ class RotationResidual(ResidualBlock):
         return r, jac
 
     def _elastic(self, ev, jacobian):
-        """The end effector's rotation (N, 3, 3) in the base frame with the deflection, and the
-        rotation Jacobians (N, 3, size) in the base frame of the blocks wanted."""
-        d = self.deflection
-        values = {b: ev[b] for b in d.blocks}
-        c, grav = values[d.compliance], values[d.gravity]
-        dq, gt, tau_sel = d.deflections(self.q, c, grav)
-        qm = self.q @ self.model.coupling.T + dq
-        T_all, ptw, jtw, masks = d.model_joints.kinematics_with(qm, ev[self.geometry], np.eye(4), [self.ee])
-        R = T_all[:, 0, :3, :3]
-        carried = self.model._ee_ancestors[self.ee][self.model.moving].astype(float)  # (n_model,)
-        jac = {}
-        if jacobian and ev.wants(self.geometry):
-            jac[self.geometry] = (ptw[:, :3] * masks[0])[..., self.geometry.index]
-        W = jtw[:, :3, d.compliance.joints] * carried[d.compliance.joints]  # (N, 3, n_c) joint axes
-        if jacobian:
-            jj = d.jacobians(W[:, None], gt, tau_sel, c, ev.wants(d.compliance), ev.wants(d.gravity))
-            jac.update({b: J[:, 0] for b, J in jj.items()})
-        if d.lateral is not None:
-            lat = d.lateral
-            jl = lat.joints
-            c_lat = values[lat].reshape(-1, 2)
-            E = gt.lateral_axes[:, jl] * carried[jl][None, :, None, None]  # (N, n_l, 2, 3)
-            M = gt.lateral_moments(d.gravity.theta(grav))[:, jl]
-            Phi = np.einsum("nja,njai->ni", 1e-6 * c_lat[None] * M, E)
-            Rx = so3_exp(Phi)
-            R = Rx @ R  # a rotation d of R before the lateral one turns the result by Rx d
-            jac = {b: Rx @ J for b, J in jac.items()}
-            Jl = _left_jacobian(Phi)  # d exp(Phi) = [Jl dPhi] exp(Phi)
-            if jacobian and ev.wants(lat):
-                jac[lat] = Jl @ np.swapaxes((1e-6 * M[..., None] * E).reshape(len(R), -1, 3), 1, 2)
-            if jacobian and ev.wants(d.gravity):
-                Lb = gt.lateral_basis[:, jl] * (1e-6 * c_lat)[None, :, :, None, None]
-                Jg = np.einsum("njabv,njai->nibv", Lb, E)
-                Jg = d.gravity.variable_jacobian(Jg)
-                jac[d.gravity] = jac.get(d.gravity, 0.0) + Jl @ Jg
-        return R, jac
+        return deflected_rotation(self.model, self.q, self.ee, self.geometry, self.deflection, ev, jacobian)
 
     @classmethod
     def example(cls, rng):

@@ -24,17 +24,19 @@ from ..blocks.points import TargetPoints
 from ..errors import ProblemError
 from .base import ResidualBlock
 from .chain import TargetChain
+from .rotation import deflected_rotation
 
 __all__ = ["ToolPointResidual", "ToolRotationResidual", "tool_chain"]
 
 
-def tool_chain(model, q, geometry, frames, tool, stations=None) -> TargetChain:
+def tool_chain(model, q, geometry, frames, tool, stations=None, deflection=None) -> TargetChain:
     """The :class:`TargetChain` of the tool's origin: one point on the tool's end effector (its
     value comes from the tool block at evaluation time; the chain's own target block is a
-    placeholder that is never a problem variable)."""
+    placeholder that is never a problem variable). ``deflection``: optional
+    :class:`~robocal.calib.residuals.deflection.Deflection` (the elastic model, docs/elastic.md)."""
     origin = TargetPoints([tool.name], tool.initial[0, :3, 3][None], name=f"{tool.name}.origin",
                           end_effectors=[tool.end_effector], free=False)
-    return TargetChain(model, q, geometry, frames, origin, stations=stations)
+    return TargetChain(model, q, geometry, frames, origin, stations=stations, deflection=deflection)
 
 
 def _origin(ev, tool):
@@ -42,21 +44,31 @@ def _origin(ev, tool):
 
 
 class _ToolPose(ResidualBlock, register=False):
-    """Shared set-up: the chain of the tool origin and the tool block."""
+    """Shared set-up: the chain of the tool origin and the tool block (and the chain's deflection
+    blocks when it has a deflection)."""
 
     def __init__(self, chain: TargetChain, tool, row_poses, sigma):
         if chain.n_points != 1:
             raise ProblemError(f"{type(self).__name__}: the chain must carry exactly the tool origin")
         self.chain, self.tool = chain, tool
-        super().__init__((chain.geometry, chain.frames, tool), row_poses, sigma)
+        self.deflection = chain.deflection
+        extra = () if self.deflection is None else self.deflection.blocks
+        super().__init__((chain.geometry, chain.frames, tool) + extra, row_poses, sigma)
 
     def _predict(self, ev, jacobian):
-        """(points (N, 1, 3), rotation of the end effector in the instrument frame (N, 3, 3),
-        geometry Jacobian of the points or None); the chain's Jacobians as asked."""
+        """(points (N, 1, 3), rotation of the end effector in the instrument frame (N, 3, 3));
+        the chain's Jacobians as asked (with a deflection: to first order in the lateral
+        rotations, as the points)."""
         c = self.chain
-        wants = (ev.wants(c.geometry), ev.wants(c.frames), True) if jacobian else None
-        out = c.predict(ev[c.geometry], ev[c.frames], _origin(ev, self.tool), c.q, c.stations,
-                        wants if jacobian else (False, False, True))
+        d = self.deflection
+        elastic = None if d is None else tuple(ev[b] for b in d.blocks)
+        others = () if d is None else tuple(ev.wants(b) for b in d.blocks)
+        if jacobian:
+            wants = (ev.wants(c.geometry), ev.wants(c.frames), True) + others
+        else:
+            wants = (False, False, True) + tuple(False for _ in others)
+        out = c.predict(ev[c.geometry], ev[c.frames], _origin(ev, self.tool), c.q, c.stations, wants,
+                        elastic=elastic)
         R_inst_ee = out.jac[c.targets][:, 0, :, :3]  # d p / d origin = R_inst_ee
         return out, R_inst_ee
 
@@ -83,8 +95,7 @@ class ToolPointResidual(_ToolPose):
         if not jacobian:
             return r, None
         c = self.chain
-        jac = {b: out.jac[b][:, 0][m].reshape(-1, out.jac[b].shape[-1]) * w
-               for b in (c.geometry, c.frames) if b in out.jac}
+        jac = {b: J[:, 0][m].reshape(-1, J.shape[-1]) * w for b, J in out.jac.items() if b is not c.targets}
         if ev.wants(self.tool):
             t = _origin(ev, self.tool)[0]
             Jt = np.concatenate([R @ -skew(t), R], axis=2)  # (N, 3, 6): rotation then origin
@@ -97,14 +108,12 @@ class ToolPointResidual(_ToolPose):
 
     @classmethod
     def example(cls, rng):
-        from .examples import example_chain, example_frames
-
-        base = example_chain(rng, n_poses=5, n_stations=2)
-        tool = _example_tool(rng, example_frames)
-        chain = tool_chain(base.model, base.q, base.geometry, base.frames, tool, stations=base.stations)
-        meas = rng.normal(0, 1000, (5, 3))
-        meas[2] = np.nan
-        return cls(chain, tool, meas, sigma=0.05)
+        out = []
+        for chain, tool in _example_chains(rng):
+            meas = rng.normal(0, 1000, (5, 3))
+            meas[2] = np.nan
+            out.append(cls(chain, tool, meas, sigma=0.05))
+        return out
 
 
 class ToolRotationResidual(_ToolPose):
@@ -131,7 +140,18 @@ class ToolRotationResidual(_ToolPose):
     def evaluate(self, ev, jacobian):
         c = self.chain
         R_tool = ev[self.tool][0, :3, :3]
-        out, R_ie = self._predict(ev, False)
+        Rb = ev[c.frames][c.stations, :3, :3]
+        ee = int(c.ee_of_target[0])
+        jac_base = {}
+        if self.deflection is not None:  # torsion at the deflected joints, then exp(Phi) (rotation.py)
+            R_base, jac_base = deflected_rotation(c.model, c.q, ee, c.geometry, self.deflection, ev, jacobian)
+        elif jacobian and ev.wants(c.geometry):
+            T_all, ptw, _, masks = c.model.kinematics_with(c.q, ev[c.geometry], np.eye(4), [ee])
+            R_base = T_all[:, 0, :3, :3]
+            jac_base[c.geometry] = (ptw[:, :3] * masks[0])[..., c.geometry.index]
+        else:
+            R_base = c.model.kinematics_with(c.q, ev[c.geometry], np.eye(4), [ee])[0][:, 0, :3, :3]
+        R_ie = Rb @ R_base
         R_pred = R_ie @ R_tool
         err = so3_log(self.measured @ np.swapaxes(R_pred, 1, 2))
         k = self.weight * self.rotation_weight
@@ -140,12 +160,7 @@ class ToolRotationResidual(_ToolPose):
             return r, None
         Jr_inv = so3_right_jacobian_inverse(err)
         N = len(c.q)
-        jac = {}
-        if ev.wants(c.geometry):
-            T_all, ptw, _, masks = c.model.kinematics_with(c.q, ev[c.geometry], np.eye(4), [c.ee_of_target[0]])
-            Rb = ev[c.frames][c.stations, :3, :3]
-            Jg = (ptw[:, :3] * masks[0])[..., c.geometry.index]
-            jac[c.geometry] = (Jr_inv @ (Rb @ Jg)).reshape(N * 3, -1) * k
+        jac = {b: (Jr_inv @ (Rb @ J)).reshape(N * 3, -1) * k for b, J in jac_base.items()}
         if ev.wants(c.frames):
             G = c.frames.n_frames
             Jf = np.zeros((N, 3, G, 6))
@@ -160,12 +175,22 @@ class ToolRotationResidual(_ToolPose):
     @classmethod
     def example(cls, rng):
         from ...transforms import so3_exp
-        from .examples import example_chain, example_frames
 
-        base = example_chain(rng, n_poses=5, n_stations=2)
+        return [cls(chain, tool, so3_exp(rng.normal(0, 1, (5, 3))), weight_mm_per_rad=100.0, sigma=0.1)
+                for chain, tool in _example_chains(rng)]
+
+
+def _example_chains(rng):
+    """[(tool chain, tool)]: rigid, elastic (joint compliance) and elastic with lateral compliance."""
+    from .examples import example_chain, example_elastic_chain, example_frames
+
+    out = []
+    for factory, kw in ((example_chain, {}), (example_elastic_chain, {}), (example_elastic_chain, {"lateral": True})):
+        base = factory(rng, n_poses=5, n_stations=2, **kw)
         tool = _example_tool(rng, example_frames)
-        chain = tool_chain(base.model, base.q, base.geometry, base.frames, tool, stations=base.stations)
-        return cls(chain, tool, so3_exp(rng.normal(0, 1, (5, 3))), weight_mm_per_rad=100.0, sigma=0.1)
+        out.append((tool_chain(base.model, base.q, base.geometry, base.frames, tool, stations=base.stations,
+                               deflection=base.deflection), tool))
+    return out
 
 
 def _example_tool(rng, example_frames):
