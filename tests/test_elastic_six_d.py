@@ -6,6 +6,7 @@ joint compliances together, in the library and through ``robocal calibrate --ela
 import json
 
 import numpy as np
+import pytest
 from click.testing import CliRunner
 from test_elastic import COMPLIANCE, MASSES, PAYLOAD
 from test_six_d_cli import true_tool
@@ -94,6 +95,8 @@ def test_calibrate_elastic_joint_on_a_six_d_file(tmp_path):
         res = json.loads((out / "result.json").read_text())
         assert res["six_d"] is True
         after[label] = res["validation"]["after"]["rms"]
+        # "before" is the rigid baseline on both paths (the elastic start deflects the robot: 176 mm)
+        assert res["residuals"]["before"]["rms"] == pytest.approx(res["baseline"]["rms_mm"], rel=1e-12)
         if label == "elastic":
             assert "joint compliance under gravity (lumped gravity parameters)" in r.output
             toml = (out / "calibrated_robot.toml").read_text()

@@ -282,7 +282,21 @@ def _solve(setup, step, total, n_train, n_free, K, loss, method, max_iterations,
         else:
             result = identify(setup["problem"], start, method=method, loss=loss, max_iterations=max_iterations,
                               **swarm)
+    if start is not res0.state:
+        _before_is_the_baseline(result, res0)
     return res0, result, [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
+
+
+def _before_is_the_baseline(result, res0) -> None:
+    """An elastic solve starts from the baseline plus the compliance and gravity blocks' initial
+    values, which already deflect the robot (with lumped gravity one compliance is held at a
+    nonzero value to fix the scale): its own "before" would be that arbitrary start. Report the
+    rigid baseline (nominal geometry, best-fit base and targets) as "before" instead, as on the
+    rigid path, when the two problems' residuals have the same layout."""
+    if (np.shape(result.residuals_before) == np.shape(res0.residuals_after)
+            and np.shape(result.point_errors_before) == np.shape(res0.point_errors_after)):
+        result.residuals_before = res0.residuals_after
+        result.point_errors_before = res0.point_errors_after
 
 
 def _validate(setup, res0, result, meas, hold):
