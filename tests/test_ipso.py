@@ -135,6 +135,16 @@ def test_cli_ipso_records_method_generations_objective(tmp_path):
     assert bad.exit_code != 0 and "plain squared errors" in bad.output
 
 
+def _objective_at_steps(prob, cols, X):
+    """Objective (7) from Problem.evaluate at each row of X (steps of the variables ``cols``)."""
+    ref = []
+    for x in X:
+        step = np.zeros(prob.n_variables)
+        step[cols] = x
+        ref.append(objective_at(prob, prob.retract(prob.initial_state(), step)))
+    return ref
+
+
 @pytest.mark.parametrize("search_base", [False, True])
 def test_swarm_objective_with_points_and_searched_targets(search_base):
     """Tracker problem (PointResidual): the compiled sum (base fixed, targets searched) and the
@@ -148,11 +158,7 @@ def test_swarm_objective_with_points_and_searched_targets(search_base):
     cols = [prob.names.index(n) for n in names]
     rng = np.random.default_rng(2)
     X = rng.uniform(-1, 1, (5, len(names))) * np.where(np.array(prob.units)[cols] == "rad", 0.01, 0.5)
-    ref = []
-    for x in X:
-        step = np.zeros(prob.n_variables)
-        step[cols] = x
-        ref.append(objective_at(prob, prob.retract(prob.initial_state(), step)))
+    ref = _objective_at_steps(prob, cols, X)
     np.testing.assert_allclose(obj(X), ref, rtol=1e-12)
 
 
@@ -181,11 +187,7 @@ def test_swarm_objective_skips_missing_readings_like_the_problem(search_base):
     assert bool(obj._groups) != search_base
     cols = [prob.names.index(n) for n in names]
     X = rng.uniform(-1, 1, (4, len(names))) * np.where(np.array(prob.units)[cols] == "rad", 0.01, 0.5)
-    ref = []
-    for x in X:
-        step = np.zeros(prob.n_variables)
-        step[cols] = x
-        ref.append(objective_at(prob, prob.retract(prob.initial_state(), step)))
+    ref = _objective_at_steps(prob, cols, X)
     f = obj(X)
     assert np.all(np.isfinite(f)) and lost.sum() > 10
     np.testing.assert_allclose(f, ref, rtol=1e-12)

@@ -81,3 +81,8 @@ def _report_verdict(verdict) -> None:
     click.echo("FAILED: the result did not pass the sanity gates (exit code 3):", err=True)
     for reason in verdict.reasons:
         click.echo(f"  - {reason}", err=True)
+
+
+def _item_progress(i: int, n: int, text: str) -> None:
+    """Progress over images or items on stderr: ``[i/n] text`` (camera, hand-eye, self-calibration, simulators)."""
+    click.echo(f"[{i}/{n}] {text}", err=True)

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _user_error
+from ._common import _item_progress, _user_error
 
 BOARD_HELP = ("Board spec (docs/handeye.md, 'Boards'): checkerboard:9x6:25mm (inner corners), "
               "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250 (squares), circles:10x10:25.4mm[:modified] (dots).")
@@ -37,7 +37,7 @@ def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrit
     try:
         s = calibrate_camera_images(images_dir, board, out_dir=out_dir, model=model, n_distortion=int(n_distortion),
                                     fix=fix, overwrite=overwrite,
-                                    progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+                                    progress=_item_progress)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     if as_json:

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _user_error
+from ._common import _item_progress, _user_error
 from .camera import BOARD_HELP, echo_findings
 
 
@@ -64,7 +64,7 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
                           homography_threshold=homography_threshold, joints=joints_file, robot=robot,
                           joint_offsets=joint_offsets, loss=loss, out_dir=out_dir,
-                          overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+                          overwrite=overwrite, progress=_item_progress)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     if as_json:

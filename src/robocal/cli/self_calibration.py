@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _user_error
+from ._common import _item_progress, _user_error
 from .camera import BOARD_HELP
 
 
@@ -49,7 +49,7 @@ def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, bo
                 tolerance=tolerance, match=match,
                 link_parameters=link_parameters, refine_intrinsics=refine_intrinsics,
                 joint_noise_deg=joint_noise_deg, out_dir=out_dir,
-                overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+                overwrite=overwrite, progress=_item_progress)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     if as_json:

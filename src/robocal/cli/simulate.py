@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ._common import _user_error
+from ._common import _item_progress, _user_error
 
 
 @click.group()
@@ -73,7 +73,7 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
                             n_images=n_images, pose_noise_mm=pose_noise_mm, pose_noise_deg=pose_noise_deg,
                             convention=convention, length_unit=length_unit, angle_unit=angle_unit, robot=robot,
                             joint_offset_sigma_deg=joint_offset_sigma_deg, seed=seed,
-                            overwrite=overwrite, progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+                            overwrite=overwrite, progress=_item_progress)
     except (ValueError, KeyError, OSError, RuntimeError) as exc:
         raise _user_error(exc) from None
     click.echo(f"rendered {r['n_images']} images of {r['board']} ({r['setup']}, seed {seed})")
@@ -128,7 +128,7 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
             partial_fraction=partial_fraction, board_bow_mm=board_bow_mm, clock_offset_s=clock_offset_s,
             jitter_s=jitter_s,
             log_rate_hz=log_rate_hz, seed=seed, overwrite=overwrite,
-            progress=lambda i, n, t: click.echo(f"[{i}/{n}] {t}", err=True))
+            progress=_item_progress)
     except (ValueError, KeyError, OSError, RuntimeError) as exc:
         raise _user_error(exc) from None
     where = "fixed in the world" if r["chains"] == ("world",) else "held by " + ", ".join(r["chains"])

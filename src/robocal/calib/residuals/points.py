@@ -12,6 +12,12 @@ from .chain import TargetChain
 __all__ = ["PointResidual"]
 
 
+def point_distances(r, sigma) -> np.ndarray:
+    """Distances [mm] (M,) from weighted 3-D residual rows r (3M,): each row triple times ``sigma``
+    (1 when None), then its norm."""
+    return np.linalg.norm((np.asarray(r) * (sigma or 1.0)).reshape(-1, 3), axis=1)
+
+
 class PointResidual(ResidualBlock):
     """``r = (p_measured - p_predicted) / sigma`` for every measured point, 3 rows per point.
 
@@ -49,7 +55,7 @@ class PointResidual(ResidualBlock):
 
     def errors(self, r):
         """Distances [mm] between measured and predicted points (one per measured point)."""
-        return np.linalg.norm((np.asarray(r) * (self.sigma or 1.0)).reshape(-1, 3), axis=1)
+        return point_distances(r, self.sigma)
 
     @classmethod
     def example(cls, rng):

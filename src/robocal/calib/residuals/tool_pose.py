@@ -24,6 +24,7 @@ from ..blocks.points import TargetPoints
 from ..errors import ProblemError
 from .base import ResidualBlock
 from .chain import TargetChain
+from .points import point_distances
 from .rotation import deflected_rotation
 
 __all__ = ["ToolPointResidual", "ToolRotationResidual", "tool_chain"]
@@ -104,7 +105,7 @@ class ToolPointResidual(_ToolPose):
 
     def errors(self, r):
         """Distances [mm] between measured and predicted origins."""
-        return np.linalg.norm((np.asarray(r) * (self.sigma or 1.0)).reshape(-1, 3), axis=1)
+        return point_distances(r, self.sigma)
 
     @classmethod
     def example(cls, rng):
