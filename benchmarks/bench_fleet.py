@@ -14,6 +14,10 @@ ABB IRB140 robots, each with its own hidden true parameters):
   ``distributed.LocalCluster`` of ``--workers`` single-threaded worker processes (the default of
   ``robocal fleet calibrate``), no reports, no history (as the loop), into a fresh folder each
   repeat; the cluster is started once beforehand (its start-up is printed separately);
+* **plain processes** (the machine's ceiling, no Dask): ``--workers`` processes started with
+  ``multiprocessing`` (spawn), each running the serial loop over its share of the robots, timed
+  from the moment all are ready; on a shared VM whose two vCPUs are not two free cores this is
+  what any pool can reach, so the fleet is read against it as well as against the ideal;
 * **per-task overhead**: (a) the round trip of an empty task (1,000 no-op tasks through the same
   client, wall time / 1,000 x workers), (b) in the fleet run, wall x workers minus the summed
   in-task time, per robot;
@@ -78,6 +82,36 @@ def fleet_run(client, fleet_file: Path, out: Path):
     return wall, sum(row["seconds"] for row in rows)
 
 
+def _share(fleet_file, out, k, workers, barrier, spans):
+    """One plain process of the ceiling row: warm up, wait for the others, then the loop over its share."""
+    serial_loop(fleet_file, Path(out) / f"warm{k}", limit=len(MODELS))
+    from robocal.io.fleet_file import read_fleet
+    from robocal.workflows.calibrate import run_calibration
+
+    entries = read_fleet(fleet_file).entries[k::workers]
+    barrier.wait(timeout=600)
+    t0 = time.perf_counter()
+    for e in entries:
+        run_calibration(e.model, e.measurements, Path(out) / e.id, report=False, **e.options)
+    spans.put((t0, time.perf_counter()))
+
+
+def plain_processes(fleet_file: Path, out: Path, workers: int) -> float:
+    """Wall time of ``workers`` plain processes sharing the fleet, from their common start (after
+    start-up and warm-up) to the last one's end."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn")
+    barrier, spans = ctx.Barrier(workers), ctx.Queue()
+    procs = [ctx.Process(target=_share, args=(fleet_file, out, k, workers, barrier, spans)) for k in range(workers)]
+    for p in procs:
+        p.start()
+    got = [spans.get(timeout=3600) for _ in procs]
+    for p in procs:
+        p.join()
+    return max(t1 for _, t1 in got) - min(t0 for t0, _ in got)
+
+
 def _noop(x):
     return x
 
@@ -99,9 +133,7 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--workers", type=int, default=None, help="local cluster size (default: usable CPUs)")
     args = ap.parse_args()
-    from distributed import Client, LocalCluster
-
-    from robocal.workflows.fleet_cluster import default_workers
+    from robocal.workflows.fleet_cluster import default_workers, fleet_client
 
     workers = args.workers or default_workers()
     for line in machine_info([f"fleet       {args.robots} robots x {args.poses} poses, {workers} workers, "
@@ -114,22 +146,25 @@ def main():
         print(f"simulated the fleet's campaigns in {time.perf_counter() - t0:.1f} s")
         serial_loop(fleet_file, tmp / "warm", limit=len(MODELS))  # numba kernels loaded, caches warm
         t0 = time.perf_counter()
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                          silence_logs=40) as cluster, Client(cluster) as client:
+        # the cluster robocal fleet calibrate starts (single-threaded workers, no worker profiler)
+        with fleet_client(workers=workers) as client:
             client.run(lambda: __import__("robocal.workflows.calibrate"))
             start = time.perf_counter() - t0
             fleet_run(client, fleet_file, tmp / "fleet-warm")  # workers load the kernels from cache
-            serial, fleet, busy = [], [], []
+            serial, fleet, busy, plain = [], [], [], []
             for k in range(args.repeat):
                 serial.append(serial_loop(fleet_file, tmp / f"serial{k}"))
                 w, b = fleet_run(client, fleet_file, tmp / f"fleet{k}")
                 fleet.append(w)
                 busy.append(b)
-                print(f"  repeat {k + 1}: serial {serial[-1]:.2f} s, fleet {w:.2f} s")
+                plain.append(plain_processes(fleet_file, tmp / f"plain{k}", workers))
+                print(f"  repeat {k + 1}: serial {serial[-1]:.2f} s, fleet {w:.2f} s, "
+                      f"plain processes {plain[-1]:.2f} s")
             empty = statistics.median(empty_task_overhead(client) for _ in range(3))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     s, f, b = statistics.median(serial), statistics.median(fleet), statistics.median(busy)
+    pp = statistics.median(plain)
     n = args.robots
     per_robot = s / n
     per_task_overhead = (f * workers - b) / n
@@ -137,7 +172,9 @@ def main():
     print(f"{'':<44}{'median [s]':>12}{'per robot [ms]':>16}")
     print(f"{'serial loop (run_calibration, no report)':<44}{s:>12.2f}{1e3 * per_robot:>16.1f}")
     print(f"{f'fleet, local cluster ({workers} worker processes)':<44}{f:>12.2f}{1e3 * f / n:>16.1f}")
-    print(f"ratio serial / fleet: {s / f:.2f}x   (ideal {workers}x)")
+    print(f"{f'{workers} plain processes (no Dask; the ceiling)':<44}{pp:>12.2f}{1e3 * pp / n:>16.1f}")
+    print(f"ratio serial / fleet: {s / f:.2f}x   (ideal {workers}x; plain processes reach {s / pp:.2f}x: "
+          f"the fleet gets {100 * pp / f:.0f} % of that)")
     print(f"local cluster start-up (not in the fleet time): {start:.1f} s")
     print(f"per-task overhead: empty task {1e3 * empty * workers:.2f} ms of a worker; in the fleet run "
           f"{1e3 * per_task_overhead:.1f} ms per robot (wall x workers - time inside the tasks) = "

@@ -376,3 +376,19 @@ def test_fleet_calibrate_command_on_an_existing_cluster(campaigns, client, tmp_p
     assert "3 robots: 2 ok, 1 failed, 2 unchanged" in again.output
     both = CliRunner().invoke(main, args + ["--workers", "2"])
     assert both.exit_code == 1 and "either --scheduler" in both.output
+
+
+def _square_or_raise(k):
+    if k == 3:
+        raise ValueError(f"item {k} is broken")
+    return k * k
+
+
+def test_a_task_that_raises_on_the_cluster_becomes_its_own_failed_row(client):
+    seen = []
+    out = run_tasks(client, _square_or_raise, range(6), progress=lambda done, n, row: seen.append((done, n)),
+                    on_error=lambda item, exc: f"failed {item}: {type(exc).__name__}: {exc}")
+    assert out == [0, 1, 4, "failed 3: ValueError: item 3 is broken", 16, 25]
+    assert [d for d, _ in seen] == [1, 2, 3, 4, 5, 6] and {n for _, n in seen} == {6}
+    with pytest.raises(ValueError, match="item 3 is broken"):  # without on_error the error is raised
+        run_tasks(client, _square_or_raise, range(6))

@@ -11,7 +11,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve
+
+from ._cholesky import cholesky_factor, cholesky_solve
 
 MAX_ITERATIONS_REASON = "maximum iterations reached"
 
@@ -152,7 +153,7 @@ class DampedGaussNewton:
                 try:
                     A = G.copy()  # G + lam * max(diag G) * I: only the diagonal changes
                     A.flat[::len(A) + 1] += self.lam * g_max
-                    step_s = cho_solve(cho_factor(A, overwrite_a=True, check_finite=False), g, check_finite=False)
+                    step_s = cholesky_solve(cholesky_factor(A, overwrite=True), g)
                 except np.linalg.LinAlgError:
                     self.lam *= 10.0
                     continue

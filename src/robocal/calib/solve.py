@@ -18,8 +18,8 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve
 
+from ._cholesky import cholesky_factor, cholesky_inverse, cholesky_solve
 from ._iterate import DampedGaussNewton, pose_norms
 from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
@@ -183,10 +183,10 @@ def _dropped_may_have_become_identifiable(J, names, ident, screen: float = 1e-4)
     K = J[:, kept] / norms[:len(kept)]
     D = J[:, held] / norms[len(kept):]
     try:
-        c = cho_factor(K.T @ K, check_finite=False)
+        c = cholesky_factor(K.T @ K)
     except np.linalg.LinAlgError:
         return True
-    coef = cho_solve(c, K.T @ D, check_finite=False)
+    coef = cholesky_solve(c, K.T @ D)
     independent2 = 1.0 - np.einsum("ij,ij->j", K.T @ D, coef)
     return bool(np.any(independent2 > screen**2))
 
@@ -276,7 +276,7 @@ def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
     rank = int(np.sum(keep))
     cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
     if rank == len(s):
-        cov_s = cho_solve(cho_factor(G, check_finite=False), np.eye(len(G)), check_finite=False)
+        cov_s = cholesky_inverse(G)
     else:  # rank deficient (auto_identifiable off): pseudo-inverse on the resolvable directions
         ev, V = np.linalg.eigh(G)
         ev, V = ev[::-1], V[:, ::-1]

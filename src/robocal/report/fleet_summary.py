@@ -7,15 +7,14 @@ Nothing here computes: the rows (and their ``outlier`` flags) come from
 
 from __future__ import annotations
 
-import base64
 import html
 import math
 from pathlib import Path
 
 import numpy as np
 
-from ..io.atomic import atomic_write_bytes, atomic_write_text
-from ._mpl import _figure, figure_png
+from ..io.atomic import atomic_write_text
+from .svg import Panel
 
 __all__ = ["plot_fleet_accuracy", "write_fleet_summary_html"]
 
@@ -26,30 +25,36 @@ def _accuracy(row, when: str):
     return v if v is not None else row.get(f"rms_{when}_mm")
 
 
-def plot_fleet_accuracy(rows, title: str) -> bytes:
-    """PNG: accuracy before and after calibration per robot (log scale, mm), outliers in red."""
+def plot_fleet_accuracy(rows, title: str) -> str:
+    """SVG: accuracy before and after calibration per robot (log scale, mm), outliers in red.
+
+    Written as text like the calibration report's figures (a few ms for hundreds of robots; the
+    matplotlib PNG it replaces took ~0.4 s a run plus ~0.45 s to import)."""
     done = [r for r in rows if _accuracy(r, "after") is not None]
-    n = max(1, len(done))
-    fig, axes = _figure(1, 1, (min(5.0 + 0.18 * n, 24.0), 4.6), left=0.9, bottom=1.0, top=0.8)
-    ax = axes[0, 0]
-    x = np.arange(len(done))
-    before = np.array([_accuracy(r, "before") for r in done], dtype=float)
-    after = np.array([_accuracy(r, "after") for r in done], dtype=float)
-    flagged = np.array([bool(r.get("outlier")) for r in done], dtype=bool)
-    if len(done):
-        ax.vlines(x, after, before, color="0.75", lw=1.0)
-        ax.plot(x, before, "o", ms=4, color="tab:gray", label="before (nominal model)")
-        ax.plot(x[~flagged], after[~flagged], "o", ms=4, color="tab:blue", label="after calibration")
+    n = len(done)
+    x = np.arange(n, dtype=float)
+    before = np.array([_accuracy(r, "before") for r in done], dtype=float).reshape(-1)
+    after = np.array([_accuracy(r, "after") for r in done], dtype=float).reshape(-1)
+    flagged = np.array([bool(r.get("outlier")) for r in done], dtype=bool).reshape(-1)
+    labelled = n <= 120
+    panel = Panel(int(min(max(500, 90 + 9 * n), 2400)), 340 if labelled else 280, title=title, y_log=True,
+                  y_label="position error RMS [mm] (held-out poses)",
+                  x_label="" if labelled else "robot (fleet file order)",
+                  margins=(70, 20, 28, 70 if labelled else 40))
+    if n:
+        panel.segments(x, after, before, colour="grey")
+        panel.points(x, before, colour="grey", radius=3.0, label="before (nominal model)")
+        panel.points(x[~flagged], after[~flagged], colour="blue", radius=3.0, label="after calibration")
         if flagged.any():
-            ax.plot(x[flagged], after[flagged], "s", ms=6, color="tab:red", label="after: outlier")
-        ax.set_yscale("log")
-        ax.set_xticks(x)
-        ax.set_xticklabels([r["id"] for r in done], rotation=90, fontsize=6 if n > 40 else 8)
-        ax.legend(fontsize=8, loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=3, frameon=False)
-    ax.set_ylabel("position error RMS [mm]\n(held-out poses)")
-    ax.set_title(title, fontsize=10, pad=22)
-    ax.grid(True, axis="y", alpha=0.3)
-    return figure_png(fig)
+            panel.points(x[flagged], after[flagged], colour="red", radius=4.5, label="after: outlier")
+        both = np.concatenate([before, after])
+        both = both[np.isfinite(both) & (both > 0)]
+        if both.size:  # headroom above the points for the legend
+            panel.limits(y=(both.min() / 1.6, both.max() * 12.0))
+        panel.limits(x=(-0.8, n - 0.2))
+        if labelled:
+            panel.x_categories([r["id"] for r in done])
+    return panel.svg()
 
 
 def _cell(v, digits=4) -> str:
@@ -60,11 +65,11 @@ def _cell(v, digits=4) -> str:
     return html.escape(str(v))
 
 
-def write_fleet_summary_html(path, summary: dict, png: bytes, png_name: str) -> Path:
-    """Write the fleet summary page ``path`` (the plot embedded, and also saved as ``png_name``
+def write_fleet_summary_html(path, summary: dict, svg: str, svg_name: str) -> Path:
+    """Write the fleet summary page ``path`` (the SVG plot inline, and also saved as ``svg_name``
     beside it); ``summary`` is the dict written to summary.json."""
     path = Path(path)
-    atomic_write_bytes(path.parent / png_name, png, overwrite=True)
+    atomic_write_text(path.parent / svg_name, svg + "\n", overwrite=True)
     rows = summary["robots"]
     head = ("<tr><th>robot</th><th>status</th><th>model</th><th>cell</th><th>poses</th>"
             "<th>before [mm]</th><th>after [mm]</th><th>outlier</th><th>reason</th></tr>")
@@ -78,7 +83,6 @@ def write_fleet_summary_html(path, summary: dict, png: bytes, png_name: str) -> 
                     f'<td>{_cell(_accuracy(r, "before"))}</td><td>{_cell(_accuracy(r, "after"))}</td>'
                     f'<td>{"yes" if r.get("outlier") else ""}</td><td>{_cell(r.get("reason"))}</td></tr>')
     c = summary["counts"]
-    img = base64.b64encode(png).decode()
     text = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>Fleet calibration: {html.escape(summary['fleet'])}</title>
 <style>body{{font-family:sans-serif;margin:1.5em}} table{{border-collapse:collapse;font-size:13px}}
@@ -89,7 +93,7 @@ td:last-child{{text-align:left}} tr.failed{{background:#fdd}} tr.outlier{{backgr
 since an earlier run (skipped). Accuracy is the RMS position error on the held-out poses (the calibration poses
 when none were held out), before (nominal model, best-fit base) and after calibration. Outlier: {html.escape(
         summary['outlier_rule'])}.</p>
-<img alt="accuracy before and after per robot" src="data:image/png;base64,{img}">
+<div style="overflow-x:auto">{svg}</div>
 <table>{head}{''.join(body)}</table></body></html>
 """
     return atomic_write_text(path, text, overwrite=True)

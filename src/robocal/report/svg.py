@@ -123,6 +123,13 @@ class Panel:
         if label:
             self._legend.append((label, colour, 1.0))
 
+    def segments(self, x, lo, hi, *, colour: str = "grey") -> None:
+        """Vertical segments from ``lo`` to ``hi`` (n,) at ``x`` (n,), without caps."""
+        x, lo, hi = (np.asarray(a, dtype=float) for a in (x, lo, hi))
+        ok = np.isfinite(x) & np.isfinite(lo) & np.isfinite(hi)
+        self._marks.append(("segments", (x[ok], lo[ok], hi[ok], colour)))
+        self._extent(np.concatenate([x[ok], x[ok]]), np.concatenate([lo[ok], hi[ok]]))
+
     def line(self, x, y, *, colour: str = "blue", label: str | None = None) -> None:
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         ok = np.isfinite(x) & np.isfinite(y)
@@ -266,6 +273,11 @@ class Panel:
         px, lo, hi = X(x), Y(y - err), Y(y + err)
         segs = "".join(f"M{a:.1f} {b:.1f}V{c:.1f}M{a - 3:.1f} {b:.1f}h6M{a - 3:.1f} {c:.1f}h6"
                        for a, b, c in zip(px, lo, hi))
+        return [f'<path d="{segs}" stroke="{self._fill(colour)}" fill="none"/>'] if segs else []
+
+    def _draw_segments(self, data, X, Y, *_):
+        x, lo, hi, colour = data
+        segs = "".join(f"M{a:.1f} {b:.1f}V{c:.1f}" for a, b, c in zip(X(x), Y(lo), Y(hi)))
         return [f'<path d="{segs}" stroke="{self._fill(colour)}" fill="none"/>'] if segs else []
 
     def _draw_line(self, data, X, Y, *_):

@@ -1,4 +1,4 @@
-"""``robocal fleet calibrate``: every robot of a fleet file calibrated as one Dask task.
+"""``robocal fleet calibrate``: every robot of a fleet file calibrated on Dask.
 
 ::
 
@@ -6,9 +6,14 @@
 
 writes ``out/<id>/`` per robot (the files ``robocal calibrate`` writes, the same result.json, plus
 ``fleet_inputs.json``: the robot's input hash), ``out/summary.json`` (every robot: ``status`` ``ok``
-or ``failed`` with its ``reason``), ``out/summary.html`` and ``out/summary.png`` (accuracy before and
+or ``failed`` with its ``reason``), ``out/summary.html`` and ``out/summary.svg`` (accuracy before and
 after per robot, outliers flagged). Entries the fleet file could not describe are failed rows too;
 one bad robot never stops the others. See :mod:`robocal.workflows.fleet_robot` for one robot.
+
+Each robot is calibrated on its own (its own inputs, outputs, hash and history cycle); the Dask
+tasks carry a few robots each (:func:`robots_per_task`): a 100-pose calibration takes ~30 ms, and
+the scheduler's and client's work per task (~2-3 ms of CPU in the client process, measured in
+benchmarks/bench_fleet.py) competed with the workers for the same cores.
 """
 
 from __future__ import annotations
@@ -23,10 +28,13 @@ import numpy as np
 from ..io.atomic import atomic_write_text
 from ..io.fleet_file import read_fleet
 from .fleet_cluster import run_tasks
-from .fleet_robot import calibrate_entry, failed_row
+from .fleet_robot import calibrate_entries, failed_row
 from .outputs import ensure_writable_dir
 
-__all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "run_fleet_calibration"]
+__all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "robots_per_task", "run_fleet_calibration"]
+
+#: Largest automatic group of robots per Dask task (a progress step is at most this many robots).
+MAX_ROBOTS_PER_TASK = 4
 
 SUMMARY_FORMAT = "robocal-fleet-summary/1"
 #: Modified z-score above which a robot's accuracy after calibration is an outlier (Iglewicz and
@@ -66,13 +74,32 @@ def _lost(entry, exc) -> dict:
     return failed_row(entry.id, f"the task did not finish on the cluster: {type(exc).__name__}: {exc}")
 
 
-def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: bool = True, progress=None) -> dict:
+def robots_per_task(n_robots: int, n_slots: int, requested: int | None = None) -> int:
+    """Robots per Dask task: ``requested`` if given (>= 1), else as many as keep at least four
+    tasks per worker thread (``n_slots``) for load balance, at most :data:`MAX_ROBOTS_PER_TASK`."""
+    if requested is not None:
+        if int(requested) < 1:
+            raise ValueError(f"robots per task must be at least 1, got {requested}")
+        return int(requested)
+    return int(max(1, min(MAX_ROBOTS_PER_TASK, n_robots // max(4 * n_slots, 1))))
+
+
+def _worker_threads(client) -> int:
+    try:
+        return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+    except Exception:  # an unusual client: assume one slot, i.e. the smallest groups
+        return 1
+
+
+def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: bool = True, progress=None,
+                          per_task: int | None = None) -> dict:
     """Calibrate every robot of ``fleet_file`` into ``out_dir`` (see the module docstring).
 
     client: a ``distributed.Client`` (:func:`robocal.workflows.fleet_cluster.fleet_client`), or
     None for a plain loop in this process. db: the history database (path or URL) every result
     is recorded in (None: not recorded). report: each robot's report.html (the plots take longer
-    than the solve). progress(done, total, row): after each robot.
+    than the solve). progress(done, total, row): after each robot. per_task: robots per Dask task
+    (default :func:`robots_per_task`).
 
     Returns ``{"summary": dict written to summary.json, "files": {...}}``.
     """
@@ -85,8 +112,22 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
         from ..store import HistoryStore
 
         HistoryStore.open(db_target).close()
-    rows = run_tasks(client, calibrate_entry, entries, keys=[f"calibrate-{e.id}-{e.index}" for e in entries],
-                     progress=progress, on_error=_lost, out_dir=str(out.resolve()), db=db_target, report=report)
+    size = robots_per_task(len(entries), _worker_threads(client) if client is not None else 1, per_task)
+    groups = [entries[i:i + size] for i in range(0, len(entries), size)]
+    keys = [f"calibrate-{g[0].id}-{g[0].index}" + (f"-to-{g[-1].id}-{g[-1].index}" if len(g) > 1 else "")
+            for g in groups]
+    done = [0]
+
+    def group_done(_finished, _total, group_rows):
+        for row in group_rows:
+            done[0] += 1
+            if progress is not None:
+                progress(done[0], len(entries), row)
+
+    results = run_tasks(client, calibrate_entries, groups, keys=keys, progress=group_done,
+                        on_error=lambda group, exc: [_lost(e, exc) for e in group],
+                        out_dir=str(out.resolve()), db=db_target, report=report)
+    rows = [row for group_rows in results for row in group_rows]
     for e, row in zip(entries, rows):
         row["index"] = e.index
     rows += [failed_row(p.label(), p.reason, index=p.index, stage="fleet file") for p in fleet.problems]
@@ -101,9 +142,9 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
     files = {"summary": atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n", overwrite=True)}
     from ..report.fleet_summary import plot_fleet_accuracy, write_fleet_summary_html
 
-    png = plot_fleet_accuracy(rows, f"{Path(fleet_file).name}: accuracy per robot before/after calibration")
-    files["html"] = write_fleet_summary_html(out / "summary.html", summary, png, "summary.png")
-    files["plot"] = out / "summary.png"
+    svg = plot_fleet_accuracy(rows, f"{Path(fleet_file).name}: accuracy per robot before/after calibration")
+    files["html"] = write_fleet_summary_html(out / "summary.html", summary, svg, "summary.svg")
+    files["plot"] = out / "summary.svg"
     return {"summary": summary, "files": files}
 
 

@@ -58,8 +58,15 @@ def fleet_client(scheduler: str | None = None, workers: int | None = None, *, pr
             yield client
         return
     n = workers or default_workers()
-    with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
-                                  silence_logs=40) as cluster, distributed.Client(cluster) as client:
+    import dask
+
+    # The worker's statistical profiler samples every task's stack every 10 ms under the GIL: on
+    # calibrations of ~40 ms it cost ~10-15 % of the fleet's throughput (benchmarks/bench_fleet.py).
+    # The nannies ship this setting to the worker processes.
+    no_profiler = {"distributed.worker.profile.enabled": False}
+    with dask.config.set(no_profiler), distributed.LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
+            silence_logs=40) as cluster, distributed.Client(cluster) as client:
         yield client
 
 
@@ -92,13 +99,20 @@ def run_tasks(client, fn, items, *, keys=None, progress=None, on_error=None, **k
     futures = client.map(fn, items, key=keys, pure=False, **kwargs)
     where = {f.key: i for i, f in enumerate(futures)}
     done = 0
-    for fut in distributed.as_completed(futures):
+    # with_results: the client's event loop fetches each result as it arrives, so this thread does
+    # not make one blocking round trip per robot (fut.result() cost ~5 ms of latency a robot and
+    # kept the client process busy on a machine whose cores the workers need)
+    for fut, result in distributed.as_completed(futures, with_results=True, raise_errors=False):
         i = where[fut.key]
-        try:
-            results[i] = fut.result()
-        except Exception as exc:  # a worker lost (KilledWorker) or a task that raised
-            results[i] = failed(i, exc)
+        if fut.status in ("error", "cancelled") or isinstance(result, BaseException):
+            # an erred future gives (type, exception, traceback); a cancelled one the exception
+            exc = result[1] if isinstance(result, tuple) and len(result) == 3 else result
+            if not isinstance(exc, BaseException):
+                exc = RuntimeError(f"task {fut.key} ended as {fut.status}")
+            results[i] = failed(i, exc)  # a worker lost (KilledWorker) or a task that raised
+        else:
+            results[i] = result
         done += 1
         step(done, total, results[i])
-        fut.release()
+    del futures
     return results

@@ -30,7 +30,7 @@ import numpy as np
 from ..io.atomic import atomic_write_text
 from ..io.fleet_file import FleetEntry
 
-__all__ = ["STAMP_FILE", "input_digest", "calibrate_entry", "failed_row", "record_calibration"]
+__all__ = ["STAMP_FILE", "input_digest", "calibrate_entry", "calibrate_entries", "failed_row", "record_calibration"]
 
 #: Per-robot marker of a finished robot: its input hash and summary row.
 STAMP_FILE = "fleet_inputs.json"
@@ -177,3 +177,9 @@ def calibrate_entry(entry: FleetEntry, out_dir, *, db=None, report: bool = True)
     atomic_write_text(robot_dir / STAMP_FILE, json.dumps({"input_sha256": digest, "row": row}, indent=2) + "\n",
                       overwrite=True)
     return {**row, "skipped": False}
+
+
+def calibrate_entries(entries, out_dir, *, db=None, report: bool = True) -> list:
+    """:func:`calibrate_entry` for each of a few robots, one after the other: the Dask task of a
+    group of robots (one row per robot, in order; each robot still fails alone)."""
+    return [calibrate_entry(e, out_dir, db=db, report=report) for e in entries]
