@@ -61,12 +61,13 @@ class DampedGaussNewton:
             r, J = self.augmented(state)
         self.state, self.r, self.J = state, r, J
         self.w_rows = self.row_weights()
-        self.cost = 0.5 * float(np.sum(self.w_rows * r**2))
-        self.lam = 1e-3
-        self.reason, self.converged, self.it = MAX_ITERATIONS_REASON, False, 0
         self.robust = loss != "linear"
         self.weighted = self.robust or bool(prior_weight)
+        self.cost = self._cost(r)
+        self.lam = 1e-3
+        self.reason, self.converged, self.it = MAX_ITERATIONS_REASON, False, 0
         self.all_active = bool(active.all())
+        self.n_active = int(active.sum())
         self.rejected = np.zeros(self.n_slots, dtype=bool)
         self.robust_weights = None
 
@@ -91,6 +92,12 @@ class DampedGaussNewton:
             Jp[:, np.flatnonzero(geom)] = np.diag(self.prior_weight * cs[geom])
             JJ = np.vstack([JJ, Jp])
         return rr, JJ
+
+    def _cost(self, r) -> float:
+        """0.5 * sum(w r^2) over the rows (the weights are all 1 unless robust, prior or dropped poses)."""
+        if self.weighted:
+            return 0.5 * float(np.sum(self.w_rows * r**2))
+        return 0.5 * float(r @ r)
 
     def row_weights(self):
         w = self.weights[self.pose_of_row]
@@ -125,9 +132,9 @@ class DampedGaussNewton:
         else:
             # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky
             G = Ja.T @ Ja
-            g_max = float(np.max(np.diag(G)))
+            g_max = float(G.diagonal().max())
             s_max = math.sqrt(g_max)
-        if np.max(np.abs(g), initial=0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
+        if (float(np.abs(g).max()) if g.size else 0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
             return self._stop("gradient is zero")
         found = self._line_search(G, g, g_max, step_s)
         if found is None:
@@ -138,7 +145,7 @@ class DampedGaussNewton:
             pose_norm = pose_norms(self.pose_of_row, self.r[:len(self.pose_of_row)], self.n_slots)[:self.n_poses]
             self.weights[:self.n_poses] = robust_weights(pose_norm, self.loss, self.f_scale)
             self.w_rows = self.row_weights()
-        new_cost = 0.5 * float(np.sum(self.w_rows * self.r**2))
+        new_cost = self._cost(self.r)
         self.lam = max(self.lam / 10.0, 1e-12)
         if self.progress:
             self.progress(it, new_cost)
@@ -157,11 +164,14 @@ class DampedGaussNewton:
                 except np.linalg.LinAlgError:
                     self.lam *= 10.0
                     continue
-            step = np.zeros(self.n)
-            step[self.active] = step_s / self.col_scale[self.active]
+            if self.all_active:
+                step = step_s / self.col_scale
+            else:
+                step = np.zeros(self.n)
+                step[self.active] = step_s / self.col_scale[self.active]
             trial = self.problem.retract(self.state, step)
             r_t, J_t = self.augmented(trial)  # with the Jacobian: an accepted step needs it next
-            c_t = 0.5 * float(np.sum(self.w_rows * r_t**2))
+            c_t = self._cost(r_t)
             if c_t <= self.cost:
                 return trial, r_t, J_t, step_s
             if self.method == "svd":
@@ -177,10 +187,10 @@ class DampedGaussNewton:
         # statistical criterion: the last step changed chi^2 by less than chi2_tol residual
         # variances, so the estimate is within a small fraction of a standard deviation of
         # the optimum (Gauss-Newton converges quadratically: the next change is smaller still)
-        s2 = 2.0 * cost / max(len(self.r) - int(self.active.sum()), 1)
+        s2 = 2.0 * cost / max(len(self.r) - self.n_active, 1)
         if 2.0 * abs(dcost) <= self.chi2_tol * max(s2, 1e-300) and self.lam <= 1e-3:
             return self._stop(f"chi-square change below {self.chi2_tol:g} residual variances")
-        if np.linalg.norm(step_s) <= self.xtol * (1.0 + math.sqrt(2.0 * cost)):
+        if math.sqrt(float(step_s @ step_s)) <= self.xtol * (1.0 + math.sqrt(2.0 * cost)):
             return self._stop("step below xtol")
         return False
 
@@ -197,7 +207,7 @@ class DampedGaussNewton:
         self.robust_weights, self.robust, self.weighted = self.weights.copy(), False, True
         self.weights = (~self.rejected).astype(float)
         self.w_rows = self.row_weights()
-        self.cost = 0.5 * float(np.sum(self.w_rows * self.r**2))
+        self.cost = self._cost(self.r)
         self.lam = 1e-3
         self.reason, self.converged = MAX_ITERATIONS_REASON, False
         return True

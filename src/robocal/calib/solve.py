@@ -283,8 +283,11 @@ def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
         cov_s = (V * np.where(keep, 1.0 / np.where(ev > 0, ev, 1.0), 0.0)) @ V.T
     scale_for_cov = 1.0 if problem.sigma_known else sigma0**2
     cov_a = cov_s / np.outer(col_scale[active], col_scale[active]) * scale_for_cov
-    cov = np.full((n, n), np.nan)
-    cov[np.ix_(active, active)] = cov_a
+    if len(cov_a) == n:  # every variable active: no NaN rows to place
+        cov = cov_a
+    else:
+        cov = np.full((n, n), np.nan)
+        cov[np.ix_(active, active)] = cov_a
     return cov, np.sqrt(np.diag(cov)), rank, cond, sigma0
 
 

@@ -13,6 +13,8 @@ link's offset is ``d = q_model + d_0``.
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -249,6 +251,7 @@ class RobotModel:
         self._root_affine = self.T_world_base[:3].copy()
         self._identity_root = np.eye(4)[:3].copy()
         self._target_cache = {}
+        self._checked_q = None
 
     def _build_operation_program(self, model_index: dict) -> None:
         """Operation program (Jacobians, reference FK): one row per elementary operation."""
@@ -320,14 +323,22 @@ class RobotModel:
 
     # ------------------------------------------------------------------ joints
     def _as_joints(self, q) -> tuple[np.ndarray, bool]:
+        if q is self._checked_q:  # the same immutable array as last time: checked already
+            return q, False
         q = np.asarray(q, dtype=float)
         single = q.ndim == 1
-        q2 = np.atleast_2d(q)
+        q2 = q[None] if single else q
         if q2.ndim != 2 or q2.shape[1] != self.n_joints:
             raise ValueError(f"{self.name}: joints must have shape (N, {self.n_joints}) or ({self.n_joints},), got {q.shape}")
-        if not np.isfinite(q2).all():
+        if not math.isfinite(float(np.add.reduce(q2, axis=None))):  # one pass; NaN/inf make the sum non-finite
+            if np.isfinite(q2).all():  # finite values whose sum overflows: fine
+                return np.ascontiguousarray(q2), single
             r, c = np.argwhere(~np.isfinite(q2))[0]
             raise ValueError(f"{self.name}: pose {r}, joint {self.controller_joints[c]} is {q2[r, c]} (not a finite number)")
+        if (q2 is q and q.base is None and not q.flags.writeable and q.flags.c_contiguous):
+            # an array that owns its data and is read-only cannot change: a solver passes the same
+            # joints every iteration (checking them cost ~10 us of a ~100 us evaluation)
+            self._checked_q = q
         return np.ascontiguousarray(q2), single
 
     def model_joints(self, q) -> np.ndarray:
@@ -460,7 +471,8 @@ class RobotModel:
         """
         q2, _ = self._as_joints(q)
         params = np.asarray(params, dtype=float)
-        key = (tuple(int(e) for e in ee_of_point), tuple(int(i) for i in free_index))
+        # the key as bytes: building tuples of Python ints cost ~15 us a call on the solver's hot path
+        key = (np.asarray(ee_of_point, dtype=np.int64).tobytes(), np.asarray(free_index, dtype=np.int64).tobytes())
         cached = self._target_cache.get(key)
         if cached is None:
             K = len(ee_of_point)

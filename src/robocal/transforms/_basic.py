@@ -8,6 +8,8 @@ says otherwise.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ._quaternion import rotvec_from_matrix
@@ -126,6 +128,8 @@ def skew(v) -> np.ndarray:
 def so3_exp(rotvec) -> np.ndarray:
     """Rotation matrices ``(..., 3, 3)`` from rotation vectors ``(..., 3)`` [rad] (axis * angle)."""
     w = np.asarray(rotvec, dtype=float)
+    if w.size == 3 and w.ndim >= 1 and w.shape[-1] == 3:
+        return _so3_exp_one(w)
     th = np.linalg.norm(w, axis=-1)[..., None, None]
     small = th < 1e-6
     th_safe = np.where(small, 1.0, th)
@@ -133,6 +137,20 @@ def so3_exp(rotvec) -> np.ndarray:
     b = np.where(small, 0.5 - th**2 / 24.0, (1.0 - np.cos(th_safe)) / th_safe**2)
     K = skew(w)
     return np.eye(3) + a * K + b * (K @ K)
+
+
+def _so3_exp_one(w) -> np.ndarray:
+    """:func:`so3_exp` of one rotation vector (shape (3,) or (1, 3)) with scalar math: the same
+    formula, ~6x faster than the batched code for one frame (the solvers' frame updates)."""
+    x, y, z = (float(v) for v in w.reshape(3))
+    th2 = x * x + y * y + z * z
+    th = math.sqrt(th2)
+    if th < 1e-6:
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:
+        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
+    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return (np.eye(3) + a * K + b * (K @ K)).reshape(w.shape[:-1] + (3, 3))
 
 
 def so3_log(R) -> np.ndarray:

@@ -8,6 +8,8 @@ on nothing else in :mod:`robocal.transforms` but the input checks, so :func:`so3
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ._checks import as_matrices, as_vectors
@@ -88,10 +90,34 @@ def rotvec_from_matrix(R) -> np.ndarray:
     rounding right up to pi (an angle taken from the trace with ``arccos`` loses about half the
     digits there). At exactly pi, ``v`` and ``-v`` are the same rotation; either may be returned.
     """
-    q = quaternion_from_matrix(as_matrices(R, "R"))
+    R = as_matrices(R, "R")
+    if R.size == 9:
+        return _rotvec_one(R)
+    q = quaternion_from_matrix(R)
     w, v = q[..., 0], q[..., 1:]
     n = np.linalg.norm(v, axis=-1)
     small = n < 1e-8
     # 2 atan2(n, w) / n, with its series 2/w (1 - n^2 / (3 w^2)) for tiny n (w ~ 1 there)
     scale = np.where(small, 2.0 / w * (1.0 - n**2 / (3.0 * w**2)), 2.0 * np.arctan2(n, w) / np.where(small, 1.0, n))
     return v * scale[..., None]
+
+
+def _rotvec_one(R) -> np.ndarray:
+    """:func:`rotvec_from_matrix` of one rotation (shape (3, 3) or (1, 3, 3)) with scalar math: the
+    same Shepperd quaternion and the same formulas, several times faster than the batched code for
+    one frame (the solvers report every frame's rotation vector)."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.reshape(3, 3).tolist()
+    tr = r00 + r11 + r22
+    d21, d02, d10 = r21 - r12, r02 - r20, r10 - r01
+    s01, s02, s12 = r01 + r10, r02 + r20, r12 + r21
+    pivots = (tr, r00, r11, r22)
+    k = pivots.index(max(pivots))  # the first largest, as numpy's argmax
+    q = ((1.0 + tr, d21, d02, d10), (d21, 1.0 + 2.0 * r00 - tr, s01, s02),
+         (d02, s01, 1.0 + 2.0 * r11 - tr, s12), (d10, s02, s12, 1.0 + 2.0 * r22 - tr))[k]
+    norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    w, x, y, z = (c / norm for c in q)
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    n = math.sqrt(x * x + y * y + z * z)
+    scale = 2.0 / w * (1.0 - n * n / (3.0 * w * w)) if n < 1e-8 else 2.0 * math.atan2(n, w) / n
+    return np.array([x * scale, y * scale, z * scale]).reshape(R.shape[:-2] + (3,))

@@ -58,7 +58,8 @@ class TargetChain:
     def __init__(self, model, q, geometry, frames, targets, stations=None, deflection=None):
         self.model = model
         self.deflection = deflection
-        self.q = np.asarray(q, dtype=float)
+        self.q = np.array(q, dtype=float, order="C")  # an owned, read-only copy: the model checks it once
+        self.q.setflags(write=False)
         N = len(self.q)
         self.stations = np.zeros(N, dtype=int) if stations is None else np.asarray(stations, dtype=int)
         if self.stations.shape != (N,):
