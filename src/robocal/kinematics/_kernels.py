@@ -36,6 +36,15 @@ def _mul_affine(A, B, out):
         out[i, 3] = a0 * B[0, 3] + a1 * B[1, 3] + a2 * B[2, 3] + A[i, 3]
 
 
+@njit(cache=_CACHE)
+def _copy34(src, dst):
+    """dst[:, :] = src for (3, 4) blocks, as a loop: numba compiles an array-to-slice assignment
+    with its shape-mismatch message (f-strings, str.join: ~4 s of the first compile)."""
+    for i in range(3):
+        for j in range(4):
+            dst[i, j] = src[i, j]
+
+
 @njit(cache=_CACHE, inline="always")
 def _model_joint(q_row, m, cpl_ptr, cpl_idx, cpl_coef):
     acc = 0.0
@@ -336,13 +345,13 @@ def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_p
             L = op_link[t]
             if L != cur:
                 if cur >= 0:
-                    frames[n, cur] = M
+                    _copy34(M, frames[n, cur])
                 cur = L
                 p = link_parent[L]
                 if p < 0:
-                    M[:, :] = root
+                    _copy34(root, M)
                 else:
-                    M[:, :] = frames[n, p]
+                    _copy34(frames[n, p], M)
             code = op_code[t]
             value = op_value[t]
             jm = op_joint[t]
@@ -359,7 +368,7 @@ def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_p
                         jtw[n, r, jm] = tw[r]
             _apply_op(M, code, value, op_axis[t])
         if cur >= 0:
-            frames[n, cur] = M
+            _copy34(M, frames[n, cur])
     return ptw, jtw, frames
 
 
@@ -394,13 +403,13 @@ def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, li
             L = op_link[t]
             if L != cur:
                 if cur >= 0:
-                    frames[cur] = M
+                    _copy34(M, frames[cur])
                 cur = L
                 p = link_parent[L]
                 if p < 0:
-                    M[:, :] = root
+                    _copy34(root, M)
                 else:
-                    M[:, :] = frames[p]
+                    _copy34(frames[p], M)
             code = op_code[t]
             value = op_value[t]
             jm = op_joint[t]
@@ -418,7 +427,7 @@ def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, li
                 tw[col, 5] = tw5
             _apply_op(M, code, value, op_axis[t])
         if cur >= 0:
-            frames[cur] = M
+            _copy34(M, frames[cur])
         for k in range(K):
             L = target_link[k]
             if L < 0:

@@ -10,7 +10,10 @@ from __future__ import annotations
 
 import os
 
-PARALLEL_MIN = 20_000  # poses; below this one thread is as fast (measured on a 2-core VM)
+#: Poses from which a batch is shared between the cores. On the idle 2-core VM (UR10, 2026-11-24)
+#: two threads beat one from ~2,000 poses (10.4 vs 7.4 M poses/s; 13.5 vs 7.5 M at 10,000); below a
+#: few thousand the thread hand-off (~10-50 us) and a busy second core make it a gamble.
+PARALLEL_MIN = 4_000
 
 _pool = None
 

@@ -251,7 +251,6 @@ class RobotModel:
         self._root_affine = self.T_world_base[:3].copy()
         self._identity_root = np.eye(4)[:3].copy()
         self._target_cache = {}
-        self._checked_q = None
 
     def _build_operation_program(self, model_index: dict) -> None:
         """Operation program (Jacobians, reference FK): one row per elementary operation."""
@@ -323,8 +322,6 @@ class RobotModel:
 
     # ------------------------------------------------------------------ joints
     def _as_joints(self, q) -> tuple[np.ndarray, bool]:
-        if q is self._checked_q:  # the same immutable array as last time: checked already
-            return q, False
         q = np.asarray(q, dtype=float)
         single = q.ndim == 1
         q2 = q[None] if single else q
@@ -335,10 +332,6 @@ class RobotModel:
                 return np.ascontiguousarray(q2), single
             r, c = np.argwhere(~np.isfinite(q2))[0]
             raise ValueError(f"{self.name}: pose {r}, joint {self.controller_joints[c]} is {q2[r, c]} (not a finite number)")
-        if (q2 is q and q.base is None and not q.flags.writeable and q.flags.c_contiguous):
-            # an array that owns its data and is read-only cannot change: a solver passes the same
-            # joints every iteration (checking them cost ~10 us of a ~100 us evaluation)
-            self._checked_q = q
         return np.ascontiguousarray(q2), single
 
     def model_joints(self, q) -> np.ndarray:
@@ -381,7 +374,12 @@ class RobotModel:
     def fk_all(self, q) -> np.ndarray:
         """Poses of every end effector: (N, n_ee, 4, 4) [mm]."""
         q2, single = self._as_joints(q)
-        out, _ = _kernels.fk_fused(q2, *self._fused, False)
+        if len(self.end_effectors) == 1:  # the FK kernel fk() uses (one kernel compiled, not two)
+            out = np.empty((len(q2), 1, 4, 4))
+            run_ranges(_kernels.fk_fused_into, len(q2), q2, self._fused_ints, self._fused_floats, 0,
+                       out.reshape(len(q2), 4, 4))
+        else:
+            out, _ = _kernels.fk_fused(q2, *self._fused, False)
         return out[0] if single else out
 
     def link_frames(self, q) -> np.ndarray:
@@ -461,15 +459,18 @@ class RobotModel:
         masks = self._ee_ancestors[list(ees)][:, self.params.link_of]
         return T, ptw, jtw, masks
 
-    def target_points(self, q, params, points_in_ee, ee_of_point, free_index, want_jacobian=True, root=None):
+    def target_points(self, q, params, points_in_ee, ee_of_point, free_index, want_jacobian=True, root=None, *,
+                      q_checked: bool = False):
         """Points carried by end effectors, in the base frame (no ``T_world_base``) or in the frame
         where the base sits at ``root`` (4, 4), with their derivatives w.r.t. the parameters
         ``free_index`` -- the calibration hot path, one kernel call.
 
         params (P,) [mm | rad]; points_in_ee (K, 3) [mm]; ee_of_point (K,) end-effector indices.
-        Returns p (N, K, 3), R_base_ee (N, K, 3, 3), J (N, K, 3, len(free_index)).
+        Returns p (N, K, 3), R_base_ee (N, K, 3, 3), J (N, K, 3, len(free_index)). ``q_checked``:
+        ``q`` is already a C-contiguous float64 (N, n_ctrl) array of finite values (a solver's
+        fixed joints, checked once; skips ~10 us of checks per call).
         """
-        q2, _ = self._as_joints(q)
+        q2 = q if q_checked else self._as_joints(q)[0]
         params = np.asarray(params, dtype=float)
         # the key as bytes: building tuples of Python ints cost ~15 us a call on the solver's hot path
         key = (np.asarray(ee_of_point, dtype=np.int64).tobytes(), np.asarray(free_index, dtype=np.int64).tobytes())

@@ -58,8 +58,13 @@ class TargetChain:
     def __init__(self, model, q, geometry, frames, targets, stations=None, deflection=None):
         self.model = model
         self.deflection = deflection
-        self.q = np.array(q, dtype=float, order="C")  # an owned, read-only copy: the model checks it once
-        self.q.setflags(write=False)
+        self.q = np.asarray(q, dtype=float)
+        if self.q.ndim != 2 or self.q.shape[1] != model.n_joints:
+            raise ProblemError(f"joints: expected shape (N, {model.n_joints}), got {self.q.shape}")
+        bad = np.argwhere(~np.isfinite(self.q))
+        if len(bad):
+            raise ProblemError(f"joints: pose {bad[0][0]}, joint {bad[0][1]} is {self.q[tuple(bad[0])]} (not a finite number)")
+        self._q_kernel = np.ascontiguousarray(self.q)  # checked once here, not at every evaluation
         N = len(self.q)
         self.stations = np.zeros(N, dtype=int) if stations is None else np.asarray(stations, dtype=int)
         if self.stations.shape != (N,):
@@ -87,17 +92,18 @@ class TargetChain:
         blocks = self.parameter_blocks
         wants = tuple(ev.wants(b) for b in blocks)
         elastic = None if self.deflection is None else tuple(ev[b] for b in self.deflection.blocks)
-        return self.predict(ev[self.geometry], ev[self.frames], ev[self.targets], self.q, self.stations,
-                            wants if ev.jacobian else None, elastic=elastic)
+        return self.predict(ev[self.geometry], ev[self.frames], ev[self.targets], self._q_kernel, self.stations,
+                            wants if ev.jacobian else None, elastic=elastic, q_checked=True)
 
     def predict(self, params, bases, points_ee, q, stations, wants=None, *, elastic=None,
-                payload="default", gravity=None) -> ChainPoints:
+                payload="default", gravity=None, q_checked: bool = False) -> ChainPoints:
         """Target points (N, K, 3) at joints ``q`` (N, n_ctrl) and ``stations`` (N,), for block values
         ``params`` (P,), ``bases`` (G, 4, 4), ``points_ee`` (K, 3); ``wants``: None (no Jacobians)
         or one bool per parameter block (geometry, frames, targets[, compliance, gravity]).
         ``elastic``: the (compliance, gravity) block values of a chain with a deflection (default:
         the blocks' initial values); ``payload``: that of the deflection, or one for new poses;
-        ``gravity``: (3,) or (N, 3) [m/s^2] in the base frame for new poses (default the deflection's)."""
+        ``gravity``: (3,) or (N, 3) [m/s^2] in the base frame for new poses (default the deflection's);
+        ``q_checked``: ``q`` is known C-contiguous and finite (the chain's own joints)."""
         if self.deflection is not None:
             if elastic is None:
                 elastic = tuple(b.initial for b in self.deflection.blocks)
@@ -108,11 +114,12 @@ class TargetChain:
         model, ee = self.model, self.ee_of_target
         jac = {}
         if self.frames.n_frames == 1:  # one base frame: the kernel works in the instrument frame directly
-            pts, R_inst_ee, Jg = model.target_points(q, params, points_ee, ee, index, jacobian, root=bases[0])
+            pts, R_inst_ee, Jg = model.target_points(q, params, points_ee, ee, index, jacobian, root=bases[0],
+                                                     q_checked=q_checked)
             if want_g:
                 jac[self.geometry] = Jg
         else:
-            p_base, R_base_ee, Jg = model.target_points(q, params, points_ee, ee, index, jacobian)
+            p_base, R_base_ee, Jg = model.target_points(q, params, points_ee, ee, index, jacobian, q_checked=q_checked)
             Rb = bases[stations, :3, :3]
             pts = np.einsum("nij,nkj->nki", Rb, p_base) + bases[stations, :3, 3][:, None]
             if want_g:

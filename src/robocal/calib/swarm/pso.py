@@ -23,7 +23,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import qmc
 
 __all__ = ["constriction_factor", "halton_swarm", "run_pso", "PSOOutcome", "SwarmInputError"]
 
@@ -64,6 +63,8 @@ def halton_swarm(lower, upper, particles: int, seed) -> tuple[np.ndarray, np.nda
     n = lo.size
     ss = np.random.SeedSequence(seed)
     s_pos, s_vel = ss.spawn(2)
+    from scipy.stats import qmc  # here: scipy.stats costs ~0.7 s to import, and only a swarm needs it
+
     u = qmc.Halton(d=n, scramble=True, seed=np.random.default_rng(s_pos)).random(particles)
     w = qmc.Halton(d=n, scramble=True, seed=np.random.default_rng(s_vel)).random(particles)
     return lo + u * (up - lo), (w - 0.5) * (up - lo)
