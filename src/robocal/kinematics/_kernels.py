@@ -267,7 +267,7 @@ def fk_fused_single(q, ints, floats, out):
     _write_pose(G, ee_anchor[0], E[0], out, tmp)
 
 
-@njit(cache=_CACHE)
+@njit(cache=_CACHE, inline="always")
 def _apply_op(M, code, value, ax):
     """Right-multiply the affine frame M (3x4) in place by one elementary operation."""
     if code == OP_TX or code == OP_TY or code == OP_TZ:
@@ -310,7 +310,7 @@ def _apply_op(M, code, value, ax):
             M[i, k] = c * mk - s * mj
 
 
-@njit(cache=_CACHE)
+@njit(cache=_CACHE, inline="always")
 def _op_twist(M, code, ax):
     """Spatial twist (omega, v) of an elementary operation acting at frame M (3x4)."""
     w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
