@@ -49,7 +49,7 @@ class DampedGaussNewton:
         # robust weights act per pose; rows of no pose (priors, label -1) share one extra slot of weight 1
         self.pose_of_row = np.where(labels[:, 0] < 0, self.n_poses, labels[:, 0])
         self.n_slots = self.n_poses + 1
-        self.col_scale = np.linalg.norm(J, axis=0)
+        self.col_scale = np.sqrt(np.einsum("ij,ij->j", J, J))  # column norms
         self.col_scale[self.col_scale == 0] = 1.0
         self.geom = problem.blocks == "geometry"
         self.p_start = problem.variable_values(state, "geometry") if prior_weight else None
@@ -159,7 +159,7 @@ class DampedGaussNewton:
             if self.method == "lm":
                 try:
                     A = G.copy()  # G + lam * max(diag G) * I: only the diagonal changes
-                    A.flat[::len(A) + 1] += self.lam * g_max
+                    A.ravel()[::len(A) + 1] += self.lam * g_max  # a view of the copy's diagonal
                     step_s = cholesky_solve(cholesky_factor(A, overwrite=True), g)
                 except np.linalg.LinAlgError:
                     self.lam *= 10.0

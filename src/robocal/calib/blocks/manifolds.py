@@ -79,6 +79,12 @@ class FramesBlock(ParameterBlock):
 
     def retract(self, value, delta):
         d = np.asarray(delta).reshape(-1, 6)
+        if len(d) == 1:  # one frame (the usual base): 2-D products, cheaper than the batched ones
+            R = so3_exp(d[0, :3])
+            out = value.copy()
+            out[0, :3, :3] = R @ value[0, :3, :3]
+            out[0, :3, 3] = R @ value[0, :3, 3] + d[0, 3:]
+            return out
         R = so3_exp(d[:, :3])
         out = value.copy()
         out[:, :3, :3] = R @ value[:, :3, :3]
