@@ -12,6 +12,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ...transforms import skew, so3_exp, so3_log
@@ -34,6 +36,22 @@ def so3_right_jacobian_inverse(phi) -> np.ndarray:
     ths = np.where(small, 1.0, th)
     c = np.where(small, 1.0 / 12.0, 1.0 / ths**2 - (1.0 + np.cos(ths)) / (2.0 * ths * np.sin(ths)))
     return np.eye(3) + 0.5 * K + c * (K @ K)
+
+
+def _small_rotation(x, y, z) -> np.ndarray:
+    """exp(skew(w)) (3, 3) of one rotation vector w = (x, y, z) [rad] in scalar arithmetic: the
+    solvers' frame update, ~2x faster than :func:`so3_exp` for one vector. It equals ``so3_exp`` to
+    rounding (~1e-16), not bit for bit, which is why the simulators keep ``so3_exp``."""
+    th2 = x * x + y * y + z * z
+    th = math.sqrt(th2)
+    if th < 1e-6:
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:
+        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
+    bxy, bxz, byz = b * x * y, b * x * z, b * y * z
+    return np.array([[1.0 - b * (y * y + z * z), bxy - a * z, bxz + a * y],
+                     [bxy + a * z, 1.0 - b * (x * x + z * z), byz - a * x],
+                     [bxz - a * y, byz + a * x, 1.0 - b * (x * x + y * y)]])  # I + a K + b K^2, K = skew(w)
 
 
 class VectorBlock(ParameterBlock):
@@ -79,8 +97,8 @@ class FramesBlock(ParameterBlock):
 
     def retract(self, value, delta):
         d = np.asarray(delta).reshape(-1, 6)
-        if len(d) == 1:  # one frame (the usual base): 2-D products, cheaper than the batched ones
-            R = so3_exp(d[0, :3])
+        if len(d) == 1:  # one frame (the usual base): scalar rotation, 2-D products
+            R = _small_rotation(*(float(v) for v in d[0, :3]))
             out = value.copy()
             out[0, :3, :3] = R @ value[0, :3, :3]
             out[0, :3, 3] = R @ value[0, :3, 3] + d[0, 3:]
