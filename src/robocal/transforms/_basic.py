@@ -15,6 +15,7 @@ import numpy as np
 from ._quaternion import rotvec_from_matrix
 
 __all__ = [
+    "rodrigues_coefficients",
     "rot_x",
     "rot_y",
     "rot_z",
@@ -139,16 +140,21 @@ def so3_exp(rotvec) -> np.ndarray:
     return np.eye(3) + a * K + b * (K @ K)
 
 
+def rodrigues_coefficients(x: float, y: float, z: float) -> tuple[float, float]:
+    """``(sin t / t, (1 - cos t) / t^2)`` for the rotation vector (x, y, z) [rad] of angle t (their
+    series below t = 1e-6): ``exp(skew(w)) = I + a skew(w) + b skew(w)^2``."""
+    th2 = x * x + y * y + z * z
+    th = math.sqrt(th2)
+    if th < 1e-6:
+        return 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    return math.sin(th) / th, (1.0 - math.cos(th)) / th2
+
+
 def _so3_exp_one(w) -> np.ndarray:
     """:func:`so3_exp` of one rotation vector (shape (3,) or (1, 3)) with scalar math: the same
     formula, ~6x faster than the batched code for one frame (the solvers' frame updates)."""
     x, y, z = (float(v) for v in w.reshape(3))
-    th2 = x * x + y * y + z * z
-    th = math.sqrt(th2)
-    if th < 1e-6:
-        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
-    else:
-        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
+    a, b = rodrigues_coefficients(x, y, z)
     K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
     return (np.eye(3) + a * K + b * (K @ K)).reshape(w.shape[:-1] + (3, 3))
 
