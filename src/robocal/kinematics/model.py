@@ -14,7 +14,6 @@ link's offset is ``d = q_model + d_0``.
 from __future__ import annotations
 
 import math
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -334,6 +333,11 @@ class RobotModel:
             raise ValueError(f"{self.name}: pose {r}, joint {self.controller_joints[c]} is {q2[r, c]} (not a finite number)")
         return np.ascontiguousarray(q2), single
 
+    def checked_joints(self, q) -> np.ndarray:
+        """``q`` as a C-contiguous float64 (N, n_ctrl) array, checked for shape and finite values
+        (ValueError naming the pose and joint otherwise): what ``q_checked=True`` promises."""
+        return self._as_joints(q)[0]
+
     def model_joints(self, q) -> np.ndarray:
         """Model joint values (..., n_model) from controller joints (..., n_ctrl)."""
         return np.asarray(q, dtype=float) @ self.coupling.T
@@ -374,10 +378,8 @@ class RobotModel:
     def fk_all(self, q) -> np.ndarray:
         """Poses of every end effector: (N, n_ee, 4, 4) [mm]."""
         q2, single = self._as_joints(q)
-        if len(self.end_effectors) == 1:  # the FK kernel fk() uses (one kernel compiled, not two)
-            out = np.empty((len(q2), 1, 4, 4))
-            run_ranges(_kernels.fk_fused_into, len(q2), q2, self._fused_ints, self._fused_floats, 0,
-                       out.reshape(len(q2), 4, 4))
+        if len(self.end_effectors) == 1:  # fk()'s kernel: one FK kernel compiled, not two
+            out = self.fk(q2)[:, None]
         else:
             out, _ = _kernels.fk_fused(q2, *self._fused, False)
         return out[0] if single else out

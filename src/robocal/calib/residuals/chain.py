@@ -59,12 +59,7 @@ class TargetChain:
         self.model = model
         self.deflection = deflection
         self.q = np.asarray(q, dtype=float)
-        if self.q.ndim != 2 or self.q.shape[1] != model.n_joints:
-            raise ProblemError(f"joints: expected shape (N, {model.n_joints}), got {self.q.shape}")
-        bad = np.argwhere(~np.isfinite(self.q))
-        if len(bad):
-            raise ProblemError(f"joints: pose {bad[0][0]}, joint {bad[0][1]} is {self.q[tuple(bad[0])]} (not a finite number)")
-        self._q_kernel = np.ascontiguousarray(self.q)  # checked once here, not at every evaluation
+        self._q_kernel = model.checked_joints(self.q)  # checked once here, not at every evaluation
         N = len(self.q)
         self.stations = np.zeros(N, dtype=int) if stations is None else np.asarray(stations, dtype=int)
         if self.stations.shape != (N,):
