@@ -21,6 +21,9 @@ ABB IRB140 robots, each with its own hidden true parameters):
 * **per-task overhead**: (a) the round trip of an empty task (1,000 no-op tasks through the same
   client, wall time / 1,000 x workers), (b) in the fleet run, wall x workers minus the summed
   in-task time, per robot;
+* the CPU time of the script's own process during the fleet runs (client and scheduler: they
+  share the cores with the workers), per robot and per task (``--robots-per-task`` to compare
+  group sizes);
 * an estimate for 1,000 robots from the measured per-robot time and overhead.
 
 Every figure is the median of the repeats (serial and fleet interleaved, so load changes affect both).
@@ -71,15 +74,16 @@ def serial_loop(fleet_file: Path, out: Path, limit: int | None = None) -> float:
     return time.perf_counter() - t0
 
 
-def fleet_run(client, fleet_file: Path, out: Path):
+def fleet_run(client, fleet_file: Path, out: Path, per_task=None):
+    """Wall time, summed in-task time and this (client + scheduler) process's CPU time of one run."""
     from robocal.workflows.fleet import run_fleet_calibration
 
-    t0 = time.perf_counter()
-    r = run_fleet_calibration(fleet_file, out, client=client, report=False)
-    wall = time.perf_counter() - t0
+    t0, c0 = time.perf_counter(), time.process_time()
+    r = run_fleet_calibration(fleet_file, out, client=client, report=False, per_task=per_task)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     rows = r["summary"]["robots"]
     assert all(row["status"] == "ok" for row in rows), [row for row in rows if row["status"] != "ok"][:2]
-    return wall, sum(row["seconds"] for row in rows)
+    return wall, sum(row["seconds"] for row in rows), cpu
 
 
 def _share(fleet_file, out, k, workers, barrier, spans):
@@ -132,6 +136,8 @@ def main():
     ap.add_argument("--poses", type=int, default=100)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--workers", type=int, default=None, help="local cluster size (default: usable CPUs)")
+    ap.add_argument("--robots-per-task", type=int, default=None,
+                    help="robots per Dask task (default: robocal fleet calibrate's automatic choice)")
     args = ap.parse_args()
     from robocal.workflows.fleet_cluster import default_workers, fleet_client
 
@@ -150,13 +156,14 @@ def main():
         with fleet_client(workers=workers) as client:
             client.run(lambda: __import__("robocal.workflows.calibrate"))
             start = time.perf_counter() - t0
-            fleet_run(client, fleet_file, tmp / "fleet-warm")  # workers load the kernels from cache
-            serial, fleet, busy, plain = [], [], [], []
+            fleet_run(client, fleet_file, tmp / "fleet-warm", args.robots_per_task)  # kernels from cache
+            serial, fleet, busy, plain, client_cpu = [], [], [], [], []
             for k in range(args.repeat):
                 serial.append(serial_loop(fleet_file, tmp / f"serial{k}"))
-                w, b = fleet_run(client, fleet_file, tmp / f"fleet{k}")
+                w, b, c = fleet_run(client, fleet_file, tmp / f"fleet{k}", args.robots_per_task)
                 fleet.append(w)
                 busy.append(b)
+                client_cpu.append(c)
                 plain.append(plain_processes(fleet_file, tmp / f"plain{k}", workers))
                 print(f"  repeat {k + 1}: serial {serial[-1]:.2f} s, fleet {w:.2f} s, "
                       f"plain processes {plain[-1]:.2f} s")
@@ -179,6 +186,12 @@ def main():
     print(f"per-task overhead: empty task {1e3 * empty * workers:.2f} ms of a worker; in the fleet run "
           f"{1e3 * per_task_overhead:.1f} ms per robot (wall x workers - time inside the tasks) = "
           f"{100 * per_task_overhead / (per_task_overhead + b / n):.1f} % of a task")
+    from robocal.workflows.fleet import robots_per_task
+
+    size = robots_per_task(n, workers, args.robots_per_task)
+    cc = statistics.median(client_cpu)
+    print(f"client process (client + scheduler) CPU in the fleet run: {cc:.2f} s = {1e3 * cc / n:.2f} ms per robot, "
+          f"{1e3 * cc / -(-n // size):.2f} ms per task ({size} robot(s) per task)")
     est = 1000 * (b / n + per_task_overhead) / workers
     print(f"estimate for 1,000 robots x {args.poses} poses: {est:.0f} s on {workers} workers here; "
           f"{1000 * (b / n + per_task_overhead) / 32:.0f} s on 32 such workers (4 machines x 8 cores), "

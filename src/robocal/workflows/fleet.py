@@ -12,7 +12,7 @@ one bad robot never stops the others. See :mod:`robocal.workflows.fleet_robot` f
 
 Each robot is calibrated on its own (its own inputs, outputs, hash and history cycle); the Dask
 tasks carry a few robots each (:func:`robots_per_task`): a 100-pose calibration takes ~30 ms, and
-the scheduler's and client's work per task (~2-3 ms of CPU in the client process, measured in
+the scheduler's and client's work per task (~3.7 ms of CPU in the client process, measured in
 benchmarks/bench_fleet.py) competed with the workers for the same cores.
 """
 
