@@ -1,9 +1,10 @@
 """The calibration core's error type (shared by blocks, residuals, problems and builders)."""
 
 from __future__ import annotations
+from ..errors import InputError
 
 __all__ = ["ProblemError"]
 
 
-class ProblemError(ValueError):
+class ProblemError(InputError):
     """A calibration problem is set up inconsistently (the message names what and where)."""

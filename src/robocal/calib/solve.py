@@ -12,6 +12,7 @@ Both re-linearize around the current state every iteration; frames are updated b
 """
 
 from __future__ import annotations
+from ..errors import RobocalWarning
 
 import math
 import warnings
@@ -27,7 +28,7 @@ from .identifiability import IdentifiabilityReport, analyse_identifiability
 __all__ = ["CalibrationResult", "solve", "NotConvergedWarning", "not_converged_message"]
 
 
-class NotConvergedWarning(UserWarning):
+class NotConvergedWarning(RobocalWarning):
     """The solver stopped without meeting its convergence criteria (raised by :func:`solve`; the
     message names the reason, the iterations and the condition number)."""
 

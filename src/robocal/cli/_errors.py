@@ -12,6 +12,7 @@ import sqlite3
 
 import click
 
+from ..errors import RobocalError
 from ..workflows.outputs import describe_os_error
 
 __all__ = ["GuardedGroup", "one_line_error"]
@@ -27,6 +28,8 @@ def one_line_error(exc: BaseException) -> click.ClickException:
         text = f"history database: {exc} (the file is damaged or not a robocal history database)"
     elif isinstance(exc, UnicodeError):
         text = f"not a UTF-8 text file: {exc}"
+    elif isinstance(exc, RobocalError):
+        text = str(exc)
     elif isinstance(exc, (ValueError, KeyError)):
         text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
     elif isinstance(exc, MemoryError):

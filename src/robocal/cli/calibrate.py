@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from ._common import _names, _step_printer, _user_error
+from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error
 from .calibrate_table import parameter_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
 from .swarm_progress import swarm_progress_bar
@@ -158,7 +158,7 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
         click.echo(f"not reached: {', '.join(bad)} (see the status column)", err=True)
     click.echo(f"wrote {r['file']}")
     if bad:
-        sys.exit(2)
+        sys.exit(EXIT_TARGETS_NOT_REACHED)
 
 
 
@@ -180,4 +180,4 @@ def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, p
         click.echo(f"not read: line {s.line}: {s.reason}")
     click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected; wrote {r['file']} and {r['report']}")
     if r["n_corrected"] < r["n_targets"]:
-        sys.exit(2)
+        sys.exit(EXIT_TARGETS_NOT_REACHED)

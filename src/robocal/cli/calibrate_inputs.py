@@ -9,8 +9,7 @@ import click
 
 __all__ = ["EXIT_NOT_CONVERGED", "import_options", "read_export"]
 
-#: exit code of ``robocal calibrate`` when the solver stopped without converging
-EXIT_NOT_CONVERGED = 4  # 3 is a result that failed the sanity gates (cli/_common.py)
+from ._common import EXIT_NOT_CONVERGED  # noqa: E402  (the one exit-code table, cli/_common.py)
 
 _OPTIONS = [
     click.option("--format", "point_format", type=click.Choice(["robocal", "tracker-csv", "sa-text"]),

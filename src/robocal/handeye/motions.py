@@ -17,6 +17,7 @@ robot poses, C the observations) satisfy ``A X = X B``.
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 import numpy as np
 
@@ -28,7 +29,7 @@ __all__ = ["SETUPS", "HandEyeError", "robot_poses", "motion_pairs", "check_motio
 SETUPS = ("eye_in_hand", "eye_to_hand")
 
 
-class HandEyeError(ValueError):
+class HandEyeError(InputError):
     """A pose set from which the hand-eye transform cannot be determined (the message says why)."""
 
 

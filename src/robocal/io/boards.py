@@ -29,6 +29,7 @@ This module imports no cv2 except to draw ChArUco markers (:func:`board_image`).
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 import re
 from dataclasses import dataclass
@@ -47,7 +48,7 @@ _LENGTH = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(mm|m)\s*$")
 _SIZE = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*$")
 
 
-class BoardSpecError(ValueError):
+class BoardSpecError(InputError):
     """A ``--board`` spec string (or board settings of a file) is not a valid board."""
 
 

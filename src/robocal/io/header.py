@@ -6,6 +6,7 @@ Every reader in :mod:`robocal.io` raises a subclass of :class:`FileFormatError` 
 """
 
 from __future__ import annotations
+from ..errors import InputFileError
 
 import re
 
@@ -16,7 +17,7 @@ __all__ = ["FileFormatError", "KEY_RE", "read_header_block", "read_text", "open_
 KEY_RE = re.compile(r"^#\s*([A-Za-z][A-Za-z0-9_.-]*)\s*:(.*)$")
 
 
-class FileFormatError(ValueError):
+class FileFormatError(InputFileError):
     """A file is malformed or implausible; the base of every reader's error in :mod:`robocal.io`.
 
     The message names the file, the 1-based line number and the column where known; the same are

@@ -9,6 +9,7 @@ and how many of each there are.
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 from dataclasses import dataclass
 
@@ -20,7 +21,7 @@ from .tcp_files import read_flange_poses_csv
 __all__ = ["ImagePoseMismatch", "ImagePoses", "pair_images_with_poses", "pair_images_with_labels"]
 
 
-class ImagePoseMismatch(ValueError):
+class ImagePoseMismatch(InputError):
     """Images and flange poses do not match one to one (counts or names)."""
 
 

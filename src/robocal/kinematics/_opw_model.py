@@ -5,6 +5,7 @@ Lengths in mm, angles in rad.
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 from dataclasses import dataclass, field
 
@@ -17,7 +18,7 @@ __all__ = ["NotAnalyticError", "OPWParameters", "opw_fk"]
 TWO_PI = 2.0 * np.pi
 
 
-class NotAnalyticError(ValueError):
+class NotAnalyticError(InputError):
     """The robot model is not exactly of the OPW class; the message says which condition failed."""
 
 

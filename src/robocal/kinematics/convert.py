@@ -13,6 +13,7 @@ followed by a rotation ``q`` about z (``Rz`` and ``Tz`` commute); prismatic join
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 import numpy as np
 
@@ -23,7 +24,7 @@ from .model import EndEffector, RobotModel
 __all__ = ["dh_to_mdh", "dh_with_beta", "mdh_to_urdf", "to_urdf_kind", "ConversionError"]
 
 
-class ConversionError(ValueError):
+class ConversionError(InputError):
     """The model cannot be converted exactly (the message says why)."""
 
 

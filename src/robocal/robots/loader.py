@@ -1,6 +1,7 @@
 """Read and write robot files (format ``robocal-robot/1``, see docs/robot-files.md)."""
 
 from __future__ import annotations
+from ..errors import InputFileError
 
 import difflib
 import math
@@ -21,7 +22,7 @@ _LENGTH = {"mm": 1.0, "m": 1000.0}
 _ANGLE = {"deg": math.pi / 180.0, "rad": 1.0}
 
 
-class RobotFileError(ValueError):
+class RobotFileError(InputFileError):
     """A robot file is malformed; the message names the file and the offending entry."""
 
 

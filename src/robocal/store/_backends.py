@@ -10,6 +10,7 @@ features), inserts through :meth:`Tx.insert`, tables created from one schema des
 """
 
 from __future__ import annotations
+from ..errors import RobocalError
 
 import sqlite3
 import time
@@ -23,7 +24,7 @@ __all__ = ["HistoryError", "HistoryBusyError", "open_backend", "redact_url"]
 DB_EXTRA_HINT = "pip install 'robocal[db]'"
 
 
-class HistoryError(RuntimeError):
+class HistoryError(RobocalError, RuntimeError):
     """The history database cannot be opened, read or written (the message says which database)."""
 
 

@@ -6,6 +6,7 @@ and where it helps the row and column, that was wrong.
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 import json
 import math
@@ -21,7 +22,7 @@ __all__ = [
 ]
 
 
-class HistoryInputError(ValueError):
+class HistoryInputError(InputError):
     """A value handed to the history store is not acceptable (the message says which and why)."""
 
 

@@ -30,6 +30,7 @@ along ``(cos beta, sin beta)`` in the orthogonal frame (X_s, Y_s'),
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 import math
 from dataclasses import dataclass, field
@@ -55,7 +56,7 @@ BEAM_POINTS = ("A", "B", "C", "D")
 SENSOR_POINT_LABELS = tuple(f"{P}{i}" for P in BEAM_POINTS for i in (1, 2, 3, 4))
 
 
-class SensorCalibrationError(ValueError):
+class SensorCalibrationError(InputError):
     """The recorded points cannot define the sensor frame (coincident points, parallel beams...)."""
 
 

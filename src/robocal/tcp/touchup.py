@@ -23,6 +23,7 @@ Flange poses are ``T_base_flange`` (pose of the flange in the robot base frame, 
 """
 
 from __future__ import annotations
+from ..errors import NotIdentifiableError
 
 import math
 from dataclasses import dataclass, field
@@ -44,7 +45,7 @@ __all__ = [
 DEFAULT_MIN_SPREAD_DEG = 20.0
 
 
-class DegenerateToolPosesError(ValueError):
+class DegenerateToolPosesError(NotIdentifiableError):
     """The flange orientations are too similar to determine the TCP (or the tool frame)."""
 
 

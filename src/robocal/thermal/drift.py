@@ -26,6 +26,7 @@ rad columns compare; the raw condition number of a mixed-unit matrix means nothi
 """
 
 from __future__ import annotations
+from ..errors import NotIdentifiableError
 
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -39,7 +40,7 @@ __all__ = ["DriftResult", "DriftIdentificationError", "RankDeficientError", "dri
            "predict_sphere", "resolve_subset"]
 
 
-class DriftIdentificationError(ValueError):
+class DriftIdentificationError(NotIdentifiableError):
     """The drift identification cannot be set up (shapes, too few equations, unknown names)."""
 
 

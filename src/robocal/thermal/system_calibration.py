@@ -44,6 +44,7 @@ unknowns (e.g. all flange orientations equal: ``P_e`` is then inseparable from `
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 import math
 from dataclasses import dataclass, field
@@ -63,7 +64,7 @@ __all__ = ["SystemCalibration", "SystemCalibrationComparison", "SystemCalibratio
 MIN_SYSTEM_POSES = 5
 
 
-class SystemCalibrationError(ValueError):
+class SystemCalibrationError(InputError):
     """The poses or measurements cannot determine the sensor frame and the sphere centre."""
 
 

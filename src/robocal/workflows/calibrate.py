@@ -22,6 +22,7 @@ read and written by :mod:`robocal.io.targets`.
 """
 
 from __future__ import annotations
+from ..errors import InputError
 
 import json
 import math
@@ -54,7 +55,7 @@ OUTPUT_FILES = {"result": "result.json", "robot": "calibrated_robot.toml", "urdf
                 "report": "report.html"}
 
 
-class CalibrationInputError(ValueError):
+class CalibrationInputError(InputError):
     """The inputs of a calibration cannot work (too few poses, unknown parameter names, ...)."""
 
 

@@ -7,6 +7,7 @@ options): what travels to a worker is the task description, not the data.
 """
 
 from __future__ import annotations
+from ..errors import RobocalError
 
 import contextlib
 import os
@@ -16,7 +17,7 @@ __all__ = ["FleetClusterError", "import_distributed", "fleet_client", "run_tasks
 FLEET_EXTRA_HINT = "pip install 'robocal[fleet]'"
 
 
-class FleetClusterError(RuntimeError):
+class FleetClusterError(RobocalError, RuntimeError):
     """The Dask cluster cannot be used (not installed, not reachable)."""
 
 

@@ -11,6 +11,7 @@ Existing files are checked before any work (``FileExistsError`` naming the file,
 """
 
 from __future__ import annotations
+from ..errors import RobocalError
 
 import contextlib
 import errno
@@ -22,7 +23,7 @@ from pathlib import Path
 __all__ = ["OutputError", "check_outputs_free", "ensure_writable_dir", "staged_outputs", "describe_os_error"]
 
 
-class OutputError(OSError):
+class OutputError(RobocalError, OSError):
     """An output could not be written; the message names the path and the cause."""
 
 

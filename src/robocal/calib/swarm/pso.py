@@ -18,6 +18,7 @@ The whole swarm is evaluated in one call per generation: ``fun(X)`` with X (P, n
 """
 
 from __future__ import annotations
+from ...errors import InputError
 
 import math
 from dataclasses import dataclass
@@ -27,7 +28,7 @@ import numpy as np
 __all__ = ["constriction_factor", "halton_swarm", "run_pso", "PSOOutcome", "SwarmInputError"]
 
 
-class SwarmInputError(ValueError):
+class SwarmInputError(InputError):
     """Bad swarm input: empty or inverted bounds, no particles or generations, bad coefficients,
     an objective that is not finite anywhere in the initial swarm."""
 

@@ -7,6 +7,7 @@ returned with the data and as a :class:`UnitAssumptionWarning`.
 """
 
 from __future__ import annotations
+from ...errors import RobocalWarning
 
 import re
 import warnings
@@ -33,7 +34,7 @@ _DETECT_M_BELOW = 10.0  # undeclared: a spread below 10 units is metres
 _DETECT_MM_FROM = 100.0  # undeclared: a spread of 100 units or more is millimetres
 
 
-class UnitAssumptionWarning(UserWarning):
+class UnitAssumptionWarning(RobocalWarning):
     """An importer assumed a unit or found a declared unit implausible; the message says which."""
 
 

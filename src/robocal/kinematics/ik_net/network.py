@@ -18,6 +18,7 @@ whose solution on this branch needs joints outside the trained box, or a pose ne
 """
 
 from __future__ import annotations
+from ...errors import InputError
 
 import time
 from dataclasses import dataclass, field
@@ -46,7 +47,7 @@ rotation) is ``poor_seed``: about 5 % of poses inside the branch get that flag (
 stated in docs/kinematics.md), poses outside it far more often."""
 
 
-class NetworkMismatchError(ValueError):
+class NetworkMismatchError(InputError):
     """The network was trained for another robot (or other kinematic parameters)."""
 
 

@@ -9,6 +9,7 @@ the controller clock, positions in mm (base frame).
 """
 
 from __future__ import annotations
+from ...errors import InputError
 
 import math
 from dataclasses import dataclass
@@ -18,7 +19,7 @@ import numpy as np
 __all__ = ["BarrierEvent", "MotionRecord", "CrossLaserError"]
 
 
-class CrossLaserError(ValueError):
+class CrossLaserError(InputError):
     """The recorded events cannot be evaluated (missing crossings, inconsistent pattern)."""
 
 
