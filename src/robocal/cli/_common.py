@@ -13,8 +13,10 @@ from ..robots import RobotFileError, load_robot
 #: 0 success; 1 an error (one ``Error:`` line); 2 a usage error (click's own code); 3 a result that
 #: FAILED its sanity gates (written with ``status: failed``, no robot/camera/tool file unless
 #: ``--force``); 4 a solver that did not converge (no output model unless ``--allow-unconverged``);
-#: 5 targets not reached (``correct``: some corrected targets are out of reach).
+#: 5 targets not reached (``correct``: some corrected targets are out of reach); 6 a mechanical fault
+#: suspected (``verify``: one joint's offset explains the misfit).
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, EXIT_TARGETS_NOT_REACHED = 0, 1, 2, 3, 4, 5
+EXIT_MECHANICAL_FAULT = 6
 
 JOINTS_ARG = dict(nargs=-1, type=str, required=True)
 NUMBERS_CONTEXT = {"ignore_unknown_options": True, "allow_interspersed_args": True}

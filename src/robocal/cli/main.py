@@ -22,6 +22,13 @@ def _attach_cross_laser(tcp):
     tcp.add_command(accuracy_cmd)
 
 
+def _attach_simulate_iso(simulate):
+    """``robocal simulate iso9283`` lives with the ISO 9283 commands."""
+    from .iso9283 import simulate_iso9283_cmd
+
+    simulate.add_command(simulate_iso9283_cmd)
+
+
 # Every command: (module in robocal.cli, attribute, one line in `robocal --help`, hook after loading).
 # The modules are imported only when their command runs (or its help is asked for), so that
 # `robocal --help` and `robocal robots` start without numba, scipy or matplotlib. The summaries are
@@ -33,7 +40,8 @@ _COMMANDS = {
     "ik-train": ("ik_net", "ik_train", "Train a learned IK seed (GA-RBF network) for a robot.", None),
     "calibrate": ("calibrate", "calibrate", "Calibrate a robot's kinematics from a measurement file.", None),
     "correct": ("calibrate", "correct", "Corrected joint targets for a nominal-model controller.", None),
-    "simulate": ("simulate", "simulate", "Simulated measurement campaigns with the hidden truth.", None),
+    "simulate": ("simulate", "simulate", "Simulated measurement campaigns with the hidden truth.",
+                 _attach_simulate_iso),
     "tcp": ("tcp", "tcp", "Tool frame calibration: touch-up, light barriers, cross-laser.", _attach_cross_laser),
     "thermal": ("thermal", "thermal", "Thermal drift: system calibration, screening, compensation.", None),
     "history": ("history", "history_cmd", "A robot's calibration and maintenance history.", None),
@@ -46,6 +54,8 @@ _COMMANDS = {
     "closed-chain": ("closed_chain", "closed_chain", "Calibration with a laser spot held on plate targets.", None),
     "fleet": ("fleet", "fleet", "Many robots at once on Dask: calibrate, studies, status.", None),
     "datasets": ("datasets", "datasets", "The real data sets: list them, rerun their protocols.", None),
+    "iso9283": ("iso9283", "iso9283", "ISO 9283 performance test: plan, evaluate.", None),
+    "verify": ("verify", "verify", "Check a calibrated robot with a few poses.", None),
 }
 
 

@@ -1,0 +1,59 @@
+"""``robocal verify``: is the robot still what its calibration promised? ok / recalibrate / fault."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from ._common import EXIT_FAILED_RESULT, EXIT_MECHANICAL_FAULT, _user_error
+
+__all__ = ["verify"]
+
+
+@click.command("verify")
+@click.argument("model", type=click.Path(exists=True))
+@click.argument("measurements", type=click.Path(exists=True, dir_okay=False))
+@click.option("--noise", "noise_mm", default=0.02, show_default=True,
+              help="Instrument noise per coordinate [mm] (standard deviation).")
+@click.option("--false-alarm", "false_alarm_rate", default=0.01, show_default=True,
+              help="Probability that a healthy robot is flagged (the test's alpha).")
+@click.option("--register", "register_frame", is_flag=True,
+              help="The instrument was moved: re-fit its frame on the same poses (a J1 offset is then not checked).")
+@click.option("--tool", "tool", default=None, metavar="X,Y,Z",
+              help="The measured point on the flange [mm] (default: the calibration's identified target).")
+@click.option("--temperature", "temperature_c", type=float, default=None, help="Robot temperature [°C], recorded.")
+@click.option("--instrument", default=None, help="Instrument name/serial, recorded.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool, temperature_c, instrument, as_json):
+    """Check a calibrated robot (MODEL: the calibration folder or its robot file) against a few
+    measured poses (MEASUREMENTS, a robocal measurement file in the calibration's instrument frame).
+
+    Exit 0: ok; 3: recalibrate; 6: mechanical fault suspected (a joint named)."""
+    from ..workflows.verify import run_verify
+    from .iso9283 import _xyz
+
+    point = _xyz(tool, "--tool") if tool else None
+    try:
+        r = run_verify(model, measurements, noise_mm=noise_mm, false_alarm_rate=false_alarm_rate,
+                       register_frame=register_frame, tool_point_mm=point, temperature_c=temperature_c,
+                       instrument=instrument)
+    except (ValueError, OSError) as exc:
+        raise _user_error(exc) from None
+    if as_json:
+        click.echo(json.dumps(r, indent=1))
+    else:
+        click.echo(f"{r['robot']}: {r['n_poses']} poses, residual RMS {r['rms_mm']:.4f} mm, max {r['max_mm']:.4f} mm")
+        click.echo(f"chi2 test: T = {r['statistic']:.1f}, threshold {r['threshold']:.1f} ({r['dof']} dof, "
+                   f"false-alarm rate {r['false_alarm_rate']:g}), p = {r['p_value']:.3g}")
+        for reason in r["reasons"][1:]:
+            click.echo(f"  {reason}")
+        if "suspect_offset" in r:
+            s = r["suspect_offset"]
+            click.echo(f"  {r['suspect_joint']} offset jump {s['value']:+.4f} ± {s['std']:.4f} {s['unit']}")
+        click.echo(f"decision: {r['decision'].upper()}")
+    if r["decision"] == "recalibrate":
+        sys.exit(EXIT_FAILED_RESULT)
+    if r["decision"] == "mechanical fault suspected":
+        sys.exit(EXIT_MECHANICAL_FAULT)

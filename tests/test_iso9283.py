@@ -1,0 +1,183 @@
+"""ISO 9283 characteristics, instrument adequacy, the test plan and its simulated execution."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from robocal.cli import main
+from robocal.performance.adequacy import figure_adequacy, parse_mpe
+from robocal.performance.iso9283 import (
+    distance_characteristics,
+    multidirectional_variation,
+    path_characteristics,
+    pose_characteristics,
+)
+from robocal.performance.iso_cube import iso_test_poses
+from robocal.transforms import rot_z
+
+
+def test_pose_characteristics_by_hand():
+    # four attained positions around commanded (0, 0, 0); by hand: barycentre (1, 0, 0) -> AP = 1;
+    # distances from it: 1, 1, 1, 1 -> l_mean = 1, S_l = 0 -> RP = 1
+    P = np.array([[2.0, 0, 0], [0.0, 0, 0], [1.0, 1, 0], [1.0, -1, 0]])
+    c = pose_characteristics(P, [0, 0, 0])
+    assert c.barycentre_mm == pytest.approx([1, 0, 0], abs=1e-12)
+    assert c.AP_mm == pytest.approx(1.0, abs=1e-12)
+    assert c.RP_mm == pytest.approx(1.0, abs=1e-12)
+    # distances 1, 2 from barycentre (0,0,0) of [[1,0,0],[-1,0,0],[0,2,0],[0,-2,0]]: l = 1,1,2,2;
+    # mean 1.5, S = sqrt(4 * 0.25 / 3) = 0.57735..., RP = 1.5 + 3 * 0.57735 = 3.2320508...
+    c2 = pose_characteristics([[1, 0, 0], [-1, 0, 0], [0, 2, 0], [0, -2, 0]], [0, 0, 1])
+    assert c2.AP_mm == pytest.approx(1.0, abs=1e-12)
+    assert c2.AP_xyz_mm == pytest.approx([0, 0, -1], abs=1e-12)
+    assert c2.RP_mm == pytest.approx(1.5 + 3 * math.sqrt(1 / 3), abs=1e-9)
+
+
+def test_orientation_figures_by_hand():
+    # rotations about z of +0.1, -0.1, +0.3 deg around a commanded identity: AP_c = 0.1 deg,
+    # S_c = std(0.1, -0.1, 0.3) = 0.2 deg -> RP_c = 0.6 deg; a and b are zero
+    R = np.array([rot_z(math.radians(a)) for a in (0.1, -0.1, 0.3)])
+    c = pose_characteristics(np.zeros((3, 3)) + [[0, 0, 0], [0, 0, 1e-3], [0, 0, 2e-3]], [0, 0, 0], R, np.eye(3))
+    assert c.AP_abc_deg == pytest.approx([0, 0, 0.1], abs=1e-9)
+    assert c.RP_abc_deg == pytest.approx([0, 0, 0.6], abs=1e-9)
+
+
+def test_distance_and_multidirectional_by_hand():
+    a = np.array([[0, 0, 0], [0, 0, 0], [0, 0, 0.0]])
+    b = np.array([[10.1, 0, 0], [10.2, 0, 0], [10.3, 0, 0]])        # attained distances 10.1, 10.2, 10.3
+    d = distance_characteristics(a, b, [0, 0, 0], [10, 0, 0])
+    assert d["D_c_mm"] == pytest.approx(10.0, abs=1e-12)
+    assert d["AD_mm"] == pytest.approx(0.2, abs=1e-9)               # 10.2 - 10
+    assert d["RD_mm"] == pytest.approx(3 * 0.1, abs=1e-9)           # S_D = 0.1
+    assert d["AD_x_mm"] == pytest.approx(-0.2, abs=1e-9)            # D_x = x1 - x2 = -10.2 vs -10
+    v = multidirectional_variation([np.zeros((2, 3)), np.ones((2, 3)) * [3, 4, 0], np.ones((2, 3)) * [0, 1, 0]])
+    assert v["vAP_mm"] == pytest.approx(5.0, abs=1e-12)
+
+
+def test_path_characteristics_by_hand():
+    # commanded line along x; two cycles offset by +0.1 and +0.3 mm in y: barycentre offset 0.2 mm
+    # everywhere -> AT = 0.2; l = 0.1, 0.1 -> S = 0 -> RT = 0.1
+    x = np.linspace(0, 100, 201)
+    paths = [np.stack([x, np.full_like(x, dy), np.zeros_like(x)], axis=1) for dy in (0.1, 0.3)]
+    pts = np.array([[20.0, 0, 0], [50.0, 0, 0], [80.0, 0, 0]])
+    r = path_characteristics(pts, np.tile([1.0, 0, 0], (3, 1)), paths)
+    assert r.AT_mm == pytest.approx(0.2, abs=1e-9)
+    assert r.RT_mm == pytest.approx(0.1, abs=1e-9)
+
+
+def test_test_poses_are_on_the_diagonal_plane_at_ten_percent():
+    P = iso_test_poses([100, 0, 500], 400)
+    assert P[0] == pytest.approx([100, 0, 500])
+    diag = math.sqrt(400 ** 2 + (400 * math.sqrt(2)) ** 2)          # plane: 400 x 400*sqrt(2)
+    corner = np.array([100 - 200, -200, 500 - 200])
+    assert np.linalg.norm(P[1] - corner) == pytest.approx(0.1 * diag, rel=1e-12)
+    n = np.cross(P[2] - P[1], P[4] - P[1])
+    assert abs(np.dot(n, P[3] - P[1])) < 1e-6                        # the five are coplanar
+
+
+def test_mpe_and_adequacy_flip_where_theory_says():
+    m = parse_mpe("15um+6um/m")
+    assert m.at(4000) == pytest.approx(0.039)
+    # an RP of 0.03 mm cannot be stated with this tracker at 4 m (its MPE exceeds the figure itself)
+    assert not figure_adequacy(0.03, m, 4000)["adequate"]
+    # an RP of 0.2 mm can (0.039 <= 25 % of 0.2) ...
+    assert figure_adequacy(0.2, m, 4000)["adequate"]
+    # ... and an RP of 0.03 mm with a CMM-class instrument (1 um + 1 um/m) at 1 m too
+    assert figure_adequacy(0.03, parse_mpe("1um + 1um/m"), 1000)["adequate"]
+    assert parse_mpe("0.015mm+0.006mm/m").B_mm_per_m == pytest.approx(0.006)
+    with pytest.raises(ValueError, match="15um\\+6um/m"):
+        parse_mpe("15 + 6")
+
+
+@pytest.fixture(scope="module")
+def iso_run(tmp_path_factory):
+    """Plan, simulate and evaluate the ISO test of an IRB 140 through the command line."""
+    d = tmp_path_factory.mktemp("iso")
+    run = CliRunner().invoke
+    r = run(main, ["iso9283", "plan", "abb_irb140", "--out", str(d / "plan"), "--drift-hours", "1", "--json"])
+    assert r.exit_code == 0, r.output
+    plan = json.loads(r.output)
+    r = run(main, ["simulate", "iso9283", "abb_irb140", str(d / "plan"), "--seed", "4", "--out", str(d / "run.csv"),
+                   "--instrument-at", "3500,0,300"])
+    assert r.exit_code == 0, r.output
+    out = {}
+    for name in ("run.csv", "run.truth.csv"):
+        r = run(main, ["iso9283", "evaluate", str(d / "plan"), str(d / name), "--out", str(d / ("ev-" + name)),
+                       "--mpe", "15um+6um/m", "--instrument-at", "3500,0,300", "--json"])
+        assert r.exit_code == 0, r.output
+        out[name] = json.loads(r.output)
+    return d, plan, out
+
+
+def test_plan_poses_are_feasible(iso_run):
+    from robocal.robots import load_robot
+
+    d, plan, _ = iso_run
+    protocol = json.loads((d / "plan" / "protocol.json").read_text())
+    model = load_robot("abb_irb140")
+    q = np.array([p["joints_rad"] for p in protocol["poses"].values()]
+                 + [p["joints_rad"] for p in protocol["approach_points"].values()])
+    assert np.all(model.within_limits(q))
+    assert np.all(model.link_frames(q)[..., 2, 3] >= 0.0)               # nothing below the mounting plane
+    T = model.fk(q[:5])
+    P = np.array([p["position_mm"] for p in protocol["poses"].values()])
+    assert np.abs(T[:, :3, 3] - P).max() < 1e-3                          # the joints reach the poses
+    assert plan["cube"]["edge_mm"] >= 300
+
+
+def test_every_figure_equals_the_truth_within_the_instrument_uncertainty(iso_run):
+    _, _, out = iso_run
+    meas, true = out["run.csv"]["runs"][0], out["run.truth.csv"]["runs"][0]
+    U = 0.015 + 0.006 * 4.2        # the MPE at the largest test distance (< 4.2 m)
+    keys = ["AP_mm", "RP_mm", "vAP_mm", "AD_mm", "RD_mm", "dAP_mm", "dRP_mm", "AT_mm_line", "RT_mm_line",
+            "AT_mm_circle", "RT_mm_circle"]
+    for k in keys:
+        assert k in meas["summary"], k
+        assert abs(meas["summary"][k] - true["summary"][k]) <= U, (k, meas["summary"][k], true["summary"][k])
+    # the simulated effects show where they must: backlash -> vAP well above zero; the circle is
+    # driven 0.05 mm inside its radius on top of the geometric error
+    assert true["summary"]["vAP_mm"] > 0.01
+    assert true["summary"]["RP_a_deg"] > 0
+    # a tracker cannot state an IRB 140's repeatability: the adequacy says so
+    assert not meas["adequacy"]["RP_mm.P1"]["adequate"]
+    assert meas["adequacy"]["AP_mm.P1"]["adequate"]
+
+
+def test_evaluate_refuses_a_measurement_file_of_another_plan(iso_run, tmp_path):
+    d, _, _ = iso_run
+    bad = tmp_path / "bad.csv"
+    bad.write_text("# format: robocal-iso9283-measurements/1\n# frame: base\n# length_unit: mm\n"
+                   "id,time_s,x,y,z\nfoo.c01.P9,0,1,2,3\n")
+    r = CliRunner().invoke(main, ["iso9283", "evaluate", str(d / "plan"), str(bad), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1 and "not in the plan" in r.output
+    bad.write_text("# format: robocal-iso9283-measurements/1\n# length_unit: mm\nid,time_s,x,y,z\n")
+    r = CliRunner().invoke(main, ["iso9283", "evaluate", str(d / "plan"), str(bad), "--out", str(tmp_path / "o")])
+    assert r.exit_code == 1 and "frame: base" in r.output
+
+
+def test_before_after_with_a_calibrated_program(tmp_path):
+    """A tracker campaign, a calibration, the ISO test before and after the correction: AP drops."""
+    run = CliRunner().invoke
+    assert run(main, ["simulate", "tracker", "abb_irb140", "--poses", "60", "--seed", "5",
+                      "--out", str(tmp_path / "c.csv")]).exit_code == 0
+    r = run(main, ["calibrate", "abb_irb140", str(tmp_path / "c.csv"), "--out", str(tmp_path / "cal")])
+    assert r.exit_code == 0, r.output
+    assert run(main, ["iso9283", "plan", "abb_irb140", "--out", str(tmp_path / "plan"), "--cycles", "5",
+                      "--path-cycles", "3"]).exit_code == 0
+    for name, extra in (("before.csv", []), ("after.csv", ["--calibrated", str(tmp_path / "cal" / "calibrated_robot.toml")])):
+        r = run(main, ["simulate", "iso9283", "abb_irb140", str(tmp_path / "plan"), "--seed", "5",
+                       "--truth", str(tmp_path / "c.truth.json"), "--out", str(tmp_path / name)] + extra)
+        assert r.exit_code == 0, r.output
+    r = run(main, ["iso9283", "evaluate", str(tmp_path / "plan"), str(tmp_path / "before.csv"),
+                   str(tmp_path / "after.csv"), "--out", str(tmp_path / "ev"), "--json"])
+    assert r.exit_code == 0, r.output
+    res = json.loads(r.output)
+    before, after = res["runs"][0]["summary"], res["runs"][1]["summary"]
+    assert before["AP_mm"] > 0.5
+    assert after["AP_mm"] < 0.25 * before["AP_mm"], (before["AP_mm"], after["AP_mm"])
+    assert after["AT_mm_line"] < before["AT_mm_line"]
+    assert {row["characteristic"] for row in res["comparison"]} >= {"AP_mm", "RP_mm", "AD_mm"}
