@@ -120,7 +120,7 @@ def test_nao_model_simulator_run_end_to_end_without_rendering(simulated_run):
     for r, v, s in zip(res.joint_report, res.joint_offsets, res.joint_offset_sigma):
         if r["identifiable"]:
             z.append((v - run.joint_offsets_rad[r["joint"]]) / s)
-    assert len(z) == 9 and max(abs(x) for x in z) < 3.0  # measured 1.06
+    assert len(z) == 9 and max(abs(x) for x in z) < 3.0  # measured 1.59 (docs figure, robocal.docs.figures)
     assert abs(res.rms_px / np.sqrt(2) / NOISE_PX - 1.0) < 0.1  # measured 0.304 px
 
 

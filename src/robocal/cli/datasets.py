@@ -69,7 +69,8 @@ def run_cmd(name, model, root, as_json):
     click.echo(f"{name} ({model}): {rec['protocol']}")
     click.echo(f"{'':18s}{'holdout RMS':>12}{'mean':>8}{'max':>8}   geometric RMS   nominal RMS  [mm]")
     for r in rows:
-        click.echo(f"{r['set']:18s}{r['holdout_rms_mm']:12.3f}{r['holdout_mean_mm']:8.3f}{r['holdout_max_mm']:8.2f}"
+        label = r['set'] + (" (training)" if r.get("role") == "training" else "")
+        click.echo(f"{label:18s}{r['holdout_rms_mm']:12.3f}{r['holdout_mean_mm']:8.3f}{r['holdout_max_mm']:8.2f}"
                    f"   {r['geometric']['rms']:13.3f}   {r['nominal']['rms']:11.3f}")
     for n in notes:
         click.echo(f"Warning: {n}")
