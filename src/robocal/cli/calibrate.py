@@ -79,19 +79,24 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     0 done, 1 error, 3 the result failed the sanity gates (docs/reliability.md), 4 the solver did not
     converge (unless --allow-unconverged).
     """
-    from ..workflows.calibrate import run_calibration
+    from .. import CalibrationOptions, calibrate as calibrate_in_memory
+    from ..workflows.calibrate import check_calibration_outputs
+
+    def step(i, n, text):
+        _step_printer(i, 5 if no_report else n, text)
 
     try:
+        check_calibration_outputs(out_dir, overwrite=overwrite, report=not no_report)
         meas = read_export(robot, data, imp)
-        r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
-                            holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
-                            progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
-                            prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,
-                            measurements=meas, max_iterations=max_iterations,
-                            report=not no_report, force=force, drop_duplicates=drop_duplicates,
-                            method=method, particles=particles, generations=generations,
-                            swarm_progress=swarm_progress_bar(method, generations), elastic=elastic,
-                            payload=payload)
+        options = CalibrationOptions(
+            free=tuple(_names(free)) or None, free_all=free_all, fix=tuple(_names(fix)), holdout=holdout, seed=seed,
+            method=method, loss=loss, noise_mm=sigma_mm, tool_mm=tool, rotation_weight=rotation_weight,
+            use_orientation=not no_orientation, prior_sigma=prior_sigma if prior else None, train_ids=train_ids,
+            holdout_ids=holdout_ids, max_iterations=max_iterations, drop_duplicates=drop_duplicates,
+            particles=particles, generations=generations, elastic=elastic, payload=payload)
+        result = calibrate_in_memory(robot, data if meas is None else meas, options=options, progress=step,
+                                     swarm_progress=swarm_progress_bar(method, generations), name=data)
+        r = result._write(out_dir, overwrite=overwrite, report=not no_report, force=force, progress=step)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
