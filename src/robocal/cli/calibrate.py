@@ -11,6 +11,7 @@ import click
 from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error
 from .calibrate_table import parameter_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
+from ._grammar import POINT
 from .swarm_progress import swarm_progress_bar
 
 
@@ -36,9 +37,9 @@ from .swarm_progress import swarm_progress_bar
 @click.option("--generations", default=2000, show_default=True, help="IPSO: number of generations.")
 @click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
               help="Loss per pose (huber/cauchy down-weight outlier poses).")
-@click.option("--sigma", "sigma_mm", type=float, default=None,
+@click.option("--noise", "sigma_mm", type=float, default=None, metavar="MM",
               help="Measurement noise per coordinate [mm] (default: estimated from the residuals).")
-@click.option("--tool", nargs=3, type=float, default=None, metavar="X Y Z",
+@click.option("--tool", type=POINT, default=None, metavar="X,Y,Z",
               help="Initial target point in the flange frame [mm] (default 0 0 0).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--rotation-weight", "rotation_weight", type=float, default=None, metavar="MM_PER_RAD",

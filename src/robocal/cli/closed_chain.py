@@ -21,9 +21,9 @@ def closed_chain():
 @click.option("--targets", default=5, show_default=True, help="Targets per plate (a row).")
 @click.option("--configurations", default=8, show_default=True, help="Configurations per target.")
 @click.option("--spacing", "spacing_mm", default=50.0, show_default=True, help="Distance between targets [mm].")
-@click.option("--tolerance", "tolerance_mm", default=0.1, show_default=True,
+@click.option("--distance-tolerance", "tolerance_mm", default=0.1, show_default=True, metavar="MM",
               help="Detection tolerance: the spot lies within this of the mark [mm].")
-@click.option("--joint-resolution", "resolution_deg", default=0.001, show_default=True,
+@click.option("--joint-noise", "resolution_deg", default=0.001, show_default=True, metavar="DEG",
               help="Controller joint resolution and reading noise [deg].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the true robot, the laser mount and the holding.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
@@ -54,7 +54,7 @@ def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_m
               help="Known distance between consecutive targets of a plate [mm]: fixes the length scale.")
 @click.option("--spacing-sigma", "spacing_sigma_mm", default=0.02, show_default=True,
               help="Uncertainty of --target-spacing [mm].")
-@click.option("--sigma", "sigma_mm", type=float, default=None,
+@click.option("--noise", "sigma_mm", type=float, default=None, metavar="MM",
               help="Spread of a held spot per in-plate axis [mm] (default: half the file's spot_tolerance_mm).")
 @click.option("--free", "free", multiple=True, metavar="NAMES", help="Parameters to identify (comma separated).")
 @click.option("--free-all", is_flag=True, help="Identify every kinematic parameter.")

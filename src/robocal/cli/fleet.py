@@ -13,6 +13,7 @@ from pathlib import Path
 import click
 
 from ._common import EXIT_FAILED_RESULT, _user_error
+from ._grammar import POINT
 
 __all__ = ["fleet"]
 
@@ -117,8 +118,8 @@ def _exit_on_failures(failed, total) -> None:
               help="History database: an SQLite file or a URL (postgresql+psycopg://user@host/db).")
 @click.option("--max-age", "max_age_days", type=float, default=90.0, show_default=True, metavar="DAYS",
               help="A robot whose last calibration is older is stale.")
-@click.option("--tolerance", "tolerance_mm", type=float, default=0.1, show_default=True, metavar="MM",
-              help="Flag a length parameter whose drift trend since the first calibration exceeds this.")
+@click.option("--distance-tolerance", "tolerance_mm", type=float, default=0.1, show_default=True, metavar="MM",
+              help="Flag a length parameter whose drift trend since the first calibration exceeds this [mm].")
 @click.option("--tolerance-deg", type=float, default=0.01, show_default=True, metavar="DEG",
               help="Flag an angle parameter whose drift trend exceeds this.")
 @click.option("--kind", default="geometric_calibration", show_default=True,
@@ -206,10 +207,10 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
 @click.option("--samples", default=200, show_default=True, help="Virtual robots (each its own true parameters).")
 @click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
 @click.option("--check-poses", default=200, show_default=True, help="Random poses where each result is checked.")
-@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
+@click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
-@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
+@click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
 @_SCHEDULER
 @_WORKERS
 def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, scheduler, workers):
@@ -256,9 +257,10 @@ def _robot_model(robot):
 @click.option("--count", default=40, show_default=True, help="Poses per plan.")
 @click.option("--candidates", default=800, show_default=True, help="Random candidate poses per set.")
 @click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
-@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z")
+@click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
+              help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
-@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
+@click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
 @_SCHEDULER
 @_WORKERS
 def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, scheduler, workers):
@@ -280,7 +282,7 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
 @study.command("thermal")
 @click.argument("runs", nargs=-1, required=True, type=click.Path(file_okay=False))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep per robot.")
-@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
+@click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
 @_SCHEDULER
 @_WORKERS
 def thermal_cmd(runs, n_keep, out_file, scheduler, workers):

@@ -54,8 +54,7 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
               help="Orientation convention of flange_poses.csv (a robocal.transforms.POSE_CONVENTIONS name).")
 @click.option("--length-unit", type=click.Choice(["mm", "m"]), default="mm", show_default=True)
 @click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True)
-@click.option("--robot", default=None,
-              help="Also write joints.csv: the joints of this robot (shipped name or robot file) at every image.")
+@click.argument("robot", default=None, required=False)
 @click.option("--joint-offset-sigma-deg", default=0.05, show_default=True,
               help="With --robot: spread of the robot's true joint zero offsets around its robot file [deg].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses and the image noise.")
@@ -63,7 +62,8 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
 def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, pose_noise_deg, convention,
                         length_unit, angle_unit, robot, joint_offset_sigma_deg, seed, overwrite):
     """Render a hand-eye cell: PNG images of a board (1280x1024, lens distortion, blur, lighting,
-    noise), the flange poses as a CSV in a named convention, the camera and the hidden truth."""
+    noise), the flange poses as a CSV in a named convention, the camera and the hidden truth. With
+    ROBOT (shipped name or robot file) also joints.csv: that robot's joints at every image."""
     from ..workflows.camera_simulate import simulate_camera
 
     if n_images < 1:
@@ -96,7 +96,7 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
 @click.option("--joint-offsets-deg", default=3.0, show_default=True,
               help="True joint zero offsets: uniform within +- this [deg], on every joint moving the camera or a board.")
 @click.option("--length-sigma-mm", default=0.0, show_default=True, help="Spread of true link lengths [mm].")
-@click.option("--joint-noise-deg", default=0.05, show_default=True, help="Joint reading noise per log row [deg].")
+@click.option("--joint-noise", "joint_noise_deg", default=0.05, show_default=True, metavar="DEG", help="Joint reading noise per log row [deg].")
 @click.option("--partial-fraction", default=0.1, show_default=True,
               help="Extra images per chain showing the board only partly, as a fraction of --images-per-chain.")
 @click.option("--board-bow-mm", default=0.0, show_default=True,
