@@ -19,7 +19,7 @@ def load_robot(name_or_path):
     Returns
     -------
     RobotModel
-        The kinematic model; lengths in mm, angles in rad.
+        The kinematic model; its lengths in [mm], angles in [rad].
 
     Raises
     ------
@@ -71,4 +71,5 @@ def _file_error(path, exc: OSError):
     """An :class:`~robocal.errors.InputFileError` naming the file for an operating-system error."""
     from ..errors import InputFileError
 
-    return InputFileError(f"{path}: {exc.strerror or exc}")
+    text = str(exc)
+    return InputFileError(text if str(path) in text else f"{path}: {exc.strerror or text}")
