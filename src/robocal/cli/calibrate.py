@@ -12,10 +12,12 @@ from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_erro
 from .calibrate_table import parameter_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
 from ._grammar import POINT
+from ._json import json_option, set_json_result
 from .swarm_progress import swarm_progress_bar
 
 
 @click.command()
+@json_option
 @click.argument("robot")
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -120,10 +122,12 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     for row in res.get("elastic", {}).get("not_identifiable", []):
         if row["name"].startswith("compliance."):
             click.echo(f"not identifiable: {row['name']}: {row['why']}")
+    set_json_result({**res, "files": r["files"]})
     finish_calibration(r, allow_unconverged)
 
 
 @click.command()
+@json_option
 @click.argument("robot_file")
 @click.argument("targets", type=click.Path(dir_okay=False))
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
@@ -163,6 +167,8 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
     if bad:
         click.echo(f"not reached: {', '.join(bad)} (see the status column)", err=True)
     click.echo(f"wrote {r['file']}")
+    set_json_result({"file": r["file"], "frame": r["frame"], "nominal": r["nominal"], "not_reached": bad,
+                     "targets": [dict(row, name=n) for n, row in zip(r["names"], c.report)]})
     if bad:
         sys.exit(EXIT_TARGETS_NOT_REACHED)
 
@@ -185,5 +191,6 @@ def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, p
     for s in r["skipped"]:
         click.echo(f"not read: line {s.line}: {s.reason}")
     click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected; wrote {r['file']} and {r['report']}")
+    set_json_result({k: r[k] for k in ("file", "report", "n_corrected", "n_targets", "rows")})
     if r["n_corrected"] < r["n_targets"]:
         sys.exit(EXIT_TARGETS_NOT_REACHED)

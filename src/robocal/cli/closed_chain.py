@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ._common import _names, _step_printer, _user_error
+from ._json import json_option, set_json_result
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration
 from .calibrate_table import parameter_table
 
@@ -16,6 +17,7 @@ def closed_chain():
 
 
 @closed_chain.command("simulate")
+@json_option
 @click.argument("robot")
 @click.option("--plates", default=2, show_default=True, help="Plate positions (1-4).")
 @click.option("--targets", default=5, show_default=True, help="Targets per plate (a row).")
@@ -43,9 +45,11 @@ def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_m
     click.echo(f"simulated {r['n_rows']} held spots of {r['robot']} ({plates} plate position(s) x {targets} targets "
                f"x {configurations} configurations, tolerance {tolerance_mm} mm, seed {seed})")
     click.echo(f"wrote {r['spots']} and {r['truth']}")
+    set_json_result(r)
 
 
 @closed_chain.command("calibrate")
+@json_option
 @click.argument("robot")
 @click.argument("spots", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -100,4 +104,5 @@ def calibrate_cmd(robot, spots, out_dir, target_spacing_mm, spacing_sigma_mm, si
     if res.get("validation"):
         v = res["validation"]
         click.echo(f"held-out spots: in-plate error RMS {v['before']['rms']:.4f} mm before, {v['after']['rms']:.4f} mm after")
+    set_json_result({**res, "files": r["files"]})
     finish_calibration(r, allow_unconverged)

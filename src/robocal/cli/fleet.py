@@ -14,6 +14,7 @@ import click
 
 from ._common import EXIT_FAILED_RESULT, _user_error
 from ._grammar import POINT
+from ._json import json_option, set_json_result
 
 __all__ = ["fleet"]
 
@@ -48,6 +49,7 @@ def _history_target(db, no_history, out_dir):
 
 
 @fleet.command("calibrate")
+@json_option
 @click.argument("fleet_file", metavar="FLEET.toml", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for <id>/ per robot, summary.json, summary.html and summary.svg.")
@@ -99,6 +101,7 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
                f"{c['outliers']} outlier(s); {s['wall_seconds']:.1f} s")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values())
                + (f"; history {s['history']}" if s["history"] else ""))
+    set_json_result({**s, "files": r["files"]})
     _exit_on_failures([row for row in s["robots"] if row["status"] != "ok"], c["robots"])
 
 
@@ -202,6 +205,7 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
 
 
 @study.command("monte-carlo")
+@json_option
 @click.argument("robot")
 @click.argument("poses", type=click.Path(dir_okay=False))
 @click.option("--samples", default=200, show_default=True, help="Virtual robots (each its own true parameters).")
@@ -237,6 +241,7 @@ def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, ou
                    f"{r['unconverged_samples'][:10]}")
     _chunk_line(r["chunking"])
     _write_json(r, out_file)
+    set_json_result(r)
 
 
 def _median(v):
@@ -252,6 +257,7 @@ def _robot_model(robot):
 
 
 @study.command("pose-sets")
+@json_option
 @click.argument("robot")
 @click.option("--sets", default=100, show_default=True, help="Candidate sets (seeds SEED .. SEED+SETS-1).")
 @click.option("--count", default=40, show_default=True, help="Poses per plan.")
@@ -277,9 +283,11 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
                f"--candidates {candidates} --seed {best['seed']} --out poses.csv")
     _chunk_line(r["chunking"])
     _write_json(r, out_file)
+    set_json_result(r)
 
 
 @study.command("thermal")
+@json_option
 @click.argument("runs", nargs=-1, required=True, type=click.Path(file_okay=False))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep per robot.")
 @click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
@@ -299,4 +307,5 @@ def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
         else:
             click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
     _write_json(r, out_file)
+    set_json_result(r)
     _exit_on_failures([row for row in r["robots"] if row["status"] != "ok"], len(r["robots"]))

@@ -5,9 +5,11 @@ from __future__ import annotations
 import click
 
 from ._common import _user_error
+from ._json import json_option, set_json_result
 
 
 @click.command("import")
+@json_option
 @click.argument("robot")
 @click.argument("points_file", type=click.Path(dir_okay=False))
 @click.option("--joints", "joints_file", required=True, type=click.Path(dir_okay=False),
@@ -45,3 +47,4 @@ def import_cmd(points_file, joints_file, robot, point_format, pair, id_match, to
     for note in r["notes"]:
         click.echo(f"note: {note}")
     click.echo(f"wrote {r['file']}")
+    set_json_result(dict(r, unmatched=[str(u) for u in r["pairing"].unmatched]))

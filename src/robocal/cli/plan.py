@@ -8,9 +8,11 @@ import click
 
 from ._common import _user_error
 from ._grammar import POINT
+from ._json import json_option, set_json_result
 
 
 @click.command("plan-poses")
+@json_option
 @click.argument("robot")
 @click.option("--count", required=True, type=int, help="Number of poses to plan.")
 @click.option("--candidates", default=1000, show_default=True, help="Random candidate poses within the joint limits.")
@@ -52,3 +54,4 @@ def plan_poses_cmd(robot, count, candidates, workspace, tracker_at, tool, sigma_
     click.echo(f"predicted held-out RMS error {p['holdout_rms_mm']:.4f} mm (model {p['holdout_model_std_mm']:.4f} mm "
                f"+ noise) at the other candidates")
     click.echo(f"wrote {p['file']}")
+    set_json_result(p)

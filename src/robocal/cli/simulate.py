@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ._common import _item_progress, _user_error
+from ._json import json_option, set_json_result
 
 
 @click.group()
@@ -13,6 +14,7 @@ def simulate():
 
 
 @simulate.command("tracker")
+@json_option
 @click.argument("robot")
 @click.option("--poses", "n_poses", default=100, show_default=True, help="Number of random poses.")
 @click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
@@ -36,10 +38,12 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
         raise _user_error(exc) from None
     click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm)")
     click.echo(f"wrote {r['measurements']} and {r['truth']}")
+    set_json_result(r)
 
 
 
 @simulate.command("camera")
+@json_option
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for images/, flange_poses.csv, camera.json and truth.json.")
 @click.option("--board", default="charuco:9x7:30mm:22mm:DICT_5X5_100", show_default=True,
@@ -79,9 +83,11 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
     click.echo(f"rendered {r['n_images']} images of {r['board']} ({r['setup']}, seed {seed})")
     joints = "" if r["joints"] is None else f"{r['joints']}, "
     click.echo(f"wrote {r['images']}/, {r['poses']}, {joints}{r['camera']} and {r['truth']}")
+    set_json_result(r)
 
 
 @simulate.command("self-calibration")
+@json_option
 @click.argument("robot")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for images/, joint_log.csv, frames.csv, camera.json and truth.json.")
@@ -135,3 +141,4 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
     click.echo(f"rendered {r['n_images']} images ({r['n_full']} with the full board) of {r['board']} {where} "
                f"({r['robot']}, seed {seed})")
     click.echo(f"wrote {out_dir}/images/, joint_log.csv, frames.csv, camera.json and truth.json")
+    set_json_result(r)
