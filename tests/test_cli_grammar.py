@@ -196,3 +196,24 @@ def test_json_prints_one_document_on_stdout_and_the_text_on_stderr(tmp_path):
     doc = json.loads(out)
     assert doc == {**json.loads((tmp_path / "cal" / "result.json").read_text()), "files": doc["files"]}
     assert "held-out poses, after" in err
+
+
+def test_progress_without_a_terminal_prints_counts_and_eta_every_few_seconds():
+    import io
+    import time
+
+    from robocal.cli._progress import Progress
+
+    log = io.StringIO()
+    with Progress("samples", 4, every_s=0.05, file=log, tty=False) as bar:
+        for _ in range(4):
+            time.sleep(0.06)
+            bar.update(1)
+    lines = log.getvalue().splitlines()
+    assert len(lines) >= 3 and all(line.startswith("samples: ") for line in lines)
+    assert any("ETA" in line and "s elapsed" in line for line in lines)
+    assert lines[-1].startswith("samples: 4/4 (100 %)") and lines[-1].endswith("done")
+    quiet = io.StringIO()
+    with Progress("quick", 2, every_s=10, file=quiet, tty=False) as bar:  # done within every_s: silent
+        bar.update(2)
+    assert quiet.getvalue() == ""

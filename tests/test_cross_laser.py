@@ -358,7 +358,7 @@ def test_cli_simulate_then_cross_laser(tmp_path):
     r = runner.invoke(simulate_cmd, ["none", "--collisions", "1", "--seed", "3", "--events-out", str(ev),
                                      "--sensor-out", str(sj), "--json"])
     assert r.exit_code == 0, r.output
-    study = json.loads(r.output)
+    study = json.loads(r.stdout)
     assert set(study["variants"]) == {"beta_corrected", "no_beta_correction", "thesis_step3", "thesis_step3_no_beta"}
     r = runner.invoke(cross_laser_cmd, [str(ev), "--sensor", str(sj), "--json"])
     assert r.exit_code == 0, r.output

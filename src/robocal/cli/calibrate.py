@@ -149,7 +149,7 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
     (robocal-targets/1): header lines '# format: robocal-targets/1', '# length_unit: mm|m',
     '# angle_unit: deg|rad', optional '# orientation: <convention>' and '# frame: world|base', then
     columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>] (joints seed the solver).
-    Exit code 2 when a target is not reached.
+    Exit code 5 when a target is not reached.
     """
     from ..io.programs import SUFFIXES
 

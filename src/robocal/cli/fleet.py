@@ -80,7 +80,7 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
     try:
         with _client(scheduler, workers) as client:
             label = f"robots ({len(client.scheduler_info().get('workers', {}))} workers)"
-            with click.progressbar(length=1, label=label, file=sys.stderr, show_pos=True) as bar:
+            with _progress_bar(label) as bar:
                 def progress(done, total, row):
                     bar.length = total
                     bar.update(1)
@@ -187,7 +187,9 @@ def _chunk_line(c):
 
 
 def _progress_bar(label):
-    return click.progressbar(length=1, label=label, file=sys.stderr, show_pos=True)
+    from ._progress import Progress  # a bar on a terminal, a line every few seconds in a log
+
+    return Progress(label, file=sys.stderr)
 
 
 def _study(label, scheduler, workers, fn, *args, **kwargs):

@@ -182,12 +182,17 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     from ..tcp.cross_laser import CrossLaserError
     from ..workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
 
+    from ._progress import Progress
+
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
     try:
-        res = tcp_repeatability_study(collisions=collisions, seed=seed, beta_deg=beta_deg, tilt_deg=tilt_deg,
-                                      repeatability_mm=repeatability_mm, io_rate_hz=io_rate_hz,
-                                      tool_radius_mm=tool_radius_mm, robot=None if robot.lower() == "none" else robot,
-                                      variants=variants, events_path=events_out, sensor_path=sensor_out)
+        with Progress("recalibrations", collisions * len(variants)) as bar:
+            res = tcp_repeatability_study(collisions=collisions, seed=seed, beta_deg=beta_deg, tilt_deg=tilt_deg,
+                                          repeatability_mm=repeatability_mm, io_rate_hz=io_rate_hz,
+                                          tool_radius_mm=tool_radius_mm,
+                                          robot=None if robot.lower() == "none" else robot, variants=variants,
+                                          events_path=events_out, sensor_path=sensor_out,
+                                          progress=lambda done, total: bar.update(1))
     except (CrossLaserError, ValueError, OSError) as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:
