@@ -19,7 +19,7 @@ OLD_NAMES = {"--sigma", "--joint-noise-deg", "--joint-resolution", "--euler", "-
 UNIT_IN_HELP = {"--noise": "[mm]", "--joint-noise": "[deg]", "--time-tolerance": "[s]",
                 "--distance-tolerance": "[mm]", "--tool": "[mm]"}
 #: an optional robot that only overrides what the inputs say stays an option (docs/cli.md)
-OPTIONAL_ROBOT_OPTION = {"handeye solve", "thermal screen"}
+OPTIONAL_ROBOT_OPTION = {"handeye solve"}
 #: commands that produce a result but have no --json yet (docs/cli.md lists them)
 JSON_PENDING = {"ik-train"}
 
@@ -217,3 +217,24 @@ def test_progress_without_a_terminal_prints_counts_and_eta_every_few_seconds():
     with Progress("quick", 2, every_s=10, file=quiet, tty=False) as bar:  # done within every_s: silent
         bar.update(2)
     assert quiet.getvalue() == ""
+
+
+def test_optional_robot_before_a_required_argument(tmp_path):
+    """thermal screen [ROBOT] RUN_DIR: with one argument it is the run folder, with two the robot comes first."""
+    from robocal.cli.thermal import thermal
+
+    captured = {}
+    screen = thermal.commands["screen"]
+    callback = screen.callback
+    screen.callback = lambda **kw: captured.update(kw)
+    try:
+        for args, robot in (([str(tmp_path)], None), (["ur10", str(tmp_path)], "ur10"),
+                            (["--keep", "5", str(tmp_path)], None), ([str(tmp_path), "--keep", "5"], None)):
+            captured.clear()
+            r = CliRunner().invoke(thermal, ["screen", *args])
+            assert r.exit_code == 0, (args, r.output)
+            assert captured["robot"] == robot and captured["run_dir"] == str(tmp_path), args
+        r, _, err = _invoke("thermal", "screen", tmp_path, "--robot", "ur10")
+        assert r.exit_code == 0 and captured["robot"] == "ur10" and "--robot is deprecated" in err
+    finally:
+        screen.callback = callback

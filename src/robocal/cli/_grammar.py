@@ -13,13 +13,19 @@ Rules of a table entry ``{old: new}``:
 * ``ROBOT_ARGUMENT``: the old ``--robot NAME`` becomes the first positional argument;
 * ``("--new", "value")``: the old option is renamed only when a value follows it (``--json FILE``
   becomes ``--summary FILE``; a plain ``--json`` stays the flag).
+
+An optional robot before a required argument (``thermal screen [ROBOT] RUN_DIR``) is declared with
+:data:`OPTIONAL_ROBOT` in a command of class :class:`OptionalRobotCommand`: when the robot is left
+out, an empty first argument is put in its place (click fills positional arguments from the left)
+and becomes None.
 """
 
 from __future__ import annotations
 
 import click
 
-__all__ = ["DEPRECATED", "DEPRECATED_COMMANDS", "ROBOT_ARGUMENT", "install", "rewrite"]
+__all__ = ["DEPRECATED", "DEPRECATED_COMMANDS", "OPTIONAL_ROBOT", "OptionalRobotCommand", "ROBOT_ARGUMENT", "install",
+           "rewrite"]
 
 ROBOT_ARGUMENT = "ROBOT"
 
@@ -46,10 +52,50 @@ DEPRECATED: dict[str, dict] = {
     "thermal calibrate-sensor": {"--sigma": "--noise"},
     "thermal compensate": {"--sigma": "--noise", "--history": "--db"},
     "thermal experiment": {"--first-seed": "--seed"},
+    "thermal screen": {"--robot": ROBOT_ARGUMENT},
 }
 
 #: group path -> {old command name: new command name}
 DEPRECATED_COMMANDS: dict[str, dict] = {"tcp": {"sensor-calibrate": "calibrate-sensor"}}
+
+
+def _none_if_empty(ctx, param, value):
+    return value or None
+
+
+#: keyword arguments of ``click.argument("robot", **OPTIONAL_ROBOT)``: an optional first argument
+#: before required ones (see the module docstring)
+OPTIONAL_ROBOT = {"required": False, "default": None, "callback": _none_if_empty}
+
+
+def _given(value) -> bool:
+    """A parsed argument value that came from the command line (not None, not click's UNSET)."""
+    return value is not None and type(value).__name__ != "Sentinel"
+
+
+def _with_robot_slot(command: click.Command, ctx, args: list) -> list:
+    """``args`` with an empty first argument when the optional robot of ``command`` is left out."""
+    first = next((p for p in command.params if isinstance(p, click.Argument)), None)
+    if first is None or first.name != "robot" or first.required:
+        return args
+    n_required = sum(1 for p in command.params if isinstance(p, click.Argument) and p.required)
+    if n_required == 0:
+        return args
+    try:
+        values, rest, _ = command.make_parser(ctx).parse_args(args=list(args))
+    except click.UsageError:
+        return args  # click reports it when it parses for real
+    given = sum(_given(values.get(p.name)) for p in command.params if isinstance(p, click.Argument)) + len(rest)
+    return [""] + list(args) if given == n_required else args
+
+
+class OptionalRobotCommand(click.Command):
+    """A command whose first argument is an optional ROBOT before required arguments."""
+
+    def parse_args(self, ctx, args):
+        if not ("--help" in args or "-h" in args):
+            args = _with_robot_slot(self, ctx, args)
+        return super().parse_args(ctx, args)
 
 
 def _warn(old: str, new: str) -> None:

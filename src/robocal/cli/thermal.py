@@ -17,6 +17,7 @@ import click
 import numpy as np
 
 from ._common import _names, _user_error as _fail, _step_printer as _progress
+from ._grammar import OPTIONAL_ROBOT, OptionalRobotCommand
 
 __all__ = ["thermal"]
 
@@ -207,7 +208,8 @@ def _wrapped(prefix, text, width=110):
     click.echo(line.rstrip())
 
 
-@thermal.command("screen", short_help="Screen the parameters to re-identify online (thesis 3.2, table 5-1).")
+@thermal.command("screen", cls=OptionalRobotCommand, short_help="Screen the parameters to re-identify online (thesis 3.2, table 5-1).")
+@click.argument("robot", **OPTIONAL_ROBOT)
 @click.argument("run_dir", type=click.Path(path_type=str))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep.")
 @click.option("--threshold-mm", "threshold_mm", default=0.1, show_default=True,
@@ -221,12 +223,12 @@ def _wrapped(prefix, text, width=110):
 @click.option("--sensor", "sensor_file", type=FILE, default=None,
               help="Sensor calibration JSON (calibrate-sensor --out); default: calibrated here from sphere_cold.csv.")
 @click.option("--setup", "setup_file", type=FILE, default=None, help="Set-up JSON (default RUN_DIR/setup.json).")
-@click.option("--robot", "robot", default=None, help="Robot name or file (default: the robot the files name).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def screen_cmd(run_dir, n_keep, threshold_mm, statistic, n_online, params, sensor_file, setup_file, robot, as_json):
     """Parameter screening (thesis 3.2, fig. 3-5, table 5-1) on a heating run.
 
-    RUN_DIR: a run directory as written by 'robocal thermal simulate' (sphere_cold.csv, sphere.csv,
+    ROBOT: robot name or file (default: the robot the files name). RUN_DIR: a run directory as
+    written by 'robocal thermal simulate' (sphere_cold.csv, sphere.csv,
     monitor_cold.csv, monitor.csv, cycles.csv, setup.json). Prints the elimination table (step,
     removed parameter, lambda, remaining set), the selected set, the best online sphere poses, and
     lambda before / traditional / screened on this run. With --params the given set is evaluated
