@@ -21,7 +21,7 @@ UNIT_IN_HELP = {"--noise": "[mm]", "--joint-noise": "[deg]", "--time-tolerance":
 #: an optional robot that only overrides what the inputs say stays an option (docs/cli.md)
 OPTIONAL_ROBOT_OPTION = {"handeye solve"}
 #: commands that produce a result but have no --json yet (docs/cli.md lists them)
-JSON_PENDING = {"ik-train"}
+JSON_PENDING = set()
 
 
 def commands():
