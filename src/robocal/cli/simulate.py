@@ -60,7 +60,7 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
 @click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True)
 @click.argument("robot", default=None, required=False)
 @click.option("--joint-offset-sigma-deg", default=0.05, show_default=True,
-              help="With --robot: spread of the robot's true joint zero offsets around its robot file [deg].")
+              help="With ROBOT: spread of the robot's true joint zero offsets around its robot file [deg].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses and the image noise.")
 @click.option("--overwrite", is_flag=True, help="Replace the files of an earlier run in the folder.")
 def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, pose_noise_deg, convention,
