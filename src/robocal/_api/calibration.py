@@ -218,7 +218,7 @@ def calibrate(robot, measurements, *, options: CalibrationOptions | None = None,
     from ..io.measurements import Measurements
     from ..kinematics import RobotModel
     from ..workflows.calibrate import compute_calibration
-    from .loading import load_robot, read_measurements
+    from .loading import load_robot
 
     o = options if options is not None else CalibrationOptions()
     nominal = robot if isinstance(robot, RobotModel) else load_robot(robot)
@@ -226,11 +226,7 @@ def calibrate(robot, measurements, *, options: CalibrationOptions | None = None,
     if isinstance(measurements, Measurements):
         meas, data_label = measurements, measurements.metadata.get("source", "measurements in memory")
     else:
-        path, data_label = Path(measurements), measurements
-        size_mb = path.stat().st_size / 1e6 if path.is_file() else 0.0
-        if progress is not None and size_mb > 10.0:  # a large file takes seconds to read: say so
-            progress(1, 6, f"reading {measurements} ({size_mb:.0f} MB)")
-        meas = read_measurements(measurements, nominal, drop_duplicates=o.drop_duplicates)
+        meas, data_label = _read(nominal, measurements, o, progress), measurements
     data_label = data_label if name is None else name
     computed = compute_calibration(
         nominal, meas, robot_label=robot_label, data_label=data_label, free=list(o.free) if o.free else None,
@@ -240,3 +236,14 @@ def calibrate(robot, measurements, *, options: CalibrationOptions | None = None,
         max_iterations=o.max_iterations, particles=o.particles, generations=o.generations,
         swarm_progress=swarm_progress, elastic=o.elastic, payload=o.payload, progress=progress)
     return CalibrationResult(computed)
+
+
+def _read(nominal, path, options: CalibrationOptions, progress=None):
+    """The measurements of ``path`` as :func:`calibrate` reads them (joint limits of ``nominal``
+    checked; a line of progress first for a large file)."""
+    from .loading import read_measurements
+
+    size_mb = Path(path).stat().st_size / 1e6 if Path(path).is_file() else 0.0
+    if progress is not None and size_mb > 10.0:  # a large file takes seconds to read: say so
+        progress(1, 6, f"reading {path} ({size_mb:.0f} MB)")
+    return read_measurements(path, nominal, drop_duplicates=options.drop_duplicates)

@@ -82,8 +82,10 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     0 done, 1 error, 3 the result failed the sanity gates (docs/reliability.md), 4 the solver did not
     converge (unless --allow-unconverged).
     """
-    from .. import CalibrationOptions, calibrate as calibrate_in_memory
+    from .. import CalibrationOptions, calibrate as calibrate_in_memory, load_robot
+    from .._api.calibration import _read
     from ..workflows.calibrate import check_calibration_outputs
+    from ..workflows.outputs import ensure_writable_dir
 
     def step(i, n, text):
         _step_printer(i, 5 if no_report else n, text)
@@ -97,7 +99,10 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
             use_orientation=not no_orientation, prior_sigma=prior_sigma if prior else None, train_ids=train_ids,
             holdout_ids=holdout_ids, max_iterations=max_iterations, drop_duplicates=drop_duplicates,
             particles=particles, generations=generations, elastic=elastic, payload=payload)
-        result = calibrate_in_memory(robot, data if meas is None else meas, options=options, progress=step,
+        if meas is None:
+            meas = _read(load_robot(robot), data, options, step)
+        ensure_writable_dir(out_dir)  # before the long work
+        result = calibrate_in_memory(robot, meas, options=options, progress=step,
                                      swarm_progress=swarm_progress_bar(method, generations), name=data)
         r = result._write(out_dir, overwrite=overwrite, report=not no_report, force=force, progress=step)
     except (ValueError, KeyError, OSError) as exc:
