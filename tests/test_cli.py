@@ -22,7 +22,7 @@ def test_fk_json_bx200l_acceptance_command():
 
 
 def test_fk_radians_and_euler():
-    r = run("fk", "ur10", 0, 0, 0, 0, 0, 0, "--euler", "kuka_abc", "--json")
+    r = run("fk", "ur10", 0, 0, 0, 0, 0, 0, "--orientation", "kuka_abc", "--json")
     out = json.loads(r.output)
     assert np.allclose(out["position_mm"], [-1184.3, -256.141, 11.6])
     # zero-pose rotation of the UR10 is Rx(+90 deg): KUKA A, B, C = 0, 0, 90
@@ -35,7 +35,7 @@ def test_fk_radians_and_euler():
     (("fk", "ur10", 1, 2, "x", 3, 4, 5), "joint 3: 'x' is not a number"),
     (("fk", "ur10", 1, 2, "nan", 3, 4, 5), "joint 3: 'nan' is not a finite number"),
     (("fk", "kuka_kr150_r3100", "--deg", 0, -150, 0, 0, 0, 0), "joint A2 = -150 deg is outside its limits"),
-    (("fk", "ur10", 0, 0, 0, 0, 0, 0, "--euler", "kuka"), "kuka"),
+    (("fk", "ur10", 0, 0, 0, 0, 0, 0, "--orientation", "kuka"), "kuka"),
     (("ik", "ur10", 1, 2, 3), "POSE needs 6 values"),
 ])
 def test_bad_input_gives_one_clear_line(args, message):
@@ -48,7 +48,7 @@ def test_bad_input_gives_one_clear_line(args, message):
 
 def test_ik_numeric_recovers_fk_pose():
     q = np.radians([20.0, -70.0, 80.0, 10.0, 30.0, -40.0])
-    fk = json.loads(run("fk", "kuka_kr150_r3100", *q, "--euler", "kuka_abc", "--json").output)
+    fk = json.loads(run("fk", "kuka_kr150_r3100", *q, "--orientation", "kuka_abc", "--json").output)
     pose = fk["position_mm"] + fk["orientation"]["values"]
     start = ",".join(str(v) for v in q + 0.05)
     r = run("ik", "kuka_kr150_r3100", *pose, "--start", start, "--json")

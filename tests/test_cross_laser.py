@@ -355,10 +355,10 @@ def test_cli_simulate_then_cross_laser(tmp_path):
 
     runner = CliRunner()
     ev, sj = tmp_path / "ev.csv", tmp_path / "sensor.json"
-    r = runner.invoke(simulate_cmd, ["--collisions", "1", "--seed", "3", "--robot", "none", "--events-out", str(ev),
+    r = runner.invoke(simulate_cmd, ["none", "--collisions", "1", "--seed", "3", "--events-out", str(ev),
                                      "--sensor-out", str(sj), "--json"])
     assert r.exit_code == 0, r.output
-    study = json.loads(r.output)
+    study = json.loads(r.stdout)
     assert set(study["variants"]) == {"beta_corrected", "no_beta_correction", "thesis_step3", "thesis_step3_no_beta"}
     r = runner.invoke(cross_laser_cmd, [str(ev), "--sensor", str(sj), "--json"])
     assert r.exit_code == 0, r.output
@@ -367,5 +367,5 @@ def test_cli_simulate_then_cross_laser(tmp_path):
     assert np.linalg.norm(np.array(out["tcp_flange_mm"]) - T_true[:3, 3]) < 0.2
     r = runner.invoke(cross_laser_cmd, [str(ev), "--sensor", str(tmp_path / "missing.json")])
     assert r.exit_code != 0 and "not found" in r.output
-    r = runner.invoke(simulate_cmd, ["--collisions", "1", "--robot", "none", "--no-beta-correction"])
+    r = runner.invoke(simulate_cmd, ["none", "--collisions", "1", "--no-beta-correction"])
     assert r.exit_code == 0 and "beta_corrected" not in r.output and "no_beta_correction" in r.output

@@ -170,7 +170,7 @@ def test_calibrate_elastic_then_correct_puts_the_deflecting_robot_on_target(tmp_
     q = robot.random_configurations(120, rng, margin=0.1)
     write_measurements(tmp_path / "m.csv", tracker.measure(robot, q, rng))
     run = CliRunner().invoke(main, ["calibrate", str(path), str(tmp_path / "m.csv"), "--out", str(tmp_path / "cal"),
-                                    "--elastic", "joint", "--payload", "120@0,50,200", "--sigma", "0.02"])
+                                    "--elastic", "joint", "--payload", "120@0,50,200", "--noise", "0.02"])
     assert run.exit_code == 0, run.output
     assert "not identifiable: compliance.A1" in run.output
     report = (tmp_path / "cal" / "report.html").read_text()

@@ -51,7 +51,7 @@ def test_hilti_elastic_joint_beats_every_set_from_the_command_line():
     pytest.importorskip("yaml", reason="the Hilti files need PyYAML (extra 'yaml')")
     out = CliRunner().invoke(main, ["datasets", "run", "hilti_trailblazer", "--model", "elastic-joint", "--json"])
     assert out.exit_code == 0, out.output
-    rec = json.loads(out.output)
+    rec = json.loads(out.stdout)
     assert "warnings" not in rec  # the solver converged
     assert rec["model"] == "elastic-joint" and [s["set"] for s in rec["sets"]] == list(HILTI_SETS)
     for s in rec["sets"]:

@@ -88,7 +88,7 @@ def test_calibrate_elastic_joint_on_a_six_d_file(tmp_path):
     after = {}
     for label, extra in (("elastic", ["--elastic", "joint"]), ("geometric", [])):
         out = tmp_path / label
-        r = CliRunner().invoke(main, ["calibrate", ROBOT, str(path), "--out", str(out), "--sigma", str(SIGMA_MM),
+        r = CliRunner().invoke(main, ["calibrate", ROBOT, str(path), "--out", str(out), "--noise", str(SIGMA_MM),
                                       "--seed", "0", *extra])
         # the geometric model cannot explain the deflection: it fails the sanity gates (exit code 3)
         assert r.exit_code == (0 if label == "elastic" else 3), r.output

@@ -208,8 +208,8 @@ def test_joints_and_robot_file_route_recovers_the_joint_offsets(tmp_path):
     offsets differ from its robot file; `handeye solve --joints --robot --joint-offsets` finds them,
     and names the two that trade off with the camera and target rotations about their axes."""
     out = tmp_path / "cell"
-    r = CliRunner().invoke(main, ["simulate", "camera", "--out", str(out), "--images", "6", "--robot",
-                                  "kuka_kr150_r3100", "--seed", "2"])
+    r = CliRunner().invoke(main, ["simulate", "camera", "kuka_kr150_r3100", "--out", str(out), "--images", "6",
+                                  "--seed", "2"])
     assert r.exit_code == 0, r.output
     truth = json.loads((out / "truth.json").read_text())
     r = CliRunner().invoke(main, ["handeye", "solve", "--joints", str(out / "joints.csv"), "--robot", "kuka_kr150_r3100",

@@ -39,7 +39,7 @@ def campaign(tmp_path_factory):
 
 def test_import_then_calibrate_matches_the_original(campaign):
     d, meas = campaign
-    code, out = _run(["import", d / "leica.csv", "--joints", d / "log.csv", "--robot", "ur10", "--angle-unit", "deg",
+    code, out = _run(["import", "ur10", d / "leica.csv", "--joints", d / "log.csv", "--angle-unit", "deg",
                       "--pair", "id", "--id-match", "number", "--out", d / "imported.csv"])
     assert code == 0, out
     assert "40 pose(s) paired" in out
@@ -59,9 +59,9 @@ def test_import_then_calibrate_matches_the_original(campaign):
 
 def test_import_errors_name_the_problem(campaign):
     d, _ = campaign
-    code, out = _run(["import", d / "leica.csv", "--joints", d / "log.csv", "--robot", "ur10", "--angle-unit", "deg",
+    code, out = _run(["import", "ur10", d / "leica.csv", "--joints", d / "log.csv", "--angle-unit", "deg",
                       "--pair", "time", "--out", d / "x.csv"])
     assert code != 0 and "Error:" in out and "time" in out
-    code, out = _run(["import", d / "leica.csv", "--joints", d / "log.csv", "--robot", "ur10", "--angle-unit", "deg",
+    code, out = _run(["import", "ur10", d / "leica.csv", "--joints", d / "log.csv", "--angle-unit", "deg",
                       "--out", d / "orig.csv"])
     assert code != 0 and "exists" in out

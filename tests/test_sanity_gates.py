@@ -54,7 +54,7 @@ def _assert_failed(r, out, *needles, robot_file=False):
 
 def test_a_good_campaign_passes(campaign):
     d, csv = campaign
-    r = run("calibrate", "ur10", csv, "--out", d / "good", "--sigma", 0.02)
+    r = run("calibrate", "ur10", csv, "--out", d / "good", "--noise", 0.02)
     assert r.exit_code == 0, r.output
     res = json.loads((d / "good" / "result.json").read_text())
     assert res["status"] == "ok" and res["reasons"] == []
@@ -82,7 +82,7 @@ def test_500_mm_noise_fails_and_force_writes_the_robot(campaign):
     rng = np.random.default_rng(1)
     bad = _rewrite(csv, d / "noisy.csv", lambda rows: [r[:7] + list(np.array(r[7:]) + rng.normal(0, 500, 3))
                                                        for r in rows])
-    res = _assert_failed(run("calibrate", "ur10", bad, "--out", d / "o3", "--sigma", 0.02, "--force"), d / "o3",
+    res = _assert_failed(run("calibrate", "ur10", bad, "--out", d / "o3", "--noise", 0.02, "--force"), d / "o3",
                          "declared instrument noise", robot_file=True)
     assert not res["sanity_checks"]["residual_vs_noise"]["passed"]
 

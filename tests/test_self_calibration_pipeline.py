@@ -97,7 +97,7 @@ def test_command_recovers_offsets_from_rendered_images_and_writes_the_outputs(ca
 
 def test_command_with_per_image_joint_corrections(capture):
     root, offsets, *_ = capture
-    r = _run(root, "--json", "--joint-noise-deg", "0.01")
+    r = _run(root, "--json", "--joint-noise", "0.01")
     assert r.exit_code == 0, r.output
     s = json.loads(r.stdout[r.stdout.index("{"):])
     got = {j["name"]: j for j in s["joint_offsets"]}

@@ -64,7 +64,7 @@ def campaign(tmp_path_factory):
     meas, truth = six_d_campaign()
     path = write_measurements(d / "probe.csv", meas, length_unit="mm", angle_unit="deg", orientation="kuka_abc")
     out = d / "cal"
-    r = run("calibrate", ROBOT, path, "--out", out, "--sigma", SIGMA_MM)
+    r = run("calibrate", ROBOT, path, "--out", out, "--noise", SIGMA_MM)
     return {"dir": d, "path": path, "out": out, "run": r, "truth": truth,
             "result": json.loads((out / "result.json").read_text())}
 

@@ -507,7 +507,7 @@ def test_cli_seven_point_and_reader(tmp_path):
     assert np.allclose(Tft[:3, 3], TCP_TRUE, atol=1e-4)
     assert np.allclose(R_bf @ Tft[:3, :3], np.eye(3), atol=1e-6)
     assert set(d["tool_data"]) == set(CONTROLLERS)
-    r = CliRunner().invoke(tcp_cli, ["seven-point", f, "--tcp", "12", "-7", "180"])
+    r = CliRunner().invoke(tcp_cli, ["seven-point", f, "--tool", "12,-7,180"])
     assert r.exit_code == 0 and "TOOL_DATA[1]" in r.output and "set_tcp(p[" in r.output
 
 
@@ -537,7 +537,7 @@ z7 = {H_UP + 155.0}
 def test_cli_sensor_calibrate(tmp_path):
     pts, truth = _simulate_sensor(np.random.default_rng(14))
     f = write_sensor_points_csv(tmp_path / "sensor.csv", pts)
-    r = CliRunner().invoke(tcp_cli, ["sensor-calibrate", str(f), "--json"])
+    r = CliRunner().invoke(tcp_cli, ["calibrate-sensor", str(f), "--json"])
     assert r.exit_code == 0, r.output
     d = json.loads(r.output)
     for key in ("origin_mm", "x_axis", "y_axis", "y_axis_orthogonal", "z_axis", "T_base_sensor", "beta_deg", "gap_mm"):
@@ -545,7 +545,7 @@ def test_cli_sensor_calibrate(tmp_path):
     assert np.array(d["T_base_sensor"]).shape == (4, 4)
     assert np.linalg.norm(np.subtract(d["origin_mm"], truth["origin"])) < 0.05
     assert abs(d["beta_deg"] - 88.0) < 0.02
-    r = CliRunner().invoke(tcp_cli, ["sensor-calibrate", str(f)])
+    r = CliRunner().invoke(tcp_cli, ["calibrate-sensor", str(f)])
     assert r.exit_code == 0 and "beta" in r.output
-    r = CliRunner().invoke(tcp_cli, ["sensor-calibrate", str(tmp_path / "missing.csv")])
+    r = CliRunner().invoke(tcp_cli, ["calibrate-sensor", str(tmp_path / "missing.csv")])
     assert r.exit_code == 1 and "file not found" in r.output

@@ -230,7 +230,7 @@ def test_cli_accuracy_prints_the_librarys_study():
     from robocal.cli.main import main
     from robocal.workflows.tcp_accuracy import tcp_accuracy_study
 
-    r = CliRunner().invoke(main, ["tcp", "accuracy", "--seeds", "1", "--first-seed", "3", "--repeats", "2",
+    r = CliRunner().invoke(main, ["tcp", "accuracy", "--seeds", "1", "--seed", "3", "--repeats", "2",
                                   "--method", "cross_laser", "--json"])
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)

@@ -155,7 +155,7 @@ def test_compensate_makes_the_warm_robot_reach_the_cold_poses(cell, tmp_path):
     db = tmp_path / "history.sqlite"
     r = as_json(ok("compensate", ROBOT, "--sensor", cell["sensor"], "--sphere", run2 / "sphere.csv",
                    "--poses", poses, "--cold", run2 / "sphere_cold.csv", "--params", ",".join(s["selected"]),
-                   "--program", d / "program.csv", "--out", out, "--history", db, "--robot-id", "cell3-kr150",
+                   "--program", d / "program.csv", "--out", out, "--db", db, "--robot-id", "cell3-kr150",
                    "--json"))
     assert r["n_poses"] == 6 and r["rank"] == 8 and r["condition_number"] < 100
     assert r["residual_rms_after_mm"] < 0.05 < r["residual_rms_before_mm"]
@@ -300,7 +300,7 @@ def test_errors_existing_output_without_overwrite(cell, tmp_path):
 def test_experiment_json_is_the_librarys_multi_seed_table():
     from robocal.workflows.thermal_seeds import run_thermal_seeds
 
-    r = as_json(ok("experiment", "--seeds", 2, "--first-seed", 5, "--cycles", 10, "--json"))
+    r = as_json(ok("experiment", "--seeds", 2, "--seed", 5, "--cycles", 10, "--json"))
     lib = run_thermal_seeds(preset="realistic", seeds=2, first_seed=5, n_cycles=10)
     assert r["settings"]["preset"] == "realistic" and r["settings"]["seeds"] == 2
     for st in ("rms", "max"):

@@ -38,6 +38,9 @@ class LazyGroup(click.Group):
         command.short_help = summary
         if hook is not None:
             hook(command)
+        from ._grammar import install
+
+        install(command, name)  # the deprecated option names of docs/cli.md
         return command
 
     def format_commands(self, ctx, formatter) -> None:

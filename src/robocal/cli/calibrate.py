@@ -11,10 +11,13 @@ import click
 from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error
 from .calibrate_table import parameter_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
+from ._grammar import POINT
+from ._json import json_option, set_json_result
 from .swarm_progress import swarm_progress_bar
 
 
 @click.command()
+@json_option
 @click.argument("robot")
 @click.argument("data", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -36,9 +39,9 @@ from .swarm_progress import swarm_progress_bar
 @click.option("--generations", default=2000, show_default=True, help="IPSO: number of generations.")
 @click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
               help="Loss per pose (huber/cauchy down-weight outlier poses).")
-@click.option("--sigma", "sigma_mm", type=float, default=None,
+@click.option("--noise", "sigma_mm", type=float, default=None, metavar="MM",
               help="Measurement noise per coordinate [mm] (default: estimated from the residuals).")
-@click.option("--tool", nargs=3, type=float, default=None, metavar="X Y Z",
+@click.option("--tool", type=POINT, default=None, metavar="X,Y,Z",
               help="Initial target point in the flange frame [mm] (default 0 0 0).")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--rotation-weight", "rotation_weight", type=float, default=None, metavar="MM_PER_RAD",
@@ -79,19 +82,29 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     0 done, 1 error, 3 the result failed the sanity gates (docs/reliability.md), 4 the solver did not
     converge (unless --allow-unconverged).
     """
-    from ..workflows.calibrate import run_calibration
+    from .. import CalibrationOptions, calibrate as calibrate_in_memory, load_robot
+    from .._api.calibration import _read
+    from ..workflows.calibrate import check_calibration_outputs
+    from ..workflows.outputs import ensure_writable_dir
+
+    def step(i, n, text):
+        _step_printer(i, 5 if no_report else n, text)
 
     try:
+        check_calibration_outputs(out_dir, overwrite=overwrite, report=not no_report)
         meas = read_export(robot, data, imp)
-        r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
-                            holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
-                            progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
-                            prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,
-                            measurements=meas, max_iterations=max_iterations,
-                            report=not no_report, force=force, drop_duplicates=drop_duplicates,
-                            method=method, particles=particles, generations=generations,
-                            swarm_progress=swarm_progress_bar(method, generations), elastic=elastic,
-                            payload=payload)
+        options = CalibrationOptions(
+            free=tuple(_names(free)) or None, free_all=free_all, fix=tuple(_names(fix)), holdout=holdout, seed=seed,
+            method=method, loss=loss, noise_mm=sigma_mm, tool_mm=tool, rotation_weight=rotation_weight,
+            use_orientation=not no_orientation, prior_sigma=prior_sigma if prior else None, train_ids=train_ids,
+            holdout_ids=holdout_ids, max_iterations=max_iterations, drop_duplicates=drop_duplicates,
+            particles=particles, generations=generations, elastic=elastic, payload=payload)
+        if meas is None:
+            meas = _read(load_robot(robot), data, options, step)
+        ensure_writable_dir(out_dir)  # before the long work
+        result = calibrate_in_memory(robot, meas, options=options, progress=step,
+                                     swarm_progress=swarm_progress_bar(method, generations), name=data)
+        r = result._write(out_dir, overwrite=overwrite, report=not no_report, force=force, progress=step)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
@@ -114,10 +127,12 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     for row in res.get("elastic", {}).get("not_identifiable", []):
         if row["name"].startswith("compliance."):
             click.echo(f"not identifiable: {row['name']}: {row['why']}")
+    set_json_result({**res, "files": r["files"]})
     finish_calibration(r, allow_unconverged)
 
 
 @click.command()
+@json_option
 @click.argument("robot_file")
 @click.argument("targets", type=click.Path(dir_okay=False))
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
@@ -139,7 +154,7 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
     (robocal-targets/1): header lines '# format: robocal-targets/1', '# length_unit: mm|m',
     '# angle_unit: deg|rad', optional '# orientation: <convention>' and '# frame: world|base', then
     columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>] (joints seed the solver).
-    Exit code 2 when a target is not reached.
+    Exit code 5 when a target is not reached.
     """
     from ..io.programs import SUFFIXES
 
@@ -157,6 +172,8 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
     if bad:
         click.echo(f"not reached: {', '.join(bad)} (see the status column)", err=True)
     click.echo(f"wrote {r['file']}")
+    set_json_result({"file": r["file"], "frame": r["frame"], "nominal": r["nominal"], "not_reached": bad,
+                     "targets": [dict(row, name=n) for n, row in zip(r["names"], c.report)]})
     if bad:
         sys.exit(EXIT_TARGETS_NOT_REACHED)
 
@@ -179,5 +196,6 @@ def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, p
     for s in r["skipped"]:
         click.echo(f"not read: line {s.line}: {s.reason}")
     click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected; wrote {r['file']} and {r['report']}")
+    set_json_result({k: r[k] for k in ("file", "report", "n_corrected", "n_targets", "rows")})
     if r["n_corrected"] < r["n_targets"]:
         sys.exit(EXIT_TARGETS_NOT_REACHED)

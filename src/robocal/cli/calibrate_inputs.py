@@ -20,7 +20,7 @@ _OPTIONS = [
                  help="With --format tracker-csv|sa-text: the controller joint log."),
     click.option("--pair", type=click.Choice(["index", "id", "time"]), default="index", show_default=True,
                  help="With --format: pair points and joint rows by row order, pose id or time stamp."),
-    click.option("--tolerance", "tolerance_s", type=float, default=None, help="With --pair time: largest gap [s]."),
+    click.option("--time-tolerance", "tolerance_s", type=float, default=None, metavar="S", help="With --pair time: largest gap [s]."),
     click.option("--length-unit", type=click.Choice(["mm", "m", "in"]), default=None,
                  help="With --format: unit of the points (default: declared by the file, else detected and said)."),
     click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default=None,

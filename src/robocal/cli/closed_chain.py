@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ._common import _names, _step_printer, _user_error
+from ._json import json_option, set_json_result
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration
 from .calibrate_table import parameter_table
 
@@ -16,14 +17,15 @@ def closed_chain():
 
 
 @closed_chain.command("simulate")
+@json_option
 @click.argument("robot")
 @click.option("--plates", default=2, show_default=True, help="Plate positions (1-4).")
 @click.option("--targets", default=5, show_default=True, help="Targets per plate (a row).")
 @click.option("--configurations", default=8, show_default=True, help="Configurations per target.")
 @click.option("--spacing", "spacing_mm", default=50.0, show_default=True, help="Distance between targets [mm].")
-@click.option("--tolerance", "tolerance_mm", default=0.1, show_default=True,
+@click.option("--distance-tolerance", "tolerance_mm", default=0.1, show_default=True, metavar="MM",
               help="Detection tolerance: the spot lies within this of the mark [mm].")
-@click.option("--joint-resolution", "resolution_deg", default=0.001, show_default=True,
+@click.option("--joint-noise", "resolution_deg", default=0.001, show_default=True, metavar="DEG",
               help="Controller joint resolution and reading noise [deg].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the true robot, the laser mount and the holding.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
@@ -43,9 +45,11 @@ def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_m
     click.echo(f"simulated {r['n_rows']} held spots of {r['robot']} ({plates} plate position(s) x {targets} targets "
                f"x {configurations} configurations, tolerance {tolerance_mm} mm, seed {seed})")
     click.echo(f"wrote {r['spots']} and {r['truth']}")
+    set_json_result(r)
 
 
 @closed_chain.command("calibrate")
+@json_option
 @click.argument("robot")
 @click.argument("spots", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -54,7 +58,7 @@ def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_m
               help="Known distance between consecutive targets of a plate [mm]: fixes the length scale.")
 @click.option("--spacing-sigma", "spacing_sigma_mm", default=0.02, show_default=True,
               help="Uncertainty of --target-spacing [mm].")
-@click.option("--sigma", "sigma_mm", type=float, default=None,
+@click.option("--noise", "sigma_mm", type=float, default=None, metavar="MM",
               help="Spread of a held spot per in-plate axis [mm] (default: half the file's spot_tolerance_mm).")
 @click.option("--free", "free", multiple=True, metavar="NAMES", help="Parameters to identify (comma separated).")
 @click.option("--free-all", is_flag=True, help="Identify every kinematic parameter.")
@@ -100,4 +104,5 @@ def calibrate_cmd(robot, spots, out_dir, target_spacing_mm, spacing_sigma_mm, si
     if res.get("validation"):
         v = res["validation"]
         click.echo(f"held-out spots: in-plate error RMS {v['before']['rms']:.4f} mm before, {v['after']['rms']:.4f} mm after")
+    set_json_result({**res, "files": r["files"]})
     finish_calibration(r, allow_unconverged)

@@ -52,7 +52,9 @@ def run_cmd(name, model, root, as_json):
     if not entry["present"]:
         raise click.ClickException(f"data set {name}: folder {entry['folder']}/raw not found (give --root DIR)")
     try:
-        with warnings.catch_warnings(record=True) as caught:
+        from ._progress import Progress
+
+        with warnings.catch_warnings(record=True) as caught, Progress(f"datasets run {name}"):
             warnings.simplefilter("always")
             rec = run_dataset(name, model, root)
     except NotImplementedError as exc:

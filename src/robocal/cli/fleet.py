@@ -13,6 +13,8 @@ from pathlib import Path
 import click
 
 from ._common import EXIT_FAILED_RESULT, _user_error
+from ._grammar import POINT
+from ._json import json_option, set_json_result
 
 __all__ = ["fleet"]
 
@@ -47,6 +49,7 @@ def _history_target(db, no_history, out_dir):
 
 
 @fleet.command("calibrate")
+@json_option
 @click.argument("fleet_file", metavar="FLEET.toml", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for <id>/ per robot, summary.json, summary.html and summary.svg.")
@@ -77,7 +80,7 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
     try:
         with _client(scheduler, workers) as client:
             label = f"robots ({len(client.scheduler_info().get('workers', {}))} workers)"
-            with click.progressbar(length=1, label=label, file=sys.stderr, show_pos=True) as bar:
+            with _progress_bar(label) as bar:
                 def progress(done, total, row):
                     bar.length = total
                     bar.update(1)
@@ -98,6 +101,7 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
                f"{c['outliers']} outlier(s); {s['wall_seconds']:.1f} s")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values())
                + (f"; history {s['history']}" if s["history"] else ""))
+    set_json_result({**s, "files": r["files"]})
     _exit_on_failures([row for row in s["robots"] if row["status"] != "ok"], c["robots"])
 
 
@@ -117,8 +121,8 @@ def _exit_on_failures(failed, total) -> None:
               help="History database: an SQLite file or a URL (postgresql+psycopg://user@host/db).")
 @click.option("--max-age", "max_age_days", type=float, default=90.0, show_default=True, metavar="DAYS",
               help="A robot whose last calibration is older is stale.")
-@click.option("--tolerance", "tolerance_mm", type=float, default=0.1, show_default=True, metavar="MM",
-              help="Flag a length parameter whose drift trend since the first calibration exceeds this.")
+@click.option("--distance-tolerance", "tolerance_mm", type=float, default=0.1, show_default=True, metavar="MM",
+              help="Flag a length parameter whose drift trend since the first calibration exceeds this [mm].")
 @click.option("--tolerance-deg", type=float, default=0.01, show_default=True, metavar="DEG",
               help="Flag an angle parameter whose drift trend exceeds this.")
 @click.option("--kind", default="geometric_calibration", show_default=True,
@@ -183,7 +187,9 @@ def _chunk_line(c):
 
 
 def _progress_bar(label):
-    return click.progressbar(length=1, label=label, file=sys.stderr, show_pos=True)
+    from ._progress import Progress  # a bar on a terminal, a line every few seconds in a log
+
+    return Progress(label, file=sys.stderr)
 
 
 def _study(label, scheduler, workers, fn, *args, **kwargs):
@@ -201,15 +207,16 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
 
 
 @study.command("monte-carlo")
+@json_option
 @click.argument("robot")
 @click.argument("poses", type=click.Path(dir_okay=False))
 @click.option("--samples", default=200, show_default=True, help="Virtual robots (each its own true parameters).")
 @click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
 @click.option("--check-poses", default=200, show_default=True, help="Random poses where each result is checked.")
-@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
+@click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
-@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
+@click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
 @_SCHEDULER
 @_WORKERS
 def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, scheduler, workers):
@@ -236,6 +243,7 @@ def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, ou
                    f"{r['unconverged_samples'][:10]}")
     _chunk_line(r["chunking"])
     _write_json(r, out_file)
+    set_json_result(r)
 
 
 def _median(v):
@@ -251,14 +259,16 @@ def _robot_model(robot):
 
 
 @study.command("pose-sets")
+@json_option
 @click.argument("robot")
 @click.option("--sets", default=100, show_default=True, help="Candidate sets (seeds SEED .. SEED+SETS-1).")
 @click.option("--count", default=40, show_default=True, help="Poses per plan.")
 @click.option("--candidates", default=800, show_default=True, help="Random candidate poses per set.")
 @click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
-@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z")
+@click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
+              help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
-@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
+@click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
 @_SCHEDULER
 @_WORKERS
 def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, scheduler, workers):
@@ -275,12 +285,14 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
                f"--candidates {candidates} --seed {best['seed']} --out poses.csv")
     _chunk_line(r["chunking"])
     _write_json(r, out_file)
+    set_json_result(r)
 
 
 @study.command("thermal")
+@json_option
 @click.argument("runs", nargs=-1, required=True, type=click.Path(file_okay=False))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep per robot.")
-@click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
+@click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
 @_SCHEDULER
 @_WORKERS
 def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
@@ -297,4 +309,5 @@ def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
         else:
             click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
     _write_json(r, out_file)
+    set_json_result(r)
     _exit_on_failures([row for row in r["robots"] if row["status"] != "ok"], len(r["robots"]))

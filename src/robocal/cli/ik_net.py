@@ -7,9 +7,11 @@ from pathlib import Path
 import click
 
 from ._common import _robot
+from ._json import json_option, set_json_result
 
 
 @click.command("ik-train")
+@json_option
 @click.argument("robot")
 @click.option("--samples", default=20000, show_default=True, help="FK samples on the branch (80% train, 20% validation).")
 @click.option("--seed", default=0, show_default=True, help="Seed of the sampling, the centres and the genetic algorithm.")
@@ -71,6 +73,8 @@ def ik_train(robot, samples, seed, out, generations, population, no_tune, joint_
         v = st[key]
         click.echo(f"  {label:<22}{v['median']:9.2f}{v['p95']:9.2f}{v['max']:9.2f}")
     click.echo(f"wrote {out}")
+    set_json_result({"robot": model.name, "branch": net.branch.name, "centres": net.structure.n_centres,
+                     "file": out, "stats": st})
 
 
 def _parse_box(model, text):

@@ -39,8 +39,8 @@ def robots(as_json):
 @click.command(context_settings=NUMBERS_CONTEXT)
 @click.argument("robot")
 @click.argument("joints", **JOINTS_ARG)
-@click.option("--deg", is_flag=True, help="Joint angles in degrees (default radians); prismatic joints in mm.")
-@click.option("--euler", "convention", default=None,
+@click.option("--deg/--rad", default=False, help="Unit of joint values, in and out: degrees or radians (default); prismatic joints in mm.")
+@click.option("--orientation", "convention", default=None, metavar="CONVENTION",
               help="Also print the orientation in this convention (kuka_abc, fanuc_wpr, zxz, rpy, quaternion, rotvec, ...).")
 @click.option("--ee", "end_effector", default=None, help="End effector of a tree robot (default: the first).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON with keys position_mm and rotation.")
@@ -78,9 +78,9 @@ def fk(robot, joints, deg, convention, end_effector, as_json):
 @click.command(context_settings=NUMBERS_CONTEXT)
 @click.argument("robot")
 @click.argument("pose", **JOINTS_ARG)
-@click.option("--euler", "convention", default="kuka_abc", show_default=True,
+@click.option("--orientation", "convention", default="kuka_abc", show_default=True, metavar="CONVENTION",
               help="Orientation convention of POSE (angles in degrees; quaternion: w x y z).")
-@click.option("--deg", is_flag=True, help="Print joint angles in degrees (default radians).")
+@click.option("--deg/--rad", default=False, help="Unit of joint values, in and out (--start, the printed joints): degrees or radians (default).")
 @click.option("--start", "start", default=None,
               help="Starting joints for the numerical solver, comma separated (units as --deg).")
 @click.option("--all-branches", is_flag=True, help="All closed-form branches (6R spherical-wrist arms).")

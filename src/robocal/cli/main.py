@@ -10,6 +10,7 @@ import sys
 import click
 
 from ._errors import GuardedGroup
+from ._json import json_option, set_json_result
 from ._lazy import LazyGroup
 
 
@@ -69,12 +70,13 @@ class _MainGroup(GuardedGroup, LazyGroup):
 def main():
     """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames).
 
-    Exit codes: 0 success, 1 error (one 'Error:' line), 2 usage error (or `correct`: targets not
-    reached), 3 a result that failed the sanity gates (docs/reliability.md), 4 `calibrate`: the
-    solver did not converge."""
+    Exit codes of every command (docs/cli.md): 0 success, 1 error (one 'Error:' line), 2 usage
+    error, 3 a result that failed the sanity gates (docs/reliability.md), 4 the solver did not
+    converge, 5 targets not reached. Deprecated option names work with a warning (docs/cli.md)."""
 
 
 @main.command(short_help="The maintenance cycle on a simulated robot, with a report.")
+@json_option
 @click.option("--out", "out_dir", default="robocal-demo", show_default=True, type=click.Path(file_okay=False),
               help="Folder for the results (created if needed; existing results need --overwrite).")
 @click.option("--seed", default=7, show_default=True, help="Seed of the simulated robot and poses.")
@@ -130,6 +132,7 @@ def demo(out_dir, seed, poses, overwrite):
                f"{t['cycle_time_s']:.1f} s, TCP error {t['tcp_error_mm']:.3f} mm, axis error {t['axis_error_deg']:.3f} deg")
     click.echo("")
     click.echo(f"wrote {r['files']['report']}, {r['files']['result']}" + (f", history {r['history']}" if r.get("history") else ""))
+    set_json_result(r)
 
 
 if __name__ == "__main__":  # pragma: no cover

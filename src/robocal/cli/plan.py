@@ -7,9 +7,12 @@ import math
 import click
 
 from ._common import _user_error
+from ._grammar import POINT
+from ._json import json_option, set_json_result
 
 
 @click.command("plan-poses")
+@json_option
 @click.argument("robot")
 @click.option("--count", required=True, type=int, help="Number of poses to plan.")
 @click.option("--candidates", default=1000, show_default=True, help="Random candidate poses within the joint limits.")
@@ -17,12 +20,12 @@ from ._common import _user_error
               help="Flange box in the robot base frame: xmin,xmax,ymin,ymax,zmin,zmax [mm].")
 @click.option("--tracker-at", default=None, metavar="X,Y,Z",
               help="Tracker position in the robot base frame [mm]: poses out of range or not facing it are left out.")
-@click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
+@click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")
 @click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the candidate poses.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
-              help="Joint program to write (robocal-program/1, degrees).")
+              help="Joint program file to write (robocal-program/1, degrees).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
 def plan_poses_cmd(robot, count, candidates, workspace, tracker_at, tool, sigma_mm, seed, out_file, overwrite):
     """Plan COUNT measurement poses of ROBOT (D-optimal), print the predicted parameter sigma and
@@ -51,3 +54,4 @@ def plan_poses_cmd(robot, count, candidates, workspace, tracker_at, tool, sigma_
     click.echo(f"predicted held-out RMS error {p['holdout_rms_mm']:.4f} mm (model {p['holdout_model_std_mm']:.4f} mm "
                f"+ noise) at the other candidates")
     click.echo(f"wrote {p['file']}")
+    set_json_result(p)

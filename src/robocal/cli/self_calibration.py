@@ -24,14 +24,14 @@ from .camera import BOARD_HELP
                    "(e.g. left_hand,right_hand: each image goes to the nearest).")
 @click.option("--camera", "camera_file", default=None, type=click.Path(path_type=str),
               help="Camera intrinsics file (default: calibrated on the same images).")
-@click.option("--tolerance", type=float, default=0.05, show_default=True,
+@click.option("--time-tolerance", "tolerance", type=float, default=0.05, show_default=True, metavar="S",
               help="Largest time difference [s] between an image and its joint reading.")
 @click.option("--match", type=click.Choice(["nearest", "interpolate"]), default="nearest", show_default=True,
               help="Take the nearest joint reading or interpolate between the two around the capture time.")
 @click.option("--link-parameter", "link_parameters", multiple=True,
               help="A further robot parameter to estimate (repeatable, e.g. a2).")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics too.")
-@click.option("--joint-noise-deg", type=float, default=None,
+@click.option("--joint-noise", "joint_noise_deg", type=float, default=None, metavar="DEG",
               help="1-sigma of a joint reading [deg]: per-image joint corrections (errors in variables).")
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Folder for robot.toml, self_calibration.json, report.html.")

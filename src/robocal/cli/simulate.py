@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ._common import _item_progress, _user_error
+from ._json import json_option, set_json_result
 
 
 @click.group()
@@ -13,6 +14,7 @@ def simulate():
 
 
 @simulate.command("tracker")
+@json_option
 @click.argument("robot")
 @click.option("--poses", "n_poses", default=100, show_default=True, help="Number of random poses.")
 @click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
@@ -36,10 +38,12 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
         raise _user_error(exc) from None
     click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm)")
     click.echo(f"wrote {r['measurements']} and {r['truth']}")
+    set_json_result(r)
 
 
 
 @simulate.command("camera")
+@json_option
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for images/, flange_poses.csv, camera.json and truth.json.")
 @click.option("--board", default="charuco:9x7:30mm:22mm:DICT_5X5_100", show_default=True,
@@ -54,16 +58,16 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
               help="Orientation convention of flange_poses.csv (a robocal.transforms.POSE_CONVENTIONS name).")
 @click.option("--length-unit", type=click.Choice(["mm", "m"]), default="mm", show_default=True)
 @click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True)
-@click.option("--robot", default=None,
-              help="Also write joints.csv: the joints of this robot (shipped name or robot file) at every image.")
+@click.argument("robot", default=None, required=False)
 @click.option("--joint-offset-sigma-deg", default=0.05, show_default=True,
-              help="With --robot: spread of the robot's true joint zero offsets around its robot file [deg].")
+              help="With ROBOT: spread of the robot's true joint zero offsets around its robot file [deg].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses and the image noise.")
 @click.option("--overwrite", is_flag=True, help="Replace the files of an earlier run in the folder.")
 def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, pose_noise_deg, convention,
                         length_unit, angle_unit, robot, joint_offset_sigma_deg, seed, overwrite):
     """Render a hand-eye cell: PNG images of a board (1280x1024, lens distortion, blur, lighting,
-    noise), the flange poses as a CSV in a named convention, the camera and the hidden truth."""
+    noise), the flange poses as a CSV in a named convention, the camera and the hidden truth. With
+    ROBOT (shipped name or robot file) also joints.csv: that robot's joints at every image."""
     from ..workflows.camera_simulate import simulate_camera
 
     if n_images < 1:
@@ -79,9 +83,11 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
     click.echo(f"rendered {r['n_images']} images of {r['board']} ({r['setup']}, seed {seed})")
     joints = "" if r["joints"] is None else f"{r['joints']}, "
     click.echo(f"wrote {r['images']}/, {r['poses']}, {joints}{r['camera']} and {r['truth']}")
+    set_json_result(r)
 
 
 @simulate.command("self-calibration")
+@json_option
 @click.argument("robot")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for images/, joint_log.csv, frames.csv, camera.json and truth.json.")
@@ -96,7 +102,7 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
 @click.option("--joint-offsets-deg", default=3.0, show_default=True,
               help="True joint zero offsets: uniform within +- this [deg], on every joint moving the camera or a board.")
 @click.option("--length-sigma-mm", default=0.0, show_default=True, help="Spread of true link lengths [mm].")
-@click.option("--joint-noise-deg", default=0.05, show_default=True, help="Joint reading noise per log row [deg].")
+@click.option("--joint-noise", "joint_noise_deg", default=0.05, show_default=True, metavar="DEG", help="Joint reading noise per log row [deg].")
 @click.option("--partial-fraction", default=0.1, show_default=True,
               help="Extra images per chain showing the board only partly, as a fraction of --images-per-chain.")
 @click.option("--board-bow-mm", default=0.0, show_default=True,
@@ -135,3 +141,4 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
     click.echo(f"rendered {r['n_images']} images ({r['n_full']} with the full board) of {r['board']} {where} "
                f"({r['robot']}, seed {seed})")
     click.echo(f"wrote {out_dir}/images/, joint_log.csv, frames.csv, camera.json and truth.json")
+    set_json_result(r)

@@ -17,6 +17,7 @@ from ..tcp.sensor import calibrate_sensor
 from ..tcp.tool_data import tool_data_all
 from ..tcp.touchup import DEFAULT_MIN_SPREAD_DEG, four_point_tcp, seven_point_tool_frame
 from ..calib.sanity import sensor_verdict, touchup_verdict
+from ._grammar import POINT
 from ._common import EXIT_FAILED_RESULT, _report_verdict
 
 tcp = click.Group(
@@ -100,7 +101,7 @@ def _exit_if_failed(verdict) -> None:
 
 @tcp.command("seven-point")
 @click.argument("file", type=FILE)
-@click.option("--tcp", "tcp_xyz", type=float, nargs=3, default=None, metavar="X Y Z",
+@click.option("--tool", "tcp_xyz", type=POINT, default=None, metavar="X,Y,Z",
               help="Known TCP in the flange frame [mm]; then only P5, P6, P7 are needed.")
 @click.option("--min-spread", "min_spread", type=float, default=DEFAULT_MIN_SPREAD_DEG, show_default=True,
               help="Smallest orientation spread [deg] of the touch-up poses.")
@@ -110,7 +111,7 @@ def seven_point(file, tcp_xyz, min_spread, as_json):
 
     FILE: flange-pose CSV; the last three rows are P5 (start), P6 (moved along the tool X
     direction), P7 (then moved along the tool Z direction), same flange orientation; all rows
-    before them (>= 4) are touch-up poses for the TCP, unless --tcp is given.
+    before them (>= 4) are touch-up poses for the TCP, unless --tool is given.
     """
     try:
         poses = read_flange_poses_csv(file, min_rows=3)
@@ -121,7 +122,7 @@ def seven_point(file, tcp_xyz, min_spread, as_json):
         else:
             if len(T) < 7:
                 raise ValueError(f"{file}: need >= 4 touch-up poses + P5, P6, P7 (>= 7 rows), got {len(T)} rows; "
-                                 "or give the TCP with --tcp X Y Z")
+                                 "or give the TCP with --tool X,Y,Z")
             touch = four_point_tcp(T[:-3], min_spread_deg=min_spread, labels=poses.labels[:-3])
             t = touch.tcp_mm
         res = seven_point_tool_frame(T[-3:], t)
@@ -181,7 +182,7 @@ def parallel_barriers(file, as_json):
         click.echo("length: not recorded (give z7 and h_up)")
 
 
-@tcp.command("sensor-calibrate")
+@tcp.command("calibrate-sensor")
 @click.argument("file", type=FILE)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def sensor_calibrate(file, as_json):

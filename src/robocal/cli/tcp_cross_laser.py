@@ -36,7 +36,7 @@ Required roles: circle1, circle2 (steps 1-2, same orientation, dz apart), circle
 axis re-aligned) and down, up (step 4 vertical moves). `robocal tcp simulate --events-out`
 writes such a file.
 
-SENSOR is the JSON of `robocal tcp sensor-calibrate --json` (keys T_base_sensor, beta_deg,
+SENSOR is the JSON of `robocal tcp calibrate-sensor --json` (keys T_base_sensor, beta_deg,
 gap_mm used).
 """
 
@@ -53,14 +53,14 @@ def _load_json(path, what):
 @click.command("cross-laser", help=EVENTS_HELP)
 @click.argument("events_file", type=click.Path(dir_okay=False))
 @click.option("--sensor", "sensor_file", required=True, type=click.Path(dir_okay=False),
-              help="Sensor calibration JSON (output of `robocal tcp sensor-calibrate --json`).")
+              help="Sensor calibration JSON (output of `robocal tcp calibrate-sensor --json`).")
 @click.option("--nominal-tool", "nominal_file", type=click.Path(dir_okay=False), default=None,
               help="JSON with key T_flange_tool (4x4, mm): the tool estimate before the recalibration; "
                    "default: a tool along the flange Z axis. Only its rotation is used (the 5-D update keeps "
                    "its twist about the axis).")
 @click.option("--no-beta-correction", is_flag=True, help="Ignore beta (use the centre (d_y, d_x), thesis 4-30 error).")
 @click.option("--no-arc-correction", is_flag=True, help="Use (4-9) with R instead of R cos(blocked arc / 2).")
-@click.option("--convention", default=None, help="Also print the tool frame as a pose in this orientation "
+@click.option("--orientation", "convention", default=None, metavar="CONVENTION", help="Also print the tool frame as a pose in this orientation "
                                                   "convention (e.g. kuka_abc, fanuc_wpr, quaternion).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, no_arc_correction, convention, as_json):
@@ -86,7 +86,7 @@ def cross_laser_cmd(events_file, sensor_file, nominal_file, no_beta_correction, 
 
 
 def _load_sensor(sensor_file):
-    """The sensor frame from a ``sensor-calibrate --json`` file (click errors name the file)."""
+    """The sensor frame from a ``calibrate-sensor --json`` file (click errors name the file)."""
     from ..tcp.cross_laser import sensor_frame
 
     sd = _load_json(sensor_file, "sensor")
@@ -162,15 +162,17 @@ def _echo_result(res, out, settings, sensor, convention) -> None:
               help="Robot repeatability (ISO 9283) [mm].")
 @click.option("--io-rate", "io_rate_hz", default=1000.0, show_default=True, type=float, help="Controller I/O rate [Hz].")
 @click.option("--tool-radius", "tool_radius_mm", default=3.0, show_default=True, type=float, help="Tool radius [mm].")
-@click.option("--robot", default="ur10", show_default=True, help="Robot for the reachability check ('none': skip).")
+@click.argument("robot", default="ur10", required=False)
 @click.option("--events-out", type=click.Path(dir_okay=False), default=None,
               help="Write the first recalibration's barrier events (robocal-barrier-events/1) here.")
 @click.option("--sensor-out", type=click.Path(dir_okay=False), default=None,
-              help="Write the simulated sensor calibration (JSON, as `robocal tcp sensor-calibrate --json`) here.")
+              help="Write the simulated sensor calibration (JSON, as `robocal tcp calibrate-sensor --json`) here.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repeatability_mm, io_rate_hz, tool_radius_mm,
                  robot, events_out, sensor_out, as_json):
     """Simulated tool-recalibration study: random collisions, cross-laser recalibration, truth comparison.
+
+    ROBOT (default ur10; 'none' skips it) is checked for reaching the motions.
 
     A UR10-class cell (by default: repeatability 0.1 mm, I/O 1 kHz, tool radius 3 mm, beta = 88
     deg, sensor tilted 2 deg) as in the thesis's experiment (5.2). Variants: beta_corrected (this
@@ -180,12 +182,17 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     from ..tcp.cross_laser import CrossLaserError
     from ..workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
 
+    from ._progress import Progress
+
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
     try:
-        res = tcp_repeatability_study(collisions=collisions, seed=seed, beta_deg=beta_deg, tilt_deg=tilt_deg,
-                                      repeatability_mm=repeatability_mm, io_rate_hz=io_rate_hz,
-                                      tool_radius_mm=tool_radius_mm, robot=None if robot.lower() == "none" else robot,
-                                      variants=variants, events_path=events_out, sensor_path=sensor_out)
+        with Progress("recalibrations", collisions * len(variants)) as bar:
+            res = tcp_repeatability_study(collisions=collisions, seed=seed, beta_deg=beta_deg, tilt_deg=tilt_deg,
+                                          repeatability_mm=repeatability_mm, io_rate_hz=io_rate_hz,
+                                          tool_radius_mm=tool_radius_mm,
+                                          robot=None if robot.lower() == "none" else robot, variants=variants,
+                                          events_path=events_out, sensor_path=sensor_out,
+                                          progress=lambda done, total: bar.update(1))
     except (CrossLaserError, ValueError, OSError) as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:
@@ -203,7 +210,7 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
               help="Error sources of the cell (docs/tcp.md 'Repeatability and accuracy').")
 @click.option("--seeds", "n_seeds", default=20, show_default=True, type=click.IntRange(1, 10000),
               help="Cells (each with its own robot error, dirt, runout, collision).")
-@click.option("--first-seed", default=1, show_default=True, type=int, help="The first seed; the others follow.")
+@click.option("--seed", "first_seed", default=1, show_default=True, type=int, help="The first seed; the others follow.")
 @click.option("--repeats", default=10, show_default=True, type=click.IntRange(2, 1000),
               help="Recalibrations of the same bent tool per cell.")
 @click.option("--method", "methods", type=click.Choice(["cross_laser", "parallel_barriers"]), multiple=True,

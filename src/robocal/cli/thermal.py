@@ -17,6 +17,7 @@ import click
 import numpy as np
 
 from ._common import _names, _user_error as _fail, _step_printer as _progress
+from ._grammar import OPTIONAL_ROBOT, OptionalRobotCommand
 
 __all__ = ["thermal"]
 
@@ -62,7 +63,7 @@ def _matrix(T, indent="  "):
 @click.option("--cycles", "n_cycles", default=90, show_default=True, help="Production cycles (~3 min) per run.")
 @click.option("--sphere-poses", "n_sphere", default=20, show_default=True,
               help="Sphere poses measured per cycle (the screening set).")
-@click.option("--out", "out_dir", required=True, type=click.Path(path_type=str),
+@click.option("--out", "out_dir", required=True, type=click.Path(path_type=str, file_okay=False),
               help="Folder for run1/, run2/, run3/ and program.csv (created if needed).")
 @click.option("--preset", type=click.Choice(["ideal", "realistic"]), default="realistic", show_default=True,
               help="Effects outside the compensation model: realistic (hall, bent links, backlash, noise growing "
@@ -133,14 +134,14 @@ def _print_cal(cal, pose_ids):
 @click.option("--method", type=click.Choice(["lsq", "thesis", "both"]), default="lsq", show_default=True,
               help="lsq: nonlinear least squares with uncertainties; thesis: the penalty method (3-14 ... 3-19); "
                    "both: run both and compare (--out writes the least-squares result).")
-@click.option("--sigma", "sigma_mm", type=float, default=None,
+@click.option("--noise", "sigma_mm", type=float, default=None, metavar="MM",
               help="Sensor noise per coordinate [mm] for the standard deviations (default: from the residuals).")
 @click.option("--poses", "poses", multiple=True, metavar="IDS",
               help="Use only these pose ids (comma separated, shell patterns such as 'p0*'; repeatable).")
 @click.option("--truth", "truth_file", type=FILE, default=None,
               help="JSON with T_sensor_base and P_e_mm (e.g. a simulated run's truth.json): print the errors.")
 @click.option("--out", "out_file", type=FILE, default=None,
-              help="Write the calibration as JSON (robocal-thermal-sensor/1) for 'robocal thermal compensate'.")
+              help="Write the calibration as a JSON file (robocal-thermal-sensor/1) for 'robocal thermal compensate'.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing --out file.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file, out_file, overwrite, as_json):
@@ -207,7 +208,8 @@ def _wrapped(prefix, text, width=110):
     click.echo(line.rstrip())
 
 
-@thermal.command("screen", short_help="Screen the parameters to re-identify online (thesis 3.2, table 5-1).")
+@thermal.command("screen", cls=OptionalRobotCommand, short_help="Screen the parameters to re-identify online (thesis 3.2, table 5-1).")
+@click.argument("robot", **OPTIONAL_ROBOT)
 @click.argument("run_dir", type=click.Path(path_type=str))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep.")
 @click.option("--threshold-mm", "threshold_mm", default=0.1, show_default=True,
@@ -221,12 +223,12 @@ def _wrapped(prefix, text, width=110):
 @click.option("--sensor", "sensor_file", type=FILE, default=None,
               help="Sensor calibration JSON (calibrate-sensor --out); default: calibrated here from sphere_cold.csv.")
 @click.option("--setup", "setup_file", type=FILE, default=None, help="Set-up JSON (default RUN_DIR/setup.json).")
-@click.option("--robot", "robot", default=None, help="Robot name or file (default: the robot the files name).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def screen_cmd(run_dir, n_keep, threshold_mm, statistic, n_online, params, sensor_file, setup_file, robot, as_json):
     """Parameter screening (thesis 3.2, fig. 3-5, table 5-1) on a heating run.
 
-    RUN_DIR: a run directory as written by 'robocal thermal simulate' (sphere_cold.csv, sphere.csv,
+    ROBOT: robot name or file (default: the robot the files name). RUN_DIR: a run directory as
+    written by 'robocal thermal simulate' (sphere_cold.csv, sphere.csv,
     monitor_cold.csv, monitor.csv, cycles.csv, setup.json). Prints the elimination table (step,
     removed parameter, lambda, remaining set), the selected set, the best online sphere poses, and
     lambda before / traditional / screened on this run. With --params the given set is evaluated
@@ -300,12 +302,12 @@ def _echo_online(res, n_online) -> None:
               help="Parameter deltas to identify, comma separated (e.g. the screened set: a1,a2,beta2,...).")
 @click.option("--program", "program_file", required=True, type=FILE,
               help="Taught program (robocal-program/1): joints per point.")
-@click.option("--out", "out_file", required=True, type=FILE, help="Corrected program (robocal-program/1).")
+@click.option("--out", "out_file", required=True, type=FILE, help="Corrected program file (robocal-program/1).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing --out file.")
 @click.option("--position-only", is_flag=True, help="Correct the flange position only (default: full pose).")
-@click.option("--sigma", "sigma_mm", type=float, default=None,
+@click.option("--noise", "sigma_mm", type=float, default=None, metavar="MM",
               help="Sensor noise per coordinate [mm] for the standard deviations (default: from the residuals).")
-@click.option("--history", "history", is_flag=False, flag_value="", default=None, metavar="DB",
+@click.option("--db", "history", is_flag=False, flag_value="", default=None, metavar="URL_OR_FILE",
               help="Record a thermal_compensation cycle in the history database (a path or URL; without a value: "
                    "$ROBOCAL_HISTORY_DB or robocal-history.sqlite).")
 @click.option("--robot-id", "robot_id", default=None, help="Robot id in the history (default: the robot's name).")

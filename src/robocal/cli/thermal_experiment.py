@@ -43,7 +43,7 @@ def experiment_json(res: dict) -> dict:
               help="Effects outside the compensation model (docs/thermal.md 'Realism').")
 @click.option("--seeds", "n_seeds", default=20, show_default=True, type=click.IntRange(1, 10000),
               help="Number of seeds (cells, schedules and noise all differ per seed).")
-@click.option("--first-seed", default=1, show_default=True, type=int, help="The first seed; the others follow.")
+@click.option("--seed", "first_seed", default=1, show_default=True, type=int, help="The first seed; the others follow.")
 @click.option("--cycles", "n_cycles", default=90, show_default=True, type=click.IntRange(8, 1000),
               help="Production cycles (~3 min) per run.")
 @click.option("--resamples", default=0, show_default=True, type=click.IntRange(0, 1000),

@@ -49,7 +49,7 @@ from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .progress import solver_progress
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
-           "run_correct"]
+           "compute_calibration", "write_calibration", "check_calibration_outputs", "calibrated_model", "run_correct"]
 
 OUTPUT_FILES = {"result": "result.json", "robot": "calibrated_robot.toml", "urdf": "calibrated_robot.urdf",
                 "report": "report.html"}
@@ -157,18 +157,43 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     names = [n for k, n in OUTPUT_FILES.items() if report or k != "report"]
     _check_options(out, names, overwrite, loss, sigma_mm, method)
     nominal = load_robot(robot)
-    from .calibrate_elastic import elastic_option, parse_payload
-
-    if isinstance(payload, str):
-        payload = parse_payload(payload)
-    elastic_model = elastic_option(nominal, elastic, payload)
     if measurements is None:
         size_mb = Path(data).stat().st_size / 1e6 if Path(data).is_file() else 0.0
         if size_mb > 10.0:  # a large file takes seconds to read: say so (small files stay silent on errors)
             step(1, total, f"reading {data} ({size_mb:.0f} MB)")
         measurements = read_measurements(data, robot=nominal, check_limits=True, drop_duplicates=drop_duplicates)
-    meas = measurements
     ensure_writable_dir(out)
+    computed = compute_calibration(
+        nominal, measurements, robot_label=robot, data_label=data, free=free, free_all=free_all, fix=fix,
+        holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, method=method,
+        rotation_weight=rotation_weight, prior=prior, train_ids=train_ids, holdout_ids=holdout_ids,
+        use_orientation=use_orientation, max_iterations=max_iterations, particles=particles,
+        generations=generations, swarm_progress=swarm_progress, elastic=elastic, payload=payload,
+        progress=step, total=total)
+    return write_calibration(computed, out, overwrite=overwrite, report=report, force=force, progress=step)
+
+
+def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, free_all: bool = False, fix=(),
+                        holdout: float = 0.2, seed: int = 0, loss: str = "linear", sigma_mm: float | None = None,
+                        tool=None, method: str = "lm", rotation_weight: float | None = None, prior=None,
+                        train_ids=(), holdout_ids=(), use_orientation: bool = True, max_iterations: int = 50,
+                        particles: int = 20, generations: int = 2000, swarm_progress=None,
+                        elastic: str | None = None, payload=None, progress=None, total: int = 6) -> dict:
+    """The in-memory part of :func:`run_calibration`: split, solve, validate, sanity gates.
+
+    ``nominal`` is a loaded :class:`~robocal.kinematics.RobotModel` and ``meas`` read
+    :class:`~robocal.io.Measurements`; ``robot_label`` and ``data_label`` name them in the result's
+    metadata. The other arguments are those of :func:`run_calibration`. Nothing is written; the
+    returned dict goes to :func:`write_calibration` (``result`` is the JSON dict of result.json).
+    """
+    step = progress or (lambda i, n, text: None)
+    robot, data = robot_label, data_label
+    _check_solver_options(loss, sigma_mm, method)
+    from .calibrate_elastic import elastic_option, parse_payload
+
+    if isinstance(payload, str):
+        payload = parse_payload(payload)
+    elastic_model = elastic_option(nominal, elastic, payload)
     free_names = select_free(nominal, free, free_all, fix)
     train, hold, split_notes, protocol = _split(meas, data, free_names, use_orientation, holdout, seed,
                                                 train_ids, holdout_ids)
@@ -189,9 +214,6 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
-    write_robot = verdict.ok or force
-    step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
-                                            " (FAILED the sanity gates: no calibrated robot file)"))
     notes = list(split_notes) + list(setup["notes"])
     if "dropped_duplicates" in meas.metadata:
         notes.insert(0, f"dropped duplicate poses: {meas.metadata['dropped_duplicates']}")
@@ -209,34 +231,92 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     }
     rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
-    elastic_out = None
     if elastic_model is not None:
-        from .calibrate_elastic import elastic_summary, torque_plot, with_elastic
+        from .calibrate_elastic import elastic_summary
 
         rdict["elastic"] = json_ready(elastic_summary(setup["problem"], result))
-        elastic_out = (lambda m: with_elastic(m, setup["problem"], result),
-                       (lambda: torque_plot(setup["problem"], res0, result)) if report else None)
+    computed = {"result": rdict, "notes": notes, "calibration_result": result, "baseline_result": res0,
+                "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
+                "description": setup["description"], "convergence_warnings": convergence_warnings,
+                "nominal": nominal, "measurements": meas, "data": data, "train": train, "validation": validation,
+                "accuracy": accuracy, "stamp": stamp, "elastic": elastic_model is not None}
+    computed["robot"] = calibrated_model(computed)
+    return computed
+
+
+def calibrated_model(computed: dict):
+    """The calibrated :class:`~robocal.kinematics.RobotModel` of a :func:`compute_calibration`
+    (title and source say where it came from; an ``[elastic]`` section when identified)."""
+    nominal, result = computed["nominal"], computed["calibration_result"]
+    calibrated = result.model.replace(
+        title=f"{nominal.title or nominal.name} (calibrated)",
+        source=f"robocal calibrate of {Path(str(computed['data'])).name} ({len(computed['train'])} poses, "
+               f"{computed['stamp']}) from nominal: {nominal.source}")
+    if computed["elastic"]:
+        from .calibrate_elastic import with_elastic
+
+        calibrated = with_elastic(calibrated, computed["problem"], result)
+    return calibrated
+
+
+def write_calibration(computed: dict, out_dir, *, overwrite: bool = False, report: bool = True,
+                      force: bool = False, progress=None) -> dict:
+    """Write a :func:`compute_calibration` into ``out_dir`` (result.json, calibrated_robot.toml/.urdf
+    unless the sanity gates failed and not ``force``, report.html with ``report``), as
+    :func:`run_calibration` does; returns its dict (``files`` added)."""
+    step = progress or (lambda i, n, text: None)
+    total = 6 if report else 5
+    out = Path(out_dir)
+    names = check_calibration_outputs(out, overwrite=overwrite, report=report)
+    ensure_writable_dir(out)
+    verdict, rdict, result = computed["verdict"], computed["result"], computed["calibration_result"]
+    write_robot = verdict.ok or force
+    step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
+                                            " (FAILED the sanity gates: no calibrated robot file)"))
+    notes = list(computed["notes"])
+    elastic_out = None
+    if computed["elastic"]:
+        from .calibrate_elastic import torque_plot
+
+        problem, res0 = computed["problem"], computed["baseline_result"]
+        elastic_out = (lambda: torque_plot(problem, res0, result)) if report else None
     if report:
         step(6, total, "writing report.html; moving the outputs into place together")
     with staged_outputs(out, names, overwrite) as stage:
-        files = _write_outputs(output_paths(stage), rdict, result, nominal, meas, data, train, validation, stamp,
-                               list(setup["problem"].targets), accuracy, write_robot, notes, report,
-                               elastic=elastic_out)
+        files = _write_outputs(output_paths(stage), rdict, computed["robot"], computed["nominal"],
+                               computed["measurements"], computed["data"], computed["train"], computed["validation"],
+                               list(computed["problem"].targets), computed["accuracy"], write_robot, notes, report,
+                               result=result, torque_plots=elastic_out)
     files = {k: out / p.name for k, p in files.items()}
-    return {"result": rdict, "files": files, "notes": notes, "calibration_result": result,
-            "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
-            "description": setup["description"], "convergence_warnings": convergence_warnings}
+    return {**{k: computed[k] for k in ("result", "calibration_result", "problem", "verdict", "six_d", "description",
+                                        "convergence_warnings")},
+            "files": files, "notes": notes}
+
+
+def check_calibration_outputs(out_dir, *, overwrite: bool = False, report: bool = True) -> list:
+    """Refuse an output folder that is a file, or holds outputs of an earlier run without
+    ``overwrite`` (``OutputExistsError``); the names of the files a calibration writes there."""
+    out = Path(out_dir)
+    names = [n for k, n in OUTPUT_FILES.items() if report or k != "report"]
+    if out.exists() and not out.is_dir():
+        raise CalibrationInputError(f"{out}: exists and is not a folder")
+    check_outputs_free(out, names, overwrite)
+    return names
+
+
+def _check_solver_options(loss, sigma_mm, method) -> None:
+    if loss not in ("linear", "huber", "cauchy"):
+        raise CalibrationInputError(f"--loss must be linear, huber or cauchy, got {loss!r}")
+    check_method(method, loss)
+    if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
+        raise CalibrationInputError(f"--noise must be a positive number of mm, got {sigma_mm}")
 
 
 def _check_options(out: Path, names, overwrite, loss, sigma_mm, method) -> None:
     if out.exists() and not out.is_dir():
         raise CalibrationInputError(f"{out}: exists and is not a folder")
     check_outputs_free(out, names, overwrite)
-    if loss not in ("linear", "huber", "cauchy"):
-        raise CalibrationInputError(f"--loss must be linear, huber or cauchy, got {loss!r}")
-    check_method(method, loss)
-    if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
-        raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
+    _check_solver_options(loss, sigma_mm, method)
 
 
 def _split(meas, data, free_names, use_orientation, holdout, seed, train_ids, holdout_ids):
@@ -349,22 +429,15 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
     return rdict
 
 
-def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation, stamp, targets, accuracy,
-                   write_robot, notes, report, elastic=None) -> dict:
-    """Write result.json, the calibrated robot (TOML, URDF; only with ``write_robot``) and the
-    report (with ``report``) into ``paths`` (a staging folder); returns {kind: path}. elastic:
-    None or (function adding the ``[elastic]`` section to the model, function giving the report's
-    torque plots or None)."""
+def _write_outputs(paths, rdict, calibrated, nominal, meas, data, train, validation, targets, accuracy,
+                   write_robot, notes, report, *, result, torque_plots=None) -> dict:
+    """Write result.json, the calibrated robot ``calibrated`` (TOML, URDF; only with
+    ``write_robot``) and the report (with ``report``) into ``paths`` (a staging folder); returns
+    {kind: path}. torque_plots: None or a function giving the report's elastic torque plots."""
     if not write_robot:
         notes.append("calibrated_robot.toml/.urdf not written: the result FAILED the sanity gates "
                      "(pass --force to write them anyway)")
     N = meas.n_poses
-    calibrated = result.model.replace(
-        title=f"{nominal.title or nominal.name} (calibrated)",
-        source=f"robocal calibrate of {Path(str(data)).name} ({len(train)} poses, {stamp}) from nominal: "
-               f"{nominal.source}")
-    if elastic is not None:
-        calibrated = elastic[0](calibrated)
     comment = (f"Calibrated by robocal from {data} ({len(train)} of {N} poses; held-out RMS "
                + (f"{validation['before']['rms']:.4f} -> {validation['after']['rms']:.4f} mm" if validation else "n/a")
                + ").\n[base] is the robot base in the measurement instrument's frame "
@@ -396,7 +469,7 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap,
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}",
                                    extra_plots={**convergence_plots(result),
-                                                **(elastic[1]() if elastic is not None and elastic[1] else {})})
+                                                **(torque_plots() if torque_plots is not None else {})})
     return files
 
 

@@ -74,7 +74,7 @@ def simulate_closed_chain(robot, out_path, *, plates: int = 2, targets: int = 5,
         if v < lo:
             raise ValueError(f"{name} must be at least {lo}, got {v}")
     if not (0.0 < tolerance_mm < 50.0) or not (0.0 < spacing_mm < 2000.0):
-        raise ValueError("--tolerance must be in (0, 50) mm and --spacing in (0, 2000) mm")
+        raise ValueError("--distance-tolerance must be in (0, 50) mm and --spacing in (0, 2000) mm")
     nominal = load_robot(robot)
     cell, s_hold = make_cell(nominal, seed, plates=plates, targets=targets, spacing_mm=spacing_mm,
                              joint_resolution_deg=joint_resolution_deg, joint_noise_deg=joint_noise_deg,
@@ -214,7 +214,7 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
     if sigma_mm is None:
         sigma_mm = spots.tolerance_mm / 2.0 if spots.tolerance_mm else 0.05
     if not sigma_mm > 0:
-        raise CalibrationInputError(f"--sigma must be a positive number of mm, got {sigma_mm}")
+        raise CalibrationInputError(f"--noise must be a positive number of mm, got {sigma_mm}")
     ensure_writable_dir(out)
     free_names = select_free(nominal, free, free_all, fix)
     train, hold = split_spots(spots, holdout, seed)

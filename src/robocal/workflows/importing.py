@@ -63,7 +63,7 @@ def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "
         pairing = pair_by_id(points, log, match=id_match, robot=model)
     else:
         if tolerance_s is None:
-            raise ValueError("pairing by time needs a tolerance in seconds (--tolerance)")
+            raise ValueError("pairing by time needs a tolerance in seconds (--time-tolerance)")
         pairing = pair_by_time(points, log, tolerance=tolerance_s, offset=offset_s, robot=model)
     notes = list(pairing.notes)
     meas = _joints_named_as_robot(pairing.measurements, model, notes)

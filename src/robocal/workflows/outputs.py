@@ -11,7 +11,7 @@ Existing files are checked before any work (``FileExistsError`` naming the file,
 """
 
 from __future__ import annotations
-from ..errors import RobocalError
+from ..errors import OutputExistsError, RobocalError
 
 import contextlib
 import errno
@@ -37,7 +37,7 @@ def describe_os_error(exc: OSError, path=None) -> str:
 
 
 def check_outputs_free(out_dir, names, overwrite: bool) -> None:
-    """``FileExistsError`` naming the first of ``out_dir / names`` that exists (unless ``overwrite``);
+    """``OutputExistsError`` (a ``FileExistsError``) naming the first of ``out_dir / names`` that exists (unless ``overwrite``);
     ``NotADirectoryError`` when ``out_dir`` is a file."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
@@ -47,7 +47,7 @@ def check_outputs_free(out_dir, names, overwrite: bool) -> None:
     for name in names:
         p = out / name
         if p.exists():
-            raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
+            raise OutputExistsError(f"{p}: output file exists; pass --overwrite to replace it")
 
 
 def ensure_writable_dir(out_dir) -> Path:

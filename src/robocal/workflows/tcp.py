@@ -53,7 +53,7 @@ def tcp_repeatability_study(*, collisions: int = 10, seed: int = 0, robot: str |
                             sensor_origin_mm=(-850.0, -170.0, 200.0), collision_tilt_deg=(1.0, 3.0),
                             collision_offset_mm=(0.5, 3.0), sensor_calibration: str = "simulated",
                             settings: CrossLaserSettings | None = None, variants: dict | None = None,
-                            events_path=None, sensor_path=None) -> dict:
+                            events_path=None, sensor_path=None, progress=None) -> dict:
     """Recalibrate the tool after ``collisions`` random collisions and compare with the truth.
 
     Cell: sensor nominally aligned with the base at ``sensor_origin_mm``, ``beta_deg`` between
@@ -70,6 +70,7 @@ def tcp_repeatability_study(*, collisions: int = 10, seed: int = 0, robot: str |
     sensor-calibrate --json``) there.
     Seeds: ``numpy.random.SeedSequence(seed)`` spawns the sensor-calibration, collision and
     per-collision robot-noise streams; every variant sees the same noise stream per collision.
+    ``progress(done, total)``: called after each recalibration (``total`` = collisions x variants).
 
     Returns a dict: ``config``, ``sensor`` (calibration vs truth), ``collisions`` (the damage),
     ``variants`` name -> {``settings``, ``runs`` (per collision: tcp/axis errors, cycle time,
@@ -101,12 +102,18 @@ def tcp_repeatability_study(*, collisions: int = 10, seed: int = 0, robot: str |
 
     out_variants = {}
     reach = []
+    count = {"done": 0, "total": collisions * len(variants)}
+
+    def tick():
+        count["done"] += 1
+        if progress is not None:
+            progress(count["done"], count["total"])
     for vname, over in variants.items():
         events_note = None
         if events_path is not None and not out_variants:
             events_note = f"simulated cross-laser recalibration, seed {seed}, variant {vname}"
         runs = _run_variant(sensor, cal, tool0, damage, _replace(settings, over), model, run_seeds, cell_kw,
-                            reach, events_path, events_note)
+                            reach, events_path, events_note, tick)
         out_variants[vname] = {"settings": over, "runs": runs, "summary": _summary(runs)}
 
     return {
@@ -164,7 +171,7 @@ def _sensor_report(mode: str, cal_time, cal_d: dict, truth: dict) -> dict:
 
 
 def _run_variant(sensor, cal, tool0, damage, settings, model, run_seeds, cell_kw: dict, reach: list,
-                 events_path, events_note):
+                 events_path, events_note, tick=lambda: None):
     """Recalibrate every bent tool of ``damage`` with ``settings``, each on its own robot-noise
     stream; worst IK errors are appended to ``reach``; with ``events_note`` the first
     recalibration's events are written to ``events_path``. Returns the per-collision runs."""
@@ -177,6 +184,7 @@ def _run_variant(sensor, cal, tool0, damage, settings, model, run_seeds, cell_kw
             write_events_csv(events_path, res.records, note=events_note)
         reach.extend(cell.reach_errors_mm)
         runs.append(_run_summary(res, bent.T_flange_tool))
+        tick()
     return runs
 
 

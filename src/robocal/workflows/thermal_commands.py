@@ -60,7 +60,7 @@ def _check_new(paths, overwrite: bool) -> None:
 def _check_sigma(sigma_mm) -> None:
     """``ValueError`` unless ``sigma_mm`` [mm] is None or a positive finite number."""
     if sigma_mm is not None and not (sigma_mm > 0 and math.isfinite(sigma_mm)):
-        raise ValueError(f"--sigma must be a positive number of mm, got {sigma_mm}")
+        raise ValueError(f"--noise must be a positive number of mm, got {sigma_mm}")
 
 
 def format_delta(unit: str, value: float) -> str:

@@ -1,0 +1,240 @@
+"""One grammar for the whole command line (docs/cli.md, issue 26), checked over every command by
+click introspection, and the deprecated names that keep working for one release."""
+
+import json
+
+import click
+import pytest
+from click.testing import CliRunner
+
+from robocal.cli import main
+from robocal.cli._common import (EXIT_ERROR, EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, EXIT_OK,
+                                 EXIT_TARGETS_NOT_REACHED, EXIT_USAGE)
+from robocal.cli._grammar import DEPRECATED, DEPRECATED_COMMANDS, ROBOT_ARGUMENT, rewrite
+
+#: names the grammar replaced (docs/cli.md, "Deprecated names"); none may be declared any more
+OLD_NAMES = {"--sigma", "--joint-noise-deg", "--joint-resolution", "--euler", "--convention", "--tcp", "--history",
+             "--first-seed", "--tolerance"}
+#: option -> what its help must name (the unit or the kind of value)
+UNIT_IN_HELP = {"--noise": "[mm]", "--joint-noise": "[deg]", "--time-tolerance": "[s]",
+                "--distance-tolerance": "[mm]", "--tool": "[mm]"}
+#: an optional robot that only overrides what the inputs say stays an option (docs/cli.md)
+OPTIONAL_ROBOT_OPTION = {"handeye solve"}
+#: commands that produce a result but have no --json yet (docs/cli.md lists them)
+JSON_PENDING = set()
+
+
+def commands():
+    """(path, command) of every command of ``robocal`` (groups walked, hidden aliases skipped)."""
+    out = []
+
+    def walk(group, path, ctx):
+        for name in group.list_commands(ctx):
+            cmd = group.get_command(ctx, name)
+            if cmd.hidden:
+                continue
+            sub = f"{path} {name}".strip()
+            if isinstance(cmd, click.Group):
+                walk(cmd, sub, click.Context(cmd, parent=ctx, info_name=name))
+            else:
+                out.append((sub, cmd))
+
+    walk(main, "", click.Context(main, info_name="robocal"))
+    return out
+
+
+COMMANDS = commands()
+IDS = [p for p, _ in COMMANDS]
+
+
+def options(cmd):
+    return [p for p in cmd.params if isinstance(p, click.Option)]
+
+
+def names(cmd):
+    return {o for p in options(cmd) for o in p.opts + p.secondary_opts}
+
+
+def test_the_walk_sees_every_command():
+    assert len(COMMANDS) >= 37 and "fleet study monte-carlo" in IDS and "tcp calibrate-sensor" in IDS
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_no_old_names(path, cmd):
+    assert not names(cmd) & OLD_NAMES, f"{path}: {sorted(names(cmd) & OLD_NAMES)} (docs/cli.md)"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_robot_is_the_first_positional_argument(path, cmd):
+    args = [p for p in cmd.params if isinstance(p, click.Argument)]
+    robot_args = [i for i, a in enumerate(args) if a.name in ("robot", "robot_file")]
+    assert robot_args in ([], [0]), f"{path}: the robot must be the first argument"
+    if path not in OPTIONAL_ROBOT_OPTION:
+        assert "--robot" not in names(cmd), f"{path}: --robot must be the first positional argument"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_json_is_a_flag_and_every_result_has_it(path, cmd):
+    js = [p for p in options(cmd) if "--json" in p.opts]
+    for p in js:
+        assert p.is_flag, f"{path}: --json must be a flag printing JSON to stdout"
+    if path not in JSON_PENDING:
+        assert js, f"{path}: no --json"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_out_is_a_folder_unless_the_help_says_file(path, cmd):
+    for p in options(cmd):
+        if "--out" not in p.opts:
+            continue
+        is_folder = isinstance(p.type, click.Path) and not p.type.file_okay
+        if is_folder:
+            assert "folder" in p.help.lower(), f"{path}: --out is a folder: say so in its help"
+        else:
+            assert "file" in p.help.lower(), f"{path}: --out is a file only where its help says 'file'"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_one_name_per_concept_with_its_unit(path, cmd):
+    for p in options(cmd):
+        for name, unit in UNIT_IN_HELP.items():
+            if name in p.opts:
+                assert p.help and unit in p.help, f"{path}: {name} must state {unit} in its help"
+        if "--seed" in p.opts:
+            assert p.type.name == "integer", f"{path}: --seed takes an integer"
+        if "--deg" in p.opts:
+            assert p.secondary_opts == ["--rad"] and "in and out" in p.help, f"{path}: --deg/--rad (docs/cli.md)"
+
+
+def test_exit_code_table():
+    assert (EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, EXIT_TARGETS_NOT_REACHED) == (
+        0, 1, 2, 3, 4, 5)
+
+
+def test_every_deprecated_name_maps_to_a_declared_option():
+    declared = dict(COMMANDS)
+    for path, rules in DEPRECATED.items():
+        cmd = declared[path]
+        for old, rule in rules.items():
+            if rule == ROBOT_ARGUMENT:
+                first = [p for p in cmd.params if isinstance(p, click.Argument)][0]
+                assert first.name == "robot", path
+            else:
+                new = rule if isinstance(rule, str) else rule[0]
+                assert new in names(cmd), f"{path}: {old} -> {new}, which is not an option"
+    for group, renamed in DEPRECATED_COMMANDS.items():
+        for new in renamed.values():
+            assert f"{group} {new}" in declared
+
+
+# ------------------------------------------------------------------------------ deprecated aliases
+def test_rewrite_rules():
+    rules = {"--sigma": "--noise", "--tcp": ("--tool", 3), "--robot": ROBOT_ARGUMENT, "--json": ("--summary", "value")}
+    assert rewrite(["a", "--sigma", "0.1", "--sigma=0.2"], rules) == ["a", "--noise", "0.1", "--noise=0.2"]
+    assert rewrite(["f", "--tcp", "12", "-7", "180", "--x"], rules) == ["f", "--tool", "12,-7,180", "--x"]
+    assert rewrite(["p", "--robot", "ur10", "--x"], rules) == ["ur10", "p", "--x"]
+    assert rewrite(["--json", "out.json", "--seed", "1"], rules) == ["--summary", "out.json", "--seed", "1"]
+    assert rewrite(["--json", "--seed", "1"], rules) == ["--json", "--seed", "1"]
+    assert rewrite(["--", "--sigma"], rules) == ["--", "--sigma"]
+
+
+def _invoke(*args):
+    r = CliRunner().invoke(main, [str(a) for a in args])
+    return r, r.stdout, r.stderr
+
+
+def test_old_option_name_works_with_a_warning():
+    q = ["0", "0.5", "-0.5", "0", "1", "0"]
+    new, out_new, _ = _invoke("fk", "ur10", *q, "--orientation", "kuka_abc", "--json")
+    old, out_old, err_old = _invoke("fk", "ur10", *q, "--euler", "kuka_abc", "--json")
+    assert new.exit_code == old.exit_code == 0, old.output
+    assert json.loads(out_old) == json.loads(out_new)
+    assert "Warning: --euler is deprecated, use --orientation" in err_old
+
+
+def test_old_three_number_form_works_with_a_warning(tmp_path):
+    from robocal.workflows.simulate import simulate_tracker
+
+    sim = simulate_tracker("ur10", tmp_path / "c.csv", n_poses=30, noise_mm=0.02, seed=1)
+    r, _, err = _invoke("calibrate", "ur10", sim["measurements"], "--out", tmp_path / "o", "--no-report",
+                        "--sigma", "0.02", "--tool", "0", "0", "0", "--holdout", "0")
+    assert r.exit_code == 0, r.output
+    assert "Warning: --sigma is deprecated, use --noise" in err
+    assert "Warning: --tool V V V is deprecated, use --tool V,V,V" in err
+    meta = json.loads((tmp_path / "o" / "result.json").read_text())["metadata"]
+    assert meta["sigma_mm"] == 0.02 and meta["initial_target_mm"] == [0.0, 0.0, 0.0]
+
+
+def test_old_robot_option_becomes_the_first_argument(tmp_path):
+    r, out, err = _invoke("import", "--robot", "ur10", tmp_path / "missing.csv", "--joints", tmp_path / "log.csv",
+                          "--out", tmp_path / "m.csv")
+    assert "Warning: --robot is deprecated, use the first argument ROBOT" in err
+    assert r.exit_code == 1 and "missing.csv" in r.output  # parsed; fails on the missing file
+
+
+def test_old_command_name_works_with_a_warning(tmp_path):
+    r, _, err = _invoke("tcp", "sensor-calibrate", tmp_path / "missing.csv")
+    assert "Warning: sensor-calibrate is deprecated, use tcp calibrate-sensor" in err
+    assert r.exit_code == 1
+    assert "sensor-calibrate" not in CliRunner().invoke(main, ["tcp", "--help"]).output  # hidden
+
+
+def test_old_names_are_not_in_the_help():
+    out = CliRunner().invoke(main, ["calibrate", "--help"]).output
+    assert "--noise" in out and "--sigma" not in out
+
+
+def test_json_prints_one_document_on_stdout_and_the_text_on_stderr(tmp_path):
+    csv = tmp_path / "c.csv"
+    r, out, err = _invoke("simulate", "tracker", "ur10", "--poses", "40", "--noise", "0.02", "--seed", "2",
+                          "--out", csv, "--json")
+    assert r.exit_code == 0, r.output
+    sim = json.loads(out)
+    assert sim["n_poses"] == 40 and sim["measurements"] == str(csv) and "wrote" in err
+    r, out, err = _invoke("calibrate", "ur10", csv, "--out", tmp_path / "cal", "--no-report", "--json")
+    assert r.exit_code == 0, r.output
+    doc = json.loads(out)
+    assert doc == {**json.loads((tmp_path / "cal" / "result.json").read_text()), "files": doc["files"]}
+    assert "held-out poses, after" in err
+
+
+def test_progress_without_a_terminal_prints_counts_and_eta_every_few_seconds():
+    import io
+    import time
+
+    from robocal.cli._progress import Progress
+
+    log = io.StringIO()
+    with Progress("samples", 4, every_s=0.05, file=log, tty=False) as bar:
+        for _ in range(4):
+            time.sleep(0.06)
+            bar.update(1)
+    lines = log.getvalue().splitlines()
+    assert len(lines) >= 3 and all(line.startswith("samples: ") for line in lines)
+    assert any("ETA" in line and "s elapsed" in line for line in lines)
+    assert lines[-1].startswith("samples: 4/4 (100 %)") and lines[-1].endswith("done")
+    quiet = io.StringIO()
+    with Progress("quick", 2, every_s=10, file=quiet, tty=False) as bar:  # done within every_s: silent
+        bar.update(2)
+    assert quiet.getvalue() == ""
+
+
+def test_optional_robot_before_a_required_argument(tmp_path):
+    """thermal screen [ROBOT] RUN_DIR: with one argument it is the run folder, with two the robot comes first."""
+    from robocal.cli.thermal import thermal
+
+    captured = {}
+    screen = thermal.commands["screen"]
+    callback = screen.callback
+    screen.callback = lambda **kw: captured.update(kw)
+    try:
+        for args, robot in (([str(tmp_path)], None), (["ur10", str(tmp_path)], "ur10"),
+                            (["--keep", "5", str(tmp_path)], None), ([str(tmp_path), "--keep", "5"], None)):
+            captured.clear()
+            r = CliRunner().invoke(thermal, ["screen", *args])
+            assert r.exit_code == 0, (args, r.output)
+            assert captured["robot"] == robot and captured["run_dir"] == str(tmp_path), args
+        r, _, err = _invoke("thermal", "screen", tmp_path, "--robot", "ur10")
+        assert r.exit_code == 0 and captured["robot"] == "ur10" and "--robot is deprecated" in err
+    finally:
+        screen.callback = callback
