@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from robocal.cli import main
 from robocal.cli._common import (EXIT_ERROR, EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, EXIT_OK,
-                                 EXIT_TARGETS_NOT_REACHED, EXIT_USAGE)
+                                 EXIT_MECHANICAL_FAULT, EXIT_TARGETS_NOT_REACHED, EXIT_USAGE)
 from robocal.cli._grammar import DEPRECATED, DEPRECATED_COMMANDS, ROBOT_ARGUMENT, rewrite
 
 #: names the grammar replaced (docs/cli.md, "Deprecated names"); none may be declared any more
@@ -107,8 +107,8 @@ def test_one_name_per_concept_with_its_unit(path, cmd):
 
 
 def test_exit_code_table():
-    assert (EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, EXIT_TARGETS_NOT_REACHED) == (
-        0, 1, 2, 3, 4, 5)
+    assert (EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, EXIT_TARGETS_NOT_REACHED,
+            EXIT_MECHANICAL_FAULT) == (0, 1, 2, 3, 4, 5, 6)
 
 
 def test_every_deprecated_name_maps_to_a_declared_option():

@@ -10,6 +10,7 @@ import sys
 import click
 
 from ._common import EXIT_FAILED_RESULT, _robot, _user_error
+from ._json import json_option, set_json_result
 
 __all__ = ["iso9283", "simulate_iso9283_cmd", "xyz_option"]
 
@@ -59,7 +60,7 @@ def iso9283():
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for protocol.json and program.csv.")
 @click.option("--tool", default=None, metavar="X,Y,Z[,A,B,C]",
-              help="The measured tool point (reflector) on the flange [mm, deg KUKA A,B,C].")
+              help="The measured tool point (reflector) on the flange, X,Y,Z [mm] and A,B,C [deg, KUKA A,B,C].")
 @click.option("--cycles", default=30, show_default=True, help="Cycles of the pose and distance tests (ISO: 30).")
 @click.option("--path-cycles", default=10, show_default=True, help="Cycles of the path tests (ISO: 10).")
 @click.option("--drift-hours", default=0.0, show_default=True, help="Length of the drift run [h] (ISO: 8; 0: none).")
@@ -183,6 +184,7 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
 @click.option("--drift", "drift_deg", default=0.005, show_default=True,
               help="Thermal drift of the J2/J3 offsets at steady state [deg] (time constant 1 h).")
 @click.option("--overwrite", is_flag=True, help="Replace existing files.")
+@json_option
 def simulate_iso9283_cmd(robot, plan, out_file, seed, truth_file, calibrated, mpe, instrument_at, joint_noise_deg,
                          backlash_deg, drift_deg, overwrite):
     """The simulator's true ROBOT executes an ISO 9283 PLAN; a tracker records it."""
@@ -204,6 +206,7 @@ def simulate_iso9283_cmd(robot, plan, out_file, seed, truth_file, calibrated, mp
                              effects=IsoEffects(joint_noise_deg, backlash_deg, drift_deg), overwrite=overwrite)
     except (ValueError, OSError, RuntimeError) as exc:
         raise _user_error(exc) from None
+    set_json_result(dict(r, instrument_at_mm=st, calibrated=calibrated))
     click.echo(f"simulated the ISO 9283 run ({r['n_points']} points, tracker at "
                f"({st[0]:.0f}, {st[1]:.0f}, {st[2]:.0f}) mm{', corrected program' if calibrated else ''})")
     click.echo(f"wrote {r['measurements']} and {r['truth_measurements']}")

@@ -22,7 +22,7 @@ __all__ = ["verify"]
 @click.option("--register", "register_frame", is_flag=True,
               help="The instrument was moved: re-fit its frame on the same poses (a J1 offset is then not checked).")
 @click.option("--tool", "tool", default=None, metavar="X,Y,Z",
-              help="The measured point on the flange [mm] (default: the calibration's identified target).")
+              help="The measured point on the flange, X,Y,Z [mm] (default: the calibration's identified target).")
 @click.option("--temperature", "temperature_c", type=float, default=None, help="Robot temperature [°C], recorded.")
 @click.option("--instrument", default=None, help="Instrument name/serial, recorded.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
