@@ -135,3 +135,8 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
     click.echo(f"rendered {r['n_images']} images ({r['n_full']} with the full board) of {r['board']} {where} "
                f"({r['robot']}, seed {seed})")
     click.echo(f"wrote {out_dir}/images/, joint_log.csv, frames.csv, camera.json and truth.json")
+
+
+from .simulate_execute import execute_cmd  # noqa: E402
+
+simulate.add_command(execute_cmd)
