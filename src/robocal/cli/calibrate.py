@@ -212,6 +212,10 @@ def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, p
                    f"{UNKNOWN_TOLERANCE['mm']} mm / {math.degrees(UNKNOWN_TOLERANCE['rad']):.2f} deg each) is unknown. "
                    f"Measure the actual tool (robocal tcp) or calibrate with reflectors at known places on the "
                    f"flange; or use an identified point as the tool: {points} [mm, flange frame].", err=True)
+    if r["base_parameters"]:
+        click.echo(f"note: targets are taken in the calibrated base frame ([base] of {robot_file}): "
+                   f"{', '.join(r['base_parameters'])} cannot be told apart from the base placement, so the cell's "
+                   "frames (base / work object) must be measured in that frame.")
     kept = sum(row["status"] == "kept" for row in r["rows"])
     click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected, {kept} joint target(s) kept; "
                f"wrote {r['file']} and {r['report']}")

@@ -43,8 +43,15 @@ CONFIG_DAT_HELP = "KUKA: the robot's $config.dat (TOOL_DATA[n], BASE_DATA[n] val
 @click.option("--tool", default=None, metavar="X,Y,Z[,A,B,C]", help=TOOL_HELP)
 @click.option("--base", default=None, metavar="X,Y,Z[,A,B,C]", help=BASE_HELP)
 @click.option("--config-dat", type=click.Path(exists=True, dir_okay=False), default=None, help=CONFIG_DAT_HELP)
+@click.option("--cell-base", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="A calibrated robot file: the program's base-frame coordinates are meant in its [base] (the cell "
+                   "was measured in the calibrated base frame); errors are then taken in the tracker frame "
+                   "(default: the true robot's own base frame).")
+@click.option("--true-tool", default=None, metavar="X,Y,Z[,A,B,C]",
+              help="The tool really on the flange [mm, deg; as --tool] (default: exactly the program's tool), e.g. "
+                   "the true reflector when the program's tool is an identified reflector offset.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document (lengths mm, angles deg).")
-def execute_cmd(robot, program, intended, tool, base, config_dat, as_json):
+def execute_cmd(robot, program, intended, tool, base, config_dat, cell_base, true_tool, as_json):
     """Run PROGRAM on the simulated ROBOT as its controller would, and print where the TCP lands.
 
     ROBOT is a truth file of `robocal simulate tracker` (<name>.truth.json: the hidden true robot)
@@ -60,11 +67,18 @@ def execute_cmd(robot, program, intended, tool, base, config_dat, as_json):
 
     tool_v, base_v = frame_option(tool, "tool"), frame_option(base, "base")
     try:
-        nominal, true = true_robot_of(robot)
+        nominal, true, T_world_base_true = true_robot_of(robot)
         prog = read_program(program)
+        from ..io.programs.frames import frame_from_option
+        from ..robots import load_robot
+
+        T_cell = None if cell_base is None else load_robot(cell_base).T_world_base
+        T_true_tool = None if true_tool is None else frame_from_option(frame_option(true_tool, "true-tool"),
+                                                                       prog.format, "true-tool")
         meant = read_program(intended) if intended else prog
         cdat = None if config_dat is None else open(config_dat, encoding="latin-1").read()
-        vc = VirtualController(nominal, true)
+        vc = VirtualController(nominal, true, T_world_base_true=T_world_base_true if T_cell is not None else None,
+                               T_world_cellbase=T_cell, true_tool=T_true_tool)
         ex = vc.execute(prog, tool=tool_v, base=base_v, config_dat=cdat)
         err = vc.landing_errors(ex, meant, tool=tool_v, base=base_v, config_dat=cdat)
     except (ValueError, KeyError, OSError) as exc:

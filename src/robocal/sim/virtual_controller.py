@@ -65,8 +65,9 @@ class ExecutedTarget:
 
 
 def true_robot_of(robot):
-    """``(nominal, true)`` models from a truth file of ``robocal simulate tracker`` (``*.json``:
-    the hidden true parameters) or a robot name/file (true = nominal)."""
+    """``(nominal, true, T_world_base_true)`` from a truth file of ``robocal simulate tracker``
+    (``*.json``: the hidden true parameters and ``T_tracker_base``) or a robot name/file (true =
+    nominal, identity base)."""
     p = Path(str(robot))
     if p.suffix.lower() == ".json" and p.is_file():
         truth = json.loads(p.read_text())
@@ -74,22 +75,31 @@ def true_robot_of(robot):
             raise ValueError(f"{p}: not a truth file of robocal simulate (no 'robot' / 'true_parameters')")
         nominal = load_robot(truth["robot"])
         true = nominal.with_params(**{k: float(v) for k, v in truth["true_parameters"].items()})
-        return nominal, true
+        return nominal, true, np.asarray(truth.get("T_tracker_base", np.eye(4)), dtype=float)
     nominal = load_robot(robot)
-    return nominal, nominal
+    return nominal, nominal, np.eye(4)
 
 
 class VirtualController:
     """Executes programs as a nominal-model controller, on a robot that follows ``true_model``.
 
     nominal, true_model: :class:`~robocal.kinematics.model.RobotModel` with the same joints.
+    T_world_base_true: (4, 4) where the true robot's base really is in the cell (e.g. the tracker)
+    frame [mm]; T_world_cellbase: (4, 4) the base frame in which the program's coordinates are
+    *meant* (e.g. a calibrated robot file's ``[base]``, when the cell's frames were measured in it).
+    Landing errors are taken in the cell frame; both default to the identity (the program means the
+    true robot's own base frame). true_tool: (4, 4) the tool really on the flange [mm] (default:
+    exactly the tool the program declares).
     """
 
-    def __init__(self, nominal, true_model):
+    def __init__(self, nominal, true_model, *, T_world_base_true=None, T_world_cellbase=None, true_tool=None):
         if tuple(nominal.controller_joints) != tuple(true_model.controller_joints):
             raise ValueError("nominal and true models have different controller joints")
         self.nominal = nominal
         self.true_model = true_model
+        self.T_world_base_true = np.eye(4) if T_world_base_true is None else np.asarray(T_world_base_true, float)
+        self.T_world_cellbase = np.eye(4) if T_world_cellbase is None else np.asarray(T_world_cellbase, float)
+        self.true_tool = None if true_tool is None else np.asarray(true_tool, dtype=float)
 
     def _order(self, program):
         targets = {t.name.casefold(): t for t in program.targets}
@@ -144,7 +154,8 @@ class VirtualController:
         out = ExecutedTarget(t.name, t.kind, t.line, q, T_base_frame=T_frame, T_flange_tcp=T_tool, reason=reason)
         if q is None:
             return out
-        out.T_base_tcp_true = with_tool(self.true_model, T_tool).fk(q)
+        tool = T_tool if self.true_tool is None or t.kind == "joint" else self.true_tool
+        out.T_base_tcp_true = with_tool(self.true_model, tool).fk(q)
         out.T_base_tcp_commanded = with_tool(self.nominal, T_tool).fk(q)
         if analytic:
             out.signature = tuple(bool(x) for x in arm_signature(self.nominal, q)[0])
@@ -168,8 +179,12 @@ class VirtualController:
                 T_meant = T_frame @ t.T_frame_tcp
             else:
                 T_meant = with_tool(self.true_model, np.eye(4)).fk(np.asarray(t.joints, dtype=float))
-            dp = np.linalg.norm(e.T_base_tcp_true[:3, 3] - T_meant[:3, 3])
-            R = T_meant[:3, :3].T @ e.T_base_tcp_true[:3, :3]
+                T_meant = self.T_world_base_true @ T_meant
+            if t.kind == "cartesian":
+                T_meant = self.T_world_cellbase @ T_meant
+            T_real = self.T_world_base_true @ e.T_base_tcp_true
+            dp = np.linalg.norm(T_real[:3, 3] - T_meant[:3, 3])
+            R = T_meant[:3, :3].T @ T_real[:3, :3]
             ang = math.degrees(math.acos(max(-1.0, min(1.0, (np.trace(R) - 1) / 2))))
             out[e.name] = (float(dp), ang)
         return out

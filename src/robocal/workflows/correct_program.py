@@ -83,8 +83,17 @@ class _Accuracy:
         self.names = names
         self.C = C
         self.points = {t["name"]: np.asarray(t["point_mm"], dtype=float) for t in result.get("targets", [])}
-        dropped = [d["name"] for d in result.get("identifiability", {}).get("dropped", [])]
-        self.unknown = [n for n in dropped if n in pnames]
+        dropped = [d for d in result.get("identifiability", {}).get("dropped", []) if d["name"] in pnames]
+        # held parameters that only trade off against the base placement (A1 zero, base height) are
+        # part of the calibrated base frame: targets are taken in that frame
+        self.in_base = [d["name"] for d in dropped
+                        if d.get("trades_off_with") and all(w["name"].startswith("base.") for w in d["trades_off_with"])]
+        # held parameters that trade off against the target points (the last link against the
+        # reflectors) are determined only for those points: unknown for any other TCP; the others
+        # trade off within the arm, which compensates them for every TCP alike
+        points = {t["name"] for t in result.get("targets", [])} | {"tool"}
+        self.unknown = [d["name"] for d in dropped
+                        if any(w["name"].split(".")[0] in points for w in d.get("trades_off_with", []))]
 
     def _jac(self, names, q, T_tool):
         base = with_tool(self.cal, T_tool)
@@ -232,6 +241,7 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     return {"rows": rows, "changes": changes, "file": out_file, "report": report,
             "n_corrected": sum(r["status"] == "corrected" for r in rows), "n_targets": len(rows),
             "n_failed": len(failed), "warnings": warnings, "unknown_parameters": accuracy.unknown if accuracy.ok else [],
+            "base_parameters": accuracy.in_base if accuracy.ok else [],
             "skipped": list(prog.skipped),
             "identified_points": accuracy.points if accuracy.ok else {}}
 
