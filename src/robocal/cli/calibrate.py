@@ -127,7 +127,7 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
 @click.option("--nominal", default=None,
               help="Nominal robot the controller runs (default: the robot named in ROBOT_FILE).")
 @click.option("--frame", type=click.Choice(["world", "base"]), default=None,
-              help="Targets CSV only: frame of the targets (default: the file's '# frame:', else world).")
+              help="Targets CSV only: frame of the targets: world (the calibrated robot file's world = instrument frame) or base (the robot base frame); required when the file has no '# frame:' line.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--payload", default=None, metavar="KG@X,Y,Z",
               help="A robot file with an [elastic] section: compensate the deflection under this payload, mass [kg] "

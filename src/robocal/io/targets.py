@@ -8,7 +8,7 @@ row per target::
     # length_unit: mm                 (mm | m)
     # angle_unit: deg                 (deg | rad: Euler / rotation-vector angles, seed joints)
     # orientation: kuka_abc           (optional: a name of robocal.transforms.POSE_CONVENTIONS)
-    # frame: world                    (optional: world (default) | base)
+    # frame: world                    (world | base; required unless --frame is given)
     name,x,y,z,rx,ry,rz,J1,J2,J3,J4,J5,J6
     P1,1510.2,-220.0,980.5,180.0,0.0,90.0,10.0,-80.0,95.0,0.0,30.0,0.0
 
@@ -62,8 +62,8 @@ def _check_header(md: dict, where: dict, fail) -> tuple:
             fail(f"header is missing '# {key}: ...'")
     lu = declared_unit(md, where, "length_unit", LENGTH_UNITS, fail)
     au = declared_unit(md, where, "angle_unit", ANGLE_UNITS, fail)
-    frame = md.get("frame", "world")
-    if frame not in ("world", "base"):
+    frame = md.get("frame")  # None: not stated (the command asks for it)
+    if frame is not None and frame not in ("world", "base"):
         fail(f"frame {frame!r}: expected world or base", where["frame"])
     conv = md.get("orientation")
     if conv is not None:

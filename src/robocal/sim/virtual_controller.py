@@ -42,7 +42,8 @@ class ExecutedTarget:
     [mm]; T_base_tcp_commanded (4, 4) where the nominal model believes it is; T_base_frame (4, 4)
     the target's frame; signature (back, elbow_down, wrist_negative) of ``q`` (OPW robots);
     other_joints: commanded joints of later executions that differ from ``q`` (the target was used
-    in another configuration).
+    in another configuration). assumed_start: a UR target before any joint target (the joints the
+    robot starts from are not in the program; the first joint target's, else all zero, are assumed).
     """
 
     name: str
@@ -56,6 +57,7 @@ class ExecutedTarget:
     signature: tuple | None = None
     reason: str = ""
     other_joints: list = field(default_factory=list)
+    assumed_start: bool = False
 
     def T_frame_tcp_true(self) -> np.ndarray | None:
         """Landing pose in the target's own frame (4, 4) [mm]."""
@@ -130,6 +132,7 @@ class VirtualController:
         analytic = is_analytic(self.nominal)
         q_cur = self._start(program) if q_start is None else np.asarray(q_start, dtype=float)
         done: dict = {}
+        known = q_start is not None or program.format != "urscript"
         for t in self._order(program):
             if t.kind == "joint":
                 q, reason = np.asarray(t.joints, dtype=float), ""
@@ -146,6 +149,8 @@ class VirtualController:
                     done[key].other_joints.append(q)
             else:
                 done[key] = self._landing(t, q, reason, T_tool, T_frame, analytic)
+                done[key].assumed_start = not known and t.kind == "cartesian"
+            known = known or (t.kind == "joint" and q is not None)
             if q is not None:
                 q_cur = q
         return [done[t.name.casefold()] for t in program.targets if t.name.casefold() in done]

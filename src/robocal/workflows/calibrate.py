@@ -451,6 +451,11 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
                                     f"{list(calibrated.controller_joints)}")
     tg = read_targets(targets_file, calibrated)
     fr = frame or tg["frame"]
+    if fr is None:
+        raise CalibrationInputError(
+            f"{targets_file}: the targets' frame is not stated; add '# frame: world' (the calibrated robot file's "
+            "world frame: the measurement instrument's, e.g. the tracker) or '# frame: base' (the robot base frame) "
+            "to the header, or pass --frame world|base")
     targets = tg["positions"]
     corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr,
                                    reach=deflection_of(calibrated, payload))

@@ -231,7 +231,9 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
                    max_joint_change_deg=float(np.degrees(np.max(np.abs(q - e.q)))),
                    remaining_error_mm=float(r.position_error_mm),
                    sigma_mm=float("nan") if sig is None else float(np.hypot(sig, unknown)), unknown_mm=unknown,
-                   note=(f"TCP = identified point {point}" if point else ""))
+                   note="; ".join(x for x in (f"TCP = identified point {point}" if point else "",
+                                              "no joint target before it: the arm configuration is assumed"
+                                              if e.assumed_start else "") if x))
         if unknown > 0:
             warnings.append((t.name, unknown))
         rows.append(row)
