@@ -181,18 +181,112 @@ def _judge(tmp_path, src, truth, cal, r1_true, options, execute_options=()):
     return errors
 
 
-def test_krl_program_at_the_true_kr150(tmp_path):
-    truth, cal, r1, r1_true = _campaign(tmp_path, "kuka_kr150_r3100", 1)
-    # front, wrist flipped (A5 < 0), arm back (overhead), arm back with the elbow down
-    q = [[10, -80, 100, 5, 40, 20], [-25, -60, 85, -30, -60, -10], [41, -83, -87, -271, 63, 231],
-         [-59, -66, -90, -210, 34, 82]]
-    text, config_dat = krl_program("kuka_kr150_r3100", q, [0, -90, 90, 0, 0, 0], [*r1, 0, 0, 0],
-                                   [1500, -300, 400, 0, 0, 10])
-    src, cdat = tmp_path / "cell.dat", tmp_path / "config.dat"
+# front, wrist flipped (A5 < 0), arm back (overhead), arm back with the elbow down
+KR150_Q = [[10, -80, 100, 5, 40, 20], [-25, -60, 85, -30, -60, -10], [41, -83, -87, -271, 63, 231],
+           [-59, -66, -90, -210, 34, 82]]
+KR150_BASE = [1500, -300, 400, 0, 0, 10]
+
+
+@pytest.fixture(scope="module")
+def kr150(tmp_path_factory):
+    d = tmp_path_factory.mktemp("kr150")
+    return d, *_campaign(d, "kuka_kr150_r3100", 1)
+
+
+def _krl_files(d, tool, name="cell"):
+    text, config_dat = krl_program("kuka_kr150_r3100", KR150_Q, [0, -90, 90, 0, 0, 0], tool, KR150_BASE)
+    src, cdat = d / f"{name}.dat", d / f"{name}_config.dat"
     src.write_bytes(text.encode("latin-1"))
     cdat.write_bytes(config_dat.encode("latin-1"))
+    return src, cdat
+
+
+def test_krl_program_at_the_true_kr150(kr150, tmp_path):
+    _, truth, cal, r1, r1_true = kr150
+    src, cdat = _krl_files(tmp_path, [*r1, 0, 0, 0])
     errors = _judge(tmp_path, src, truth, cal, r1_true, ["--config-dat", cdat], ["--config-dat", cdat])
     assert min(e0 for e0, _ in errors.values()) > 1.0  # a real error to correct
+
+
+def test_a_tool_the_calibration_never_saw_gets_a_warning_and_its_uncertainty(kr150, tmp_path):
+    """A 250 mm gripper: the TCP depends on the last link, which the reflectors cannot separate from
+    their own offsets. The correction says so (Warning: size, what to measure) and its sigma
+    counts it; the true robot lands within 3 sigma."""
+    _, truth, cal, _, _ = kr150
+    src, cdat = _krl_files(tmp_path, [0, 0, 250, 0, 0, 0], "gripper")
+    out = tmp_path / "gripper_corrected.dat"
+    r = _run(["correct", cal, src, "--out", out, "--config-dat", cdat])
+    assert r.exit_code == 0, r.output
+    warning = next(line for line in r.output.splitlines() if line.startswith("Warning:"))
+    assert "theta6" in warning and "d6" in warning and "mm" in warning and "Measure the actual tool" in warning
+    before = _execute(truth, src, cal, ["--config-dat", cdat])
+    after = _execute(truth, out, cal, ["--config-dat", cdat], intended=src)
+    report = _report(out.with_name(out.name + ".report.csv"))
+    for name in ("XP1", "XP2", "XP3", "XP4"):
+        assert float(report[name]["unknown_mm"]) > 0.1
+        assert after[name]["error_mm"] <= 3 * float(report[name]["sigma_mm"]), (name, after[name], report[name])
+        assert after[name]["error_mm"] < before[name]["error_mm"]
+
+
+def test_offline_joint_targets_are_corrected_only_when_asked_and_within_the_bound(kr150, tmp_path):
+    _, truth, cal, r1, _ = kr150
+    src, cdat = _krl_files(tmp_path, [*r1, 0, 0, 0])
+    out = tmp_path / "c.dat"
+    r = _run(["correct", cal, src, "--out", out, "--config-dat", cdat, "--joint-targets", "correct"])
+    assert r.exit_code == 0, r.output
+    home_old, home_new = read_program(src).target("XHOME").joints, read_program(out).target("XHOME").joints
+    change = np.degrees(np.abs(home_new - home_old)).max()
+    assert 1e-4 < change < 1.0
+    r = _run(["correct", cal, src, "--out", tmp_path / "d.dat", "--config-dat", cdat, "--joint-targets", "correct",
+              "--max-joint-change", "0.0001"])
+    assert r.exit_code == 5 and "XHOME" in r.output and "bound" in r.output
+
+
+def test_programs_that_do_not_fit_the_robot_are_refused(kr150, tmp_path):
+    _, _, cal, _, _ = kr150
+    ur = tmp_path / "pick.script"
+    ur.write_text("def pick():\n  movej([0.1, -1.5, 1.5, -1.5, -1.5, 0.0])\nend\n")
+    r = _run(["correct", cal, ur, "--out", tmp_path / "x.script"])
+    assert r.exit_code == 1 and "UR script" in r.output and "kuka_kr150_r3100" in r.output
+    krl = tmp_path / "seven.dat"
+    krl.write_text("DEFDAT seven\nDECL E6AXIS XH={A1 0.0,A2 -90.0,A3 90.0,A4 0.0,A5 0.0,A6 0.0}\nENDDAT\n")
+    src, _ = _krl_files(tmp_path, [0, 0, 250, 0, 0, 0])
+    r = _run(["correct", cal, src, "--out", tmp_path / "y.dat"])  # TOOL_DATA[1] without values
+    assert r.exit_code == 1 and "TOOL_DATA[1]" in r.output and "--config-dat" in r.output
+
+
+def test_fk_prints_the_base_frame_by_default(kr150):
+    _, _, cal, _, _ = kr150
+    q = ["0", "-90", "90", "0", "30", "0"]
+    base = json.loads(_run(["fk", cal, *q, "--deg", "--json"]).output)
+    world = json.loads(_run(["fk", cal, *q, "--deg", "--json", "--frame", "world"]).output)
+    tool = json.loads(_run(["fk", cal, *q, "--deg", "--json", "--tool", "0,0,200"]).output)
+    model = load_robot(cal)
+    T_world = model.fk(np.radians([0, -90, 90, 0, 30, 0]))
+    assert base["frame"] == "base" and np.allclose(base["position_mm"], (np.linalg.inv(model.T_world_base) @ T_world)[:3, 3])
+    assert np.linalg.norm(np.subtract(base["position_mm"], [1965, 0, 1984])) < 250  # near nominal, not the tracker's
+    assert np.allclose(world["position_mm"], T_world[:3, 3])
+    assert abs(np.linalg.norm(np.subtract(tool["position_mm"], base["position_mm"])) - 200.0) < 1e-9
+
+
+def test_a_ur_waypoint_used_in_two_configurations_is_flagged(tmp_path):
+    """One pose variable reached from two different current joints (UR: nearest solution) lands in two
+    arm configurations; one corrected value cannot serve both."""
+    nom = load_robot("ur10")
+    q1, q2 = np.radians([-30, -100, 100, -90, -90, 0]), np.radians([-30, -100, 100, 80, 90, -160])  # wrist flipped
+    T = nom.fk(np.radians([-25, -95, 100, -95, -90, 10]))
+    pv = ", ".join(f"{v:.7f}" for v in [*(T[:3, 3] / 1000), *rotvec_from_matrix(T[:3, :3])])
+    j = lambda q: ", ".join(f"{v:.6f}" for v in q)  # noqa: E731
+    src = tmp_path / "two.script"
+    src.write_text(f"def two():\n  global wp_p=p[{pv}]\n  movej([{j(q1)}])\n  movel(wp_p)\n  movej([{j(q2)}])\n"
+                   "  movel(wp_p)\nend\n")
+    model = tmp_path / "cal.toml"
+    from robocal.robots import save_robot
+    from robocal.sim import VirtualRobot
+
+    save_robot(VirtualRobot.perturbed(nom, np.random.default_rng(3)).true_model, model)
+    r = _run(["correct", model, src, "--out", tmp_path / "out.script"])
+    assert r.exit_code == 5 and "two configurations" in r.output
 
 
 def test_rapid_program_at_the_true_irb140(tmp_path):

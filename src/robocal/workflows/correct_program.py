@@ -255,6 +255,10 @@ def _joint_row(t, cal, nominal_model, mode, max_change, analytic, updates) -> di
         return {**row, "status": "kept", "note": "taught joint target (kept; --joint-targets correct to change)"}
     T_meant = with_tool(nominal_model, np.eye(4)).fk(q0)
     r = ik_numeric(with_tool(cal, np.eye(4)), T_meant, q0, tol_mm=1e-7, tol_rad=1e-10, max_iterations=200)
+    note = ""
+    if not bool(r.converged):  # e.g. at a wrist singularity (A5 = 0): the position alone, least joint motion
+        r = ik_numeric(with_tool(cal, np.eye(4)), T_meant, q0, tol_mm=1e-7, max_iterations=200, position_only=True)
+        note = "position only (the orientation is not reachable near this pose: wrist singularity)"
     q = np.asarray(r.q, dtype=float)
     change = float(np.max(np.abs(q - q0)))
     if not bool(r.converged):
@@ -265,7 +269,7 @@ def _joint_row(t, cal, nominal_model, mode, max_change, analytic, updates) -> di
     if analytic and not np.array_equal(*arm_signature(nominal_model, np.stack([q0, q]))):
         return {**row, "status": "not reached", "note": "the correction would change the arm configuration"}
     updates[t.name] = q
-    return {"joints_deg": " ".join(f"{v:.3f}" for v in np.degrees(q)), "status": "corrected",
+    return {"joints_deg": " ".join(f"{v:.3f}" for v in np.degrees(q)), "status": "corrected", "note": note,
             "max_joint_change_deg": math.degrees(change), "remaining_error_mm": float(r.position_error_mm),
             "cartesian_correction_mm": float(np.linalg.norm(with_tool(nominal_model, np.eye(4)).fk(q)[:3, 3]
                                                             - T_meant[:3, 3]))}

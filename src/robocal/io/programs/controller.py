@@ -40,18 +40,21 @@ def controller_joints(model, T_base_tcp, configuration, q_current):
     if not is_analytic(model):
         if not configuration.nearest:
             return None, "configuration data on a robot without closed-form IK"
-        r = ik_numeric(model, T_base_tcp, q_current, tol_mm=1e-8, tol_rad=1e-11, max_iterations=200)
-        if bool(r.converged):
-            return np.asarray(r.q, dtype=float), ""
-        # far from the current joints: solutions from spread-out starts, the nearest one
+        # every solution found from the current joints and from spread-out starts; each joint turned
+        # by whole turns to the value nearest the current one; the nearest solution wins
         lo, hi = model.limits[:, 0], model.limits[:, 1]
-        seeds = np.random.default_rng(0).uniform(np.maximum(lo, -np.pi), np.minimum(hi, np.pi), (32, len(lo)))
+        seeds = np.random.default_rng(0).uniform(np.maximum(lo, -np.pi), np.minimum(hi, np.pi), (48, len(lo)))
+        seeds = np.vstack([q_current, seeds])
         rs = ik_numeric(model, np.broadcast_to(T_base_tcp, (len(seeds), 4, 4)), seeds, tol_mm=1e-8, tol_rad=1e-11,
                         max_iterations=200)
         if not rs.converged.any():
-            return None, f"not reached from the current joints ({r.position_error_mm:.3g} mm left)"
+            return None, f"not reached ({rs.position_error_mm[0]:.3g} mm left from the current joints)"
         sol = rs.q[rs.converged]
-        return sol[int(np.argmin(np.max(np.abs(sol - q_current), axis=1)))], ""
+        turns = np.round((q_current - sol) / (2 * np.pi)) * 2 * np.pi
+        shifted = sol + turns
+        inside = np.all((shifted >= lo - 1e-9) & (shifted <= hi + 1e-9), axis=1)
+        sol = np.where(inside[:, None], shifted, sol)
+        return sol[int(np.argmin(np.linalg.norm(sol - q_current, axis=1)))], ""
     cand = ik_candidates(model, T_base_tcp[None])[0]
     if len(cand) == 0:
         return None, "out of reach (no solution within the joint limits)"
