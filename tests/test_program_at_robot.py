@@ -321,3 +321,27 @@ def test_urscript_program_at_the_true_ur10(tmp_path):
     src = tmp_path / "cell.script"
     src.write_text(ur_program("ur10", moves, [*r1, 0, 0, 0]))
     _judge(tmp_path, src, truth, cal, r1_true, [])
+
+
+def test_target_orientations_are_checked_against_their_taught_joints(kr150, tmp_path):
+    """Radians under a deg header, or KUKA A, B, C declared as FANUC W, P, R: refused, naming what fits."""
+    _, _, cal, _, _ = kr150
+    nom = load_robot("kuka_kr150_r3100")
+    q = np.radians(KR150_Q)
+    T = nom.fk(q)
+
+    def targets_file(name, values, unit, convention):
+        head = ["# format: robocal-targets/1", "# length_unit: mm", f"# angle_unit: {unit}",
+                f"# orientation: {convention}", "# frame: base", "name,x,y,z,rx,ry,rz,A1,A2,A3,A4,A5,A6"]
+        rows = [f"P{k},{','.join(repr(float(v)) for v in [*T[k, :3, 3], *values[k]])},"
+                + ",".join(repr(float(v)) for v in np.degrees(q[k])) for k in range(len(q))]
+        (tmp_path / name).write_text("\n".join(head + rows) + "\n")
+        return tmp_path / name
+
+    abc = np.array([euler_from_matrix(t[:3, :3], "kuka_abc") for t in T])  # [rad]
+    ok = _run(["correct", cal, targets_file("ok.csv", np.degrees(abc), "deg", "kuka_abc"), "--out", tmp_path / "o.csv"])
+    assert ok.exit_code == 0, ok.output
+    r = _run(["correct", cal, targets_file("rad.csv", abc, "deg", "kuka_abc"), "--out", tmp_path / "r.csv"])
+    assert r.exit_code == 1 and "'# angle_unit: rad'" in r.output and "taught joints" in r.output
+    r = _run(["correct", cal, targets_file("wpr.csv", np.degrees(abc), "deg", "fanuc_wpr"), "--out", tmp_path / "w.csv"])
+    assert r.exit_code == 1 and "'# orientation: kuka_abc'" in r.output

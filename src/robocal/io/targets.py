@@ -130,7 +130,7 @@ def read_targets(path, robot) -> dict:
     problem = length_unit_problem(np.linalg.norm(xyz, axis=1) * lf, lu, what="target distances from the origin")
     if problem:
         fail(problem, where.get("length_unit"))
-    rotations = None
+    rotations = values = None
     if conv is not None:
         values = np.concatenate([xyz, numbers(ori_cols)], axis=1)
         try:
@@ -147,7 +147,8 @@ def read_targets(path, robot) -> dict:
             fail(problem, where.get("angle_unit"))
     names = [cells[cols.index("name")] if "name" in cols else str(r + 1) for r, (_, cells) in enumerate(rows)]
     return {"names": names, "positions": xyz * lf, "rotations": rotations, "q_seed": q_seed, "frame": frame,
-            "orientation": conv, "length_unit": lu, "angle_unit": au}
+            "orientation": conv, "length_unit": lu, "angle_unit": au,
+            "orientation_values": None if values is None else values[:, 3:]}
 
 
 # ---------------------------------------------------------------------------------------------- writing
