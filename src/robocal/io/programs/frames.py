@@ -151,7 +151,7 @@ def resolve_frames(program, *, tool=None, base=None, config_dat=None) -> TargetF
                 continue
             tcp, line = first.get(t.name.casefold(), (None, None))
             if tcp is not None:
-                out[t.name] = (tcp, eye, f"set_tcp before line {line}")
+                out[t.name] = (tcp, eye, f"set_tcp active at line {line}")
             elif T_tool_opt is not None:
                 out[t.name] = (T_tool_opt, eye, "--tool")
             else:
