@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.programs.checks import check_program
 from ..io.programs.configuration import configuration_of
 from ..io.programs.controller import controller_joints, with_tool
 from ..io.programs.frames import resolve_frames, urscript_motions
@@ -123,11 +124,7 @@ class VirtualController:
         :class:`ExecutedTarget` per target (first execution; later ones with other joints in
         ``other_joints``), in the program's target order. tool/base/config_dat: as
         :func:`robocal.io.programs.frames.resolve_frames`."""
-        n = self.nominal.n_joints
-        for t in program.targets:
-            if t.kind == "joint" and len(t.joints) != n:
-                raise ValueError(f"{program.path}: joint target {t.name} has {len(t.joints)} axes; "
-                                 f"{self.nominal.name} has {n}")
+        check_program(program, self.nominal)
         frames = resolve_frames(program, tool=tool, base=base, config_dat=config_dat)
         analytic = is_analytic(self.nominal)
         q_cur = self._start(program) if q_start is None else np.asarray(q_start, dtype=float)

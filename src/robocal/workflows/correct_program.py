@@ -175,7 +175,7 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     prog = read_program(program_file)
     if not prog.targets:
         raise ValueError(f"{program_file}: no targets found ({len(prog.skipped)} declaration(s) skipped)")
-    from .program_checks import check_program
+    from ..io.programs.checks import check_program
 
     check_program(prog, nominal_model)
     frames = resolve_frames(prog, tool=tool, base=base, config_dat=config_dat)
