@@ -345,3 +345,27 @@ def test_target_orientations_are_checked_against_their_taught_joints(kr150, tmp_
     assert r.exit_code == 1 and "'# angle_unit: rad'" in r.output and "taught joints" in r.output
     r = _run(["correct", cal, targets_file("wpr.csv", np.degrees(abc), "deg", "fanuc_wpr"), "--out", tmp_path / "w.csv"])
     assert r.exit_code == 1 and "'# orientation: kuka_abc'" in r.output
+
+
+def test_turn_bits_are_rewritten_when_a_correction_crosses_zero(kr150, tmp_path):
+    """A4 and A6 taught at -0.03 deg: the correction moves them past 0, so KUKA's T (turn) bits must
+    change for the controller to pick the corrected joints; S and the branch stay."""
+    _, truth, cal, r1, r1_true = kr150
+    text, config_dat = krl_program("kuka_kr150_r3100", [[-25, -60, 85, -0.03, -60, -0.03]], [0, -90, 90, 0, 0, 0],
+                                   [*r1, 0, 0, 0], KR150_BASE)
+    src, cdat = tmp_path / "turn.dat", tmp_path / "turn_config.dat"
+    src.write_text(text)
+    cdat.write_text(config_dat)
+    out = tmp_path / "turn_corrected.dat"
+    r = _run(["correct", cal, src, "--out", out, "--config-dat", cdat])
+    assert r.exit_code == 0, r.output
+    old, new = read_program(src).target("XP1"), read_program(out).target("XP1")
+    assert new.config["S"] == old.config["S"] and new.config["T"] != old.config["T"]
+    extra = ["--config-dat", cdat, "--true-tool", ",".join(repr(v) for v in r1_true)]
+    before = _execute(truth, src, cal, extra)["XP1"]
+    after = _execute(truth, out, cal, extra, intended=src)["XP1"]
+    assert after["configuration"] == before["configuration"]
+    assert after["error_mm"] < 0.15 < before["error_mm"]
+    q_new = np.radians(after["joints_deg"])
+    assert configuration_text(new, "krl", q_new, arm_signature(load_robot("kuka_kr150_r3100"), q_new)[0]) == \
+        {"S": new.config["S"], "T": new.config["T"]}

@@ -27,14 +27,15 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ..io.correction_report import write_correction_report
 from ..io.programs import read_program, write_program
-from ..io.programs.configuration import configuration_of
-from ..io.programs.controller import with_tool
+from ..io.programs.configuration import configuration_of, configuration_text
+from ..io.programs.controller import controller_joints, with_tool
 from ..io.programs.frames import resolve_frames
 from ..kinematics.arm_configuration import arm_signature
 from ..kinematics.ik import ik_numeric
@@ -184,7 +185,7 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     cal = calibrated.replace(T_world_base=np.eye(4))
     accuracy = _Accuracy(cal, _result_of(model_file))
     analytic = is_analytic(nominal_model)
-    rows, updates, warnings = [], {}, []
+    rows, updates, warnings, config_updates = [], {}, [], {}
     for t in prog.targets:
         e = executed[t.name]
         row = {"target": t.name, "kind": t.kind, "line": t.line, "cartesian_correction_mm": 0.0,
@@ -214,16 +215,17 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
         ok, why = (False, f"calibrated IK: {r.status}") if not bool(r.converged) else _branch_ok(
             nominal_model, e.q, q, analytic)
         row["joints_deg"] = " ".join(f"{v:.3f}" for v in np.degrees(q if ok else e.q))
-        if ok:
-            cfg = configuration_of(t, prog.format)
-            if not cfg.nearest and analytic and not cfg.matches(arm_signature(nominal_model, q), q[None])[0]:
-                ok, why = False, f"the corrected joints leave configuration {cfg.text}"
+        new_config = {}
+        if ok and analytic and not configuration_of(t, prog.format).nearest:
+            new_config, ok, why = _configuration_update(t, prog.format, nominal_model, nom_tool, T_frame, q, e.q)
         if not ok:
             row.update(status="not reached", note=why)
             rows.append(row)
             continue
         T_new = np.linalg.inv(T_frame) @ nom_tool.fk(q)
         updates[t.name] = T_new
+        if new_config:
+            config_updates[t.name] = new_config
         dR = T_new[:3, :3].T @ t.T_frame_tcp[:3, :3]
         sig, unknown, point = accuracy.sigma(q, T_tool)
         row.update(status="corrected", cartesian_correction_mm=float(np.linalg.norm(T_new[:3, 3] - t.T_frame_tcp[:3, 3])),
@@ -233,11 +235,14 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
                    sigma_mm=float("nan") if sig is None else float(np.hypot(sig, unknown)), unknown_mm=unknown,
                    note="; ".join(x for x in (f"TCP = identified point {point}" if point else "",
                                               "no joint target before it: the arm configuration is assumed"
-                                              if e.assumed_start else "") if x))
+                                              if e.assumed_start else "",
+                                              "configuration data re-derived: " + ", ".join(
+                                                  f"{k} {t.config[k]} -> {v}" for k, v in new_config.items())
+                                              if new_config else "") if x))
         if unknown > 0:
             warnings.append((t.name, unknown))
         rows.append(row)
-    changes = write_program(prog, updates, out_file, overwrite=overwrite)
+    changes = write_program(prog, updates, out_file, overwrite=overwrite, config_updates=config_updates)
     write_correction_report(report, rows, program=str(program_file), model=str(model_file), overwrite=overwrite)
     failed = [r for r in rows if r["status"] not in ("corrected", "kept")]
     return {"rows": rows, "changes": changes, "file": out_file, "report": report,
@@ -246,6 +251,27 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
             "base_parameters": accuracy.in_base if accuracy.ok else [],
             "skipped": list(prog.skipped),
             "identified_points": accuracy.points if accuracy.ok else {}}
+
+
+def _configuration_update(t, fmt, nominal_model, nom_tool, T_frame, q, q_nom):
+    """``(new config items, ok, why)``: the configuration data that states the corrected joints
+    ``q`` (rewritten only where it no longer does: a turn bit or quadrant crossed), checked by
+    running the corrected target through the controller's choice."""
+    cfg = configuration_of(t, fmt)
+    sig = arm_signature(nominal_model, q)[0]
+    new = {}
+    if not cfg.matches(sig[None], q[None])[0]:
+        derived = configuration_text(t, fmt, q, sig)
+        new = {k: v for k, v in derived.items() if k in t.config_spans and v != t.config.get(k)}
+        if not new:
+            return {}, False, f"the corrected joints leave configuration {cfg.text}"
+        t = replace(t, config={**t.config, **new})
+        cfg = configuration_of(t, fmt)
+    T_new = nom_tool.fk(q)
+    q_ctrl, why = controller_joints(nom_tool, T_new, cfg, q_nom)
+    if q_ctrl is None or np.max(np.abs(q_ctrl - q)) > 1e-6:
+        return {}, False, f"the controller would not run the corrected target on its joints ({why or 'other branch'})"
+    return new, True, ""
 
 
 def _joint_row(t, cal, nominal_model, mode, max_change, analytic, updates) -> dict:

@@ -93,7 +93,7 @@ def _target(text, decl, name, tree, fail, line) -> ProgramTarget:
              "unit quaternion [q1,q2,q3,q4] = (w, x, y, z)", groups[1][0])
     return ProgramTarget(name=name, kind="cartesian", declaration=decl, line=line, spans=tuple(s for _, s in nums),
                          values=values, units=("mm",) * 3 + ("1",) * 4, convention="quaternion", T_frame_tcp=T,
-                         config=config)
+                         config=config, config_spans={"conf": (groups[2][0], groups[2][1])})
 
 
 def _split_args(args: str) -> list[str]:
