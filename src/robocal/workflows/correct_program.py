@@ -153,8 +153,8 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     ``(x, y, z[, a, b, c])`` [mm, deg] values of the program's tool / base
     (:func:`robocal.io.programs.frames.resolve_frames`); config_dat: text of a KUKA
     ``$config.dat``. joint_targets: ``keep`` (taught positions, default) or ``correct``;
-    max_joint_change [rad]: the bound for corrected joint targets. payload: not supported with
-    programs (a robot file with ``[elastic]`` is refused).
+    max_joint_change [rad]: the bound for corrected joint targets. payload: ``KG@x,y,z`` for a
+    robot file with an ``[elastic]`` section (the deflection is compensated for Cartesian targets).
     Returns ``{rows, changes, file, report, n_corrected, n_targets, n_failed, warnings, skipped}``.
     """
     out_file = Path(out_file)
@@ -170,9 +170,9 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     if tuple(calibrated.controller_joints) != tuple(nominal_model.controller_joints):
         raise ValueError(f"{model_file}: controller joints {calibrated.controller_joints} differ from the nominal "
                          f"{nominal_model.name}'s {nominal_model.controller_joints}")
-    if calibrated.extra.get("elastic") is not None or payload is not None:
-        raise ValueError("correcting a robot program with an elastic model (--payload) is not supported; use a "
-                         "targets CSV file")
+    from .calibrate import deflection_of
+
+    reach = deflection_of(calibrated.replace(T_world_base=np.eye(4)), payload)
     prog = read_program(program_file)
     if not prog.targets:
         raise ValueError(f"{program_file}: no targets found ({len(prog.skipped)} declaration(s) skipped)")
@@ -212,6 +212,8 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
         cal_tool, nom_tool = with_tool(cal, T_tool), with_tool(nominal_model, T_tool)
         r = ik_numeric(cal_tool, T_goal, e.q, tol_mm=1e-7, tol_rad=1e-10, max_iterations=200)
         q = np.asarray(r.q, dtype=float)
+        if reach is not None and bool(r.converged):  # aim so that the deflecting robot lands on the target
+            r, q = _aim_deflected(reach, cal, cal_tool, T_tool, T_goal, q)
         ok, why = (False, f"calibrated IK: {r.status}") if not bool(r.converged) else _branch_ok(
             nominal_model, e.q, q, analytic)
         row["joints_deg"] = " ".join(f"{v:.3f}" for v in np.degrees(q if ok else e.q))
@@ -251,6 +253,20 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
             "base_parameters": accuracy.in_base if accuracy.ok else [],
             "skipped": list(prog.skipped),
             "identified_points": accuracy.points if accuracy.ok else {}}
+
+
+def _aim_deflected(reach, cal, cal_tool, T_tool, T_goal, q):
+    """Joints that put the deflecting calibrated robot's TCP on ``T_goal`` (a few fixed-point passes
+    on the rigid target); returns (the last IK result with its error at the deflected pose, q)."""
+    T_aim = T_goal.copy()
+    for _ in range(5):
+        T_reached = reach(cal, q[None])[0] @ T_tool
+        T_aim[:3, 3] += T_goal[:3, 3] - T_reached[:3, 3]
+        T_aim[:3, :3] = T_goal[:3, :3] @ T_reached[:3, :3].T @ T_aim[:3, :3]
+        r = ik_numeric(cal_tool, T_aim, q, tol_mm=1e-7, tol_rad=1e-10, max_iterations=200)
+        q = np.asarray(r.q, dtype=float)
+    err = float(np.linalg.norm((reach(cal, q[None])[0] @ T_tool)[:3, 3] - T_goal[:3, 3]))
+    return r.__class__(q, r.converged, r.iterations, err, r.rotation_error_rad, r.status), q
 
 
 def _configuration_update(t, fmt, nominal_model, nom_tool, T_frame, q, q_nom):
