@@ -369,3 +369,19 @@ def test_turn_bits_are_rewritten_when_a_correction_crosses_zero(kr150, tmp_path)
     q_new = np.radians(after["joints_deg"])
     assert configuration_text(new, "krl", q_new, arm_signature(load_robot("kuka_kr150_r3100"), q_new)[0]) == \
         {"S": new.config["S"], "T": new.config["T"]}
+
+
+def test_a_rapid_target_used_with_two_tools_is_flagged(tmp_path):
+    text = rapid_program("abb_irb140", [[10, 20, 10, 5, 40, 20]], [0, 0, 0, 0, 30, 0], [0, 0, 150, 0, 0, 0],
+                         [500, -100, 300, 0, 0, 20])
+    text = text.replace("  ENDPROC", "    MoveL p1,v100,fine,tool0;\n  ENDPROC")
+    src = tmp_path / "two.mod"
+    src.write_text(text)
+    assert read_program(src).target("p1").other_frames == (("tool0", "wobj0"),)
+    model = tmp_path / "cal.toml"
+    from robocal.robots import save_robot
+    from robocal.sim import VirtualRobot
+
+    save_robot(VirtualRobot.perturbed(load_robot("abb_irb140"), np.random.default_rng(3)).true_model, model)
+    r = _run(["correct", model, src, "--out", tmp_path / "out.mod"])
+    assert r.exit_code == 5 and "two configurations" in r.output and "tSmr/wTable, tool0/wobj0" in r.output

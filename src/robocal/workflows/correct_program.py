@@ -202,6 +202,13 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
             row.update(status="not reached", note=e.reason)
             rows.append(row)
             continue
+        if t.other_frames:
+            row.update(status="two configurations",
+                       note="used with several tools / frames (" + ", ".join(f"{a}/{b}" for a, b in
+                                                                          ((t.tool, t.base), *t.other_frames))
+                            + "); one corrected value cannot serve both (split the target)")
+            rows.append(row)
+            continue
         if e.other_joints:
             row.update(status="two configurations",
                        note=f"used in {1 + len(e.other_joints)} arm configurations; one value cannot serve both "

@@ -128,7 +128,10 @@ def _frames_and_inline(masked, text, index):
                 continue
             name = arg.split("\\")[0].strip()
             if re.fullmatch(r"[A-Za-z]\w*", name):
-                frames.setdefault(name.casefold(), (tool, wobj.group(1) if wobj else "wobj0"))
+                pair = (tool, wobj.group(1) if wobj else "wobj0")
+                seen = frames.setdefault(name.casefold(), [])
+                if all(tuple(x.casefold() for x in pair) != tuple(x.casefold() for x in p) for p in seen):
+                    seen.append(pair)
     return frames, skipped
 
 
@@ -166,6 +169,7 @@ def parse_rapid(text: str, path) -> tuple[list, list]:
     frames, inline = _frames_and_inline(masked, text, index)
     out = []
     for t in targets:
-        tool, wobj = frames.get(t.name.casefold(), (None, None))
-        out.append(ProgramTarget(**{**t.__dict__, "tool": tool, "base": wobj}))
+        pairs = frames.get(t.name.casefold(), [(None, None)])
+        out.append(ProgramTarget(**{**t.__dict__, "tool": pairs[0][0], "base": pairs[0][1],
+                                    "other_frames": tuple(pairs[1:])}))
     return out, skipped + inline

@@ -31,6 +31,8 @@ class ProgramTarget:
         text (so the configuration data can be rewritten), where known.
     tool, base: tool and base/user-frame/work-object ids where the format names them, else ``None``.
     label: a comment attached to the target (FANUC ``P[2:"approach"]``), else ``None``.
+    other_frames: further ``(tool, base)`` pairs the program uses the target with (RAPID: move
+        instructions with another tool or work object than the first), else empty.
     """
 
     name: str
@@ -48,6 +50,7 @@ class ProgramTarget:
     tool: str | None = None
     base: str | None = None
     label: str | None = None
+    other_frames: tuple = ()
 
 
 @dataclass(frozen=True)
