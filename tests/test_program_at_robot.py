@@ -385,3 +385,20 @@ def test_a_rapid_target_used_with_two_tools_is_flagged(tmp_path):
     save_robot(VirtualRobot.perturbed(load_robot("abb_irb140"), np.random.default_rng(3)).true_model, model)
     r = _run(["correct", model, src, "--out", tmp_path / "out.mod"])
     assert r.exit_code == 5 and "two configurations" in r.output and "tSmr/wTable, tool0/wobj0" in r.output
+
+
+def test_fanuc_flip_reads_as_published():
+    """Strybis, "The perils of six-axis robots" (onerobotics.com, 2013), R-2000iB/165F: one pose is
+    'NUT 000' at J1..J6 = 7.962, -5.284, -36.250, 77.661, -51.975, -79.273 deg and 'FUT 000' at
+    J4, J5, J6 = -102.339, 51.975, 100.727 deg."""
+    from robocal.io.programs.configuration import configuration_of
+
+    model = load_robot("fanuc_r2000ic_165f")
+    nut = np.radians([7.962, -5.284, -36.250, 77.661, -51.975, -79.273])
+    fut = np.radians([7.962, -5.284, -36.250, -102.339, 51.975, 100.727])
+    sig = arm_signature(model, np.stack([nut, fut]))
+    for text, ok in (("N U T, 0, 0, 0", [True, False]), ("F U T, 0, 0, 0", [False, True])):
+        cfg = configuration_of(_Config({"CONFIG": text}), "fanuc")
+        assert cfg.matches(sig, np.stack([nut, fut])).tolist() == ok
+    assert configuration_text(_Config({"CONFIG": ""}), "fanuc", nut, sig[0])["CONFIG"] == "N U T, 0, 0, 0"
+    assert configuration_text(_Config({"CONFIG": ""}), "fanuc", fut, sig[1])["CONFIG"] == "F U T, 0, 0, 0"

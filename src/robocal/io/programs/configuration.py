@@ -11,8 +11,10 @@ configuration data. What is read here (the joint-space properties are those of
 - ABB ``confdata [cf1, cf4, cf6, cfx]``: ``cf1``, ``cf4``, ``cf6`` the quadrant
   ``floor(q / 90 deg)`` of axes 1, 4, 6; ``cfx = 4 * back + 2 * elbow_down + wrist_negative``
   (the table of the RAPID manual: wrist centre behind axis 1, behind the lower arm, axis 5 negative).
-- FANUC ``CONFIG : 'F|N U|D T|B, t1, t4, t6'``: ``F`` flip = joint 5 negative, ``D`` = elbow down,
-  ``B`` = back; the turn numbers ``floor((q + 180 deg) / 360 deg)`` of J1, J4, J6.
+- FANUC ``CONFIG : 'F|N U|D T|B, t1, t4, t6'``: ``N`` (no flip) = ``J5 <= 0``, ``F`` (flip) =
+  ``J5 > 0`` (as on an R-2000iB/165F: the same pose is ``NUT`` at J5 = -52 deg, ``FUT`` at
+  J5 = +52 deg, J4 and J6 turned by 180 deg), ``D`` = elbow down, ``B`` = back; the turn numbers
+  ``floor((q + 180 deg) / 360 deg)`` of J1, J4, J6.
 - UR scripts and KRL targets without ``S``/``T``: no configuration data; the controller takes the
   solution nearest its current joints (:attr:`ArmConfiguration.nearest`).
 """
@@ -119,7 +121,8 @@ def _fanuc(target) -> ArmConfiguration:
     if m.group(4) is not None:
         turns = tuple((j, (2 * int(n) - 1) * math.pi, (2 * int(n) + 1) * math.pi)
                       for j, n in ((0, m.group(4)), (3, m.group(5)), (5, m.group(6))))
-    return ArmConfiguration(signature=(side == "B", elbow == "D", flip == "F"), turns=turns, text=conf)
+    return ArmConfiguration(signature=(side == "B", elbow == "D", flip == "N"), turns=turns, wrist_le_zero=True,
+                            text=conf)
 
 
 def configuration_of(target, fmt: str) -> ArmConfiguration:
@@ -149,6 +152,6 @@ def configuration_text(target, fmt: str, q, sig) -> dict:
         return {"conf": f"[{quad[0]},{quad[1]},{quad[2]},{4 * back + 2 * down + neg}]"}
     if fmt == "fanuc" and "CONFIG" in target.config:
         turns = [math.floor((q[j] + math.pi) / (2 * math.pi) + 1e-12) for j in (0, 3, 5)]
-        return {"CONFIG": f"{'F' if neg else 'N'} {'D' if down else 'U'} {'B' if back else 'T'}, "
+        return {"CONFIG": f"{'N' if q[4] <= 0 else 'F'} {'D' if down else 'U'} {'B' if back else 'T'}, "
                           f"{turns[0]}, {turns[1]}, {turns[2]}"}
     return {}
