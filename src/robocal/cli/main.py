@@ -59,9 +59,9 @@ class _MainGroup(GuardedGroup, LazyGroup):
 def main():
     """robocal: keep industrial robots accurate (calibration, thermal compensation, tool frames).
 
-    Exit codes: 0 success, 1 error (one 'Error:' line), 2 usage error (or `correct`: targets not
-    reached), 3 a result that failed the sanity gates (docs/reliability.md), 4 `calibrate`: the
-    solver did not converge."""
+    Exit codes: 0 success, 1 error (one 'Error:' line), 2 usage error, 3 a result that failed the
+    sanity gates (docs/reliability.md), 4 `calibrate`: the solver did not converge, 5 targets not
+    reached (`correct`, `simulate execute`)."""
 
 
 @main.command(short_help="The maintenance cycle on a simulated robot, with a report.")

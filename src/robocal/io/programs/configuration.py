@@ -7,7 +7,9 @@ configuration data. What is read here (the joint-space properties are those of
 
 - KUKA ``S`` (status) bit 0: wrist centre behind axis 1 ("overhead area"), bit 1: ``A3 >= phi``
   (elbow up, i.e. not ``elbow_down``), bit 2: ``A5 <= 0``; ``T`` (turn) bit i: ``A(i+1) < 0``.
-  ``S``/``T`` are written as a decimal number or as ``'B010'`` (binary); both are read.
+  ``S``/``T`` are written as a decimal number or as ``'B010'`` (binary); both are read. (Newer
+  KUKA manuals define bit 2 relative to the zero position of A4; it equals the sign rule used here
+  for ``|A4| < 90 deg``: a limitation for targets taught with A4 near 180 deg.)
 - ABB ``confdata [cf1, cf4, cf6, cfx]``: ``cf1``, ``cf4``, ``cf6`` the quadrant
   ``floor(q / 90 deg)`` of axes 1, 4, 6; ``cfx = 4 * back + 2 * elbow_down + wrist_negative``
   (the table of the RAPID manual: wrist centre behind axis 1, behind the lower arm, axis 5 negative).
