@@ -215,7 +215,7 @@ def test_correct_command_with_the_calibrated_robot_file(campaign, tmp_path):
     T = cal.fk(q_taught + 0.001)
     pose = pose_from_transform(T, "kuka_abc", length_unit="mm", angle_unit="deg")
     lines = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: kuka_abc",
-             "name,x,y,z,rx,ry,rz," + ",".join(nominal.controller_joints)]
+             "# frame: world", "name,x,y,z,rx,ry,rz," + ",".join(nominal.controller_joints)]
     for i in range(len(T)):
         lines.append(",".join([f"P{i}", *(repr(float(v)) for v in pose[i]),
                                *(repr(float(v)) for v in np.degrees(q_taught[i]))]))
@@ -234,3 +234,7 @@ def test_correct_command_with_the_calibrated_robot_file(campaign, tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text(targets.read_text().replace("# orientation: kuka_abc\n", ""))
     one_error_line(run("correct", robot_file, bad, "--out", tmp_path / "x.csv"), "bad.csv", "orientation")
+    no_frame = tmp_path / "no_frame.csv"  # issue 27: a targets file must say its frame
+    no_frame.write_text(targets.read_text().replace("# frame: world\n", ""))
+    one_error_line(r := run("correct", robot_file, no_frame, "--out", tmp_path / "y.csv"), "no_frame.csv", "frame")
+    assert "# frame: world" in r.output and "# frame: base" in r.output

@@ -3,6 +3,7 @@ corrected joint targets for a nominal-model controller."""
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -13,6 +14,7 @@ from .calibrate_table import parameter_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
 from ._grammar import POINT
 from ._json import json_option, set_json_result
+from .simulate_execute import BASE_HELP, CONFIG_DAT_HELP, TOOL_HELP, frame_option
 from .swarm_progress import swarm_progress_bar
 
 
@@ -140,12 +142,21 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
 @click.option("--nominal", default=None,
               help="Nominal robot the controller runs (default: the robot named in ROBOT_FILE).")
 @click.option("--frame", type=click.Choice(["world", "base"]), default=None,
-              help="Targets CSV only: frame of the targets (default: the file's '# frame:', else world).")
+              help="Targets CSV only: frame of the targets: world (the calibrated robot file's world = instrument frame) or base (the robot base frame); required when the file has no '# frame:' line.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--payload", default=None, metavar="KG@X,Y,Z",
               help="A robot file with an [elastic] section: compensate the deflection under this payload, mass [kg] "
                    "@ centre of mass [mm] in the flange frame (default: the robot's own weight only).")
-def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
+@click.option("--tool", "tool", default=None, metavar="X,Y,Z[,A,B,C]", help="Programs: " + TOOL_HELP)
+@click.option("--base", "base", default=None, metavar="X,Y,Z[,A,B,C]", help="Programs: " + BASE_HELP)
+@click.option("--config-dat", type=click.Path(exists=True, dir_okay=False), default=None, help=CONFIG_DAT_HELP)
+@click.option("--joint-targets", type=click.Choice(["keep", "correct"]), default="keep", show_default=True,
+              help="Programs: keep taught joint targets (home positions...) or correct offline-generated ones "
+                   "(never changing the arm configuration).")
+@click.option("--max-joint-change", type=float, default=1.0, show_default=True, metavar="DEG",
+              help="Programs with --joint-targets correct: the largest joint change allowed [deg].")
+def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload, tool, base, config_dat, joint_targets,
+            max_joint_change):
     """Correct targets with the calibrated model ROBOT_FILE ("program filtering").
 
     TARGETS is a robot program (KRL .src/.dat, RAPID .mod, FANUC .ls, UR .script; decided by the
@@ -154,12 +165,23 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
     (robocal-targets/1): header lines '# format: robocal-targets/1', '# length_unit: mm|m',
     '# angle_unit: deg|rad', optional '# orientation: <convention>' and '# frame: world|base', then
     columns name,x,y,z[,rx,ry,rz | qw,qx,qy,qz][,<controller joints>] (joints seed the solver).
-    Exit code 5 when a target is not reached.
+    Programs: Cartesian targets are corrected on their own arm configuration (KUKA S/T, ABB confdata,
+    FANUC CONFIG; UR: nearest the current joints) with the program's tool and base frames; taught
+    joint targets are kept (--joint-targets correct changes offline ones). The report prints the
+    joints each correction assumes and its predicted accuracy (1 sigma, from result.json next to
+    ROBOT_FILE). Exit code 5 when a target is not reached.
     """
     from ..io.programs import SUFFIXES
 
     if Path(targets).suffix.lower() in SUFFIXES:
-        return _correct_program(robot_file, targets, out_file, nominal, frame, overwrite, payload)
+        return _correct_program(robot_file, targets, out_file, nominal, frame, overwrite, payload,
+                                dict(tool=frame_option(tool, "tool"), base=frame_option(base, "base"),
+                                     config_dat=None if config_dat is None else
+                                     Path(config_dat).read_text(encoding="latin-1"),
+                                     joint_targets=joint_targets, max_joint_change=math.radians(max_joint_change)))
+    if tool is not None or base is not None or config_dat is not None:
+        raise click.ClickException("--tool, --base and --config-dat are for robot programs; a targets CSV file "
+                                   "gives its frame in '# frame:'")
     from ..workflows.calibrate import run_correct
     try:
         r = run_correct(robot_file, targets, out_file, nominal=nominal, frame=frame, overwrite=overwrite,
@@ -179,23 +201,42 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload):
 
 
 
-def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, payload=None):
-    from ..workflows.correct_program import run_correct_program
+def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, payload=None, options=None):
+    from ..workflows.correct_program import UNKNOWN_TOLERANCE, run_correct_program
 
     if frame is not None:
         raise click.ClickException("--frame is for targets CSV files; program targets are in the robot base frame")
     try:
-        r = run_correct_program(robot_file, program, out_file, nominal=nominal, overwrite=overwrite, payload=payload)
+        r = run_correct_program(robot_file, program, out_file, nominal=nominal, overwrite=overwrite, payload=payload,
+                                **(options or {}))
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
-    click.echo(f"{'target':<14}{'kind':<10}{'status':<16}{'corr. [mm]':>11}{'[deg]':>9}{'joints [deg]':>13}")
+    click.echo(f"{'target':<16}{'kind':<10}{'status':<19}{'corr. [mm]':>11}{'[deg]':>8}{'sigma [mm]':>11}"
+               f"  joints assumed [deg]")
     for row in r["rows"]:
-        click.echo(f"{row['target']:<14}{row['kind']:<10}{row['status']:<16}{row['cartesian_correction_mm']:>11.4f}"
-                   f"{row['orientation_correction_deg']:>9.4f}{row['max_joint_change_deg']:>13.4f}"
-                   + (f"  {row['note']}" if row["note"] else ""))
+        sig = "" if row["sigma_mm"] != row["sigma_mm"] else f"{row['sigma_mm']:.4f}"
+        click.echo(f"{row['target']:<16}{row['kind']:<10}{row['status']:<19}{row['cartesian_correction_mm']:>11.4f}"
+                   f"{row['orientation_correction_deg']:>8.4f}{sig:>11}  {row['joints_deg']}"
+                   + (f"  ({row['note']})" if row["note"] else ""))
     for s in r["skipped"]:
         click.echo(f"not read: line {s.line}: {s.reason}")
-    click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected; wrote {r['file']} and {r['report']}")
-    set_json_result({k: r[k] for k in ("file", "report", "n_corrected", "n_targets", "rows")})
-    if r["n_corrected"] < r["n_targets"]:
+    if r["warnings"]:
+        worst = max(u for _, u in r["warnings"])
+        names = ", ".join(n for n, _ in r["warnings"])
+        points = ", ".join(f"{k} = ({', '.join(f'{v:.3f}' for v in p)})" for k, p in r["identified_points"].items())
+        click.echo(f"Warning: the TCP of {names} depends on parameters the calibration could not determine "
+                   f"({', '.join(r['unknown_parameters'])}): up to {worst:.3f} mm (1 sigma at "
+                   f"{UNKNOWN_TOLERANCE['mm']} mm / {math.degrees(UNKNOWN_TOLERANCE['rad']):.2f} deg each) is unknown. "
+                   f"Measure the actual tool (robocal tcp) or calibrate with reflectors at known places on the "
+                   f"flange; or use an identified point as the tool: {points} [mm, flange frame].", err=True)
+    if r["base_parameters"]:
+        click.echo(f"note: targets are taken in the calibrated base frame ([base] of {robot_file}): "
+                   f"{', '.join(r['base_parameters'])} cannot be told apart from the base placement, so the cell's "
+                   "frames (base / work object) must be measured in that frame.")
+    kept = sum(row["status"] == "kept" for row in r["rows"])
+    click.echo(f"{r['n_corrected']}/{r['n_targets']} targets corrected, {kept} joint target(s) kept; "
+               f"wrote {r['file']} and {r['report']}")
+    set_json_result({k: r[k] for k in ("file", "report", "n_corrected", "n_targets", "rows") if k in r})
+    if r["n_failed"]:
+        click.echo(f"{r['n_failed']} target(s) not corrected (see the status column)", err=True)
         sys.exit(EXIT_TARGETS_NOT_REACHED)

@@ -43,19 +43,33 @@ def robots(as_json):
 @click.option("--orientation", "convention", default=None, metavar="CONVENTION",
               help="Also print the orientation in this convention (kuka_abc, fanuc_wpr, zxz, rpy, quaternion, rotvec, ...).")
 @click.option("--ee", "end_effector", default=None, help="End effector of a tree robot (default: the first).")
+@click.option("--frame", type=click.Choice(["base", "world"]), default="base", show_default=True,
+              help="Frame of the printed pose: the robot base, or the robot file's world (for a calibrated robot "
+                   "file: the measurement instrument's frame, its [base]).")
+@click.option("--tool", default=None, metavar="X,Y,Z[,A,B,C]",
+              help="Tool (TCP) in the flange frame, X,Y,Z [mm] [,A,B,C [deg], KUKA Rz Ry Rx]: print the TCP pose.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON with keys position_mm and rotation.")
-def fk(robot, joints, deg, convention, end_effector, as_json):
-    """Forward kinematics: flange pose of ROBOT at JOINTS (base frame, mm)."""
-    from ..transforms import pose_from_transform
+def fk(robot, joints, deg, convention, end_effector, frame, tool, as_json):
+    """Forward kinematics: flange (or --tool TCP) pose of ROBOT at JOINTS [mm], in the robot base frame
+    (default) or the robot file's world frame (--frame world)."""
+    import numpy as np
+
+    from ..transforms import pose_from_transform, transform_from_pose
+    from .simulate_execute import frame_option
 
     model = _robot(robot)
     q = _joints_from_cli(model, joints, deg)
+    tool_v = frame_option(tool, "tool")
     try:
         T = model.fk(q, end_effector)
     except (KeyError, IndexError) as exc:
         raise click.ClickException(str(exc).strip('"')) from None
+    if tool_v is not None:
+        T = T @ transform_from_pose(tool_v + [0.0] * (6 - len(tool_v)), "kuka_abc")
+    if frame == "base":
+        T = np.linalg.inv(model.T_world_base) @ T
     out = {"robot": model.name, "end_effector": model.end_effectors[model.end_effector_index(end_effector)].name,
-           "position_mm": T[:3, 3].tolist(), "rotation": T[:3, :3].tolist()}
+           "frame": frame, "tool": tool_v, "position_mm": T[:3, 3].tolist(), "rotation": T[:3, :3].tolist()}
     if convention:
         try:
             pose = pose_from_transform(T, convention, length_unit="mm", angle_unit="deg")
@@ -67,7 +81,8 @@ def fk(robot, joints, deg, convention, end_effector, as_json):
         click.echo(json.dumps(out, indent=2))
         return
     x, y, z = T[:3, 3]
-    click.echo(f"{model.name} {out['end_effector']}: position [mm] x={x:.4f} y={y:.4f} z={z:.4f}")
+    what = out["end_effector"] + (" + tool" if tool_v is not None else "")
+    click.echo(f"{model.name} {what} in the {frame} frame: position [mm] x={x:.4f} y={y:.4f} z={z:.4f}")
     for row in T[:3, :3]:
         click.echo("  [" + "  ".join(f"{v:+.6f}" for v in row) + "]")
     if convention:

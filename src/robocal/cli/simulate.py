@@ -142,3 +142,8 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
                f"({r['robot']}, seed {seed})")
     click.echo(f"wrote {out_dir}/images/, joint_log.csv, frames.csv, camera.json and truth.json")
     set_json_result(r)
+
+
+from .simulate_execute import execute_cmd  # noqa: E402
+
+simulate.add_command(execute_cmd)

@@ -12,7 +12,8 @@ __all__ = ["REPORT_FORMAT", "REPORT_COLUMNS", "write_correction_report"]
 REPORT_FORMAT = "robocal-program-correction/1"
 #: columns, in order: the target, whether it was corrected, sizes of the correction, the reason otherwise
 REPORT_COLUMNS = ("target", "kind", "line", "status", "cartesian_correction_mm", "orientation_correction_deg",
-                  "max_joint_change_deg", "remaining_error_mm", "within_limits", "note")
+                  "max_joint_change_deg", "remaining_error_mm", "within_limits", "joints_deg", "sigma_mm",
+                  "unknown_mm", "frames", "note")
 
 
 def write_correction_report(path, rows, *, program: str, model: str, overwrite: bool = False):

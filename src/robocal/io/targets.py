@@ -8,7 +8,7 @@ row per target::
     # length_unit: mm                 (mm | m)
     # angle_unit: deg                 (deg | rad: Euler / rotation-vector angles, seed joints)
     # orientation: kuka_abc           (optional: a name of robocal.transforms.POSE_CONVENTIONS)
-    # frame: world                    (optional: world (default) | base)
+    # frame: world                    (world | base; required unless --frame is given)
     name,x,y,z,rx,ry,rz,J1,J2,J3,J4,J5,J6
     P1,1510.2,-220.0,980.5,180.0,0.0,90.0,10.0,-80.0,95.0,0.0,30.0,0.0
 
@@ -62,8 +62,8 @@ def _check_header(md: dict, where: dict, fail) -> tuple:
             fail(f"header is missing '# {key}: ...'")
     lu = declared_unit(md, where, "length_unit", LENGTH_UNITS, fail)
     au = declared_unit(md, where, "angle_unit", ANGLE_UNITS, fail)
-    frame = md.get("frame", "world")
-    if frame not in ("world", "base"):
+    frame = md.get("frame")  # None: not stated (the command asks for it)
+    if frame is not None and frame not in ("world", "base"):
         fail(f"frame {frame!r}: expected world or base", where["frame"])
     conv = md.get("orientation")
     if conv is not None:
@@ -130,7 +130,7 @@ def read_targets(path, robot) -> dict:
     problem = length_unit_problem(np.linalg.norm(xyz, axis=1) * lf, lu, what="target distances from the origin")
     if problem:
         fail(problem, where.get("length_unit"))
-    rotations = None
+    rotations = values = None
     if conv is not None:
         values = np.concatenate([xyz, numbers(ori_cols)], axis=1)
         try:
@@ -147,7 +147,8 @@ def read_targets(path, robot) -> dict:
             fail(problem, where.get("angle_unit"))
     names = [cells[cols.index("name")] if "name" in cols else str(r + 1) for r, (_, cells) in enumerate(rows)]
     return {"names": names, "positions": xyz * lf, "rotations": rotations, "q_seed": q_seed, "frame": frame,
-            "orientation": conv, "length_unit": lu, "angle_unit": au}
+            "orientation": conv, "length_unit": lu, "angle_unit": au,
+            "orientation_values": None if values is None else values[:, 3:]}
 
 
 # ---------------------------------------------------------------------------------------------- writing

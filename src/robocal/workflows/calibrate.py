@@ -524,10 +524,55 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
                                     f"{list(calibrated.controller_joints)}")
     tg = read_targets(targets_file, calibrated)
     fr = frame or tg["frame"]
+    if fr is None:
+        raise CalibrationInputError(
+            f"{targets_file}: the targets' frame is not stated; add '# frame: world' (the calibrated robot file's "
+            "world frame: the measurement instrument's, e.g. the tracker) or '# frame: base' (the robot base frame) "
+            "to the header, or pass --frame world|base")
     targets = tg["positions"]
+    _check_orientations(tg, nominal_model, calibrated, fr, targets_file)
     corr = corrected_joint_targets(calibrated, nominal_model, targets, tg["rotations"], q_seed=tg["q_seed"], frame=fr,
                                    reach=deflection_of(calibrated, payload))
     write_corrected_targets(out_file, corr, calibrated, tg["names"], robot=str(robot_file), nominal=nominal_model.name,
                             targets=f"{targets_file} (frame {fr})", length_unit=tg["length_unit"],
                             angle_unit=tg["angle_unit"], orientation=tg["orientation"], overwrite=overwrite)
     return {"corrected": corr, "file": out_file, "names": tg["names"], "frame": fr, "nominal": nominal_model.name}
+
+
+#: A target's orientation farther than this from the orientation of its own taught (seed) joints
+#: is refused [deg]: a calibration moves orientations by hundredths of a degree, not by this.
+ORIENTATION_SEED_TOLERANCE_DEG = 5.0
+
+
+def _check_orientations(tg, nominal_model, calibrated, frame, targets_file) -> None:
+    """Refuse targets whose orientation does not fit their taught seed joints: the orientation unit
+    or convention of the file is then wrong (the message names the ones that fit)."""
+    if tg["rotations"] is None or tg["q_seed"] is None:
+        return
+    from ..transforms import POSE_CONVENTIONS, so3_log, transform_from_pose
+
+    base = calibrated.T_world_base if frame == "world" else np.eye(4)
+    R_taught = nominal_model.replace(T_world_base=base).fk(tg["q_seed"])[:, :3, :3]
+
+    def worst(R):
+        return float(np.degrees(np.max(np.linalg.norm(so3_log(np.swapaxes(R_taught, 1, 2) @ R), axis=1))))
+
+    off = worst(tg["rotations"])
+    if off <= ORIENTATION_SEED_TOLERANCE_DEG:
+        return
+    raw, fits = tg["orientation_values"], []
+    for conv in POSE_CONVENTIONS:
+        for au in ("deg", "rad"):
+            if (conv == "quaternion") != (raw.shape[1] == 4) or (conv == "quaternion" and au == "rad"):
+                continue
+            try:
+                T = transform_from_pose(np.concatenate([np.zeros((len(raw), 3)), raw], axis=1), conv, angle_unit=au)
+            except ValueError:
+                continue
+            if worst(T[:, :3, :3]) <= ORIENTATION_SEED_TOLERANCE_DEG:
+                fits.append(f"'# orientation: {conv}'" + ("" if conv == "quaternion" else f" with '# angle_unit: {au}'"))
+    hint = ("; the taught joints fit " + " or ".join(fits)) if fits else "; check '# orientation:' and '# angle_unit:'"
+    raise CalibrationInputError(
+        f"{targets_file}: target orientations are up to {off:.1f} deg from the orientations of their taught joints "
+        f"(the seed columns; at most {ORIENTATION_SEED_TOLERANCE_DEG:g} deg expected) as read with orientation "
+        f"{tg['orientation']} in {tg['angle_unit']}{hint}")

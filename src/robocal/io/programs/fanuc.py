@@ -69,11 +69,14 @@ def _position(text, name, label, start, end, fail, index):
     values = _assignments(text, g_start, g_end, fail, index)
     body = text[g_start:g_end]
     frames = {k: (m.group(1) if (m := rx.search(body)) else None) for k, rx in _FRAME.items()}
-    config = {"CONFIG": c.group(1)} if (c := _CONFIG.search(body)) else {}
+    c = _CONFIG.search(text, g_start, g_end)
+    config = {"CONFIG": c.group(1)} if c else {}
+    config_spans = {"CONFIG": (c.start(1), c.end(1))} if c else {}
     config.update({k: f"{v[0]:g} {v[2]}" for k, v in values.items() if re.fullmatch(r"E\d+", k)})
     keys = [k for k, _ in _CARTESIAN]
     joints = sorted((k for k in values if re.fullmatch(r"J\d+", k)), key=lambda k: int(k[1:]))
-    common = dict(name=name, line=line, config=config, tool=frames["UT"], base=frames["UF"], label=label)
+    common = dict(name=name, line=line, config=config, config_spans=config_spans, tool=frames["UT"],
+                  base=frames["UF"], label=label)
     if any(k in values for k in keys):
         missing = [k for k in keys if k not in values]
         if missing:

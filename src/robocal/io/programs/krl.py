@@ -78,12 +78,14 @@ def _target(decl, name, comps, fail, line) -> ProgramTarget:
     values = tuple(float(comps[k][0]) for k in keys)
     spans = tuple((comps[k][1], comps[k][2]) for k in keys)
     config = {k: comps[k][0] for k in _VERBATIM[decl] if k in comps}
+    config_spans = {k: (comps[k][1], comps[k][2]) for k in config}
     if kind == "joint":
         return ProgramTarget(name=name, kind=kind, declaration=decl, line=line, spans=spans, values=values,
                              units=("deg",) * 6, joints=np.radians(values), config=config)
     T = transform_from_pose(values, "kuka_abc", length_unit="mm", angle_unit="deg")
     return ProgramTarget(name=name, kind=kind, declaration=decl, line=line, spans=spans, values=values,
-                         units=("mm",) * 3 + ("deg",) * 3, convention="kuka_abc", T_frame_tcp=T, config=config)
+                         units=("mm",) * 3 + ("deg",) * 3, convention="kuka_abc", T_frame_tcp=T, config=config,
+                         config_spans=config_spans)
 
 
 def parse_krl(text: str, path) -> tuple[list, list]:

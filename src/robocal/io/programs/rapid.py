@@ -93,7 +93,7 @@ def _target(text, decl, name, tree, fail, line) -> ProgramTarget:
              "unit quaternion [q1,q2,q3,q4] = (w, x, y, z)", groups[1][0])
     return ProgramTarget(name=name, kind="cartesian", declaration=decl, line=line, spans=tuple(s for _, s in nums),
                          values=values, units=("mm",) * 3 + ("1",) * 4, convention="quaternion", T_frame_tcp=T,
-                         config=config)
+                         config=config, config_spans={"conf": (groups[2][0], groups[2][1])})
 
 
 def _split_args(args: str) -> list[str]:
@@ -128,7 +128,10 @@ def _frames_and_inline(masked, text, index):
                 continue
             name = arg.split("\\")[0].strip()
             if re.fullmatch(r"[A-Za-z]\w*", name):
-                frames.setdefault(name.casefold(), (tool, wobj.group(1) if wobj else "wobj0"))
+                pair = (tool, wobj.group(1) if wobj else "wobj0")
+                seen = frames.setdefault(name.casefold(), [])
+                if all(tuple(x.casefold() for x in pair) != tuple(x.casefold() for x in p) for p in seen):
+                    seen.append(pair)
     return frames, skipped
 
 
@@ -166,6 +169,7 @@ def parse_rapid(text: str, path) -> tuple[list, list]:
     frames, inline = _frames_and_inline(masked, text, index)
     out = []
     for t in targets:
-        tool, wobj = frames.get(t.name.casefold(), (None, None))
-        out.append(ProgramTarget(**{**t.__dict__, "tool": tool, "base": wobj}))
+        pairs = frames.get(t.name.casefold(), [(None, None)])
+        out.append(ProgramTarget(**{**t.__dict__, "tool": pairs[0][0], "base": pairs[0][1],
+                                    "other_frames": tuple(pairs[1:])}))
     return out, skipped + inline

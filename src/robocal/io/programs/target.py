@@ -27,8 +27,12 @@ class ProgramTarget:
         [mm], Cartesian targets only. joints: (n,) [rad; mm for linear axes], joint targets only.
     config: the controller's configuration data, verbatim text (KUKA ``S``, ``T``; ABB ``conf``,
         ``extax``; FANUC ``CONFIG``), keyed by the format's names.
+    config_spans: ``{key: (start, end)}`` character offsets of each ``config`` item in the source
+        text (so the configuration data can be rewritten), where known.
     tool, base: tool and base/user-frame/work-object ids where the format names them, else ``None``.
     label: a comment attached to the target (FANUC ``P[2:"approach"]``), else ``None``.
+    other_frames: further ``(tool, base)`` pairs the program uses the target with (RAPID: move
+        instructions with another tool or work object than the first), else empty.
     """
 
     name: str
@@ -42,9 +46,11 @@ class ProgramTarget:
     T_frame_tcp: np.ndarray | None = None
     joints: np.ndarray | None = None
     config: dict = field(default_factory=dict)
+    config_spans: dict = field(default_factory=dict)
     tool: str | None = None
     base: str | None = None
     label: str | None = None
+    other_frames: tuple = ()
 
 
 @dataclass(frozen=True)

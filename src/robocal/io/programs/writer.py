@@ -21,14 +21,25 @@ __all__ = ["MIN_DECIMALS", "updated_text", "write_program"]
 MIN_DECIMALS = {"mm": 2, "m": 5, "in": 4, "deg": 3, "rad": 5, "1": 6}
 
 
-def updated_text(program, updates) -> tuple[str, dict]:
+def updated_text(program, updates, config_updates=None) -> tuple[str, dict]:
     """``(text, changes)``: the program text with ``updates`` applied, and per target the number of
-    numbers replaced.
+    numbers (and configuration items) replaced.
 
     updates: target name -> new value: a (4, 4) pose [mm] in the target's frame for a Cartesian
         target, (n,) joints [rad; mm for linear axes] for a joint target.
+    config_updates: target name -> ``{key: text}`` new configuration data (keys of the target's
+        ``config``, e.g. ``S``, ``T``, ``conf``, ``CONFIG``), written verbatim in place of the old.
     """
     edits, changes = [], {}
+    for name, new in (config_updates or {}).items():
+        target = program.target(name)
+        for key, text in new.items():
+            if key not in target.config_spans:
+                raise ValueError(f"{program.path}: {name}: no configuration item {key!r} to rewrite")
+            start, end = target.config_spans[key]
+            if program.text[start:end] != text:
+                edits.append((start, end, text))
+                changes[target.name] = changes.get(target.name, 0) + 1
     for name, new in updates.items():
         target = program.target(name)
         values = target_values(target, new)
@@ -39,7 +50,7 @@ def updated_text(program, updates) -> tuple[str, dict]:
             if float(text) != float(old):
                 edits.append((start, end, text))
                 count += 1
-        changes[target.name] = count
+        changes[target.name] = changes.get(target.name, 0) + count
     edits.sort()
     for (_s0, e0, _), (s1, _, _) in zip(edits, edits[1:]):
         if s1 < e0:
@@ -62,7 +73,7 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def write_program(program, updates, out, *, overwrite: bool = False) -> dict:
+def write_program(program, updates, out, *, overwrite: bool = False, config_updates=None) -> dict:
     """Write ``program`` with ``updates`` (see :func:`updated_text`) to ``out``, atomically.
 
     ``out`` must not be the program's own file (``ValueError``); an existing ``out`` raises
@@ -72,6 +83,6 @@ def write_program(program, updates, out, *, overwrite: bool = False) -> dict:
     out = Path(out)
     if _same_file(Path(program.path), out):
         raise ValueError(f"{out}: is the input program {program.path}; write the corrected program to a new file")
-    text, changes = updated_text(program, updates)
+    text, changes = updated_text(program, updates, config_updates)
     atomic_write_bytes(out, text.encode(program.encoding), overwrite=overwrite)
     return changes
