@@ -4,6 +4,14 @@ on the geometry and a second, plain phase after dropping outliers.
 
 Columns are scaled by the norms of the initial Jacobian's columns; the step is solved on the
 identifiable (``active``) columns only. Internal module: the public entry is ``solve``.
+
+Convergence policy (the one of every solver in robocal): a solve has converged when one stated
+criterion was met after an accepted step -- relative cost change below ``ftol``, chi-square change
+below ``chi2_tol`` residual variances, scaled step below ``xtol`` -- or at a first-order stationary
+point: the largest scaled gradient component ``|J_j^T r|`` at most ``GTOL`` times
+``max_j |J_j| * |r|`` (the cosine between the residuals and the Jacobian's columns). "No step
+reduces the cost" is convergence only at such a stationary point (numerical precision reached);
+anywhere else it is reported as NOT converged, as is reaching the iteration cap.
 """
 
 from __future__ import annotations
@@ -15,6 +23,9 @@ import numpy as np
 from ._cholesky import cholesky_factor, cholesky_solve
 
 MAX_ITERATIONS_REASON = "maximum iterations reached"
+#: First-order optimality tolerance: largest |J_j^T r| over max_j |J_j| * |r| (scaled, weighted).
+#: Where the line search stalls at a true minimum this is ~sqrt(2 eps) * s_min / s_max < 2e-8.
+GTOL = 1e-6
 
 
 def robust_weights(r_pose, loss, f_scale):
@@ -134,11 +145,20 @@ class DampedGaussNewton:
             G = Ja.T @ Ja
             g_max = float(G.diagonal().max())
             s_max = math.sqrt(g_max)
-        if (float(np.abs(g).max()) if g.size else 0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
+        g_inf = float(np.abs(g).max()) if g.size else 0.0
+        if g_inf <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
             return self._stop("gradient is zero")
         found = self._line_search(G, g, g_max, step_s)
         if found is None:
-            return self._stop("no step reduces the cost further (numerical precision reached)")
+            if self.method == "svd":  # only the kept directions can be stepped along
+                g_inf = float(np.abs(Vt.T @ np.where(keep, s * (U.T @ ra), 0.0)).max())
+            optimality = g_inf / max(s_max * math.sqrt(2 * self.cost), 1e-300)
+            if optimality <= GTOL:
+                return self._stop(f"no step reduces the cost at a stationary point (gradient {optimality:.1e} "
+                                  f"<= {GTOL:g} of |J| |r|: numerical precision reached)")
+            return self._stop(f"no step reduces the cost, but the gradient is {optimality:.1e} of |J| |r| "
+                              f"(above {GTOL:g}): not a minimum (inconsistent Jacobian or discontinuous cost)",
+                              converged=False)
         trial, r_t, J_t, step_s = found
         self.state, self.r, self.J = trial, r_t, J_t
         if self.robust:
@@ -194,8 +214,8 @@ class DampedGaussNewton:
             return self._stop("step below xtol")
         return False
 
-    def _stop(self, reason) -> bool:
-        self.reason, self.converged = reason, True
+    def _stop(self, reason, converged: bool = True) -> bool:
+        self.reason, self.converged = reason, converged
         return True
 
     def drop_outliers(self, threshold) -> bool:

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error
+from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error, allow_unconverged_option
 from .calibrate_table import parameter_table
-from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
+from .calibrate_inputs import finish_calibration, import_options, read_export
 from .swarm_progress import swarm_progress_bar
 
 
@@ -54,8 +54,7 @@ from .swarm_progress import swarm_progress_bar
 @click.option("--holdout-ids", multiple=True, metavar="IDS",
               help="Validate on these pose ids (comma separated, repeatable, or @FILE).")
 @click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
-@click.option("--allow-unconverged", is_flag=True,
-              help=f"Exit 0 even when the solver does not converge (otherwise exit {EXIT_NOT_CONVERGED}).")
+@allow_unconverged_option
 @click.option("--no-report", is_flag=True, help="Do not write report.html (batch runs: the plots take longer than the solve).")
 @click.option("--force", is_flag=True,
               help="Write the calibrated robot files even when the result fails the sanity gates (exit code 3).")
@@ -77,7 +76,7 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     DATA is robocal's measurement file, or with --format a tracker export paired with --joints.
     Orientation columns (rx, ry, rz or qw..qz) are used: a 6-D fit with a tool frame. Exit codes:
     0 done, 1 error, 3 the result failed the sanity gates (docs/reliability.md), 4 the solver did not
-    converge (unless --allow-unconverged).
+    converge (no calibrated robot file unless --allow-unconverged).
     """
     from ..workflows.calibrate import run_calibration
 
@@ -91,7 +90,7 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
                             report=not no_report, force=force, drop_duplicates=drop_duplicates,
                             method=method, particles=particles, generations=generations,
                             swarm_progress=swarm_progress_bar(method, generations), elastic=elastic,
-                            payload=payload)
+                            payload=payload, allow_unconverged=allow_unconverged)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]

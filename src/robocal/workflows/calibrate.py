@@ -45,6 +45,7 @@ from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
 from .calibrate_swarm import check_method, convergence_plots, identify, swarm_record
 from .calibrate_setup import build_problems, split_by_ids, tool_frame_summary
+from .convergence import Convergence
 from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .progress import solver_progress
 
@@ -115,7 +116,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
                     max_iterations: int = 50, report: bool = True, force: bool = False,
                     drop_duplicates: bool = False, particles: int = 20, generations: int = 2000,
-                    swarm_progress=None, elastic: str | None = None, payload=None) -> dict:
+                    swarm_progress=None, elastic: str | None = None, payload=None,
+                    allow_unconverged: bool = False) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -148,8 +150,11 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     naming the file, checked before any work); the files are written into a temporary folder and
     moved into place together (:mod:`robocal.workflows.outputs`). The sanity gates
     (:mod:`robocal.calib.sanity`) give ``status`` and ``reasons`` in result.json; a failed result
-    writes no calibrated robot files unless ``force``. Returns a dict with ``result`` (the JSON
-    dict), ``files``, ``notes``, ``verdict``, ``convergence_warnings`` and the solver objects.
+    writes no calibrated robot files unless ``force``. A fit that did not converge (the baseline or
+    the calibration; :mod:`robocal.workflows.convergence`) marks result.json (``convergence``) and
+    writes no calibrated robot files unless ``allow_unconverged``. Returns a dict with ``result``
+    (the JSON dict), ``files``, ``notes``, ``verdict``, ``convergence`` (a
+    :class:`~robocal.workflows.convergence.Convergence`), ``convergence_warnings`` and the solver objects.
     """
     step = progress or (lambda i, n, text: None)
     total = 6 if report else 5
@@ -189,10 +194,13 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
-    write_robot = verdict.ok or force
+    convergence = Convergence.of([("baseline fit (nominal geometry)", res0), ("calibration", result)])
+    write_robot = (verdict.ok or force) and convergence.may_write_model(allow_unconverged)
     step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
-                                            " (FAILED the sanity gates: no calibrated robot file)"))
+                                            " (no calibrated robot file: FAILED the sanity gates or did not converge)"))
     notes = list(split_notes) + list(setup["notes"])
+    if not convergence.may_write_model(allow_unconverged):
+        notes.append(convergence.skipped_note("calibrated_robot.toml/.urdf"))
     if "dropped_duplicates" in meas.metadata:
         notes.insert(0, f"dropped duplicate poses: {meas.metadata['dropped_duplicates']}")
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
@@ -209,6 +217,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     }
     rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
+    rdict["convergence"] = convergence.as_dict()
     elastic_out = None
     if elastic_model is not None:
         from .calibrate_elastic import elastic_summary, torque_plot, with_elastic
@@ -221,11 +230,12 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     with staged_outputs(out, names, overwrite) as stage:
         files = _write_outputs(output_paths(stage), rdict, result, nominal, meas, data, train, validation, stamp,
                                list(setup["problem"].targets), accuracy, write_robot, notes, report,
-                               elastic=elastic_out)
+                               elastic=elastic_out, failed_gates=not (verdict.ok or force))
     files = {k: out / p.name for k, p in files.items()}
     return {"result": rdict, "files": files, "notes": notes, "calibration_result": result,
             "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
-            "description": setup["description"], "convergence_warnings": convergence_warnings}
+            "description": setup["description"], "convergence_warnings": convergence_warnings,
+            "convergence": convergence}
 
 
 def _check_options(out: Path, names, overwrite, loss, sigma_mm, method) -> None:
@@ -350,12 +360,12 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
 
 
 def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation, stamp, targets, accuracy,
-                   write_robot, notes, report, elastic=None) -> dict:
+                   write_robot, notes, report, elastic=None, failed_gates: bool = True) -> dict:
     """Write result.json, the calibrated robot (TOML, URDF; only with ``write_robot``) and the
     report (with ``report``) into ``paths`` (a staging folder); returns {kind: path}. elastic:
     None or (function adding the ``[elastic]`` section to the model, function giving the report's
     torque plots or None)."""
-    if not write_robot:
+    if not write_robot and failed_gates:
         notes.append("calibrated_robot.toml/.urdf not written: the result FAILED the sanity gates "
                      "(pass --force to write them anyway)")
     N = meas.n_poses
