@@ -80,7 +80,7 @@ def test_fleet_results_equal_serial_calibrate(campaigns, client, tmp_path):
     kernels chosen per thread and CPU), a changed option or input changes them by far more."""
     fleet = fleet_toml(tmp_path, good_entries(campaigns, 3))
     r = run_fleet_calibration(fleet, tmp_path / "fleet", client=client, report=False)
-    assert r["summary"]["counts"] == {"robots": 3, "ok": 3, "failed": 0, "skipped": 0, "outliers": 0}
+    assert r["summary"]["counts"] == {"robots": 3, "ok": 3, "failed": 0, "not_converged": 0, "skipped": 0, "outliers": 0}
     for i in range(3):
         out = tmp_path / "serial" / f"robot-{i}"
         res = CliRunner().invoke(main, ["calibrate", MODELS[i], str(campaigns / f"r{i}.csv"), "--out", str(out),
@@ -400,3 +400,16 @@ def test_a_task_that_raises_on_the_cluster_becomes_its_own_failed_row(client):
     assert [d for d, _ in seen] == [1, 2, 3, 4, 5, 6] and {n for _, n in seen} == {6}
     with pytest.raises(ValueError, match="item 3 is broken"):  # without on_error the error is raised
         run_tasks(client, _square_or_raise, range(6))
+
+
+def test_a_robot_whose_fit_does_not_converge_gets_no_robot_file_and_exit_4(campaigns, tmp_path, lm_one_iteration):
+    """Issue 25: the convergence policy (every LM solve stopped after one iteration), in this process."""
+    fleet = fleet_toml(tmp_path, good_entries(campaigns, 2))
+    r = run_fleet_calibration(fleet, tmp_path / "a", client=None, report=False)
+    assert r["summary"]["counts"]["not_converged"] == 2 and r["summary"]["counts"]["failed"] == 0
+    row = r["summary"]["robots"][0]
+    assert row["status"] == "not converged" and "did not converge" in row["reason"]
+    assert not (tmp_path / "a" / "robot-0" / "calibrated_robot.toml").exists()
+    r = run_fleet_calibration(fleet, tmp_path / "b", client=None, report=False, allow_unconverged=True)
+    assert r["summary"]["counts"]["ok"] == 2 and r["summary"]["robots"][0]["converged"] is False
+    assert (tmp_path / "b" / "robot-0" / "calibrated_robot.toml").exists()

@@ -46,7 +46,7 @@ from ..robots import load_robot, save_robot
 from ..sim import VirtualRobot, write_truth
 from ..sim.closed_chain import ClosedChainCell, JointReadout, LaserPointer, default_plates
 from .calibrate import OUTPUT_FILES, CalibrationInputError, output_paths, select_free
-from .convergence import Convergence
+from .convergence import Convergence, record_fit
 from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .simulate import check_simulation_outputs
 
@@ -141,7 +141,7 @@ def _problem(nominal, spots, rows, **kw):
 def _solve_quiet(problem, state0=None, max_iterations=50):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotConvergedWarning)
-        res = solve(problem, state0=state0, max_iterations=max_iterations)
+        res = record_fit(solve(problem, state0=state0, max_iterations=max_iterations))
     return res, [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
 
 

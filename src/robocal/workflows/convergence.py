@@ -11,9 +11,33 @@ and exits 4 (``robocal.cli._common.finish_convergence``).
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 from dataclasses import dataclass
 
-__all__ = ["Convergence", "DEFAULT_HINT", "fit_reason"]
+__all__ = ["Convergence", "DEFAULT_HINT", "fit_reason", "record_fit", "recording_fits"]
+
+_FITS = contextvars.ContextVar("robocal_recorded_fits", default=None)
+
+
+@contextlib.contextmanager
+def recording_fits():
+    """Collect the solver results :func:`record_fit` sees inside the block (a list, yielded): a study
+    or protocol counts how many of its fits did not converge and reports it next to its figures."""
+    fits = []
+    token = _FITS.set(fits)
+    try:
+        yield fits
+    finally:
+        _FITS.reset(token)
+
+
+def record_fit(result):
+    """Add a solver result to the innermost :func:`recording_fits` list (if any); returns ``result``."""
+    log = _FITS.get()
+    if log is not None:
+        log.append(result)
+    return result
 
 #: What to try when a fit did not converge (commands with other knobs pass their own).
 DEFAULT_HINT = "raise --max-iterations, start closer (better nominal or initial values) or free fewer parameters"
