@@ -113,6 +113,8 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     for row in res.get("elastic", {}).get("not_identifiable", []):
         if row["name"].startswith("compliance."):
             click.echo(f"not identifiable: {row['name']}: {row['why']}")
+    for row in res.get("elastic", {}).get("not_identified", []):
+        click.echo(f"not identified: {row['name']}: {row['why']}")
     finish_calibration(r, allow_unconverged)
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from ..calib import solve
 from ..calib.solve import NotConvergedWarning
 from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
-from ..calib.sanity import calibration_verdict
+from ..calib.sanity import Verdict, calibration_verdict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
 from ..io.atomic import atomic_write_text
@@ -194,6 +194,12 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    elastic_json = None
+    if elastic_model is not None:  # the plausibility gate of the compliances and mass parameters
+        from .calibrate_elastic import elastic_summary
+
+        elastic_json = elastic_summary(setup["problem"], result)
+        verdict = Verdict(tuple(verdict.reasons) + tuple(elastic_json["gate_reasons"]), verdict.checks)
     convergence = Convergence.of([("baseline fit (nominal geometry)", res0), ("calibration", result)])
     write_robot = (verdict.ok or force) and convergence.may_write_model(allow_unconverged)
     step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
@@ -220,9 +226,9 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     rdict["convergence"] = convergence.as_dict()
     elastic_out = None
     if elastic_model is not None:
-        from .calibrate_elastic import elastic_summary, torque_plot, with_elastic
+        from .calibrate_elastic import torque_plot, with_elastic
 
-        rdict["elastic"] = json_ready(elastic_summary(setup["problem"], result))
+        rdict["elastic"] = json_ready(elastic_json)
         elastic_out = (lambda m: with_elastic(m, setup["problem"], result),
                        (lambda: torque_plot(setup["problem"], res0, result)) if report else None)
     if report:
@@ -382,6 +388,10 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
                + "; ".join(f"{t.name} = [{', '.join(f'{v:.4f}' for v in result.state.targets[k])}]"
                            for k, t in enumerate(targets))
                + ".\nAll numbers with uncertainties: result.json.")
+    implausible = (rdict.get("elastic") or {}).get("not_identified") or []
+    if implausible:
+        comment += ("\n[elastic]: NOT identified by these data (negative, or sigma >= |value|; kept at their fitted "
+                    "values, do not read them as known): " + ", ".join(r["name"] for r in implausible) + ".")
     files = {}
     from ..io.urdf import UrdfError, write_urdf
 
