@@ -116,3 +116,13 @@ def fresh_server_db(_server_admin):
     finally:
         with admin.connect() as conn:
             conn.execute(sa.text(f'DROP SCHEMA IF EXISTS "{name}" CASCADE'))
+
+
+@pytest.fixture
+def lm_one_iteration(monkeypatch):
+    """Every Levenberg-Marquardt solve of the calibration core stops after one iteration: a fit that
+    does not converge, for the tests of the convergence policy (exit code 4, no model file)."""
+    from robocal.calib._iterate import DampedGaussNewton
+
+    run_phase = DampedGaussNewton.run_phase
+    monkeypatch.setattr(DampedGaussNewton, "run_phase", lambda self, first, _max: run_phase(self, first, 1))

@@ -52,7 +52,8 @@ def test_blocks_built_by_hand_give_the_builders_numbers():
     step = np.random.default_rng(4).normal(0, 1e-3, built.n_variables)
     r1, J1, lab1 = built.evaluate(built.retract(built.initial_state(), step))
     r2, J2, lab2 = by_hand.evaluate(by_hand.retract(by_hand.initial_state(), step))
-    assert np.array_equal(r1, r2) and np.array_equal(J1, J2)
+    np.testing.assert_allclose(r1, r2, rtol=1e-12, atol=1e-12)  # the same blocks, built two ways
+    np.testing.assert_allclose(J1, J2, rtol=1e-12, atol=1e-12)
     assert np.array_equal(lab1[:, 0], lab2[:, 0])
     assert [built.kinds[c] for c in lab1[:, 1]] == [by_hand.kinds[c] for c in lab2[:, 1]]
     assert by_hand.row_label(len(r2) - 1)[:2] == (8, "plane")

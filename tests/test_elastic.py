@@ -327,3 +327,44 @@ def test_correct_with_a_payload_needs_an_elastic_robot_file(tmp_path):
     r = CliRunner().invoke(main, ["correct", "ur10", str(tmp_path / "t.csv"), "--out", str(tmp_path / "c.csv"),
                                   "--payload", "5@0,0,100"])
     assert r.exit_code == 1 and "--payload needs a robot file with an [elastic] section" in r.output, r.output
+
+
+def test_the_elastic_gate_refuses_a_rigid_robot_and_names_what_is_not_identified(tmp_path):
+    """Issue 25 item 6: a rigid simulated robot calibrated with --elastic joint: every compliance is
+    negative or within its sigma of zero, so the result fails (exit 3) and no robot file is written;
+    with --force the file names the quantities the data did not determine."""
+    from click.testing import CliRunner
+
+    from robocal.cli import main
+    from robocal.workflows.simulate import simulate_tracker
+
+    simulate_tracker("kuka_kr150_r3100", tmp_path / "m.csv", n_poses=100, noise_mm=0.02, seed=1)
+    args = ["calibrate", "kuka_kr150_r3100", str(tmp_path / "m.csv"), "--elastic", "joint", "--no-report"]
+    r = CliRunner().invoke(main, args + ["--out", str(tmp_path / "cal")])
+    assert r.exit_code == 3, r.output
+    assert "none of the 6 compliances is identified" in r.output
+    assert not (tmp_path / "cal" / "calibrated_robot.toml").exists()
+    el = json.loads((tmp_path / "cal" / "result.json").read_text())["elastic"]
+    named = {row["name"] for row in el["not_identified"]}
+    assert {"compliance.A2", "compliance.A3", "compliance.A6"} <= named
+    assert any(n.startswith("gravity.") for n in named)  # mass moments with sigma >= |value|
+    for row in el["not_identified"]:
+        assert row["value"] < 0 or row["std"] >= abs(row["value"]), row
+    assert all(not row["identifiable"] for row in el["compliance"])
+    r = CliRunner().invoke(main, args + ["--out", str(tmp_path / "forced"), "--force"])
+    assert r.exit_code == 3
+    text = (tmp_path / "forced" / "calibrated_robot.toml").read_text()
+    assert "NOT identified by these data" in text and "compliance.A6" in text
+
+
+def test_the_elastic_gate_fails_a_significantly_negative_compliance():
+    from robocal.calib.sanity import elastic_reasons
+
+    rows = [{"name": "compliance.A2", "value": -11.1, "std": 4.3, "unit": "mrad/kNm", "identifiable": True},
+            {"name": "compliance.A3", "value": 0.8, "std": 0.05, "unit": "mrad/kNm", "identifiable": True},
+            {"name": "gravity.A2.hx", "value": 311.0, "std": 1122.0, "unit": "kg m", "identifiable": True}]
+    reasons, named = elastic_reasons(rows)
+    assert len(reasons) == 1 and "negative compliance" in reasons[0] and "compliance.A2" in reasons[0]
+    assert [r["name"] for r in named] == ["compliance.A2", "gravity.A2.hx"]
+    ok, named = elastic_reasons(rows[1:])
+    assert ok == [] and [r["name"] for r in named] == ["gravity.A2.hx"]

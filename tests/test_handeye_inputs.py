@@ -246,3 +246,25 @@ def test_robust_loss_names_an_image_whose_pose_is_wrong(simulated, tmp_path):
         outliers = [row["name"] for row in s["images"] if row["outlier"]]
         assert outliers == ([] if loss == "linear" else ["img_01.png"])
     assert errors["linear"] > 10.0 and errors["huber"] < 1.0, errors
+
+
+def test_camera_and_handeye_fits_that_do_not_converge_exit_4_without_model_files(simulated, tmp_path,
+                                                                               lm_one_iteration):
+    """Issue 25: the convergence policy (every LM solve stopped after one iteration)."""
+    out, _ = simulated
+    board = json.loads((out / "truth.json").read_text())["board"]
+    r = CliRunner().invoke(main, ["camera", "calibrate", str(out / "images"), "--board", board,
+                                  "--out", str(tmp_path / "cam")])
+    assert r.exit_code == 4, r.output
+    assert sum(line.startswith("Warning:") for line in r.output.splitlines()) == 1
+    assert not (tmp_path / "cam" / "camera.json").exists() and not (tmp_path / "cam" / "camera.yaml").exists()
+    c = json.loads((tmp_path / "cam" / "camera_calibration.json").read_text())
+    assert c["convergence"]["converged"] is False
+    he = ["handeye", "solve", "--poses", str(out / "flange_poses.csv"), "--images", str(out / "images"), "--board",
+          board, "--eye-to-hand", "--camera", str(out / "camera.json")]
+    r = CliRunner().invoke(main, he + ["--out", str(tmp_path / "he")])
+    assert r.exit_code == 4, r.output
+    assert not (tmp_path / "he" / "handeye.yaml").exists()
+    assert json.loads((tmp_path / "he" / "handeye.json").read_text())["convergence"]["converged"] is False
+    r = CliRunner().invoke(main, he + ["--out", str(tmp_path / "he2"), "--allow-unconverged"])
+    assert r.exit_code == 0 and (tmp_path / "he2" / "handeye.yaml").exists()

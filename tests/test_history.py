@@ -46,7 +46,7 @@ def write_cycle(store, i, robot="kr150-cell3", kind="thermal_compensation", t=No
         c.add_measurements(rng.uniform(-1, 1, (n, 6)), rng.uniform(-1500, 1500, (n, 3)), target="sphere", sensor="stereo")
         c.add_parameters(["a2", "beta3"], [0.01 * i, 2e-6 * i], units=["mm", "rad"], std=[0.001, 1e-7],
                          values=[1350.0 + 0.01 * i, None])
-        c.add_metric("lambda", 0.9 + 0.01 * i, "1")
+        c.add_metric("lambda", 90.0 + i, "%")
         c.add_metric("residual_rms_after", 0.02 + 0.001 * i, "mm")
         c.add_corrections(np.zeros((4, 6)), np.full((4, 6), 1e-4 * i), program="body_side")
         if t is None:
@@ -65,7 +65,7 @@ def check_cycle(store, cid):
     np.testing.assert_array_equal(sc.joints, rng.uniform(-1, 1, (n, 6)))
     np.testing.assert_array_equal(sc.points_mm, rng.uniform(-1500, 1500, (n, 3)))
     assert sc.parameters["a2"].delta == pytest.approx(0.01 * i)
-    assert sc.record.metrics["lambda"].value == pytest.approx(0.9 + 0.01 * i)
+    assert sc.record.metrics["lambda"].value == pytest.approx(90.0 + i)
     assert sc.corrections_joints_after.shape == (4, 6)
     return i
 
@@ -281,13 +281,13 @@ def test_exception_rolls_back_the_whole_cycle_and_records_the_failure(store):
     assert list(store.parameter_history("kr150-cell3", "a2")["a2"].values) == [pytest.approx(0.01)]
     assert store.cycles("kr150-cell3", status="failed") == [failed]
     with pytest.raises(HistoryError, match="closed"):
-        c.add_metric("lambda", 1.0, "1")
+        c.add_metric("lambda", 100.0, "%")
 
 
 def test_failure_not_recorded_when_asked(store):
     with pytest.raises(ValueError):
         with store.cycle("r1", "measurement", record_failure=False) as c:
-            c.add_metric("lambda", 0.5, "1")
+            c.add_metric("lambda", 50.0, "%")
             raise ValueError("stop")
     assert store.robots() == []  # not even the robot row stayed
 
@@ -351,10 +351,10 @@ def test_cycle_arguments_are_validated(store, call, message):
     (lambda c: c.add_parameters(["a2", "a2"], [1, 2], units="mm"), "'a2' was already added"),
     (lambda c: c.add_parameters(["a2", "a3"], [1], units="mm"), "2 names but 1 deltas"),
     (lambda c: c.add_parameters(["a2"], [1], units=None), "units are required"),
-    (lambda c: c.add_metric("lambda", True, "1"), "must be a finite number, got bool"),
-    (lambda c: c.add_metric("lambda", "0.9", "1"), "must be a finite number, got str"),
+    (lambda c: c.add_metric("lambda", True, "%"), "must be a finite number, got bool"),
+    (lambda c: c.add_metric("lambda", "0.9", "%"), "must be a finite number, got str"),
     (lambda c: c.add_metric("cycle_time", 3, "min"), "multiply by 60"),
-    (lambda c: c.add_metric("lambda", 95, "%"), "divide by 100"),
+    (lambda c: c.add_metric("lambda", 0.95, "1"), "multiply a fraction by 100"),
     (lambda c: c.add_metrics({"lambda": 0.9}), r"give \(value, unit\)"),
     (lambda c: c.add_corrections(np.zeros((2, 6)), np.zeros((3, 6))), "joints_before has shape"),
     (lambda c: c.add_corrections(np.zeros((2, 6)), np.zeros((2, 6)), point_index=[1, 1]), "appears twice"),
@@ -418,8 +418,8 @@ def test_queries_order_filter_and_series(store):
     assert len(only_thermal) == 4
 
     lam = store.metric_history("kr150-cell3", "lambda")
-    np.testing.assert_allclose(lam.values, 0.9 + 0.01 * np.arange(1, 6))
-    assert lam.unit == "1" and np.all(np.isnan(lam.std))
+    np.testing.assert_allclose(lam.values, 90.0 + np.arange(1, 6))
+    assert lam.unit == "%" and np.all(np.isnan(lam.std))
     assert list(lam.cycle_ids) == [c.id for c in cycles]
     assert len(store.metric_history("ur10-lab", "lambda")) == 1
 
@@ -477,7 +477,7 @@ def test_reader_sees_only_committed_cycles_while_a_writer_is_open(tmp_path):
 def test_sqlite_file_settings_and_schema(tmp_path):
     db = tmp_path / "h.sqlite"
     with HistoryStore.open(db) as s:
-        assert s.schema_version == 1
+        assert s.schema_version == 2
         assert s._backend.conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
         assert s._backend.conn.execute("PRAGMA foreign_keys").fetchone()[0] == 1
     con = sqlite3.connect(db)
@@ -488,7 +488,7 @@ def test_sqlite_file_settings_and_schema(tmp_path):
         con.execute("INSERT INTO cycles (robot_id, kind, status, started_at) VALUES (1, 'party', 'committed', '2024')")
     con.close()
     with HistoryStore.open(db) as s:  # reopening does not migrate twice
-        assert s._read("SELECT COUNT(*) AS n FROM schema_version")[0]["n"] == 1
+        assert s._read("SELECT COUNT(*) AS n FROM schema_version")[0]["n"] == 2
 
 
 
@@ -682,9 +682,12 @@ def test_cli_history_table(history_db):
     assert "7 cycles (6 committed, 1 failed)" in out
     assert "2024-05-01 07:00:00  geometric_calibration" in out
     assert "tool_recalibration" in out and "failed" in out
-    assert "residual_rms_after [mm]" in out and "lambda [1]" in out
+    assert "residual_rms_after [mm]" in out and "lambda [%]" in out
     line = next(ln for ln in out.splitlines() if ln.strip().startswith("a2 "))
     assert line.split()[1:] == ["mm", "6", "+0.01", "+0.06", "+0.05", "+0.01", "+0.06"]
+    # one unit per quantity (issue 25): stored in rad, shown in degrees (the plot and the JSON too)
+    line = next(ln for ln in out.splitlines() if ln.strip().startswith("beta3 "))
+    assert line.split()[1] == "deg" and float(line.split()[4]) == pytest.approx(float(np.degrees(12e-6)), rel=1e-3)
 
 
 def test_cli_history_json_and_plot(history_db, tmp_path):
@@ -696,7 +699,7 @@ def test_cli_history_json_and_plot(history_db, tmp_path):
     assert out["parameters"]["a2"]["values"] == pytest.approx([0.01 * i for i in range(1, 7)])
     assert out["parameters"]["a2"]["times"][0] == "2024-05-01T07:00:00.000000Z"
     assert [c["status"] for c in out["cycles"]].count("failed") == 1
-    assert out["metrics"]["lambda"]["unit"] == "1"
+    assert out["metrics"]["lambda"]["unit"] == "%"
     assert png.read_bytes()[:4] == b"\x89PNG" and out["plot"] == str(png)
 
 
@@ -736,3 +739,32 @@ def test_cli_history_default_database_from_environment(history_db, monkeypatch):
     r = run_history("ur10-lab")
     assert r.exit_code == 0, r.output
     assert "1 cycles" in r.output
+
+
+def test_version_1_database_is_migrated_lambda_to_percent_and_demo_truth_errors_renamed(tmp_path):
+    """Issue 25: a version-1 history (lambda as a fraction, the demo's truth errors stored as residuals)
+    opened by this robocal: lambda x 100 in %, the demo's two metrics renamed, others untouched."""
+    from robocal.store import _schema
+
+    db = tmp_path / "v1.sqlite"
+    v2 = _schema.MIGRATIONS
+    try:
+        _schema.MIGRATIONS, _schema.SCHEMA_VERSION = v2[:1], 1
+        with HistoryStore.open(db) as s:
+            with s.cycle("kr", "geometric_calibration", notes="robocal demo (simulated time): campaign") as c:
+                c.add_metric("residual_rms_before", 1.5, "mm")
+                c.add_metric("residual_rms_after", 0.05, "mm")
+            with s.cycle("kr", "geometric_calibration", notes="a real calibration") as c:
+                c.add_metric("residual_rms_after", 0.02, "mm")
+            with s.cycle("kr", "thermal_compensation") as c:
+                c._metrics.clear()
+                c._write(c._tx.insert, "metrics", {"cycle_id": c.id, "name": "lambda", "value": 0.9, "unit": "1"})
+    finally:
+        _schema.MIGRATIONS, _schema.SCHEMA_VERSION = v2, v2[-1].version
+    with HistoryStore.open(db) as s:
+        assert s.schema_version == 2
+        demo, real, thermal = s.cycles("kr")
+        assert set(demo.metrics) == {"workspace_error_nominal_rms", "workspace_error_calibrated_rms"}
+        assert demo.metrics["workspace_error_nominal_rms"].value == 1.5
+        assert set(real.metrics) == {"residual_rms_after"}
+        assert thermal.metrics["lambda"].value == pytest.approx(90.0) and thermal.metrics["lambda"].unit == "%"

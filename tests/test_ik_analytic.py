@@ -95,7 +95,7 @@ def test_within_limits(name):
     Q, V = ik_analytic(model, T, within_limits=True)
     assert np.all(V <= V_all)
     assert np.all(model.within_limits(Q[V]))
-    np.testing.assert_array_equal(Q[V], Q_all[V])
+    np.testing.assert_allclose(Q[V], Q_all[V], rtol=0, atol=1e-12)  # rad
     theta5 = opw_from_model(model).opw_angles(q)[:, 4]
     nonsing = np.abs(np.sin(theta5)) > 1e-6
     assert np.all(_contains_original(model, q, Q, V)[nonsing])

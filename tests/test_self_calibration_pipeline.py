@@ -141,3 +141,16 @@ def test_an_image_of_another_size_and_an_unmatched_image_get_per_image_reasons(c
     assert "320x240 px, the first image is 640x480 px" in rows[names[2]]["skip_reason"]
     assert "no joint reading within 0.05 s" in rows[names[5]]["skip_reason"]
     assert sum(x["used"] for x in rows.values()) == len(names) - 2
+
+
+def test_a_fit_that_does_not_converge_exits_4_and_writes_no_robot_file(capture, tmp_path, lm_one_iteration):
+    """Issue 25: the convergence policy (every LM solve stopped after one iteration)."""
+    root = capture[0]
+    r = _run(root, "--out", str(tmp_path / "a"))
+    assert r.exit_code == 4, r.output
+    assert sum(line.startswith("Warning:") for line in r.output.splitlines()) == 1
+    assert not (tmp_path / "a" / "robot.toml").exists()
+    s = json.loads((tmp_path / "a" / "self_calibration.json").read_text())
+    assert s["convergence"]["converged"] is False
+    r = _run(root, "--out", str(tmp_path / "b"), "--allow-unconverged")
+    assert r.exit_code == 0 and (tmp_path / "b" / "robot.toml").exists()

@@ -166,11 +166,15 @@ def test_non_convergence_warns_marks_the_report_and_exits_4(campaign, tmp_path):
     assert "maximum iterations reached" in warning and "condition number" in warning
     res = json.loads((tmp_path / "c" / "result.json").read_text())
     assert res["solver"]["converged"] is False and "condition number" in res["solver"]["warning"]
+    assert res["convergence"]["converged"] is False and res["convergence"]["n_not_converged"] >= 1
+    assert not (tmp_path / "c" / "calibrated_robot.toml").exists()  # no model from a fit that did not converge
+    assert sum(line.startswith("Warning:") for line in r.output.splitlines()) == 1
     html = (tmp_path / "c" / "report.html").read_text()
     assert "NOT CONVERGED" in html and "did not converge" in html
     ok = run("calibrate", ROBOT, campaign["path"], "--out", tmp_path / "d", "--max-iterations", "1",
              "--allow-unconverged")
     assert ok.exit_code == 0 and "Warning:" in ok.output
+    assert (tmp_path / "d" / "calibrated_robot.toml").exists()
 
 
 def test_solve_raises_not_converged_warning():

@@ -343,3 +343,14 @@ def test_compensate_refuses_a_moved_sensor(cell, tmp_path):
     assert not (tmp_path / "corrected.csv").exists()
     r = run(*args, "--force")
     assert r.exit_code == 3 and (tmp_path / "corrected.csv").exists()
+
+
+def test_calibrate_sensor_that_does_not_converge_exits_4_without_a_sensor_file(cell, tmp_path, lm_one_iteration):
+    """Issue 25: the convergence policy (every LM solve stopped after one iteration)."""
+    r = run("calibrate-sensor", ROBOT, cell["dir"] / "run1" / "sphere_cold.csv", "--out", tmp_path / "s.json")
+    assert r.exit_code == 4, r.output
+    assert sum(line.startswith("Warning:") for line in r.output.splitlines()) == 1
+    assert not (tmp_path / "s.json").exists()
+    r = run("calibrate-sensor", ROBOT, cell["dir"] / "run1" / "sphere_cold.csv", "--out", tmp_path / "s.json",
+            "--allow-unconverged")
+    assert r.exit_code == 0 and (tmp_path / "s.json").exists()

@@ -131,7 +131,8 @@ class CalibrationResult:
         self.holdout = computed["validation"]
         self.rms_before_mm = float(r.rms_before)
         self.rms_after_mm = float(r.rms_after)
-        self.converged = bool(r.converged) and not computed["convergence_warnings"]
+        self.converged = bool(computed["convergence"].converged) if "convergence" in computed else \
+            bool(r.converged) and not computed["convergence_warnings"]
         self.status = computed["verdict"].status
         self.reasons = list(computed["verdict"].reasons)
         self.result = rd
@@ -141,7 +142,7 @@ class CalibrationResult:
                 f"converged={self.converged}, status={self.status!r})")
 
     def save(self, folder, *, overwrite: bool = False, report: bool = True, force: bool = False,
-             progress=None) -> dict:
+             progress=None, allow_unconverged: bool = False) -> dict:
         """Write the outputs of ``robocal calibrate`` into ``folder``.
 
         Parameters
@@ -157,6 +158,8 @@ class CalibrationResult:
             Write the calibrated robot files even when the result failed the sanity gates.
         progress : callable, optional
             ``progress(step, total, text)``, called between steps.
+        allow_unconverged : bool, default False
+            Write the calibrated robot files even when a fit did not converge.
 
         Returns
         -------
@@ -168,7 +171,8 @@ class CalibrationResult:
         robocal.OutputExistsError
             An output file exists and ``overwrite`` is false (nothing is written).
         """
-        return self._write(folder, overwrite=overwrite, report=report, force=force, progress=progress)["files"]
+        return self._write(folder, overwrite=overwrite, report=report, force=force, progress=progress,
+                           allow_unconverged=allow_unconverged)["files"]
 
     def _write(self, folder, **kwargs) -> dict:
         """:meth:`save` returning everything ``robocal calibrate`` prints (notes, verdict, files)."""

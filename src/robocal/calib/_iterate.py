@@ -4,6 +4,17 @@ on the geometry and a second, plain phase after dropping outliers.
 
 Columns are scaled by the norms of the initial Jacobian's columns; the step is solved on the
 identifiable (``active``) columns only. Internal module: the public entry is ``solve``.
+
+Convergence policy (the one of every solver in robocal): a solve has converged when one stated
+criterion was met after an accepted step -- relative cost change below ``ftol``, chi-square change
+below ``chi2_tol`` residual variances, scaled step below ``xtol`` -- or at a first-order stationary
+point: the largest scaled gradient component ``|J_j^T r|`` at most ``GTOL`` times
+``max_j |J_j| * |r|`` (the cosine between the residuals and the Jacobian's columns), or a
+Gauss-Newton step predicting a cost reduction of at most ``STALL_RTOL`` of the cost. "No step
+reduces the cost" is convergence only at such a stationary point (numerical precision reached);
+anywhere else it is reported as NOT converged, as is reaching the iteration cap. A trial step must
+lower the cost strictly, and the cost-change and step-size criteria count only for steps whose
+damping is below 1 (a heavily damped step is short wherever it is).
 """
 
 from __future__ import annotations
@@ -15,6 +26,12 @@ import numpy as np
 from ._cholesky import cholesky_factor, cholesky_solve
 
 MAX_ITERATIONS_REASON = "maximum iterations reached"
+#: First-order optimality tolerance: largest |J_j^T r| over max_j |J_j| * |r| (scaled, weighted).
+#: Where the line search stalls at a true minimum this is ~sqrt(2 eps) * s_min / s_max < 2e-8.
+GTOL = 1e-6
+#: ... or the Gauss-Newton step predicts a cost reduction of at most this fraction of the cost (the
+#: residuals themselves at their rounding level, e.g. exact data, make the gradient test too strict).
+STALL_RTOL = 1e-6
 
 
 def robust_weights(r_pose, loss, f_scale):
@@ -134,11 +151,26 @@ class DampedGaussNewton:
             G = Ja.T @ Ja
             g_max = float(G.diagonal().max())
             s_max = math.sqrt(g_max)
-        if (float(np.abs(g).max()) if g.size else 0.0) <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
+        g_inf = float(np.abs(g).max()) if g.size else 0.0
+        if g_inf <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
             return self._stop("gradient is zero")
         found = self._line_search(G, g, g_max, step_s)
         if found is None:
-            return self._stop("no step reduces the cost further (numerical precision reached)")
+            if self.method == "svd":  # only the kept directions can be stepped along
+                Ur = np.where(keep, U.T @ ra, 0.0)
+                g_inf = float(np.abs(Vt.T @ (s * Ur)).max())
+                predicted = 0.5 * float(Ur @ Ur)
+            else:
+                predicted = self._predicted_reduction(G, g, g_max)
+            optimality = g_inf / max(s_max * math.sqrt(2 * self.cost), 1e-300)
+            rel = predicted / max(self.cost, 1e-300)
+            what = (f"gradient {optimality:.1e} of |J| |r|, the Gauss-Newton step would lower the cost by "
+                    f"{rel:.1e} of it")
+            if optimality <= GTOL or rel <= STALL_RTOL:
+                return self._stop(f"no step reduces the cost at a stationary point ({what}: numerical precision "
+                                  "reached)")
+            return self._stop(f"no step reduces the cost, but not at a minimum ({what}; limits {GTOL:g} and "
+                              f"{STALL_RTOL:g}): inconsistent Jacobian or discontinuous cost", converged=False)
         trial, r_t, J_t, step_s = found
         self.state, self.r, self.J = trial, r_t, J_t
         if self.robust:
@@ -151,6 +183,16 @@ class DampedGaussNewton:
             self.progress(it, new_cost)
         dcost, self.cost = self.cost - new_cost, new_cost
         return self._converged_after_step(dcost, step_s)
+
+    @staticmethod
+    def _predicted_reduction(G, g, g_max) -> float:
+        """Cost reduction 0.5 g^T G^-1 g the (barely damped) Gauss-Newton step predicts (inf if singular)."""
+        try:
+            A = G.copy()
+            A.ravel()[::len(A) + 1] += 1e-12 * g_max
+            return 0.5 * float(g @ cholesky_solve(cholesky_factor(A, overwrite=True), g))
+        except np.linalg.LinAlgError:
+            return math.inf
 
     def _line_search(self, G, g, g_max, step_s):
         """A step that does not raise the cost: LM raises the damping, SVD halves the step (30 tries).
@@ -172,7 +214,7 @@ class DampedGaussNewton:
             trial = self.problem.retract(self.state, step)
             r_t, J_t = self.augmented(trial)  # with the Jacobian: an accepted step needs it next
             c_t = self._cost(r_t)
-            if c_t <= self.cost:
+            if c_t < self.cost:  # a step that changes nothing is no step: the stationarity check decides
                 return trial, r_t, J_t, step_s
             if self.method == "svd":
                 step_s = 0.5 * step_s  # backtracking
@@ -182,6 +224,10 @@ class DampedGaussNewton:
 
     def _converged_after_step(self, dcost, step_s) -> bool:
         cost = self.cost
+        if self.lam >= 1.0:
+            # a heavily damped step (a short gradient step) is small however far the minimum is:
+            # its size and cost change say nothing about convergence
+            return False
         if abs(dcost) <= self.ftol * max(cost, 1e-300):
             return self._stop("relative cost reduction below ftol")
         # statistical criterion: the last step changed chi^2 by less than chi2_tol residual
@@ -194,8 +240,8 @@ class DampedGaussNewton:
             return self._stop("step below xtol")
         return False
 
-    def _stop(self, reason) -> bool:
-        self.reason, self.converged = reason, True
+    def _stop(self, reason, converged: bool = True) -> bool:
+        self.reason, self.converged = reason, converged
         return True
 
     def drop_outliers(self, threshold) -> bool:

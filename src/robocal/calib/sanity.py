@@ -27,6 +27,7 @@ __all__ = [
     "LENGTH_CHANGE_MM", "LENGTH_CHANGE_FRACTION", "ANGLE_CHANGE_DEG", "TOOL_LENGTH_LIMIT_MM",
     "residual_reasons", "holdout_reasons", "nominal_misfit_reasons", "parameter_reasons",
     "calibration_verdict", "touchup_verdict", "sensor_verdict", "BEAM_ANGLE_TOLERANCE_DEG", "BEAM_GAP_LIMIT_MM",
+    "NEGATIVE_COMPLIANCE_SIGMAS", "elastic_reasons",
 ]
 
 #: Residual RMS (3-D point error) above this multiple of the noise's expected RMS
@@ -53,6 +54,9 @@ DRIFT_LENGTH_MM = 5.0
 DRIFT_ANGLE_DEG = 0.5
 BEAM_ANGLE_TOLERANCE_DEG = 10.0
 BEAM_GAP_LIMIT_MM = 20.0
+#: An identified compliance below minus this many standard deviations is physically impossible (a
+#: joint that deflects against the load): the elastic model does not describe the data.
+NEGATIVE_COMPLIANCE_SIGMAS = 2.0
 
 _CAUSE_DATA = ("likely swapped joint or x/y/z columns, angles or lengths in another unit than declared, or the "
                "measurements of another robot")
@@ -212,3 +216,53 @@ def drift_verdict(names, units, delta, residual_rms_mm: float, sigma_mm: float |
                        f"{DRIFT_ANGLE_DEG:g} deg): {', '.join(worst)}: {_CAUSE_DATA}, a sensor that moved, "
                        "or sphere poses that do not match the cold reference")
     return Verdict(tuple(reasons), checks)
+
+
+def elastic_reasons(rows, checks: dict | None = None) -> tuple:
+    """The plausibility gate of an elastic calibration (docs/elastic.md, docs/reliability.md).
+
+    rows: dicts ``name``, ``value``, ``std`` (None when not identifiable), ``unit``, ``identifiable``
+    of every compliance (``compliance.*``, ``lateral.*``: mrad/kNm or mm/kN) and mass parameter
+    (``gravity.*``: kg, kg m) of the fit. A quantity whose standard deviation is at least its
+    magnitude, or a compliance below zero, is **not identified** (the data cannot tell it from zero,
+    or it has no physical meaning); a compliance below ``-NEGATIVE_COMPLIANCE_SIGMAS`` sigma, or a
+    fit in which no compliance is identified (a rigid robot: nothing to model), fails.
+
+    Returns ``(reasons, not_identified)``: failure sentences, and ``[{name, value, std, unit, why}]``.
+    """
+    checks = {} if checks is None else checks
+    reasons, not_identified = [], []
+    identified_compliances, negative = [], []
+    for r in rows:
+        name, v, sd = r["name"], float(r["value"]), r.get("std")
+        if not r.get("identifiable", True) or sd is None or not math.isfinite(sd):
+            continue
+        is_compliance = name.startswith(("compliance.", "lateral."))
+        why = None
+        if is_compliance and v < -NEGATIVE_COMPLIANCE_SIGMAS * sd:
+            negative.append(f"{name} = {v:.4g} +- {sd:.2g} {r['unit']}")
+            why = f"negative ({v:.4g} +- {sd:.2g} {r['unit']}): a joint cannot deflect against its load"
+        elif is_compliance and v < 0:
+            why = f"negative but within {NEGATIVE_COMPLIANCE_SIGMAS:g} sigma of zero ({v:.4g} +- {sd:.2g} {r['unit']})"
+        elif sd >= abs(v):
+            why = f"sigma {sd:.3g} >= |value| {abs(v):.3g} {r['unit']}: not distinguishable from zero"
+        if why is None:
+            if is_compliance:
+                identified_compliances.append(name)
+            continue
+        not_identified.append({"name": name, "value": v, "std": float(sd), "unit": r["unit"], "why": why})
+    n_comp = sum(r["name"].startswith(("compliance.", "lateral.")) for r in rows)
+    n_held = sum(r["name"].startswith(("compliance.", "lateral.")) and not r.get("identifiable", True) for r in rows)
+    checks["elastic_compliances_identified"] = {"value": len(identified_compliances), "limit": 1,
+                                                "passed": bool(identified_compliances), "unit": "count"}
+    checks["elastic_negative_compliances"] = {"value": len(negative), "limit": 0, "passed": not negative,
+                                              "unit": "count"}
+    if negative:
+        reasons.append("elastic: negative compliance beyond its uncertainty (" + "; ".join(negative) + "): the "
+                       "deflection model does not describe these data (a rigid robot, a missing payload or another "
+                       "error absorbed by the compliances); calibrate without --elastic or check the payload")
+    if n_comp and not identified_compliances:
+        reasons.append(f"elastic: none of the {n_comp} compliances is identified ({n_held} not identifiable, the "
+                       "others negative or within their standard deviation of zero): the data show no elastic "
+                       "deflection; calibrate without --elastic")
+    return reasons, not_identified

@@ -90,3 +90,23 @@ def _report_verdict(verdict) -> None:
 def _item_progress(i: int, n: int, text: str) -> None:
     """Progress over images or items on stderr: ``[i/n] text`` (camera, hand-eye, self-calibration, simulators)."""
     click.echo(f"[{i}/{n}] {text}", err=True)
+
+
+def allow_unconverged_option(f):
+    """The ``--allow-unconverged`` flag of every command that fits something (one help text)."""
+    return click.option("--allow-unconverged", is_flag=True,
+                        help="Accept a fit that did not converge: write its model file and exit 0 "
+                             f"(otherwise no model file is written and the exit code is {EXIT_NOT_CONVERGED}).")(f)
+
+
+def finish_convergence(convergence, allow_unconverged: bool) -> None:
+    """The end of every fitting command when its fits did not all converge
+    (:class:`~robocal.workflows.convergence.Convergence`): one ``Warning:`` line on stderr with the
+    reason and what to try; exit 4 unless ``allow_unconverged``. Does nothing when all converged."""
+    if convergence is None or convergence.converged:
+        return
+    click.echo(f"Warning: {convergence.warning()}", err=True)
+    if not allow_unconverged:
+        import sys
+
+        sys.exit(EXIT_NOT_CONVERGED)

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error
+from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error, allow_unconverged_option
 from .calibrate_table import parameter_table
-from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
+from .calibrate_inputs import finish_calibration, import_options, read_export
 from ._grammar import POINT
 from ._json import json_option, set_json_result
 from .simulate_execute import BASE_HELP, CONFIG_DAT_HELP, TOOL_HELP, frame_option
@@ -59,8 +59,7 @@ from .swarm_progress import swarm_progress_bar
 @click.option("--holdout-ids", multiple=True, metavar="IDS",
               help="Validate on these pose ids (comma separated, repeatable, or @FILE).")
 @click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
-@click.option("--allow-unconverged", is_flag=True,
-              help=f"Exit 0 even when the solver does not converge (otherwise exit {EXIT_NOT_CONVERGED}).")
+@allow_unconverged_option
 @click.option("--no-report", is_flag=True, help="Do not write report.html (batch runs: the plots take longer than the solve).")
 @click.option("--force", is_flag=True,
               help="Write the calibrated robot files even when the result fails the sanity gates (exit code 3).")
@@ -82,7 +81,7 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     DATA is robocal's measurement file, or with --format a tracker export paired with --joints.
     Orientation columns (rx, ry, rz or qw..qz) are used: a 6-D fit with a tool frame. Exit codes:
     0 done, 1 error, 3 the result failed the sanity gates (docs/reliability.md), 4 the solver did not
-    converge (unless --allow-unconverged).
+    converge (no calibrated robot file unless --allow-unconverged).
     """
     from .. import CalibrationOptions, calibrate as calibrate_in_memory, load_robot
     from .._api.calibration import _read
@@ -106,7 +105,8 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
         ensure_writable_dir(out_dir)  # before the long work
         result = calibrate_in_memory(robot, meas, options=options, progress=step,
                                      swarm_progress=swarm_progress_bar(method, generations), name=data)
-        r = result._write(out_dir, overwrite=overwrite, report=not no_report, force=force, progress=step)
+        r = result._write(out_dir, overwrite=overwrite, report=not no_report, force=force, progress=step,
+                          allow_unconverged=allow_unconverged)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]
@@ -129,6 +129,8 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     for row in res.get("elastic", {}).get("not_identifiable", []):
         if row["name"].startswith("compliance."):
             click.echo(f"not identifiable: {row['name']}: {row['why']}")
+    for row in res.get("elastic", {}).get("not_identified", []):
+        click.echo(f"not identified: {row['name']}: {row['why']}")
     set_json_result({**res, "files": r["files"]})
     finish_calibration(r, allow_unconverged)
 

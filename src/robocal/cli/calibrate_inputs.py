@@ -56,19 +56,19 @@ def read_export(robot, data, opts: dict):
 
 
 def finish_calibration(r: dict, allow_unconverged: bool) -> None:
-    """The common end of the calibration commands: notes, the files written, convergence warnings
-    (stderr), and the exit code (3: failed the sanity gates, 4: not converged unless allowed)."""
+    """The common end of the calibration commands: notes, the files written, and the exit code
+    (3: failed the sanity gates; 4: did not converge unless allowed, with one ``Warning:`` line)."""
     import sys
 
-    from ._common import EXIT_FAILED_RESULT, _report_verdict
+    from ._common import EXIT_FAILED_RESULT, _report_verdict, finish_convergence
 
     for note in r["notes"]:
         click.echo(f"note: {note}")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values()))
-    for w in r["convergence_warnings"]:
-        click.echo(f"Warning: {w}", err=True)
+    conv = r["convergence"]
     if not r["verdict"].ok:
+        if not conv.converged:
+            click.echo(f"Warning: {conv.warning()}", err=True)
         _report_verdict(r["verdict"])
         sys.exit(EXIT_FAILED_RESULT)
-    if r["convergence_warnings"] and not allow_unconverged:
-        sys.exit(EXIT_NOT_CONVERGED)
+    finish_convergence(conv, allow_unconverged)

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _item_progress, _user_error
+from ._common import _item_progress, _user_error, allow_unconverged_option, finish_convergence
 
 BOARD_HELP = ("Board spec (docs/handeye.md, 'Boards'): checkerboard:9x6:25mm (inner corners), "
               "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250 (squares), circles:10x10:25.4mm[:modified] (dots).")
@@ -29,14 +29,19 @@ def camera():
               help="Folder for camera.json, camera.yaml (ROS), camera_calibration.json and report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrite, as_json):
-    """Calibrate a camera from the images in IMAGES_DIR (intrinsics, distortion, 1-sigma)."""
+@allow_unconverged_option
+def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrite, as_json, allow_unconverged):
+    """Calibrate a camera from the images in IMAGES_DIR (intrinsics, distortion, 1-sigma).
+
+    Exit code 4 (and no camera.json/.yaml) when the fit did not converge, unless --allow-unconverged."""
+    from ..workflows.convergence import Convergence
+
     from ..handeye import HandEyeError
     from ..workflows.camera_calibrate import calibrate_camera_images
 
     try:
         s = calibrate_camera_images(images_dir, board, out_dir=out_dir, model=model, n_distortion=int(n_distortion),
-                                    fix=fix, overwrite=overwrite,
+                                    fix=fix, overwrite=overwrite, allow_unconverged=allow_unconverged,
                                     progress=_item_progress)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
@@ -44,6 +49,7 @@ def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrit
         from ..calib.outputs import json_ready
 
         click.echo(json.dumps(json_ready(s), indent=2))
+        finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)
         return
     cam = s["camera"]
     click.echo(f"camera calibration: {s['n_images_used']} of {s['n_images']} images, {s['n_corners']} corners, "
@@ -52,6 +58,7 @@ def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrit
         sigma = cam["sigma"].get(name)
         click.echo(f"  {name:>5s} {value:14.6f}" + ("" if sigma is None else f"  +- {sigma:.6f}"))
     echo_findings(s, out_dir)
+    finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)
 
 
 def echo_findings(s: dict, out_dir) -> None:

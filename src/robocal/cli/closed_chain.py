@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import click
 
-from ._common import _names, _step_printer, _user_error
+from ._common import _names, _step_printer, _user_error, allow_unconverged_option
 from ._json import json_option, set_json_result
-from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration
+from .calibrate_inputs import finish_calibration
 from .calibrate_table import parameter_table
 
 
@@ -67,8 +67,7 @@ def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_m
               help="Share of each spot's configurations held out for validation.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the calibration/held-out split.")
 @click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
-@click.option("--allow-unconverged", is_flag=True,
-              help=f"Exit 0 even when the solver does not converge (otherwise exit {EXIT_NOT_CONVERGED}).")
+@allow_unconverged_option
 @click.option("--no-report", is_flag=True, help="Do not write report.html.")
 @click.option("--force", is_flag=True, help="Write the calibrated robot files even when the sanity gates fail.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
@@ -82,7 +81,8 @@ def calibrate_cmd(robot, spots, out_dir, target_spacing_mm, spacing_sigma_mm, si
                                          spacing_sigma_mm=spacing_sigma_mm, sigma_mm=sigma_mm, holdout=holdout,
                                          seed=seed, free=_names(free) or None, free_all=free_all, fix=_names(fix),
                                          overwrite=overwrite, report=not no_report, force=force,
-                                         max_iterations=max_iterations, progress=_step_printer)
+                                         max_iterations=max_iterations, progress=_step_printer,
+                                         allow_unconverged=allow_unconverged)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     res = r["result"]

@@ -6,6 +6,8 @@ import json
 
 import click
 
+from ._common import allow_unconverged_option, finish_convergence
+
 MODEL_CHOICES = ("geometric", "elastic-joint", "elastic-full")
 
 
@@ -39,9 +41,14 @@ def list_cmd(root, as_json):
 @click.option("--root", type=click.Path(file_okay=False), default=None,
               help="Folder holding the data sets (default: $ROBOCAL_DATASETS or ../shared/datasets).")
 @click.option("--json", "as_json", is_flag=True, help="Print the record as JSON.")
-def run_cmd(name, model, root, as_json):
-    """Run the protocol of data set NAME (see `robocal datasets list`) with --model; holdout errors in mm."""
+@allow_unconverged_option
+def run_cmd(name, model, root, as_json, allow_unconverged):
+    """Run the protocol of data set NAME (see `robocal datasets list`) with --model; holdout errors in mm.
+
+    Exit code 4 when one of the protocol's fits did not converge, unless --allow-unconverged."""
     import warnings
+
+    from ..workflows.convergence import Convergence
 
     from ..io.datasets import DatasetError
     from ..workflows.datasets.run import DATASETS, list_datasets, run_dataset
@@ -61,11 +68,11 @@ def run_cmd(name, model, root, as_json):
         raise click.ClickException(str(exc)) from None
     except DatasetError as exc:
         raise click.ClickException(str(exc)) from None
-    notes = sorted({str(w.message).splitlines()[0] for w in caught if "converge" in str(w.message).lower()})
-    if notes:
-        rec["warnings"] = notes
+    del caught  # the solver's own warnings: summarised by rec["convergence"]
+    conv = Convergence.from_dict(rec["convergence"])
     if as_json:
         click.echo(json.dumps(rec, indent=2))
+        finish_convergence(conv, allow_unconverged)
         return
     rows = rec["sets"] if "sets" in rec else [dict(rec, set=name)]
     click.echo(f"{name} ({model}): {rec['protocol']}")
@@ -74,5 +81,5 @@ def run_cmd(name, model, root, as_json):
         label = r['set'] + (" (training)" if r.get("role") == "training" else "")
         click.echo(f"{label:18s}{r['holdout_rms_mm']:12.3f}{r['holdout_mean_mm']:8.3f}{r['holdout_max_mm']:8.2f}"
                    f"   {r['geometric']['rms']:13.3f}   {r['nominal']['rms']:11.3f}")
-    for n in notes:
-        click.echo(f"Warning: {n}")
+    click.echo(f"fits: {conv.n_fits}, not converged: {conv.n_not_converged}")
+    finish_convergence(conv, allow_unconverged)

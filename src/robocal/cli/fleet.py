@@ -12,7 +12,7 @@ from pathlib import Path
 
 import click
 
-from ._common import EXIT_FAILED_RESULT, _user_error
+from ._common import EXIT_FAILED_RESULT, _user_error, allow_unconverged_option, finish_convergence
 from ._grammar import POINT
 from ._json import json_option, set_json_result
 
@@ -64,13 +64,15 @@ def _history_target(db, no_history, out_dir):
               help="Robots calibrated one after the other in each Dask task (default: up to 4, keeping at "
                    "least 4 tasks per worker thread; a 100-pose robot takes ~30 ms, short next to the "
                    "scheduler's cost per task).")
-def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_report, per_task):
+@allow_unconverged_option
+def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_report, per_task, allow_unconverged):
     """Calibrate every robot of FLEET.toml on a Dask cluster, each robot on its own.
 
     Writes OUT/<id>/ (the files of `robocal calibrate`), OUT/summary.json (status ok or failed with
     the reason, per robot), OUT/summary.html and .svg. Robots whose inputs are unchanged since an
     earlier run into OUT are skipped (content hash): a crashed run resumes. Exit code 3 when some
-    robots failed (the last line counts them), 1 when all did.
+    robots failed (the last line counts them), 1 when all did; 4 when none failed but some fits did
+    not converge (their robot files are not written) unless --allow-unconverged.
     """
     from ..workflows.fleet import run_fleet_calibration
     from ..workflows.fleet_cluster import FleetClusterError
@@ -86,23 +88,33 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
                     bar.update(1)
 
                 r = run_fleet_calibration(fleet_file, out_dir, client=client, db=target, report=not no_report,
-                                          progress=progress, per_task=per_task)
+                                          progress=progress, per_task=per_task, allow_unconverged=allow_unconverged)
     except (ValueError, KeyError, OSError, FleetClusterError) as exc:
         raise _user_error(exc) from None
     s = r["summary"]
     c = s["counts"]
     for row in s["robots"]:
-        if row["status"] != "ok":
+        if row["status"] == "failed":
             click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
+        elif row["status"] == "not converged":
+            click.echo(f"not converged {row['id']}: {row['reason']}", err=True)
         elif row.get("outlier"):
             click.echo(f"outlier {row['id']}: accuracy after calibration {row.get('holdout_rms_after_mm')} mm "
                        f"(modified z {row.get('outlier_z')})", err=True)
-    click.echo(f"{c['robots']} robots: {c['ok']} ok, {c['failed']} failed, {c['skipped']} unchanged (skipped), "
+    click.echo(f"{c['robots']} robots: {c['ok']} ok, {c['failed']} failed, {c['not_converged']} not converged, "
+               f"{c['skipped']} unchanged (skipped), "
                f"{c['outliers']} outlier(s); {s['wall_seconds']:.1f} s")
     click.echo("wrote " + ", ".join(str(p) for p in r["files"].values())
                + (f"; history {s['history']}" if s["history"] else ""))
     set_json_result({**s, "files": r["files"]})
-    _exit_on_failures([row for row in s["robots"] if row["status"] != "ok"], c["robots"])
+    _exit_on_failures([row for row in s["robots"] if row["status"] == "failed"], c["robots"])
+    bad = [r for r in s["robots"] if r.get("converged") is False]
+    if bad:
+        from ..workflows.convergence import Convergence
+
+        finish_convergence(Convergence(c["robots"], tuple(f"{r['id']}" for r in bad),
+                                       "raise max_iterations in the fleet file's [options], or check those robots' "
+                                       "measurements"), allow_unconverged)
 
 
 def _exit_on_failures(failed, total) -> None:

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _item_progress, _user_error
+from ._common import _item_progress, _user_error, allow_unconverged_option, finish_convergence
 from .camera import BOARD_HELP, echo_findings
 
 
@@ -46,10 +46,15 @@ def handeye():
               help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@allow_unconverged_option
 def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
-              refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, as_json):
+              refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, as_json,
+              allow_unconverged):
     """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
-    cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC."""
+    cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC. Exit code 4 (and no handeye.yaml)
+    when a fit did not converge, unless --allow-unconverged."""
+    from ..workflows.convergence import Convergence
+
     from ..handeye import HandEyeError
     from ..workflows.handeye_solve import solve_handeye
 
@@ -64,11 +69,12 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
                           homography_threshold=homography_threshold, joints=joints_file, robot=robot,
                           joint_offsets=joint_offsets, loss=loss, out_dir=out_dir,
-                          overwrite=overwrite, progress=_item_progress)
+                          overwrite=overwrite, progress=_item_progress, allow_unconverged=allow_unconverged)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(s, indent=2))
+        finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)
         return
     cp = s["camera_pose"]
     sig_p, sig_r = cp.get("sigma_position_mm") or [float("nan")] * 3, cp.get("sigma_rotation_deg") or [float("nan")] * 3
@@ -86,6 +92,7 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
     for name, value in (s.get("joint_offsets_deg") or {}).items():
         click.echo(f"  joint offset {name}: {value:+.4f} deg")
     echo_findings(s, out_dir)
+    finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)
 
 
 def _v(values, digits=2) -> str:

@@ -14,6 +14,8 @@ from types import SimpleNamespace
 import click
 import numpy as np
 
+from ..report.units import display_unit
+
 from ..store import (
     HistoryError,
     HistoryInputError,
@@ -64,8 +66,10 @@ def _num(v):
 
 
 def _series_json(s) -> dict:
-    return {"unit": s.unit, "times": [str(t) + "Z" for t in s.times.astype("datetime64[us]")],
-            "values": [_num(v) for v in s.values], "std": [_num(v) for v in s.std],
+    """A series in its display unit (angles in deg, as the console and the plot)."""
+    k, unit = display_unit(s.unit)
+    return {"unit": unit, "times": [str(t) + "Z" for t in s.times.astype("datetime64[us]")],
+            "values": [_num(k * v) for v in s.values], "std": [_num(k * v) for v in s.std],
             "cycle_ids": [int(i) for i in s.cycle_ids], "kinds": list(s.kinds)}
 
 
@@ -190,14 +194,15 @@ def _echo_drift(view) -> None:
     if not view.series:
         click.echo("parameter drift: no parameters stored" + (" for the selected cycles" if view.stored else ""))
         return
-    click.echo("parameter drift (Δ from nominal over committed cycles; mm and rad)")
+    click.echo("parameter drift (Δ from nominal over committed cycles; mm and deg)")
     rows = []
     for n, s in view.series.items():
-        v = s.values
+        k, unit = display_unit(s.unit)
+        v = k * np.asarray(s.values, dtype=float)
         if len(v) == 0:
-            rows.append([n, s.unit, 0, "-", "-", "-", "-", "-"])
+            rows.append([n, unit, 0, "-", "-", "-", "-", "-"])
             continue
-        rows.append([n, s.unit, len(v), _fmt(v[0], True), _fmt(v[-1], True), _fmt(v[-1] - v[0], True),
+        rows.append([n, unit, len(v), _fmt(v[0], True), _fmt(v[-1], True), _fmt(v[-1] - v[0], True),
                      _fmt(float(np.min(v)), True), _fmt(float(np.max(v)), True)])
     for line in _table(["name", "unit", "cycles", "first", "last", "change", "min", "max"], rows,
                        [False, False, True, True, True, True, True, True]):

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _item_progress, _user_error
+from ._common import _item_progress, _user_error, allow_unconverged_option, finish_convergence
 from .camera import BOARD_HELP
 
 
@@ -37,9 +37,14 @@ from .camera import BOARD_HELP
               help="Folder for robot.toml, self_calibration.json, report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@allow_unconverged_option
 def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, board_on, camera_file, tolerance, match,
-                   link_parameters, refine_intrinsics, joint_noise_deg, out_dir, overwrite, as_json):
-    """Calibrate ROBOT's joint offsets from images of a board taken by its own camera."""
+                   link_parameters, refine_intrinsics, joint_noise_deg, out_dir, overwrite, as_json, allow_unconverged):
+    """Calibrate ROBOT's joint offsets from images of a board taken by its own camera.
+
+    Exit code 4 (and no robot.toml) when a fit did not converge, unless --allow-unconverged."""
+    from ..workflows.convergence import Convergence
+
     from ..handeye import HandEyeError
     from ..workflows.self_calibration import self_calibrate as run
 
@@ -49,11 +54,12 @@ def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, bo
                 tolerance=tolerance, match=match,
                 link_parameters=link_parameters, refine_intrinsics=refine_intrinsics,
                 joint_noise_deg=joint_noise_deg, out_dir=out_dir,
-                overwrite=overwrite, progress=_item_progress)
+                overwrite=overwrite, progress=_item_progress, allow_unconverged=allow_unconverged)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(s, indent=2))
+        finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)
         return
     click.echo(f"self-calibration of {s['robot']}: {s['n_images_used']} of {s['n_images']} images, reprojection RMS "
                f"{s['reprojection_rms_px']:.3f} px ({'converged' if s['converged'] else 'NOT converged'})")
@@ -66,5 +72,8 @@ def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, bo
     for r in s["images"]:
         if not r["used"]:
             click.echo(f"  skipped {r['name']}: {r['skip_reason']}")
+    for note in s.get("notes", []):
+        click.echo(f"note: {note}")
     if s.get("outputs"):
         click.echo("wrote " + ", ".join(s["outputs"].values()))
+    finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)

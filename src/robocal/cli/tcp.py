@@ -18,7 +18,7 @@ from ..tcp.tool_data import tool_data_all
 from ..tcp.touchup import DEFAULT_MIN_SPREAD_DEG, four_point_tcp, seven_point_tool_frame
 from ..calib.sanity import sensor_verdict, touchup_verdict
 from ._grammar import POINT
-from ._common import EXIT_FAILED_RESULT, _report_verdict
+from ._common import EXIT_FAILED_RESULT, _report_verdict, allow_unconverged_option, finish_convergence
 
 tcp = click.Group(
     "tcp",
@@ -60,7 +60,8 @@ FILE = click.Path(dir_okay=False, path_type=str)
 @click.option("--min-spread", "min_spread", type=float, default=DEFAULT_MIN_SPREAD_DEG, show_default=True,
               help="Smallest orientation spread [deg] accepted before the poses are called degenerate.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def four_point(file, min_spread, as_json):
+@allow_unconverged_option
+def four_point(file, min_spread, as_json, allow_unconverged):
     """TCP in the flange frame from N >= 4 flange poses touching one point (4-1 ... 4-4).
 
     FILE: flange-pose CSV (docs/tcp.md): '# orientation:', '# length_unit:', '# angle_unit:'
@@ -72,11 +73,14 @@ def four_point(file, min_spread, as_json):
     except ValueError as exc:
         raise _fail(exc) from None
     verdict = touchup_verdict(res.rms_mm, res.tcp_mm)
+    conv = _touchup_convergence(res)
     if as_json:
         d = res.to_dict()
-        d.update(file=file, convention=poses.convention, status=verdict.status, reasons=list(verdict.reasons))
+        d.update(file=file, convention=poses.convention, status=verdict.status, reasons=list(verdict.reasons),
+                 convergence=conv.as_dict())
         _echo_json(d)
         _exit_if_failed(verdict)
+        finish_convergence(conv, allow_unconverged)
         return
     click.echo(f"4-point TCP from {res.n_poses} poses ({poses.convention}, {poses.length_unit})")
     click.echo(f"TCP (flange frame)      {_v(res.tcp_mm)} mm")
@@ -91,6 +95,17 @@ def four_point(file, min_spread, as_json):
         click.echo(f"  {lab:>10s}  {r:8.4f}  {_v(rv)}")
     click.echo(f"rms {res.rms_mm:.4f} mm, max {res.residuals_mm.max():.4f} mm")
     _exit_if_failed(verdict)
+    finish_convergence(conv, allow_unconverged)
+
+
+def _touchup_convergence(touch):
+    """The convergence of a touch-up least-squares fit (None: no fit was run)."""
+    from ..workflows.convergence import Convergence
+
+    if touch is None or touch.fit is None:
+        return Convergence(0)
+    return Convergence.of([("touch-up least squares", touch.fit)],
+                          "touch the point from more orientations, tilted further about two axes")
 
 
 def _exit_if_failed(verdict) -> None:
@@ -106,7 +121,8 @@ def _exit_if_failed(verdict) -> None:
 @click.option("--min-spread", "min_spread", type=float, default=DEFAULT_MIN_SPREAD_DEG, show_default=True,
               help="Smallest orientation spread [deg] of the touch-up poses.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def seven_point(file, tcp_xyz, min_spread, as_json):
+@allow_unconverged_option
+def seven_point(file, tcp_xyz, min_spread, as_json, allow_unconverged):
     """Tool frame (TCP and orientation) by the 7-point method (4-1 ... 4-5).
 
     FILE: flange-pose CSV; the last three rows are P5 (start), P6 (moved along the tool X
@@ -128,12 +144,14 @@ def seven_point(file, tcp_xyz, min_spread, as_json):
         res = seven_point_tool_frame(T[-3:], t)
     except ValueError as exc:
         raise _fail(exc) from None
-    data = tool_data_all(res.T_flange_tool)
+    conv = _touchup_convergence(touch)
+    data = tool_data_all(res.T_flange_tool) if conv.may_write_model(allow_unconverged) else {}
     if as_json:
         d = {"file": file, "convention": poses.convention, **res.to_dict(),
              "touch_up": None if touch is None else touch.to_dict(),
-             "tool_data": {k: v.to_dict() for k, v in data.items()}}
+             "tool_data": {k: v.to_dict() for k, v in data.items()}, "convergence": conv.as_dict()}
         _echo_json(d)
+        finish_convergence(conv, allow_unconverged)
         return
     if touch is not None:
         click.echo(f"TCP from {touch.n_poses} touch-up poses: {_v(touch.tcp_mm)} mm (rms {touch.rms_mm:.4f} mm, "
@@ -146,7 +164,9 @@ def seven_point(file, tcp_xyz, min_spread, as_json):
     click.echo(f"  X/Z orthogonality error before orthonormalization {res.orthogonality_error_deg:+.3f} deg")
     click.echo(f"  flange orientation change over P5..P7 {res.flange_orientation_change_deg:.3f} deg")
     _echo_matrix("T_flange_tool", res.T_flange_tool)
-    _print_tool_data(res.T_flange_tool)
+    if data:
+        _print_tool_data(res.T_flange_tool)
+    finish_convergence(conv, allow_unconverged)
 
 
 @tcp.command("parallel-barriers")

@@ -16,7 +16,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ._common import _names, _user_error as _fail, _step_printer as _progress
+from ._common import _names, _user_error as _fail, _step_printer as _progress, allow_unconverged_option, finish_convergence
 from ._grammar import OPTIONAL_ROBOT, OptionalRobotCommand
 
 __all__ = ["thermal"]
@@ -144,25 +144,30 @@ def _print_cal(cal, pose_ids):
               help="Write the calibration as a JSON file (robocal-thermal-sensor/1) for 'robocal thermal compensate'.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing --out file.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file, out_file, overwrite, as_json):
+@allow_unconverged_option
+def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file, out_file, overwrite, as_json,
+                         allow_unconverged):
     """System calibration (thesis 3.3): the sensor frame T_sensor_base and the sphere centre P_e on
     the flange from N >= 5 poses.
 
     ROBOT: robot name or robot file (a calibrated robot makes the result more accurate).
     SPHERE_FILE: measurement file (robocal-measurements/1) of sphere centres in the sensor frame
-    (columns pose, <joints>, x, y, z), e.g. a simulated run's sphere_cold.csv.
+    (columns pose, <joints>, x, y, z), e.g. a simulated run's sphere_cold.csv. Exit code 4 (and no
+    --out file) when a fit did not converge, unless --allow-unconverged.
     """
     from ..calib.sanity import Verdict
+    from ..workflows.convergence import Convergence
     from ..workflows.thermal_commands import calibrate_sensor
     from .tcp import _exit_if_failed
 
     res = _call(calibrate_sensor, robot, sphere_file, method=method, sigma_mm=sigma_mm, poses=poses,
-                truth_file=truth_file, out_file=out_file, overwrite=overwrite)
+                truth_file=truth_file, out_file=out_file, overwrite=overwrite, allow_unconverged=allow_unconverged)
     if as_json:
         _echo_json(res)
     else:
         _echo_sensor_calibration(res, truth_file)
     _exit_if_failed(Verdict(tuple(res["reasons"])))
+    finish_convergence(Convergence.from_dict(res["convergence"]), allow_unconverged)
 
 
 def _echo_sensor_calibration(res, truth_file) -> None:

@@ -43,7 +43,7 @@ _ROBOT_FILE_SUFFIXES = (".toml", ".urdf")
 CALIBRATION_OPTIONS = {
     "holdout": float, "seed": int, "loss": str, "sigma_mm": float, "method": str, "max_iterations": int,
     "free": list, "fix": list, "free_all": bool, "rotation_weight": float, "use_orientation": bool,
-    "drop_duplicates": bool, "force": bool, "particles": int, "generations": int,
+    "drop_duplicates": bool, "force": bool, "particles": int, "generations": int, "allow_unconverged": bool,
 }
 
 

@@ -10,23 +10,21 @@ from datetime import datetime, timezone
 import numpy as np
 
 from .plots import plt, save_figure
+from .units import display_unit
 
 __all__ = ["plot_history"]
 
-# Display units: the store keeps mm and rad; thermal angle deltas are micro- to milliradians.
-_DISPLAY = {"mm": (1.0, "mm"), "rad": (1e3, "mrad"), "1": (1.0, "1"), "s": (1.0, "s"), "px": (1.0, "px"),
-            "degC": (1.0, "°C"), "mm/s": (1.0, "mm/s")}
 _EVENT_STYLE = {"geometric_calibration": ("tab:green", "geometric calibration"),
                 "tool_recalibration": ("tab:red", "tool recalibration")}
 
 
 def _display(unit: str):
-    return _DISPLAY.get(unit, (1.0, unit))
+    return display_unit(unit)  # the console and JSON of `robocal history` show the same units
 
 
 def plot_history(parameters: dict, metrics: dict, path, title: str, *, events=(), max_metrics: int = 4,
                  field: str = "delta"):
-    """Parameters grouped by unit (one panel per unit: lengths in mm, angles in mrad) and one panel
+    """Parameters grouped by unit (one panel per unit: lengths in mm, angles in deg) and one panel
     per metric, against time (UTC).
 
     parameters, metrics: ``{name: Series}`` from ``HistoryStore.parameter_history`` /

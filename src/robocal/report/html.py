@@ -117,13 +117,22 @@ def render_report(result: dict, *, accuracy_map: dict | None = None, title: str 
 
 
 def _status_banner(result: dict) -> list:
-    """A banner over the report when the sanity gates failed the result (``status``/``reasons``)."""
+    """A banner over the report when a fit did not converge (``convergence``) or the sanity gates
+    failed the result (``status``/``reasons``)."""
+    out = []
+    conv = result.get("convergence") or {}
+    if conv.get("converged") is False:
+        items = "".join(f"<li>{html.escape(str(r))}</li>" for r in conv.get("reasons", []))
+        out.append('<div class="banner" style="border:3px solid #b00;background:#fee;padding:0.6em 1em;margin:1em 0">'
+                   f'<p><b class="bad">NOT CONVERGED: {conv.get("n_not_converged")} of {conv.get("n_fits")} fit(s) '
+                   'did not converge; no model file is written unless --allow-unconverged.</b></p>'
+                   f'<ul>{items}</ul><p>Try: {html.escape(str(conv.get("what_to_try", "")))}</p></div>')
     if result.get("status", "ok") == "ok":
-        return []
+        return out
     items = "".join(f"<li>{html.escape(str(r))}</li>" for r in result.get("reasons", []))
-    return ['<div class="banner" style="border:3px solid #b00;background:#fee;padding:0.6em 1em;margin:1em 0">'
-            '<p><b class="bad">FAILED: this result did not pass the sanity gates; do not use it to move a '
-            f'robot.</b></p><ul>{items}</ul></div>']
+    return out + ['<div class="banner" style="border:3px solid #b00;background:#fee;padding:0.6em 1em;margin:1em 0">'
+                  '<p><b class="bad">FAILED: this result did not pass the sanity gates; do not use it to move a '
+                  f'robot.</b></p><ul>{items}</ul></div>']
 
 
 def _solver_section(result: dict) -> list:

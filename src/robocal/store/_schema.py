@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 from ._validate import CYCLE_KINDS
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 CYCLE_STATUSES = ("running", "committed", "failed")
 
 
@@ -114,8 +114,20 @@ class Migration:
     extra: tuple = field(default_factory=tuple)
 
 
+#: Version 2 (issue 25): one unit per quantity and honest names. ``lambda`` is stored in % (was a
+#: fraction, unit "1"); the demo's geometric calibration had stored the simulator-truth workspace
+#: errors as ``residual_rms_before/after``: they are renamed to what they are.
+V2_EXTRA = (
+    "UPDATE metrics SET value = value * 100.0, unit = '%' WHERE name = 'lambda' AND unit = '1'",
+    "UPDATE metrics SET name = 'workspace_error_nominal_rms' WHERE name = 'residual_rms_before' AND cycle_id IN "
+    "(SELECT id FROM cycles WHERE kind = 'geometric_calibration' AND notes LIKE 'robocal demo%')",
+    "UPDATE metrics SET name = 'workspace_error_calibrated_rms' WHERE name = 'residual_rms_after' AND cycle_id IN "
+    "(SELECT id FROM cycles WHERE kind = 'geometric_calibration' AND notes LIKE 'robocal demo%')",
+)
+
 MIGRATIONS = (
     Migration(1, "robots, cycles, measurements, parameters, metrics, corrections", V1_TABLES),
+    Migration(2, "lambda in %; the demo's workspace errors named as such (not residuals)", (), V2_EXTRA),
 )
 assert MIGRATIONS[-1].version == SCHEMA_VERSION
 

@@ -38,7 +38,11 @@ ALLOWED_UNITS = {
     "px": "image length",
     "degC": "temperature",
     "mm/s": "speed",
+    "%": "percent",
 }
+
+#: Metrics with one fixed unit (one unit per quantity, issue 25): the name -> the unit it is stored in.
+METRIC_UNITS = {"lambda": "%"}
 
 # Units people are likely to pass, with the conversion the store wants instead.
 _UNIT_HINTS = {
@@ -59,8 +63,6 @@ _UNIT_HINTS = {
     "ms": "divide by 1000 and store in 's'",
     "min": "multiply by 60 and store in 's'",
     "h": "multiply by 3600 and store in 's'",
-    "%": "divide by 100 and store as '1' (dimensionless)",
-    "percent": "divide by 100 and store as '1' (dimensionless)",
     "K": "store temperatures in 'degC'",
     "C": "write 'degC'",
     "°C": "write 'degC'",

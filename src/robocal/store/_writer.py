@@ -11,7 +11,7 @@ from datetime import datetime
 
 from ._backends import HistoryError
 from ._validate import (
-    HistoryInputError, check_array, check_indices, check_joints, check_labels, check_name, check_number,
+    HistoryInputError, METRIC_UNITS, check_array, check_indices, check_joints, check_labels, check_name, check_number,
     check_points_mm, check_unit, check_units_list, parse_time,
 )
 
@@ -138,12 +138,16 @@ class CycleWriter:
         return n
 
     def add_metric(self, name: str, value, unit: str) -> None:
-        """One number describing the cycle: ``residual_rms_before``/``_after`` [mm], ``lambda`` [1],
-        ``cycle_time`` [s], ``condition_number`` [1], ... (see docs/history.md)."""
+        """One number describing the cycle: ``residual_rms_before``/``_after`` [mm] (the
+        calibration's own residuals), ``lambda`` [%], ``cycle_time`` [s], ``condition_number`` [1],
+        ... (see docs/history.md)."""
         self._check_open()
         check_name(name, "metric")
         v = check_number(value, f"metric {name!r}")
         u = check_unit(unit, f"metric {name!r}")
+        if name in METRIC_UNITS and u != METRIC_UNITS[name]:
+            raise HistoryInputError(f"metric {name!r} is stored in {METRIC_UNITS[name]!r}, got {u!r}"
+                                    + (" (multiply a fraction by 100)" if METRIC_UNITS[name] == "%" else ""))
         if name in self._metrics:
             raise HistoryInputError(f"metric {name!r} was already added to this cycle")
         self._write(self._tx.insert, "metrics", {"cycle_id": self.id, "name": name, "value": v, "unit": u})

@@ -7,7 +7,7 @@ measurement) is one database transaction::
     with store.cycle("cell3-kr150", "thermal_compensation") as c:
         c.add_measurements(joints_rad, sphere_mm, target="sphere", sensor="stereo")
         c.add_parameters(["a2", "beta2"], [0.031, 2.1e-5], units=["mm", "rad"])
-        c.add_metric("lambda", 0.96, "1")
+        c.add_metric("lambda", 96.0, "%")
         c.add_corrections(q_taught, q_corrected, program="body_side")
     # committed here, all rows at once; an exception inside the block rolls all of them back
 

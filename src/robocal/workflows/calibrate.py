@@ -35,7 +35,7 @@ import numpy as np
 from ..calib import solve
 from ..calib.solve import NotConvergedWarning
 from ..calib.outputs import corrected_joint_targets, json_ready, result_to_dict
-from ..calib.sanity import calibration_verdict
+from ..calib.sanity import Verdict, calibration_verdict
 from ..calib.uncertainty import predicted_point_std
 from ..calib.validation import train_holdout_split
 from ..io.atomic import atomic_write_text
@@ -45,6 +45,7 @@ from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
 from .calibrate_swarm import check_method, convergence_plots, identify, swarm_record
 from .calibrate_setup import build_problems, split_by_ids, tool_frame_summary
+from .convergence import Convergence
 from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .progress import solver_progress
 
@@ -115,7 +116,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
                     max_iterations: int = 50, report: bool = True, force: bool = False,
                     drop_duplicates: bool = False, particles: int = 20, generations: int = 2000,
-                    swarm_progress=None, elastic: str | None = None, payload=None) -> dict:
+                    swarm_progress=None, elastic: str | None = None, payload=None,
+                    allow_unconverged: bool = False) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -148,8 +150,11 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     naming the file, checked before any work); the files are written into a temporary folder and
     moved into place together (:mod:`robocal.workflows.outputs`). The sanity gates
     (:mod:`robocal.calib.sanity`) give ``status`` and ``reasons`` in result.json; a failed result
-    writes no calibrated robot files unless ``force``. Returns a dict with ``result`` (the JSON
-    dict), ``files``, ``notes``, ``verdict``, ``convergence_warnings`` and the solver objects.
+    writes no calibrated robot files unless ``force``. A fit that did not converge (the baseline or
+    the calibration; :mod:`robocal.workflows.convergence`) marks result.json (``convergence``) and
+    writes no calibrated robot files unless ``allow_unconverged``. Returns a dict with ``result``
+    (the JSON dict), ``files``, ``notes``, ``verdict``, ``convergence`` (a
+    :class:`~robocal.workflows.convergence.Convergence`), ``convergence_warnings`` and the solver objects.
     """
     step = progress or (lambda i, n, text: None)
     total = 6 if report else 5
@@ -170,7 +175,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         use_orientation=use_orientation, max_iterations=max_iterations, particles=particles,
         generations=generations, swarm_progress=swarm_progress, elastic=elastic, payload=payload,
         progress=step, total=total)
-    return write_calibration(computed, out, overwrite=overwrite, report=report, force=force, progress=step)
+    return write_calibration(computed, out, overwrite=overwrite, report=report, force=force, progress=step,
+                             allow_unconverged=allow_unconverged)
 
 
 def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, free_all: bool = False, fix=(),
@@ -214,6 +220,13 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    elastic_json = None
+    if elastic_model is not None:  # the plausibility gate of the compliances and mass parameters
+        from .calibrate_elastic import elastic_summary
+
+        elastic_json = elastic_summary(setup["problem"], result)
+        verdict = Verdict(tuple(verdict.reasons) + tuple(elastic_json["gate_reasons"]), verdict.checks)
+    convergence = Convergence.of([("baseline fit (nominal geometry)", res0), ("calibration", result)])
     notes = list(split_notes) + list(setup["notes"])
     if "dropped_duplicates" in meas.metadata:
         notes.insert(0, f"dropped duplicate poses: {meas.metadata['dropped_duplicates']}")
@@ -231,15 +244,15 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
     }
     rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
+    rdict["convergence"] = convergence.as_dict()
     if elastic_model is not None:
-        from .calibrate_elastic import elastic_summary
-
-        rdict["elastic"] = json_ready(elastic_summary(setup["problem"], result))
+        rdict["elastic"] = json_ready(elastic_json)
     computed = {"result": rdict, "notes": notes, "calibration_result": result, "baseline_result": res0,
                 "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
                 "description": setup["description"], "convergence_warnings": convergence_warnings,
                 "nominal": nominal, "measurements": meas, "data": data, "train": train, "validation": validation,
-                "accuracy": accuracy, "stamp": stamp, "elastic": elastic_model is not None}
+                "accuracy": accuracy, "stamp": stamp, "elastic": elastic_model is not None,
+                "convergence": convergence}
     computed["robot"] = calibrated_model(computed)
     return computed
 
@@ -260,9 +273,10 @@ def calibrated_model(computed: dict):
 
 
 def write_calibration(computed: dict, out_dir, *, overwrite: bool = False, report: bool = True,
-                      force: bool = False, progress=None) -> dict:
+                      force: bool = False, progress=None, allow_unconverged: bool = False) -> dict:
     """Write a :func:`compute_calibration` into ``out_dir`` (result.json, calibrated_robot.toml/.urdf
-    unless the sanity gates failed and not ``force``, report.html with ``report``), as
+    unless the sanity gates failed and not ``force``, or a fit did not converge and not
+    ``allow_unconverged``; report.html with ``report``), as
     :func:`run_calibration` does; returns its dict (``files`` added)."""
     step = progress or (lambda i, n, text: None)
     total = 6 if report else 5
@@ -270,10 +284,13 @@ def write_calibration(computed: dict, out_dir, *, overwrite: bool = False, repor
     names = check_calibration_outputs(out, overwrite=overwrite, report=report)
     ensure_writable_dir(out)
     verdict, rdict, result = computed["verdict"], computed["result"], computed["calibration_result"]
-    write_robot = verdict.ok or force
+    convergence = computed["convergence"]
+    write_robot = (verdict.ok or force) and convergence.may_write_model(allow_unconverged)
     step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
-                                            " (FAILED the sanity gates: no calibrated robot file)"))
+                                            " (no calibrated robot file: FAILED the sanity gates or did not converge)"))
     notes = list(computed["notes"])
+    if not convergence.may_write_model(allow_unconverged):
+        notes.append(convergence.skipped_note("calibrated_robot.toml/.urdf"))
     elastic_out = None
     if computed["elastic"]:
         from .calibrate_elastic import torque_plot
@@ -286,10 +303,10 @@ def write_calibration(computed: dict, out_dir, *, overwrite: bool = False, repor
         files = _write_outputs(output_paths(stage), rdict, computed["robot"], computed["nominal"],
                                computed["measurements"], computed["data"], computed["train"], computed["validation"],
                                list(computed["problem"].targets), computed["accuracy"], write_robot, notes, report,
-                               result=result, torque_plots=elastic_out)
+                               result=result, torque_plots=elastic_out, failed_gates=not (verdict.ok or force))
     files = {k: out / p.name for k, p in files.items()}
     return {**{k: computed[k] for k in ("result", "calibration_result", "problem", "verdict", "six_d", "description",
-                                        "convergence_warnings")},
+                                        "convergence_warnings", "convergence")},
             "files": files, "notes": notes}
 
 
@@ -430,11 +447,11 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
 
 
 def _write_outputs(paths, rdict, calibrated, nominal, meas, data, train, validation, targets, accuracy,
-                   write_robot, notes, report, *, result, torque_plots=None) -> dict:
+                   write_robot, notes, report, *, result, torque_plots=None, failed_gates: bool = True) -> dict:
     """Write result.json, the calibrated robot ``calibrated`` (TOML, URDF; only with
     ``write_robot``) and the report (with ``report``) into ``paths`` (a staging folder); returns
     {kind: path}. torque_plots: None or a function giving the report's elastic torque plots."""
-    if not write_robot:
+    if not write_robot and failed_gates:
         notes.append("calibrated_robot.toml/.urdf not written: the result FAILED the sanity gates "
                      "(pass --force to write them anyway)")
     N = meas.n_poses
@@ -445,6 +462,10 @@ def _write_outputs(paths, rdict, calibrated, nominal, meas, data, train, validat
                + "; ".join(f"{t.name} = [{', '.join(f'{v:.4f}' for v in result.state.targets[k])}]"
                            for k, t in enumerate(targets))
                + ".\nAll numbers with uncertainties: result.json.")
+    implausible = (rdict.get("elastic") or {}).get("not_identified") or []
+    if implausible:
+        comment += ("\n[elastic]: NOT identified by these data (negative, or sigma >= |value|; kept at their fitted "
+                    "values, do not read them as known): " + ", ".join(r["name"] for r in implausible) + ".")
     files = {}
     from ..io.urdf import UrdfError, write_urdf
 

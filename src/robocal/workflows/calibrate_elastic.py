@@ -17,6 +17,7 @@ import numpy as np
 
 from ..calib.elastic import ElasticModel, Payload, elastic_description
 from ..calib.errors import ProblemError
+from ..calib.sanity import elastic_reasons
 
 __all__ = ["ELASTIC_CHOICES", "elastic_option", "parse_payload", "elastic_summary", "with_elastic", "torque_plot"]
 
@@ -64,21 +65,32 @@ def elastic_option(nominal, kind: str | None, payload: Payload | None) -> Elasti
 
 
 def elastic_summary(problem, result) -> dict:
-    """result.json's ``elastic``: compliances (value, std, unit, identifiable), dropped with reasons."""
+    """result.json's ``elastic``: compliances and mass parameters (value, std, unit, identifiable,
+    why), those the data cannot determine (``not_identifiable``), those the plausibility gate
+    (:func:`robocal.calib.sanity.elastic_reasons`) names as not identified (``not_identified``:
+    negative, or sigma >= |value|) and its failure reasons (``gate_reasons``)."""
     ident = result.identifiability.by_block()
     dropped = {d["name"]: d["why"] for blk in ("compliance", "lateral", "gravity")
                for d in ident.get(blk, {}).get("dropped", [])}
-    rows = []
+    rows, masses = [], []
     for i, n in enumerate(result.names):
-        if n.startswith(("compliance.", "lateral.")):
-            rows.append({"name": n, "joint": n.split(".")[1], "value": float(result.values[i]), "unit": result.units[i],
-                         "std": None if not np.isfinite(result.std[i]) else float(result.std[i]),
-                         "identifiable": n not in dropped, "why": dropped.get(n)})
+        if n.startswith(("compliance.", "lateral.", "gravity.")):
+            row = {"name": n, "joint": n.split(".")[1], "value": float(result.values[i]), "unit": result.units[i],
+                   "std": None if not np.isfinite(result.std[i]) else float(result.std[i]),
+                   "identifiable": n not in dropped, "why": dropped.get(n)}
+            (masses if n.startswith("gravity.") else rows).append(row)
+    reasons, implausible = elastic_reasons(rows + masses)
+    gate = {r["name"]: r["why"] for r in implausible}
+    for row in rows + masses:
+        if row["name"] in gate:
+            row["identifiable"], row["why"] = False, gate[row["name"]]
     el = problem.elastic
     return {"model": "full" if el.lateral else "joint", "mass_model": not el.lumped,
             "payload": None if el.payload is None else {"mass_kg": float(np.mean(el.payload.mass)),
                                                         "com_mm": [float(v) for v in np.ravel(el.payload.com)[:3]]},
-            "compliance": rows, "not_identifiable": [{"name": k, "why": v} for k, v in dropped.items()],
+            "compliance": rows, "mass_parameters": masses,
+            "not_identifiable": [{"name": k, "why": v} for k, v in dropped.items()],
+            "not_identified": implausible, "gate_reasons": reasons,
             "note": "without a mass model only the products compliance x gravity torque are identifiable "
                     "(docs/elastic.md)" if el.lumped else "mass model from the robot file"}
 

@@ -21,6 +21,7 @@ from ..io.camera_files import write_camera_json, write_camera_ros_yaml
 from ..io.images import list_images
 from ..report.camera_report import write_camera_report
 from .camera_common import backprojection, detect_set, identifiability_lines, image_rows, overlay_figures
+from .convergence import Convergence
 from .outputs import check_outputs_free, staged_outputs
 
 __all__ = ["calibrate_camera_images", "CAMERA_OUTPUTS", "camera_summary"]
@@ -45,9 +46,10 @@ def camera_summary(camera, sigma: dict | None = None) -> dict:
 
 
 def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str = "brown", n_distortion: int = 5,
-                            fix=(), overwrite: bool = False, progress=None) -> dict:
+                            fix=(), overwrite: bool = False, progress=None, allow_unconverged: bool = False) -> dict:
     """Calibrate a camera from the images of ``images_dir`` (module docstring). Returns the summary
-    dict (the JSON); writes the outputs when ``out_dir`` is given."""
+    dict (the JSON); writes the outputs when ``out_dir`` is given (camera.json/.yaml only when the
+    fit converged, or with ``allow_unconverged``; ``convergence`` in the summary)."""
     from ..handeye.camera_calibration import calibrate_camera
 
     b = parse_board(board)
@@ -72,6 +74,9 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
         "n_images": len(rows), "n_images_used": sum(r["used"] for r in rows),
         "n_corners": int(np.count_nonzero(np.isfinite(residuals[..., 0]))),
         "converged": bool(cal.converged), "message": cal.message,
+        "convergence": Convergence.of([("camera calibration", cal)],
+                                      "more images with the board tilted and near the corners, or fewer distortion "
+                                      "terms (--fix)").as_dict(),
         "identifiability": identifiability_lines(cal.identifiability), "images": rows,
     }
     if out_dir is not None:
@@ -79,8 +84,9 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
         per_image = np.array([np.nan if r["rms_px"] is None else r["rms_px"] for r in rows])
         overlays = overlay_figures(detected, projected, per_image)
         with staged_outputs(out_dir, CAMERA_OUTPUTS, overwrite=overwrite) as stage:
-            write_camera_json(stage / "camera.json", camera)
-            if camera.model == "brown":
+            if Convergence.from_dict(summary["convergence"]).may_write_model(allow_unconverged):
+                write_camera_json(stage / "camera.json", camera)
+            if camera.model == "brown" and (stage / "camera.json").exists():
                 write_camera_ros_yaml(stage / "camera.yaml", camera)
             (stage / "camera_calibration.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
             write_camera_report(stage / "report.html", {**summary, "_residuals_px": residuals},

@@ -46,6 +46,7 @@ from ..robots import load_robot, save_robot
 from ..sim import VirtualRobot, write_truth
 from ..sim.closed_chain import ClosedChainCell, JointReadout, LaserPointer, default_plates
 from .calibrate import OUTPUT_FILES, CalibrationInputError, output_paths, select_free
+from .convergence import Convergence, record_fit
 from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from .simulate import check_simulation_outputs
 
@@ -140,7 +141,7 @@ def _problem(nominal, spots, rows, **kw):
 def _solve_quiet(problem, state0=None, max_iterations=50):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", NotConvergedWarning)
-        res = solve(problem, state0=state0, max_iterations=max_iterations)
+        res = record_fit(solve(problem, state0=state0, max_iterations=max_iterations))
     return res, [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
 
 
@@ -192,7 +193,7 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
                                  spacing_sigma_mm: float = 0.02, sigma_mm=None, holdout: float = 0.2,
                                  seed: int = 0, free=None, free_all: bool = False, fix=(), overwrite: bool = False,
                                  report: bool = True, force: bool = False, max_iterations: int = 50,
-                                 progress=None) -> dict:
+                                 progress=None, allow_unconverged: bool = False) -> dict:
     """Calibrate ``robot`` from the held-spot file ``spots_file``; write the outputs into ``out_dir``.
 
     target_spacing_mm: the known distance between consecutive targets of a plate [mm] (fixes the
@@ -200,7 +201,9 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
     sigma_mm: in-plate spread of a held spot per axis [mm] (default: half the file's
     ``spot_tolerance_mm``, else 0.05). holdout: share of each spot's rows held out (seeded).
     free / free_all / fix: as ``robocal calibrate``. Returns ``result`` (the JSON dict), ``files``,
-    ``notes``, ``verdict``, ``calibration_result``, ``problem`` and ``convergence_warnings``.
+    ``notes``, ``verdict``, ``calibration_result``, ``problem``, ``convergence`` and
+    ``convergence_warnings``. A fit that did not converge writes no robot files unless
+    ``allow_unconverged`` (:mod:`robocal.workflows.convergence`).
     """
     step = progress or (lambda i, n, text: None)
     out = Path(out_dir)
@@ -253,10 +256,14 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
                      "value; give --target-spacing MM")
     if warns:
         rdict["solver"]["warning"] = warns[-1]
-    write_robot = verdict.ok or force
-    if not write_robot:
+    convergence = Convergence.of([("baseline fit (nominal geometry)", res0), ("calibration", result)])
+    rdict["convergence"] = convergence.as_dict()
+    write_robot = (verdict.ok or force) and convergence.may_write_model(allow_unconverged)
+    if not (verdict.ok or force):
         notes.append("calibrated_robot.toml/.urdf not written: the result FAILED the sanity gates "
                      "(pass --force to write them anyway)")
+    elif not write_robot:
+        notes.append(convergence.skipped_note("calibrated_robot.toml/.urdf"))
     rdict["notes"] = notes
     step(5, 5, "writing result.json, calibrated robot, report")
     with staged_outputs(out, names, overwrite) as stage:
@@ -264,7 +271,7 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
                        notes, report)
     return {"result": rdict, "files": {k: out / p.name for k, p in files.items()}, "notes": notes,
             "verdict": verdict, "calibration_result": result, "problem": problem, "baseline": res0,
-            "convergence_warnings": warns}
+            "convergence_warnings": warns, "convergence": convergence}
 
 
 def _rms(e) -> float:

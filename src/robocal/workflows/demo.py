@@ -79,6 +79,10 @@ def _geometric_calibration(nominal, virtual, q_work, out, seed):
         "held_out": run["result"].get("validation", {}),
         "workspace_accuracy_mm": {"after": error_statistics(err_after)},
         "identified": len(res.identifiability.identifiable),
+        # the calibration's own numbers, for the history: its estimated parameters and its residuals
+        "parameters": [p for p in run["result"]["model_parameters"] if p["estimated"]],
+        "residuals_mm": {"before": run["result"]["residuals"]["before"]["rms"],
+                         "after": run["result"]["residuals"]["after"]["rms"]},
         "not_identifiable": [d["name"] for d in res.identifiability.dropped],
         "files": {k: str(v) for k, v in run["files"].items() if v is not None},
     }, err_after
@@ -100,12 +104,13 @@ def _thermal(seed):
     for c in range(0, deltas.shape[0], 10):  # every 10th production cycle goes to the history
         within = np.abs(ev.residuals[c]) < 0.1  # this cycle's monitored directions within 0.1 mm
         cycles.append({"cycle": c, "time_s": float(times[c]), "names": names, "deltas": deltas[c].tolist(),
-                       "units": units, "lambda": float(within.mean())})
+                       "units": units, "lambda_percent": 100.0 * float(within.mean())})
     return {
         "rows": exp["rows"],
         "screened": names,
         "traditional": list(exp["traditional"]),
-        "screening_table": [{"step": st.step, "removed": st.removed, "lambda": st.lam} for st in exp["screening"].steps],
+        "screening_table": [{"step": st.step, "removed": st.removed, "lambda_percent": st.lam}
+                            for st in exp["screening"].steps],
         "cycles": cycles,
         "note": "thermal cell simulated on its own KR150 (seed-derived), realistic preset (effects outside the model, docs/thermal.md); 34 monitored points",
     }
@@ -152,8 +157,17 @@ def _record_history(store_path, robot_name, result, campaign_path):
         with store.cycle(robot_name, "geometric_calibration", started_at=t_cal, finished_at=t_cal, meta=meta,
                          notes="robocal demo (simulated time): laser-tracker campaign") as c:
             c.add_measurements(meas.joints, meas.points[:, 0], sensor="laser tracker (simulated)")
-            c.add_metric("residual_rms_before", result["accuracy_mm"]["rms"], "mm")
-            c.add_metric("residual_rms_after", g["workspace_accuracy_mm"]["after"]["rms"], "mm")
+            params = g.get("parameters") or []
+            if params:  # the calibration's own estimates: change from nominal, value, std
+                c.add_parameters([p["name"] for p in params], [p["change"] for p in params],
+                                 units=[p["unit"] for p in params], values=[p["calibrated"] for p in params],
+                                 std=[p["std"] for p in params])
+            if g.get("residuals_mm"):  # its own residuals on the calibration poses
+                c.add_metric("residual_rms_before", g["residuals_mm"]["before"], "mm")
+                c.add_metric("residual_rms_after", g["residuals_mm"]["after"], "mm")
+            # the simulator's truth: nominal and calibrated model against the true robot over the workspace
+            c.add_metric("workspace_error_nominal_rms", result["accuracy_mm"]["rms"], "mm")
+            c.add_metric("workspace_error_calibrated_rms", g["workspace_accuracy_mm"]["after"]["rms"], "mm")
         start = now - timedelta(seconds=production_s)
         for cyc in thermal:
             t = start + timedelta(seconds=cyc["time_s"])
@@ -162,7 +176,7 @@ def _record_history(store_path, robot_name, result, campaign_path):
                              notes=f"robocal demo (simulated time): production cycle {cyc['cycle']}, "
                                    f"6 sphere poses") as c:
                 c.add_parameters(cyc["names"], cyc["deltas"], units=cyc["units"])
-                c.add_metric("lambda", cyc["lambda"], "")
+                c.add_metric("lambda", cyc["lambda_percent"], "%")
         t = result["tool_recalibration"]
         with store.cycle(robot_name, "tool_recalibration", started_at=now, finished_at=now, meta=meta,
                          notes="robocal demo (simulated time): after a collision") as c:

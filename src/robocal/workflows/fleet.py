@@ -18,6 +18,7 @@ benchmarks/bench_fleet.py) competed with the workers for the same cores.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from datetime import datetime, timezone
@@ -92,14 +93,16 @@ def _worker_threads(client) -> int:
 
 
 def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: bool = True, progress=None,
-                          per_task: int | None = None) -> dict:
+                          per_task: int | None = None, allow_unconverged: bool = False) -> dict:
     """Calibrate every robot of ``fleet_file`` into ``out_dir`` (see the module docstring).
 
     client: a ``distributed.Client`` (:func:`robocal.workflows.fleet_cluster.fleet_client`), or
     None for a plain loop in this process. db: the history database (path or URL) every result
     is recorded in (None: not recorded). report: each robot's report.html (the plots take longer
     than the solve). progress(done, total, row): after each robot. per_task: robots per Dask task
-    (default :func:`robots_per_task`).
+    (default :func:`robots_per_task`). A robot whose fit did not converge gets ``status: "not
+    converged"`` (no robot file, no history record) unless ``allow_unconverged`` (or the fleet file's
+    ``allow_unconverged`` option).
 
     Returns ``{"summary": dict written to summary.json, "files": {...}}``.
     """
@@ -107,6 +110,8 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
     fleet = read_fleet(fleet_file)
     out = ensure_writable_dir(out_dir)
     entries = fleet.entries
+    if allow_unconverged:
+        entries = [dataclasses.replace(e, options={**e.options, "allow_unconverged": True}) for e in entries]
     db_target = str(db) if db is not None else None
     if db_target is not None:  # reachable, and its tables made once, before the workers write
         from ..store import HistoryStore
@@ -134,7 +139,8 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
     rows.sort(key=lambda r: r["index"])
     flag_outliers(rows)
     counts = {"robots": len(rows), "ok": sum(r["status"] == "ok" for r in rows),
-              "failed": sum(r["status"] != "ok" for r in rows), "skipped": sum(bool(r.get("skipped")) for r in rows),
+              "failed": sum(r["status"] == "failed" for r in rows),
+              "not_converged": sum(r["status"] == "not converged" for r in rows), "skipped": sum(bool(r.get("skipped")) for r in rows),
               "outliers": sum(r["outlier"] for r in rows)}
     summary = {"format": SUMMARY_FORMAT, "fleet": str(fleet.path), "written": _now(), "counts": counts,
                "history": _display_db(db_target), "outlier_rule": _OUTLIER_RULE,

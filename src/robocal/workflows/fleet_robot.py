@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .convergence import Convergence
 from ..io.atomic import atomic_write_text
 from ..io.fleet_file import FleetEntry
 
@@ -85,14 +86,18 @@ def _finished(robot_dir: Path, digest: str):
 def _row(entry, rdict, digest, seconds) -> dict:
     res, val = rdict["residuals"], rdict.get("validation")
     ok = rdict["status"] != "failed"
-    row = {"id": entry.id, "status": "ok" if ok else "failed",
-           "reason": None if ok else "the result failed the sanity gates: " + "; ".join(rdict["reasons"]),
+    conv = Convergence.from_dict(rdict.get("convergence"))
+    unconverged = ok and not conv.may_write_model(entry.options.get("allow_unconverged", False))
+    status = "failed" if not ok else ("not converged" if unconverged else "ok")
+    reason = {"ok": None, "failed": "the result failed the sanity gates: " + "; ".join(rdict["reasons"]),
+              "not converged": conv.warning() if unconverged else None}[status]
+    row = {"id": entry.id, "status": status, "reason": reason,
            "model": rdict["robot"] if isinstance(rdict.get("robot"), str) else entry.model, "cell": entry.cell,
            "measurements": str(entry.measurements), "n_poses": rdict["metadata"]["n_poses_file"],
            "sanity": rdict["status"], "rms_before_mm": res["before"]["rms"], "rms_after_mm": res["after"]["rms"],
            "holdout_rms_before_mm": val["before"]["rms"] if val else None,
            "holdout_rms_after_mm": val["after"]["rms"] if val else None,
-           "converged": bool(rdict["solver"].get("converged", True)) and "warning" not in rdict["solver"],
+           "converged": conv.converged,
            "result": f"{entry.id}/result.json", "input_sha256": digest, "seconds": round(seconds, 3)}
     return row
 
@@ -168,7 +173,7 @@ def calibrate_entry(entry: FleetEntry, out_dir, *, db=None, report: bool = True)
                           else str(exc).strip("'\""), input_sha256=digest)
     rdict = r["result"]
     row = _row(entry, rdict, digest, time.perf_counter() - t0)
-    if db is not None:
+    if db is not None and row["status"] == "ok":  # no history of a fit that did not converge
         try:
             row["history_cycle"] = record_calibration(db, entry, rdict, meas, digest)
         except Exception as exc:  # the calibration stands; the robot is retried next run

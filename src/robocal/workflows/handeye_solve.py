@@ -47,6 +47,7 @@ from .camera_common import (
     pose_dict,
     ros_transform_yaml,
 )
+from .convergence import Convergence
 from .outputs import check_outputs_free, staged_outputs
 
 __all__ = ["solve_handeye", "HANDEYE_OUTPUTS", "chain_T_camera_target"]
@@ -108,7 +109,8 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
 def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
                   method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
                   robot_pose_sigma="default", homography_threshold=None, joints=None, robot=None,
-                  joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None) -> dict:
+                  joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None,
+                  allow_unconverged: bool = False) -> dict:
     """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
 
     robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
@@ -119,7 +121,8 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
     flange poses are the robot file's forward kinematics; ``joint_offsets`` also estimates the
     robot's joint zero offsets. loss: ``"linear"``, or ``"huber"`` / ``"cauchy"`` to reject whole
-    images that do not fit (listed per image as ``outlier``)."""
+    images that do not fit (listed per image as ``outlier``). A fit that did not converge (camera or
+    hand-eye; ``convergence`` in the JSON) writes no handeye.yaml unless ``allow_unconverged``."""
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.refine import refine_hand_eye
 
@@ -138,9 +141,11 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     X = b.object_points()
     uv = detected.image_points[used]
     camera_source = "given"
+    fits = []
     if camera is None:
         cal = calibrate_camera(uv, X, detected.image_size, min_points=b.min_points)
         camera, camera_source = cal.camera, "calibrated on the same images"
+        fits.append(("camera intrinsics", cal))
     if camera.image_size is None:
         camera = replace(camera, image_size=tuple(int(v) for v in detected.image_size))
     elif tuple(camera.image_size) != tuple(detected.image_size):
@@ -199,6 +204,9 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         "n_corners": int(np.count_nonzero(np.isfinite(back[..., 0]))),
         "camera": {**camera_summary(result.camera), "source": camera_source, "refined": bool(refine_intrinsics)},
         "converged": bool(result.converged), "message": result.message,
+        "convergence": Convergence.of(fits + [("hand-eye refinement", result)],
+                                      "another --method to start from, --loss huber against bad images, or more "
+                                      "images with larger rotations between them").as_dict(),
         "identifiability": identifiability_lines(result.identifiability),
         "linear": linear, "images": rows,
     }
@@ -211,11 +219,12 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         parent, child = ("tool0", "camera") if setup == "eye_in_hand" else ("base_link", "camera")
         with staged_outputs(out_dir, HANDEYE_OUTPUTS, overwrite=overwrite) as stage:
             (stage / "handeye.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
-            (stage / "handeye.yaml").write_text(ros_transform_yaml(
-                result.camera_pose, parent, child,
-                f"robocal hand-eye ({setup}): the camera's optical frame in the robot's "
-                f"{result.camera_pose_frame} frame\nreprojection RMS {result.rms_px:.3f} px"))
+            if Convergence.from_dict(summary["convergence"]).may_write_model(allow_unconverged):
+                (stage / "handeye.yaml").write_text(ros_transform_yaml(
+                    result.camera_pose, parent, child,
+                    f"robocal hand-eye ({setup}): the camera's optical frame in the robot's "
+                    f"{result.camera_pose_frame} frame\nreprojection RMS {result.rms_px:.3f} px"))
             write_camera_report(stage / "report.html", {**summary, "_residuals_px": back},
                                 title=f"Hand-eye calibration ({setup})", overlays=overlays)
-        summary["outputs"] = {n: str(Path(out_dir) / n) for n in HANDEYE_OUTPUTS}
+        summary["outputs"] = {n: str(Path(out_dir) / n) for n in HANDEYE_OUTPUTS if (Path(out_dir) / n).exists()}
     return json_ready(summary)

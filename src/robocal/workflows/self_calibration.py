@@ -35,6 +35,7 @@ from ..io.joint_log_files import read_frames, read_joint_log_file
 from ..robots import load_robot
 from ..robots.writer import save_robot
 from .camera_common import DetectedSet, identifiability_lines, overlay_figures
+from .convergence import Convergence
 from .outputs import check_outputs_free, staged_outputs
 
 __all__ = ["self_calibrate", "SELF_CALIBRATION_OUTPUTS"]
@@ -74,8 +75,10 @@ def _detect(paths, board, progress):
 def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effector: str, board_on,
                    camera_file=None, tolerance: float = 0.05, match: str = "nearest", link_parameters=(),
                    refine_intrinsics: bool = False, joint_noise_deg: float | None = None, out_dir=None,
-                   overwrite: bool = False, progress=None) -> dict:
-    """Run the pipeline (module docstring); returns the JSON summary.
+                   overwrite: bool = False, progress=None, allow_unconverged: bool = False) -> dict:
+    """Run the pipeline (module docstring); returns the JSON summary (``convergence``: of the camera
+    and self-calibration fits; robot.toml is not written when one did not converge, unless
+    ``allow_unconverged``).
 
     robot: shipped name or robot file; images: folder; joints: the joint log; frames: the frames
     file; board: board spec; camera_end_effector: the end effector carrying the camera;
@@ -117,11 +120,14 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
                          f"({sum(matched)} matched of {len(names)})")
     X = b.object_points()
     camera_source = "given"
+    fits = []
     if camera_file is not None:
         camera = read_camera(camera_file)
     else:
-        camera = calibrate_camera(uv[used], X, size, min_points=b.min_points).camera
+        intrinsics = calibrate_camera(uv[used], X, size, min_points=b.min_points)
+        camera = intrinsics.camera
         camera_source = "calibrated on the same images"
+        fits.append(("camera intrinsics", intrinsics))
     on = [carriers[0]] * len(names)
     if len(carriers) > 1:
         idx = np.flatnonzero(used)
@@ -135,6 +141,8 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
                                  camera_end_effector=camera_end_effector, link_parameters=link_parameters,
                                  refine_intrinsics=refine_intrinsics, min_points=b.min_points,
                                  joint_noise_deg=joint_noise_deg)
+    convergence = Convergence.of(fits + [("self-calibration", res)],
+                                 "better joint offsets to start from, more images or fewer --link-parameter")
     res_px = np.full_like(uv, np.nan)
     res_px[idx] = res.residuals_px
     for k, r in res.skipped.items():
@@ -161,7 +169,7 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
         "reprojection_rms_px": res.rms_px, "pixel_sigma_px": res.pixel_sigma,
         "variance_factor": res.variance_factor, "joint_noise_deg": joint_noise_deg,
         "n_images": len(names), "n_images_used": int(used.sum() - len(res.skipped)),
-        "converged": res.converged, "message": res.message,
+        "converged": res.converged, "message": res.message, "convergence": convergence.as_dict(),
         "identifiability": identifiability_lines(res.identifiability), "images": rows,
         "units": "mm, rad (joint offsets in the robot file's parameter units: rad or mm)",
     }
@@ -173,9 +181,13 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
         from ..report.camera_report import write_camera_report
 
         with staged_outputs(out_dir, SELF_CALIBRATION_OUTPUTS, overwrite=overwrite) as stage:
-            save_robot(res.model, stage / "robot.toml", comment=f"self-calibrated from {len(idx)} images")
+            if convergence.may_write_model(allow_unconverged):
+                save_robot(res.model, stage / "robot.toml", comment=f"self-calibrated from {len(idx)} images")
+            else:
+                summary["notes"] = [convergence.skipped_note("robot.toml")]
             (stage / "self_calibration.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
             write_camera_report(stage / "report.html", {**summary, "_residuals_px": res_px},
                                 title=f"Camera self-calibration ({model.name})", overlays=overlays)
-        summary["outputs"] = {n: str(Path(out_dir) / n) for n in SELF_CALIBRATION_OUTPUTS}
+        summary["outputs"] = {n: str(Path(out_dir) / n) for n in SELF_CALIBRATION_OUTPUTS
+                              if (Path(out_dir) / n).exists()}
     return json_ready(summary)

@@ -187,16 +187,18 @@ def _read_truth(truth_file):
 
 
 def calibrate_sensor(robot, sphere_file, *, method: str = "lsq", sigma_mm=None, poses=(), truth_file=None,
-                     out_file=None, overwrite: bool = False) -> dict:
+                     out_file=None, overwrite: bool = False, allow_unconverged: bool = False) -> dict:
     """System calibration (thesis 3.3): ``T_sensor_base`` and ``P_e`` from the sphere file.
 
     method: ``"lsq"``, ``"thesis"`` or ``"both"``; sigma_mm: sensor noise per coordinate [mm] or
     None; poses: id patterns (all without). ``out_file`` is written (least squares first) only
     when the sanity gates pass. Returns ``results`` (one per method), ``errors`` against
     ``truth_file``, ``comparison``, ``out``, ``note``, ``status``, ``reasons``; ``_calibrations``
-    holds the result objects.
+    holds the result objects. ``convergence``: of every method's fit; one that did not converge
+    writes no ``out_file`` unless ``allow_unconverged``.
     """
     from ..calib.sanity import touchup_verdict
+    from .convergence import Convergence
 
     model = load_robot(robot)
     _check_sigma(sigma_mm)
@@ -208,13 +210,16 @@ def calibrate_sensor(robot, sphere_file, *, method: str = "lsq", sigma_mm=None, 
     cals, comp = _system_calibrations(model, q, P, method, sigma_mm, truth)
     errors = _truth_errors(model, q, cals, truth)
     verdict = touchup_verdict(cals[0].rms_mm, cals[0].P_e, sigma_mm, what="system calibration")
-    if out_file and verdict.ok:  # a failed calibration writes no sensor file (exit code 3)
+    conv = Convergence.of([(c.method, c.converged, c.message) for c in cals],
+                          "more sphere poses spread over the workspace and joint ranges, or --method lsq")
+    write = bool(out_file) and verdict.ok and conv.may_write_model(allow_unconverged)
+    if write:  # a failed or unconverged calibration writes no sensor file (exit code 3 or 4)
         write_sensor_json(out_file, cals[0], model, sphere_file, overwrite=overwrite)
     return {"robot": model.name, "file": sphere_file, "pose_ids": list(meas.pose_ids),
             "results": [_cal_dict(c) for c in cals], "errors": errors or None,
             "comparison": None if comp is None else {"difference": comp.difference, "table": comp.table()},
-            "out": out_file if verdict.ok else None, "note": _rms_note(cals[0].rms_mm), "status": verdict.status,
-            "reasons": list(verdict.reasons), "_calibrations": cals}
+            "out": out_file if write else None, "note": _rms_note(cals[0].rms_mm), "status": verdict.status,
+            "reasons": list(verdict.reasons), "convergence": conv.as_dict(), "_calibrations": cals}
 
 
 # ---------------------------------------------------------------------------------------------- screen

@@ -54,8 +54,7 @@ def calibrate_boby(seed: int = 0, n_train: int = 24, data=None, root=None, prior
     out["geometric"] = out["calibrated"]
     if elastic is not None:
         p2, r2 = fit(model.with_params(r1.state.params), ds.joints[tr], with_state_targets(targets, r1.state),
-                     ds.points[tr], free=None, base_initial=r1.state.bases, prior=prior, elastic=elastic,
-                     max_iterations=200)
+                     ds.points[tr], free=None, base_initial=r1.state.bases, prior=prior, elastic=elastic)
         out.update(result=r2, train_rms=r2.rms_after, calibrated=holdout_stats(p2, r2, ds, te))
     return out
 

@@ -54,8 +54,7 @@ def calibrate_justin(seed: int = 0, n_train: int = 400, data=None, root=None, pr
     for lev in levels:
         el = elastic if lev in ("elastic", "full") else None
         p, r = fit(model, ds.joints[tr], state_targets, ds.points[tr], free=free_sets[lev], base_initial=base,
-                   prior=prior if lev in ("all", "elastic", "full") else 0.0, elastic=el,
-                   max_iterations={"elastic": 60, "full": 200}.get(lev, 50))
+                   prior=prior if lev in ("all", "elastic", "full") else 0.0, elastic=el)
         if lev != levels[-1]:
             # next level starts from this solution
             model = r.model.replace(T_world_base=model.T_world_base)

@@ -11,7 +11,7 @@ from ...calib import Target, rigid_fit
 from ...calib.gravity import STANDARD_GRAVITY
 from ...io.datasets import HILTI_SETS, DatasetError, RealDataset, read_hilti_trailblazer
 from ...robots import load_robot
-from ._fitting import elastic_model, error_stats, fit, param_names, points_in_base
+from ._fitting import PROTOCOL_MAX_ITERATIONS, elastic_model, error_stats, fit, param_names, points_in_base
 
 __all__ = ["HILTI_ARM_JOINTS", "hilti_station_protocol", "calibrate_hilti"]
 
@@ -77,7 +77,8 @@ def _station_errors(ds, pred_base, solution_spaces, min_cross) -> dict:
     return {"all": error_stats(np.concatenate(preds), np.concatenate(meas)), "stations": stations, "skipped": skipped}
 
 
-def calibrate_hilti(root=None, sets=HILTI_SETS, prior: float = 1e-2, data=None, max_iterations: int = 100,
+def calibrate_hilti(root=None, sets=HILTI_SETS, prior: float = 1e-2, data=None,
+                    max_iterations: int = PROTOCOL_MAX_ITERATIONS,
                     model: str = "geometric", tilt: bool = False) -> dict:
     """Fit the Trailblazer on ``flat`` (every point: stationing and evaluation, all solution spaces),
     one base frame per column height (5), 6-dof perturbations of the URDF origins of dsr_joint2..6,
@@ -122,7 +123,7 @@ def calibrate_hilti(root=None, sets=HILTI_SETS, prior: float = 1e-2, data=None, 
             elastic = dataclasses.replace(elastic, g=g_flat)
         prob, res_e = fit(model.with_params(res.state.params), flat.joints, prism, flat.points, free=free,
                           stations=stations, base_initial=res.state.bases, prior=prior, elastic=elastic,
-                          max_iterations=4 * max_iterations)  # bilinear lumped parameters: LM needs more
+                          max_iterations=max_iterations)
         in_base = res_e.state._replace(bases=np.eye(4)[None])
 
         def predict(q, gravity=None):

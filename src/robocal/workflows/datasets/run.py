@@ -3,13 +3,15 @@
 :func:`run_dataset` runs one protocol with one model (``geometric``, ``elastic-joint``,
 ``elastic-full``) and returns ``holdout_rms_mm``, ``holdout_mean_mm``, ``holdout_max_mm`` (the
 chosen model), the geometric and nominal figures beside them, the training RMS and the protocol;
-for ``hilti_trailblazer`` one such record per set under ``sets``.
+for ``hilti_trailblazer`` one such record per set under ``sets``; ``convergence``: how many of the
+protocol's fits (every seed, every level) did not converge, with the reasons.
 """
 
 from __future__ import annotations
 
 from ...io.datasets import HILTI_SETS, datasets_root
-from ._fitting import MODELS
+from ..convergence import Convergence
+from ._fitting import MODELS, recording_fits
 
 __all__ = ["DATASETS", "list_datasets", "run_dataset"]
 
@@ -44,6 +46,16 @@ def run_dataset(name: str, model: str = "geometric", root=None) -> dict:
     if model not in MODELS:
         raise ValueError(f"unknown model {model!r}; expected one of {', '.join(MODELS)}")
     out = {"dataset": name, "model": model, "robot": DATASETS[name][0], "protocol": DATASETS[name][1]}
+    with recording_fits() as fits:
+        _run(name, model, root, out)
+    out["convergence"] = Convergence.of(
+        [(f"fit {i + 1}", r) for i, r in enumerate(fits)],
+        "raise the protocol's iteration cap (workflows/datasets) or start the elastic levels from the previous "
+        "level's solution").as_dict()
+    return out
+
+
+def _run(name: str, model: str, root, out: dict) -> None:
     if name == "boby_fanuc":
         from .boby_fanuc import calibrate_boby_seeds
 
@@ -71,4 +83,3 @@ def run_dataset(name: str, model: str = "geometric", root=None) -> dict:
                    **_record(c, r["geometric"][s]["all"], r["nominal"][s]["all"]),
                    "p95_xy_mm": c["p95_xy"], "p95_z_mm": c["p95_z"]}
             out["sets"].append(rec)
-    return out
