@@ -102,6 +102,9 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     click.echo("")
     for line in parameter_table(res):
         click.echo(line)
+    for row in (res.get("identifiability") or {}).get("parallel_axes", []):
+        click.echo(f"parallel axes: {row['joints'][0]} || {row['joints'][1]} ({row['beta']} "
+                   f"{'free' if row['beta_free'] else 'held'}: Hayati's tilt of the parallel pair)")
     click.echo("")
     click.echo(f"{'position error [mm]':<30}{'RMS':>9}{'mean':>9}{'p95':>9}{'max':>9}")
     rows = [("calibration poses, before", res["residuals"]["before"]),

@@ -342,11 +342,31 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
         "rms_mm": res0.rms_after, "T_instrument_base": res0.state.bases[0], "targets_mm": res0.state.targets})
     rdict["accuracy_map"] = json_ready(accuracy)
     rdict["six_d"] = bool(setup["six_d"])
+    _name_parallel_axes(rdict, nominal)
     rdict["tool_frame"] = json_ready(tool_frame_summary(result, problem))
     swarm_record(rdict, result, metadata["method"])
     if convergence_warnings:
         rdict["solver"]["warning"] = convergence_warnings[-1]
     return rdict
+
+
+def _name_parallel_axes(rdict: dict, nominal) -> None:
+    """``identifiability.parallel_axes``: the robot's (nearly) parallel consecutive joint axes with
+    the beta that carries their tilt; a dropped parameter of such a pair says so in its ``why``."""
+    from ..kinematics.parallel_axes import parallel_axis_pairs
+
+    ident = rdict.setdefault("identifiability", {})
+    free = set(rdict.get("metadata", {}).get("free") or ())
+    rows = []
+    for pair in parallel_axis_pairs(nominal.links):
+        a, b = nominal.links[pair.first].name, nominal.links[pair.second].name
+        beta = f"beta{pair.beta_link + 1}"
+        rows.append({"joints": [a, b], "beta": beta, "beta_free": beta in free})
+        mine = {beta} | {f"d{k + 1}" for k in (pair.first, pair.second)}
+        for d in ident.get("dropped") or ():
+            if d["name"] in mine:
+                d["why"] = (d.get("why") or "") + f" (axes {a} and {b} are parallel; {beta} carries their tilt)"
+    ident["parallel_axes"] = rows
 
 
 def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation, stamp, targets, accuracy,
