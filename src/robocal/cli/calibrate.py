@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error
-from .calibrate_table import parameter_table
+from .calibrate_table import parameter_table, statistics_table
 from .calibrate_inputs import EXIT_NOT_CONVERGED, finish_calibration, import_options, read_export
 from .swarm_progress import swarm_progress_bar
 
@@ -106,14 +106,21 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
         click.echo(f"parallel axes: {row['joints'][0]} || {row['joints'][1]} ({row['beta']} "
                    f"{'free' if row['beta_free'] else 'held'}: Hayati's tilt of the parallel pair)")
     click.echo("")
-    click.echo(f"{'position error [mm]':<30}{'RMS':>9}{'mean':>9}{'p95':>9}{'max':>9}")
     rows = [("calibration poses, before", res["residuals"]["before"]),
             ("calibration poses, after", res["residuals"]["after"])]
     if res.get("validation"):
         rows += [("held-out poses, before", res["validation"]["before"]),
                  ("held-out poses, after", res["validation"]["after"])]
-    for label, s in rows:
-        click.echo(f"{label:<30}{s['rms']:9.4f}{s['mean']:9.4f}{s['p95']:9.4f}{s['max']:9.4f}")
+    for line in statistics_table("position error [mm]", rows):
+        click.echo(line)
+    orient = res.get("orientation")
+    if orient:
+        rows = [(f"{split} poses, {state}", orient[key][state])
+                for key, split in (("train", "calibration"), ("holdout", "held-out")) if orient.get(key)
+                for state in ("nominal", "baseline", "calibrated")]
+        click.echo("")
+        for line in statistics_table("orientation error [deg]", rows):
+            click.echo(line)
     for row in res.get("elastic", {}).get("not_identifiable", []):
         if row["name"].startswith("compliance."):
             click.echo(f"not identifiable: {row['name']}: {row['why']}")

@@ -36,6 +36,24 @@ def robots(as_json):
         click.echo(f"{r['name']:<{w}}  {r['model']:<8} {r['joints']:>2} joints  {r['title']}")
 
 
+def _with_tool(model, text):
+    """``model`` with its single chain's end effector replaced by the ``--tool`` frame."""
+    from ..kinematics.model import EndEffector
+    from ..transforms import transform_from_pose
+
+    try:
+        vals = [float(v) for v in str(text).replace(" ", "").split(",")]
+    except ValueError:
+        raise click.ClickException(f"--tool: expected X,Y,Z or X,Y,Z,A,B,C numbers, got {text!r}") from None
+    if len(vals) not in (3, 6):
+        raise click.ClickException(f"--tool: expected 3 or 6 numbers (X,Y,Z[,A,B,C]), got {len(vals)}")
+    if len(model.end_effectors) != 1:
+        raise click.ClickException("--tool: for single-chain robots (this one has several end effectors; use --ee)")
+    T = transform_from_pose(vals + [0.0] * (6 - len(vals)), "kuka_abc", "mm", "deg")
+    link = len(model.links) - 1
+    return model.replace(end_effectors=[EndEffector("tool", link, T)])
+
+
 @click.command(context_settings=NUMBERS_CONTEXT)
 @click.argument("robot")
 @click.argument("joints", **JOINTS_ARG)
@@ -43,12 +61,18 @@ def robots(as_json):
 @click.option("--euler", "convention", default=None,
               help="Also print the orientation in this convention (kuka_abc, fanuc_wpr, zxz, rpy, quaternion, rotvec, ...).")
 @click.option("--ee", "end_effector", default=None, help="End effector of a tree robot (default: the first).")
+@click.option("--tool", "tool", default=None, metavar="X,Y,Z[,A,B,C]",
+              help="Tool frame on the flange [mm; A,B,C KUKA ABC in deg] instead of the robot file's [tool] "
+                   "(a calibrated robot file carries the identified one); --tool 0,0,0 gives the flange.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON with keys position_mm and rotation.")
-def fk(robot, joints, deg, convention, end_effector, as_json):
-    """Forward kinematics: flange pose of ROBOT at JOINTS (base frame, mm)."""
+def fk(robot, joints, deg, convention, end_effector, tool, as_json):
+    """Forward kinematics: pose of ROBOT's tool (the file's [tool], else the flange) at JOINTS
+    (base frame, mm)."""
     from ..transforms import pose_from_transform
 
     model = _robot(robot)
+    if tool is not None:
+        model = _with_tool(model, tool)
     q = _joints_from_cli(model, joints, deg)
     try:
         T = model.fk(q, end_effector)

@@ -208,6 +208,11 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         "split": protocol, "max_iterations": max_iterations, "elastic": elastic,
     }
     rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
+    from .orientation_errors import orientation_summary
+
+    rdict["orientation"] = json_ready(orientation_summary(setup, res0, result, meas, train, hold))
+    if setup["six_d"]:
+        rdict["baseline"]["T_flange_tool"] = json_ready(res0.state.tool[0])
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
     elastic_out = None
     if elastic_model is not None:
@@ -350,6 +355,22 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
     return rdict
 
 
+def _with_identified_tool(calibrated, result, rdict):
+    """The calibrated model with the identified 6-DoF tool frame (a 6-D fit with one measured frame)
+    as its tool: the robot file's ``[tool]`` (docs/robot-files.md), so ``robocal fk`` and
+    ``robocal correct`` work at the measured frame. Other fits: unchanged."""
+    from ..kinematics.model import EndEffector
+
+    tf = rdict.get("tool_frame")
+    if tf is None or getattr(result.state, "tool", None) is None or "targets" in result.state._fields:
+        return calibrated
+    ees = calibrated.end_effectors
+    if len(ees) != 1 or ees[0].link != len(calibrated.links) - 1:
+        return calibrated  # a tree robot: the tool stays in result.json
+    T = ees[0].T_link_ee @ np.asarray(result.state.tool[0], dtype=float)
+    return calibrated.replace(end_effectors=[EndEffector("tool", ees[0].link, T)])
+
+
 def _name_parallel_axes(rdict: dict, nominal) -> None:
     """``identifiability.parallel_axes``: the robot's (nearly) parallel consecutive joint axes with
     the beta that carries their tilt; a dropped parameter of such a pair says so in its ``why``."""
@@ -385,6 +406,7 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
                f"{nominal.source}")
     if elastic is not None:
         calibrated = elastic[0](calibrated)
+    calibrated = _with_identified_tool(calibrated, result, rdict)
     comment = (f"Calibrated by robocal from {data} ({len(train)} of {N} poses; held-out RMS "
                + (f"{validation['before']['rms']:.4f} -> {validation['after']['rms']:.4f} mm" if validation else "n/a")
                + ").\n[base] is the robot base in the measurement instrument's frame "
