@@ -24,6 +24,9 @@ from .swarm_progress import swarm_progress_bar
                    "Default: every parameter the robot file does not list as fixed.")
 @click.option("--free-all", is_flag=True,
               help="Identify every kinematic parameter (ignore the robot file's fixed lists).")
+@click.option("--frames-only", is_flag=True,
+              help="Hold the whole geometry; fit only the base (instrument) frame and the tool frame / target "
+                   "points: a calibrated robot moved to a new cell.")
 @click.option("--fix", "fix", multiple=True, metavar="NAMES",
               help="Parameters to hold at nominal (comma separated, repeatable).")
 @click.option("--holdout", default=0.2, show_default=True, help="Fraction of poses held out for validation.")
@@ -69,7 +72,7 @@ from .swarm_progress import swarm_progress_bar
               help="With --elastic: the payload carried during the measurements, mass [kg] @ centre of mass "
                    "[mm] in the flange frame.")
 @import_options
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, particles, generations, loss, sigma_mm, tool, overwrite,
+def calibrate(robot, data, out_dir, free, free_all, frames_only, fix, holdout, seed, method, particles, generations, loss, sigma_mm, tool, overwrite,
               rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
               allow_unconverged, no_report, force, drop_duplicates, elastic, payload, **imp):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA.
@@ -83,7 +86,8 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
 
     try:
         meas = read_export(robot, data, imp)
-        r = run_calibration(robot, data, out_dir, free=_names(free) or None, free_all=free_all, fix=_names(fix),
+        r = run_calibration(robot, data, out_dir, free=_names(free) if free else None, free_all=free_all,
+                            fix=_names(fix), frames_only=frames_only,
                             holdout=holdout, seed=seed, loss=loss, sigma_mm=sigma_mm, tool=tool, overwrite=overwrite,
                             progress=_step_printer, rotation_weight=rotation_weight, use_orientation=not no_orientation,
                             prior=prior_sigma if prior else None, train_ids=train_ids, holdout_ids=holdout_ids,

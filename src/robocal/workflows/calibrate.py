@@ -72,10 +72,19 @@ def split_poses(n: int, holdout: float, seed: int):
     return train_holdout_split(n, holdout, seed)
 
 
-def select_free(model, free=None, free_all: bool = False, fix=()) -> list:
+def select_free(model, free=None, free_all: bool = False, fix=(), frames_only: bool = False) -> list:
     """Names of the parameters to identify: the model's free ones (robot file ``fixed`` lists
-    respected), or ``free`` (names), or all with ``free_all``; minus ``fix``."""
+    respected), or ``free`` (names), or all with ``free_all``; minus ``fix``. ``frames_only``: none
+    (the geometry held, only the base / instrument and tool frames are fitted); it excludes the
+    other options. An empty ``free`` list (``--free ""``) is an error, not "the default"."""
     names = list(model.params.names)
+    if frames_only:
+        if free or free_all or fix:
+            raise CalibrationInputError("--frames-only holds the whole geometry: give no --free, --free-all or --fix")
+        return []
+    if free is not None and not isinstance(free, str) and len(free) == 0:
+        raise CalibrationInputError("--free names no parameter; name some (e.g. --free a2,theta3), leave --free out "
+                                    "for the default set, or pass --frames-only to fit only the base and tool frames")
 
     def check(ns, what):
         for n in ns:
@@ -115,7 +124,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
                     max_iterations: int = 50, report: bool = True, force: bool = False,
                     drop_duplicates: bool = False, particles: int = 20, generations: int = 2000,
-                    swarm_progress=None, elastic: str | None = None, payload=None) -> dict:
+                    swarm_progress=None, elastic: str | None = None, payload=None,
+                    frames_only: bool = False) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -142,7 +152,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     identifies a torsional compliance per joint under gravity together with the geometry (the
     robot file's mass model if it has one, else lumped gravity parameters; docs/elastic.md);
     payload: a :class:`~robocal.calib.elastic.Payload` (or ``KG@x,y,z`` text) carried during the
-    measurements.
+    measurements. frames_only: hold the whole geometry and fit only the base (instrument) frame and
+    the tool frame / target points: re-registering a calibrated robot in a new cell.
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
     naming the file, checked before any work); the files are written into a temporary folder and
@@ -169,7 +180,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         measurements = read_measurements(data, robot=nominal, check_limits=True, drop_duplicates=drop_duplicates)
     meas = measurements
     ensure_writable_dir(out)
-    free_names = select_free(nominal, free, free_all, fix)
+    free_names = select_free(nominal, free, free_all, fix, frames_only=frames_only)
     train, hold, split_notes, protocol = _split(meas, data, free_names, use_orientation, holdout, seed,
                                                 train_ids, holdout_ids)
     step(1, total, f"read {meas.n_poses} poses of {nominal.name} from {data}: {len(train)} to calibrate, "
@@ -189,6 +200,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    verdict = _non_convergence_first(verdict, convergence_warnings, max_iterations)
     write_robot = verdict.ok or force
     step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
                                             " (FAILED the sanity gates: no calibrated robot file)"))
@@ -200,6 +212,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         "robot": str(robot), "measurements": str(data), "n_poses_file": meas.n_poses,
         "n_poses_calibration": int(len(train)), "n_poses_holdout": int(len(hold)), "holdout_fraction": holdout,
         "seed": seed, "loss": loss, "sigma_mm": sigma_mm, "method": method, "free": free_names,
+        "frames_only": bool(frames_only),
         "fixed_by_option": list(fix), "initial_target_mm": [0.0, 0.0, 0.0] if tool is None else [float(v) for v in tool],
         "targets": list(meas.targets), "instrument": meas.metadata.get("instrument"),
         "frame": meas.metadata.get("frame"), "written": stamp, "measurement_kind": setup["description"],
@@ -231,6 +244,19 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     return {"result": rdict, "files": files, "notes": notes, "calibration_result": result,
             "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
             "description": setup["description"], "convergence_warnings": convergence_warnings}
+
+
+def _non_convergence_first(verdict, convergence_warnings, max_iterations):
+    """A failed verdict after an unconverged solve names the non-convergence first: the gates then
+    judge an unfinished solve, and their likely causes (swapped columns, units) may not apply."""
+    if verdict.ok or not convergence_warnings:
+        return verdict
+    from ..calib.sanity import Verdict
+
+    first = (f"the solver did not converge within {max_iterations} iterations: the figures the gates judged come "
+             "from an unfinished solve (try --max-iterations, better starting values or fewer free parameters) "
+             "before suspecting the causes below")
+    return Verdict((first,) + tuple(verdict.reasons), dict(verdict.checks))
 
 
 def _check_options(out: Path, names, overwrite, loss, sigma_mm, method) -> None:
