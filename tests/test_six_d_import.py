@@ -34,8 +34,9 @@ def true_tool():
     return T
 
 
-def simulate(n=60, seed=11):
-    """Joints, measured probe poses (N, 4, 4) in the tracker frame and the hidden truth."""
+def simulate(n=60, seed=11, truth=False):
+    """Joints and measured probe poses (N, 4, 4) in the tracker frame (and, with ``truth``, the
+    virtual robot and the tracker's frame T_inst)."""
     nominal = load_robot("ur10")
     rng = np.random.default_rng(seed)
     virtual = VirtualRobot.perturbed(nominal, rng, joint_noise_deg=0.0)
@@ -51,7 +52,7 @@ def simulate(n=60, seed=11):
     T = T_inst @ virtual.true_poses(q) @ true_tool()
     T[:, :3, 3] += rng.normal(0, SIGMA_MM, (n, 3))
     T[:, :3, :3] = so3_exp(rng.normal(0, SIGMA_MM / W, (n, 3))) @ T[:, :3, :3]
-    return q, T
+    return (q, T, virtual, T_inst, rng) if truth else (q, T)
 
 
 def _stamp(t: datetime) -> str:
@@ -79,13 +80,13 @@ def write_rtde(path, q):
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
     d = tmp_path_factory.mktemp("sixd_import")
-    q, T = simulate()
+    q, T, virtual, T_inst, rng = simulate(truth=True)
     times = [T0 + timedelta(seconds=4.0 * k) for k in range(len(q))]
     leica = write_leica(d / "tmac.csv", T, times)
     rtde = write_rtde(d / "rtde.csv", q)
     imp = run("import", leica, "--joints", rtde, "--robot", "ur10", "--orientation", "rpy", "--out", d / "m.csv")
     cal = run("calibrate", "ur10", d / "m.csv", "--out", d / "cal", "--sigma", SIGMA_MM)
-    return {"dir": d, "q": q, "T": T, "import": imp, "calibrate": cal, "leica": leica, "rtde": rtde,
+    return {"dir": d, "q": q, "T": T, "virtual": virtual, "T_inst": T_inst, "rng": rng, "import": imp, "calibrate": cal, "leica": leica, "rtde": rtde,
             "result": json.loads((d / "cal" / "result.json").read_text()) if (d / "cal" / "result.json").exists()
             else None}
 
@@ -184,3 +185,32 @@ def test_calibrate_format_takes_the_id_pairing_options(campaign, tmp_path):
             "--pair", "id", "--id-match", "number", "--orientation", "rpy", "--out", tmp_path / "c", "--no-report",
             "--sigma", SIGMA_MM)
     assert r.exit_code == 0, r.output
+
+
+def test_correct_with_the_calibrated_tool_lands_the_true_probe_on_the_targets(campaign, tmp_path):
+    """At the robot: tool-pose targets in the tracker frame, corrected with calibrated_robot.toml
+    (its [tool] = the identified probe frame), executed by the hidden true robot with the true
+    probe."""
+    from robocal.transforms import quaternion_from_matrix
+
+    virtual, T_inst = campaign["virtual"], campaign["T_inst"]
+    q_t = virtual.random_configurations(8, np.random.default_rng(99), margin=0.2)
+    targets = T_inst @ virtual.true_poses(q_t) @ true_tool()
+    quat = quaternion_from_matrix(targets[:, :3, :3])
+    rows = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: quaternion",
+            "# frame: world", "name,x,y,z,qw,qx,qy,qz,J1,J2,J3,J4,J5,J6"]
+    rows += [",".join([f"T{k}"] + [repr(float(v)) for v in (*targets[k, :3, 3], *quat[k], *np.degrees(q_t[k]))])
+             for k in range(len(q_t))]
+    (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
+    r = run("correct", campaign["dir"] / "cal" / "calibrated_robot.toml", tmp_path / "t.csv", "--out",
+            tmp_path / "c.csv")
+    assert r.exit_code == 0, r.output
+    lines = [x for x in (tmp_path / "c.csv").read_text().splitlines() if not x.startswith("#")]
+    cols = lines[0].split(",")
+    q_c = np.radians([[float(row.split(",")[cols.index(j)]) for j in ("J1", "J2", "J3", "J4", "J5", "J6")]
+                      for row in lines[1:]])
+    reached = T_inst @ virtual.true_poses(q_c) @ true_tool()
+    pos_err = np.linalg.norm(reached[:, :3, 3] - targets[:, :3, 3], axis=1)
+    rot_err = np.degrees(np.linalg.norm(so3_log(reached[:, :3, :3] @ np.swapaxes(targets[:, :3, :3], 1, 2)),
+                                        axis=1))
+    assert pos_err.max() < 0.15 and rot_err.max() < 0.05, (pos_err, rot_err)

@@ -492,6 +492,20 @@ def deflection_of(calibrated, payload=None):
     return lambda model, q: desc.reached_poses(model, q, load)
 
 
+def _controller_tool(nominal, calibrated):
+    """The nominal model as the controller runs it: with the calibrated file's tool (``[tool]``,
+    e.g. the 6-DoF tool frame ``robocal calibrate`` identified) when the nominal robot has a bare
+    flange, so targets and the filtered Cartesian targets are poses of the same tool frame."""
+    from ..kinematics.model import EndEffector
+
+    c_ees, n_ees = calibrated.end_effectors, nominal.end_effectors
+    if (len(c_ees) == 1 and c_ees[0].name == "tool" and len(n_ees) == 1 and n_ees[0].name == "flange"
+            and np.array_equal(np.asarray(n_ees[0].T_link_ee, dtype=float), np.eye(4))
+            and len(nominal.links) == len(calibrated.links)):
+        return nominal.replace(end_effectors=[EndEffector("tool", n_ees[0].link, np.asarray(c_ees[0].T_link_ee))])
+    return nominal
+
+
 def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None, overwrite: bool = False,
                 payload=None) -> dict:
     """Corrected joint targets for the targets in ``targets_file`` with the calibrated robot
@@ -505,14 +519,16 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     nominal-model controller in the robot base frame (``x, y, z`` and orientation columns in the
     input's convention, ``quaternion`` if it had none), ``converged``, ``status``,
     ``position_error_mm``, ``rotation_error_deg`` (of the calibrated model at the joints).
-    A robot file with an ``[elastic]`` section: the joint deflection under gravity and ``payload``
+    A calibrated file with a ``[tool]`` (a 6-D calibration's identified tool frame): targets are
+    poses of that tool, and a nominal robot with a bare flange gets the same tool (the controller's
+    TCP). A robot file with an ``[elastic]`` section: the joint deflection under gravity and ``payload``
     (``KG@x,y,z`` or a :class:`~robocal.calib.elastic.Payload`) is compensated (docs/elastic.md).
     """
     out_file = Path(out_file)
     if out_file.exists() and not overwrite:
         raise FileExistsError(f"{out_file}: output file exists; pass --overwrite to replace it")
     calibrated = load_robot(robot_file)
-    nominal_model = load_robot(nominal if nominal is not None else calibrated.name)
+    nominal_model = _controller_tool(load_robot(nominal if nominal is not None else calibrated.name), calibrated)
     if tuple(nominal_model.controller_joints) != tuple(calibrated.controller_joints):
         raise CalibrationInputError(f"nominal robot {nominal_model.name} has joints "
                                     f"{list(nominal_model.controller_joints)}, the calibrated robot "
