@@ -136,7 +136,8 @@ def read_joint_log(path, *, angle_unit: str | None = None, joint_columns=None, p
     def is_header(names):
         return any(wanted is None and _is_joint_name(n) or wanted and n in wanted for n in names)
 
-    table = read_table(path, is_header, "e.g. 'Pose;A1 [deg];A2 [deg];...'", delimiter=delimiter,
+    table = read_table(path, is_header, "e.g. 'Pose;A1 [deg];A2 [deg];...' or UR RTDE's 'timestamp actual_q_0 ...'; "
+                       "name other joint columns with --joint-columns", delimiter=delimiter,
                        decimal=decimal, encoding=encoding)
     cols, scheme_unit = _joint_columns(table, joint_columns)
     lin_names = {p.lower() for p in prismatic}
