@@ -214,3 +214,8 @@ def test_correct_with_the_calibrated_tool_lands_the_true_probe_on_the_targets(ca
     rot_err = np.degrees(np.linalg.norm(so3_log(reached[:, :3, :3] @ np.swapaxes(targets[:, :3, :3], 1, 2)),
                                         axis=1))
     assert pos_err.max() < 0.15 and rot_err.max() < 0.05, (pos_err, rot_err)
+
+
+def test_export_options_with_robocal_s_own_file_are_refused(campaign, tmp_path):
+    r = run("calibrate", "ur10", campaign["dir"] / "m.csv", "--orientation", "rpy", "--out", tmp_path / "c")
+    assert r.exit_code == 1 and "--orientation: for --format tracker-csv or sa-text" in r.output, r.output

@@ -83,8 +83,15 @@ def read_export(robot, data, opts: dict):
     format, which the calibration reads itself); notes go to stderr."""
     fmt = opts["point_format"]
     if fmt == "robocal":
-        if opts["joints_file"]:
-            raise ValueError("--joints is for --format tracker-csv or sa-text; DATA is robocal's measurement file")
+        given = [name for name, key, default in (("--joints", "joints_file", None), ("--orientation", "orientation", None),
+                                                  ("--orientation-unit", "orientation_unit", None),
+                                                  ("--name-fields", "name_fields", None),
+                                                  ("--joint-columns", "joint_columns", None),
+                                                  ("--id-match", "id_match", "exact"), ("--offset", "offset_s", 0.0))
+                 if opts.get(key, default) != default]
+        if given:
+            raise ValueError(f"{', '.join(given)}: for --format tracker-csv or sa-text; DATA is robocal's measurement "
+                             "file (its header declares its orientation columns)")
         return None
     if not opts["joints_file"]:
         raise ValueError(f"--format {fmt} needs --joints (the controller joint log to pair the points with)")
