@@ -74,15 +74,21 @@ def test_simulated_campaign_reaches_the_noise_floor(name):
 
 
 def test_ur10_in_dh_beta_form_identifies_what_plain_dh_cannot():
-    """UR10's parallel axes 2-3-4: in plain DH only d2 + d3 + d4 shows (two parameters lost); with
-    Hayati's beta on links 2 and 3 the count is the full 27 of a 6R arm measured by points."""
+    """UR10's parallel axes 2-3-4: plain DH alone shows only d2 + d3 + d4 (two parameters lost);
+    with Hayati's beta on links 2 and 3 the count is the full 27 of a 6R arm measured by points.
+    The plain-DH file gets beta2 and beta3 from the loader (its axes are parallel, issue 31), so
+    both files now reach 27; holding the two betas gives plain DH's 25 back."""
     ranks = {}
     for name in ("ur10", "ur10_dh_beta"):
         nominal, robot, q, pts, truth, n = campaign(name, 12)
         prob, res = fit(nominal, q[:n], pts[:n])
         ranks[name] = (res.rank, set(res.identifiability.dropped_names))
-    assert ranks["ur10"][0] == 25 and {"d3", "d4"} <= ranks["ur10"][1]
+    assert ranks["ur10"][0] == 27 and {"beta2", "beta3"}.isdisjoint(ranks["ur10"][1])
     assert ranks["ur10_dh_beta"][0] == 27
+    nominal, robot, q, pts, truth, n = campaign("ur10", 12)
+    held = nominal.with_free([n_ not in ("beta2", "beta3") for n_ in nominal.params.names])
+    _, res = fit(held, q[:n], pts[:n])
+    assert res.rank == 25 and {"d3", "d4"} <= set(res.identifiability.dropped_names)
     assert {"beta2", "beta3"}.isdisjoint(ranks["ur10_dh_beta"][1])
 
 

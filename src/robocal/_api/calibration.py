@@ -22,6 +22,9 @@ class CalibrationOptions:
         robot file does not list as fixed.
     free_all : bool, default False
         Identify every kinematic parameter (ignore the robot file's fixed lists).
+    frames_only : bool, default False
+        Hold the whole geometry; fit only the base (instrument) and tool frames (a calibrated
+        robot moved to a new cell).
     fix : tuple of str, default ()
         Parameters held at their nominal values.
     holdout : float, default 0.2
@@ -63,6 +66,7 @@ class CalibrationOptions:
 
     free: tuple | None = None
     free_all: bool = False
+    frames_only: bool = False
     fix: tuple = ()
     holdout: float = 0.2
     seed: int = 0
@@ -233,7 +237,8 @@ def calibrate(robot, measurements, *, options: CalibrationOptions | None = None,
         meas, data_label = _read(nominal, measurements, o, progress), measurements
     data_label = data_label if name is None else name
     computed = compute_calibration(
-        nominal, meas, robot_label=robot_label, data_label=data_label, free=list(o.free) if o.free else None,
+        nominal, meas, robot_label=robot_label, data_label=data_label,
+        free=list(o.free) if o.free is not None else None, frames_only=o.frames_only,
         free_all=o.free_all, fix=list(o.fix), holdout=o.holdout, seed=o.seed, loss=o.loss, sigma_mm=o.noise_mm,
         tool=o.tool_mm, method=o.method, rotation_weight=o.rotation_weight, prior=o.prior_sigma,
         train_ids=o.train_ids, holdout_ids=o.holdout_ids, use_orientation=o.use_orientation,

@@ -32,12 +32,17 @@ import numpy as np
 from .blocks import GaussianPrior, RobotGeometry, StationFrames, TargetPoints, ToolFrame
 from .core import Problem
 from .errors import ProblemError
-from .initial import frame_from_orientations, mean_rotation, rigid_fit
+from .initial import base_and_tool_from_orientations, collinearity, frame_from_orientations, mean_rotation, rigid_fit
 from .problem import Target
 from .residuals import PointResidual, TargetChain, ToolPointResidual, ToolRotationResidual, tool_chain
 from .residuals.chain import _frame_jacobian
 
-__all__ = ["PoseCalibrationProblem", "PoseState", "MultiPoseState", "geometry_prior"]
+__all__ = ["PoseCalibrationProblem", "PoseState", "MultiPoseState", "geometry_prior", "NEARLY_COLLINEAR"]
+
+#: Predicted points whose spread across their line is below this fraction of the spread along it
+#: (:func:`~.initial.collinearity`) cannot fix the rotation about the line: with orientations
+#: measured, the start comes from them instead of a rigid fit of the points.
+NEARLY_COLLINEAR = 1e-3
 
 
 class PoseState(NamedTuple):
@@ -168,11 +173,14 @@ class PoseCalibrationProblem(Problem):
         if isinstance(base_initial, str):
             if base_initial != "fit":
                 raise ProblemError(f"base_initial: expected a (4, 4) transform or 'fit', got {base_initial!r}")
-            try:
-                T_base, how = rigid_fit(pred.reshape(-1, 3), self.points.reshape(-1, 3)), "fit"
-            except ValueError:  # a line of points: the orientations fix the rotation
-                T_base = frame_from_orientations(T_ee[:, :3, :3] @ R_tool, self.rotations,
-                                                 pred.reshape(-1, 3), self.points.reshape(-1, 3))
+            T_base = None
+            if collinearity(pred.reshape(-1, 3)) >= NEARLY_COLLINEAR:
+                try:
+                    T_base, how = rigid_fit(pred.reshape(-1, 3), self.points.reshape(-1, 3)), "fit"
+                except ValueError:
+                    T_base = None
+            if T_base is None:  # (nearly) a line of points: the orientations fix the rotation
+                T_base, R_tool = self._start_from_orientations(T_ee, pred, R_tool, tool_rotation0)
                 how = "orientations"
         else:
             T_base = np.asarray(base_initial, dtype=float)
@@ -183,6 +191,19 @@ class PoseCalibrationProblem(Problem):
         T_tool[:3, :3] = R_tool
         T_tool[:3, 3] = P0[0] if self.single else 0.0
         return T_base, T_tool, how
+
+    def _start_from_orientations(self, T_ee, pred, R_tool, tool_rotation0):
+        """(T_base, R_tool) from the measured orientations: base and tool rotation estimated
+        together from the data (:func:`~.initial.base_and_tool_from_orientations`) unless the
+        tool rotation is given; when the data cannot separate them, the base from the given (or
+        identity) tool rotation."""
+        P, Q = pred.reshape(-1, 3), self.points.reshape(-1, 3)
+        if tool_rotation0 is None:
+            try:
+                return base_and_tool_from_orientations(T_ee[:, :3, :3], self.rotations, P, Q)
+            except ValueError:
+                pass
+        return frame_from_orientations(T_ee[:, :3, :3] @ R_tool, self.rotations, P, Q), R_tool
 
     def predict_points(self, state, q=None, stations=None, jacobian: bool = False, payload="default",
                        gravity=None):

@@ -9,10 +9,11 @@ read-only output folder, a full disk, a corrupted history database).
 from __future__ import annotations
 
 import sqlite3
+import warnings
 
 import click
 
-from ..errors import RobocalError
+from ..errors import RobocalError, RobocalWarning
 from ..workflows.outputs import describe_os_error
 
 __all__ = ["GuardedGroup", "one_line_error"]
@@ -39,12 +40,29 @@ def one_line_error(exc: BaseException) -> click.ClickException:
     return click.ClickException(" ".join(str(text).split()) or type(exc).__name__)
 
 
+def _show_robocal_warning(original):
+    """A ``warnings.showwarning`` that prints robocal's own warnings as one ``Warning: ...`` line on
+    stderr (no source path and line: they are about the user's files, not robocal's code) and
+    leaves every other warning to ``original``."""
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, RobocalWarning):
+            click.echo(f"Warning: {' '.join(str(message).split())}", err=True)
+        else:
+            original(message, category, filename, lineno, file, line)
+
+    return show
+
+
 class GuardedGroup(click.Group):
-    """A click group whose commands (and sub-groups) never end in a traceback."""
+    """A click group whose commands (and sub-groups) never end in a traceback, and whose
+    robocal warnings print as one ``Warning:`` line."""
 
     def invoke(self, ctx):
         try:
-            return super().invoke(ctx)
+            with warnings.catch_warnings():
+                warnings.showwarning = _show_robocal_warning(warnings.showwarning)
+                return super().invoke(ctx)
         except (click.ClickException, click.exceptions.Exit, click.Abort, SystemExit, KeyboardInterrupt):
             raise
         except Exception as exc:  # noqa: BLE001 - the guard's purpose

@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ._common import EXIT_TARGETS_NOT_REACHED, _names, _step_printer, _user_error, allow_unconverged_option
-from .calibrate_table import parameter_table
+from .calibrate_table import parameter_table, statistics_table
 from .calibrate_inputs import finish_calibration, import_options, read_export
 from ._grammar import POINT
 from ._json import json_option, set_json_result
@@ -29,6 +29,9 @@ from .swarm_progress import swarm_progress_bar
                    "Default: every parameter the robot file does not list as fixed.")
 @click.option("--free-all", is_flag=True,
               help="Identify every kinematic parameter (ignore the robot file's fixed lists).")
+@click.option("--frames-only", is_flag=True,
+              help="Hold the whole geometry; fit only the base (instrument) frame and the tool frame / target "
+                   "points: a calibrated robot moved to a new cell.")
 @click.option("--fix", "fix", multiple=True, metavar="NAMES",
               help="Parameters to hold at nominal (comma separated, repeatable).")
 @click.option("--holdout", default=0.2, show_default=True, help="Fraction of poses held out for validation.")
@@ -73,7 +76,7 @@ from .swarm_progress import swarm_progress_bar
               help="With --elastic: the payload carried during the measurements, mass [kg] @ centre of mass "
                    "[mm] in the flange frame.")
 @import_options
-def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, particles, generations, loss, sigma_mm, tool, overwrite,
+def calibrate(robot, data, out_dir, free, free_all, frames_only, fix, holdout, seed, method, particles, generations, loss, sigma_mm, tool, overwrite,
               rotation_weight, no_orientation, prior, prior_sigma, train_ids, holdout_ids, max_iterations,
               allow_unconverged, no_report, force, drop_duplicates, elastic, payload, **imp):
     """Calibrate ROBOT (name or robot file) from the measurement file DATA.
@@ -95,7 +98,7 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
         check_calibration_outputs(out_dir, overwrite=overwrite, report=not no_report)
         meas = read_export(robot, data, imp)
         options = CalibrationOptions(
-            free=tuple(_names(free)) or None, free_all=free_all, fix=tuple(_names(fix)), holdout=holdout, seed=seed,
+            free=tuple(_names(free)) if free else None, free_all=free_all, frames_only=frames_only, fix=tuple(_names(fix)), holdout=holdout, seed=seed,
             method=method, loss=loss, noise_mm=sigma_mm, tool_mm=tool, rotation_weight=rotation_weight,
             use_orientation=not no_orientation, prior_sigma=prior_sigma if prior else None, train_ids=train_ids,
             holdout_ids=holdout_ids, max_iterations=max_iterations, drop_duplicates=drop_duplicates,
@@ -117,15 +120,25 @@ def calibrate(robot, data, out_dir, free, free_all, fix, holdout, seed, method, 
     click.echo("")
     for line in parameter_table(res):
         click.echo(line)
+    for row in (res.get("identifiability") or {}).get("parallel_axes", []):
+        click.echo(f"parallel axes: {row['joints'][0]} || {row['joints'][1]} ({row['beta']} "
+                   f"{'free' if row['beta_free'] else 'held'}: Hayati's tilt of the parallel pair)")
     click.echo("")
-    click.echo(f"{'position error [mm]':<30}{'RMS':>9}{'mean':>9}{'p95':>9}{'max':>9}")
     rows = [("calibration poses, before", res["residuals"]["before"]),
             ("calibration poses, after", res["residuals"]["after"])]
     if res.get("validation"):
         rows += [("held-out poses, before", res["validation"]["before"]),
                  ("held-out poses, after", res["validation"]["after"])]
-    for label, s in rows:
-        click.echo(f"{label:<30}{s['rms']:9.4f}{s['mean']:9.4f}{s['p95']:9.4f}{s['max']:9.4f}")
+    for line in statistics_table("position error [mm]", rows):
+        click.echo(line)
+    orient = res.get("orientation")
+    if orient:
+        rows = [(f"{split} poses, {state}", orient[key][state])
+                for key, split in (("train", "calibration"), ("holdout", "held-out")) if orient.get(key)
+                for state in ("nominal", "baseline", "calibrated")]
+        click.echo("")
+        for line in statistics_table("orientation error [deg]", rows):
+            click.echo(line)
     for row in res.get("elastic", {}).get("not_identifiable", []):
         if row["name"].startswith("compliance."):
             click.echo(f"not identifiable: {row['name']}: {row['why']}")

@@ -36,6 +36,24 @@ def robots(as_json):
         click.echo(f"{r['name']:<{w}}  {r['model']:<8} {r['joints']:>2} joints  {r['title']}")
 
 
+def _with_tool(model, text):
+    """``model`` with its single chain's end effector replaced by the ``--tool`` frame."""
+    from ..kinematics.model import EndEffector
+    from ..transforms import transform_from_pose
+
+    try:
+        vals = [float(v) for v in str(text).replace(" ", "").split(",")]
+    except ValueError:
+        raise click.ClickException(f"--tool: expected X,Y,Z or X,Y,Z,A,B,C numbers, got {text!r}") from None
+    if len(vals) not in (3, 6):
+        raise click.ClickException(f"--tool: expected 3 or 6 numbers (X,Y,Z[,A,B,C]), got {len(vals)}")
+    if len(model.end_effectors) != 1:
+        raise click.ClickException("--tool: for single-chain robots (this one has several end effectors; use --ee)")
+    T = transform_from_pose(vals + [0.0] * (6 - len(vals)), "kuka_abc", "mm", "deg")
+    link = len(model.links) - 1
+    return model.replace(end_effectors=[EndEffector("tool", link, T)])
+
+
 @click.command(context_settings=NUMBERS_CONTEXT)
 @click.argument("robot")
 @click.argument("joints", **JOINTS_ARG)
@@ -46,30 +64,27 @@ def robots(as_json):
 @click.option("--frame", type=click.Choice(["base", "world"]), default="base", show_default=True,
               help="Frame of the printed pose: the robot base, or the robot file's world (for a calibrated robot "
                    "file: the measurement instrument's frame, its [base]).")
-@click.option("--tool", default=None, metavar="X,Y,Z[,A,B,C]",
-              help="Tool (TCP) in the flange frame, X,Y,Z [mm] [,A,B,C [deg], KUKA Rz Ry Rx]: print the TCP pose.")
+@click.option("--tool", "tool", default=None, metavar="X,Y,Z[,A,B,C]",
+              help="Tool frame on the flange, X,Y,Z [mm] [,A,B,C [deg], KUKA A,B,C], instead of the robot file's "
+                   "[tool] (a calibrated robot file carries the identified one); --tool 0,0,0 gives the flange.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON with keys position_mm and rotation.")
 def fk(robot, joints, deg, convention, end_effector, frame, tool, as_json):
-    """Forward kinematics: flange (or --tool TCP) pose of ROBOT at JOINTS [mm], in the robot base frame
-    (default) or the robot file's world frame (--frame world)."""
-    import numpy as np
-
-    from ..transforms import pose_from_transform, transform_from_pose
-    from .simulate_execute import frame_option
+    """Forward kinematics: pose of ROBOT's tool (the file's [tool], else the flange; or --tool) at
+    JOINTS [mm], in the robot base frame (default) or the robot file's world frame (--frame world)."""
+    from ..transforms import pose_from_transform
 
     model = _robot(robot)
+    if tool is not None:
+        model = _with_tool(model, tool)
     q = _joints_from_cli(model, joints, deg)
-    tool_v = frame_option(tool, "tool")
     try:
         T = model.fk(q, end_effector)
     except (KeyError, IndexError) as exc:
         raise click.ClickException(str(exc).strip('"')) from None
-    if tool_v is not None:
-        T = T @ transform_from_pose(tool_v + [0.0] * (6 - len(tool_v)), "kuka_abc")
     if frame == "base":
         T = np.linalg.inv(model.T_world_base) @ T
     out = {"robot": model.name, "end_effector": model.end_effectors[model.end_effector_index(end_effector)].name,
-           "frame": frame, "tool": tool_v, "position_mm": T[:3, 3].tolist(), "rotation": T[:3, :3].tolist()}
+           "frame": frame, "tool": tool, "position_mm": T[:3, 3].tolist(), "rotation": T[:3, :3].tolist()}
     if convention:
         try:
             pose = pose_from_transform(T, convention, length_unit="mm", angle_unit="deg")
@@ -81,7 +96,7 @@ def fk(robot, joints, deg, convention, end_effector, frame, tool, as_json):
         click.echo(json.dumps(out, indent=2))
         return
     x, y, z = T[:3, 3]
-    what = out["end_effector"] + (" + tool" if tool_v is not None else "")
+    what = out["end_effector"]
     click.echo(f"{model.name} {what} in the {frame} frame: position [mm] x={x:.4f} y={y:.4f} z={z:.4f}")
     for row in T[:3, :3]:
         click.echo("  [" + "  ".join(f"{v:+.6f}" for v in row) + "]")

@@ -24,6 +24,7 @@ from __future__ import annotations
 import csv
 import difflib
 import io
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -230,12 +231,15 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
         ``robocal.transforms.POSE_CONVENTIONS``; default: ``meas.metadata`` or "quaternion").
     overwrite: replace an existing file; otherwise ``FileExistsError``.
     float_format: a ``format()`` spec for numbers such as ``".6f"``; default ``None`` writes the
-        shortest text that reads back to the identical float (exact round trip).
+        shortest text that reads back to the identical float (exact round trip); ``"short"`` the
+        shortest text within 1e-12 (relative) of the value: no unit-conversion noise
+        (``255.371``, not ``255.37100000000004``), far below any instrument's resolution.
     metadata: extra or replacing header entries (``instrument``, ``frame``, ``note``, ...).
     """
     md, lu, au, conv = _header_values(meas, metadata, length_unit, angle_unit, orientation)
     columns, data = _data_block(meas, conv, LENGTH_UNITS[lu], ANGLE_UNITS[au])
-    fmt = repr if float_format is None else (lambda v: format(v, float_format))
+    fmt = (repr if float_format is None else short_number if float_format == "short"
+           else (lambda v: format(v, float_format)))
     buf = io.StringIO()
     buf.write("\n".join(_header_lines(md)) + "\n")
     writer = csv.writer(buf, lineterminator="\n")
@@ -243,6 +247,19 @@ def write_measurements(path, meas: Measurements, *, length_unit: str | None = No
     for pid, row in zip(meas.pose_ids, data.tolist()):
         writer.writerow([pid, *(fmt(v) for v in row)])
     return atomic_write_text(path, buf.getvalue(), overwrite=overwrite)
+
+
+def short_number(v: float, rel: float = 1e-12) -> str:
+    """The shortest decimal text of ``v`` within ``rel`` (relative; absolute below 1) of it."""
+    v = float(v)
+    tol = rel * max(1.0, abs(v))
+    if not math.isfinite(v) or abs(v) >= 1e15:
+        return repr(v)
+    for places in range(0, 16):
+        text = f"{v:.{places}f}"
+        if abs(float(text) - v) <= tol:
+            return "0" if float(text) == 0.0 else text
+    return repr(v)
 
 
 def _header_values(meas: Measurements, metadata, length_unit, angle_unit, orientation) -> tuple:

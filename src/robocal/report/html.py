@@ -153,6 +153,23 @@ def _solver_section(result: dict) -> list:
     return out
 
 
+def _orientation_rows(orient) -> list:
+    """The orientation error table of a 6-D calibration (``result["orientation"]``), or nothing."""
+    if not orient:
+        return []
+    rows = []
+    for key, split in (("train", "calibration"), ("holdout", "held-out")):
+        for state in ("nominal", "baseline", "calibrated"):
+            st = (orient.get(key) or {}).get(state)
+            if st:
+                rows.append([f"{split} poses, {state}", _f(st["rms"]), _f(st["mean"]), _f(st["p95"]), _f(st["max"]),
+                             _f(st["n"])])
+    return ["<h2>Orientation errors [deg]</h2>", _table(["poses", "RMS", "mean", "p95", "max", "n"], rows),
+            '<p class="note">Angle between the measured and the predicted tool orientation per pose. "nominal": '
+            'nominal geometry with the start estimates of the base and tool frames; "baseline": nominal geometry '
+            'with the best-fit frames; "calibrated": the identified model and frames.</p>']
+
+
 def _errors_section(result: dict) -> list:
     """Position error statistics before/after, per pose and as histograms."""
     out = ["<h2>Position errors [mm]</h2>"]
@@ -161,6 +178,7 @@ def _errors_section(result: dict) -> list:
         out.append(_table(["poses", "RMS", "mean", "p95", "max", "n"], rows))
     out.append('<p class="note">"before": nominal kinematics with the best-fit base frame and target points; '
                '"after": the calibrated model. Held-out poses were not used in the fit.</p>')
+    out += _orientation_rows(result.get("orientation"))
     for fig, alt in ((plot_errors_per_pose(result), "error per pose"), (plot_histogram(result), "error histogram")):
         if fig:
             out.append(_img(fig, alt))

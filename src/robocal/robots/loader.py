@@ -14,6 +14,7 @@ import numpy as np
 from ..io.plausibility import REACH_LARGEST_MM, REACH_SMALLEST_MM, angle_unit_problem, length_unit_problem
 from ..kinematics.links import ANGLE_PARAMS, MODEL_KINDS, Link, frame_from_xyz_rpy, link_param_names
 from ..kinematics.model import EndEffector, RobotModel
+from ..kinematics.parallel_axes import parallel_axis_pairs
 
 __all__ = ["RobotFileError", "load_robot", "list_robots", "robot_path", "parse_robot", "frame_from_xyz_rpy"]
 
@@ -142,6 +143,7 @@ def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
             couplings.append((where, _joint_coupling(where, j, link.name)))
             if "limits" in j:
                 limits_by_name[link.name] = _joint_limits(where, j, link.joint_type, ls, as_)
+    links = _with_parallel_betas(links)
     ctrl, coupling = _controller_coupling(data, origin, links, couplings)
     limits = _controller_limits(data, origin, links, ctrl, coupling, limits_by_name, ls, as_)
     _check_units(origin, links, [limits_by_name[L.name] for L in links
@@ -214,6 +216,8 @@ def _parse_joint(i: int, j: dict, names: list, kind: str, ls: float, as_: float,
     fixed = j.get("fixed", [])
     if not isinstance(fixed, list) or not all(isinstance(f, str) for f in fixed):
         raise RobotFileError(f"{where}: 'fixed' must be a list of parameter names")
+    if conv in ("dh", "mdh") and "beta" in fixed and "beta" not in params:  # named, so it exists (value 0)
+        params = _with_beta(conv, jtype, params)
     unknown = [f for f in fixed if f not in params]
     if unknown:
         raise RobotFileError(f"{where}: 'fixed' names unknown parameters {unknown}; this joint has {list(params)}")
@@ -221,6 +225,25 @@ def _parse_joint(i: int, j: dict, names: list, kind: str, ls: float, as_: float,
         return Link(name, jtype, conv, params, parent, axis, frozenset(fixed)), where
     except ValueError as exc:
         raise RobotFileError(f"{origin}: {exc}") from None
+
+
+def _with_beta(conv: str, jtype: str, params: dict) -> dict:
+    """``params`` with ``beta = 0`` added in the convention's parameter order."""
+    return {p: params.get(p, 0.0) for p in link_param_names(conv, jtype, has_beta=True)}
+
+
+def _with_parallel_betas(links: list) -> list:
+    """The links with Hayati's ``beta = 0`` added wherever two consecutive joint axes are (nearly)
+    parallel and the file did not declare it (:mod:`robocal.kinematics.parallel_axes`): the
+    parameter the geometry needs exists, and calibration can free it, whether or not it was
+    written."""
+    out = list(links)
+    for pair in parallel_axis_pairs(out):
+        L = out[pair.beta_link]
+        if "beta" not in L.params:
+            out[pair.beta_link] = Link(L.name, L.joint_type, L.convention,
+                                       _with_beta(L.convention, L.joint_type, L.params), L.parent, L.axis, L.fixed)
+    return out
 
 
 def _frame_joint_params(where, j, conv, jtype, ls, as_):

@@ -73,10 +73,19 @@ def split_poses(n: int, holdout: float, seed: int):
     return train_holdout_split(n, holdout, seed)
 
 
-def select_free(model, free=None, free_all: bool = False, fix=()) -> list:
+def select_free(model, free=None, free_all: bool = False, fix=(), frames_only: bool = False) -> list:
     """Names of the parameters to identify: the model's free ones (robot file ``fixed`` lists
-    respected), or ``free`` (names), or all with ``free_all``; minus ``fix``."""
+    respected), or ``free`` (names), or all with ``free_all``; minus ``fix``. ``frames_only``: none
+    (the geometry held, only the base / instrument and tool frames are fitted); it excludes the
+    other options. An empty ``free`` list (``--free ""``) is an error, not "the default"."""
     names = list(model.params.names)
+    if frames_only:
+        if free or free_all or fix:
+            raise CalibrationInputError("--frames-only holds the whole geometry: give no --free, --free-all or --fix")
+        return []
+    if free is not None and not isinstance(free, str) and len(free) == 0:
+        raise CalibrationInputError("--free names no parameter; name some (e.g. --free a2,theta3), leave --free out "
+                                    "for the default set, or pass --frames-only to fit only the base and tool frames")
 
     def check(ns, what):
         for n in ns:
@@ -117,7 +126,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     max_iterations: int = 50, report: bool = True, force: bool = False,
                     drop_duplicates: bool = False, particles: int = 20, generations: int = 2000,
                     swarm_progress=None, elastic: str | None = None, payload=None,
-                    allow_unconverged: bool = False) -> dict:
+                    allow_unconverged: bool = False, frames_only: bool = False) -> dict:
     """Calibrate ``robot`` from the measurement file ``data``; write the results into ``out_dir``.
 
     robot: shipped robot name or robot file path (the nominal model). data: a
@@ -144,7 +153,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     identifies a torsional compliance per joint under gravity together with the geometry (the
     robot file's mass model if it has one, else lumped gravity parameters; docs/elastic.md);
     payload: a :class:`~robocal.calib.elastic.Payload` (or ``KG@x,y,z`` text) carried during the
-    measurements.
+    measurements. frames_only: hold the whole geometry and fit only the base (instrument) frame and
+    the tool frame / target points: re-registering a calibrated robot in a new cell.
 
     Nothing is written when an output file exists and ``overwrite`` is false (``FileExistsError``
     naming the file, checked before any work); the files are written into a temporary folder and
@@ -174,7 +184,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         rotation_weight=rotation_weight, prior=prior, train_ids=train_ids, holdout_ids=holdout_ids,
         use_orientation=use_orientation, max_iterations=max_iterations, particles=particles,
         generations=generations, swarm_progress=swarm_progress, elastic=elastic, payload=payload,
-        progress=step, total=total)
+        progress=step, total=total, frames_only=frames_only)
     return write_calibration(computed, out, overwrite=overwrite, report=report, force=force, progress=step,
                              allow_unconverged=allow_unconverged)
 
@@ -184,7 +194,8 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
                         tool=None, method: str = "lm", rotation_weight: float | None = None, prior=None,
                         train_ids=(), holdout_ids=(), use_orientation: bool = True, max_iterations: int = 50,
                         particles: int = 20, generations: int = 2000, swarm_progress=None,
-                        elastic: str | None = None, payload=None, progress=None, total: int = 6) -> dict:
+                        elastic: str | None = None, payload=None, progress=None, total: int = 6,
+                        frames_only: bool = False) -> dict:
     """The in-memory part of :func:`run_calibration`: split, solve, validate, sanity gates.
 
     ``nominal`` is a loaded :class:`~robocal.kinematics.RobotModel` and ``meas`` read
@@ -200,7 +211,7 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
     if isinstance(payload, str):
         payload = parse_payload(payload)
     elastic_model = elastic_option(nominal, elastic, payload)
-    free_names = select_free(nominal, free, free_all, fix)
+    free_names = select_free(nominal, free, free_all, fix, frames_only=frames_only)
     train, hold, split_notes, protocol = _split(meas, data, free_names, use_orientation, holdout, seed,
                                                 train_ids, holdout_ids)
     step(1, total, f"read {meas.n_poses} poses of {nominal.name} from {data}: {len(train)} to calibrate, "
@@ -220,6 +231,7 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    verdict = _non_convergence_first(verdict, convergence_warnings, max_iterations)
     elastic_json = None
     if elastic_model is not None:  # the plausibility gate of the compliances and mass parameters
         from .calibrate_elastic import elastic_summary
@@ -235,6 +247,7 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
         "robot": str(robot), "measurements": str(data), "n_poses_file": meas.n_poses,
         "n_poses_calibration": int(len(train)), "n_poses_holdout": int(len(hold)), "holdout_fraction": holdout,
         "seed": seed, "loss": loss, "sigma_mm": sigma_mm, "method": method, "free": free_names,
+        "frames_only": bool(frames_only),
         "fixed_by_option": list(fix), "initial_target_mm": [0.0, 0.0, 0.0] if tool is None else [float(v) for v in tool],
         "targets": list(meas.targets), "instrument": meas.metadata.get("instrument"),
         "frame": meas.metadata.get("frame"), "written": stamp, "measurement_kind": setup["description"],
@@ -243,6 +256,11 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
         "split": protocol, "max_iterations": max_iterations, "elastic": elastic,
     }
     rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
+    from .orientation_errors import orientation_summary
+
+    rdict["orientation"] = json_ready(orientation_summary(setup, res0, result, meas, train, hold))
+    if setup["six_d"]:
+        rdict["baseline"]["T_flange_tool"] = json_ready(res0.state.tool[0])
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
     rdict["convergence"] = convergence.as_dict()
     if elastic_model is not None:
@@ -269,7 +287,7 @@ def calibrated_model(computed: dict):
         from .calibrate_elastic import with_elastic
 
         calibrated = with_elastic(calibrated, computed["problem"], result)
-    return calibrated
+    return _with_identified_tool(calibrated, result, computed["result"])
 
 
 def write_calibration(computed: dict, out_dir, *, overwrite: bool = False, report: bool = True,
@@ -327,6 +345,19 @@ def _check_solver_options(loss, sigma_mm, method) -> None:
     check_method(method, loss)
     if sigma_mm is not None and not (math.isfinite(sigma_mm) and sigma_mm > 0):
         raise CalibrationInputError(f"--noise must be a positive number of mm, got {sigma_mm}")
+
+
+def _non_convergence_first(verdict, convergence_warnings, max_iterations):
+    """A failed verdict after an unconverged solve names the non-convergence first: the gates then
+    judge an unfinished solve, and their likely causes (swapped columns, units) may not apply."""
+    if verdict.ok or not convergence_warnings:
+        return verdict
+    from ..calib.sanity import Verdict
+
+    first = (f"the solver did not converge within {max_iterations} iterations: the figures the gates judged come "
+             "from an unfinished solve (try --max-iterations, better starting values or fewer free parameters) "
+             "before suspecting the causes below")
+    return Verdict((first,) + tuple(verdict.reasons), dict(verdict.checks))
 
 
 def _check_options(out: Path, names, overwrite, loss, sigma_mm, method) -> None:
@@ -439,11 +470,47 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
         "rms_mm": res0.rms_after, "T_instrument_base": res0.state.bases[0], "targets_mm": res0.state.targets})
     rdict["accuracy_map"] = json_ready(accuracy)
     rdict["six_d"] = bool(setup["six_d"])
+    _name_parallel_axes(rdict, nominal)
     rdict["tool_frame"] = json_ready(tool_frame_summary(result, problem))
     swarm_record(rdict, result, metadata["method"])
     if convergence_warnings:
         rdict["solver"]["warning"] = convergence_warnings[-1]
     return rdict
+
+
+def _with_identified_tool(calibrated, result, rdict):
+    """The calibrated model with the identified 6-DoF tool frame (a 6-D fit with one measured frame)
+    as its tool: the robot file's ``[tool]`` (docs/robot-files.md), so ``robocal fk`` and
+    ``robocal correct`` work at the measured frame. Other fits: unchanged."""
+    from ..kinematics.model import EndEffector
+
+    tf = rdict.get("tool_frame")
+    if tf is None or getattr(result.state, "tool", None) is None or "targets" in result.state._fields:
+        return calibrated
+    ees = calibrated.end_effectors
+    if len(ees) != 1 or ees[0].link != len(calibrated.links) - 1:
+        return calibrated  # a tree robot: the tool stays in result.json
+    T = ees[0].T_link_ee @ np.asarray(result.state.tool[0], dtype=float)
+    return calibrated.replace(end_effectors=[EndEffector("tool", ees[0].link, T)])
+
+
+def _name_parallel_axes(rdict: dict, nominal) -> None:
+    """``identifiability.parallel_axes``: the robot's (nearly) parallel consecutive joint axes with
+    the beta that carries their tilt; a dropped parameter of such a pair says so in its ``why``."""
+    from ..kinematics.parallel_axes import parallel_axis_pairs
+
+    ident = rdict.setdefault("identifiability", {})
+    free = set(rdict.get("metadata", {}).get("free") or ())
+    rows = []
+    for pair in parallel_axis_pairs(nominal.links):
+        a, b = nominal.links[pair.first].name, nominal.links[pair.second].name
+        beta = f"beta{pair.beta_link + 1}"
+        rows.append({"joints": [a, b], "beta": beta, "beta_free": beta in free})
+        mine = {beta} | {f"d{k + 1}" for k in (pair.first, pair.second)}
+        for d in ident.get("dropped") or ():
+            if d["name"] in mine:
+                d["why"] = (d.get("why") or "") + f" (axes {a} and {b} are parallel; {beta} carries their tilt)"
+    ident["parallel_axes"] = rows
 
 
 def _write_outputs(paths, rdict, calibrated, nominal, meas, data, train, validation, targets, accuracy,
@@ -518,6 +585,20 @@ def deflection_of(calibrated, payload=None):
     return lambda model, q: desc.reached_poses(model, q, load)
 
 
+def _controller_tool(nominal, calibrated):
+    """The nominal model as the controller runs it: with the calibrated file's tool (``[tool]``,
+    e.g. the 6-DoF tool frame ``robocal calibrate`` identified) when the nominal robot has a bare
+    flange, so targets and the filtered Cartesian targets are poses of the same tool frame."""
+    from ..kinematics.model import EndEffector
+
+    c_ees, n_ees = calibrated.end_effectors, nominal.end_effectors
+    if (len(c_ees) == 1 and c_ees[0].name == "tool" and len(n_ees) == 1 and n_ees[0].name == "flange"
+            and np.array_equal(np.asarray(n_ees[0].T_link_ee, dtype=float), np.eye(4))
+            and len(nominal.links) == len(calibrated.links)):
+        return nominal.replace(end_effectors=[EndEffector("tool", n_ees[0].link, np.asarray(c_ees[0].T_link_ee))])
+    return nominal
+
+
 def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None, overwrite: bool = False,
                 payload=None) -> dict:
     """Corrected joint targets for the targets in ``targets_file`` with the calibrated robot
@@ -531,14 +612,16 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     nominal-model controller in the robot base frame (``x, y, z`` and orientation columns in the
     input's convention, ``quaternion`` if it had none), ``converged``, ``status``,
     ``position_error_mm``, ``rotation_error_deg`` (of the calibrated model at the joints).
-    A robot file with an ``[elastic]`` section: the joint deflection under gravity and ``payload``
+    A calibrated file with a ``[tool]`` (a 6-D calibration's identified tool frame): targets are
+    poses of that tool, and a nominal robot with a bare flange gets the same tool (the controller's
+    TCP). A robot file with an ``[elastic]`` section: the joint deflection under gravity and ``payload``
     (``KG@x,y,z`` or a :class:`~robocal.calib.elastic.Payload`) is compensated (docs/elastic.md).
     """
     out_file = Path(out_file)
     if out_file.exists() and not overwrite:
         raise FileExistsError(f"{out_file}: output file exists; pass --overwrite to replace it")
     calibrated = load_robot(robot_file)
-    nominal_model = load_robot(nominal if nominal is not None else calibrated.name)
+    nominal_model = _controller_tool(load_robot(nominal if nominal is not None else calibrated.name), calibrated)
     if tuple(nominal_model.controller_joints) != tuple(calibrated.controller_joints):
         raise CalibrationInputError(f"nominal robot {nominal_model.name} has joints "
                                     f"{list(nominal_model.controller_joints)}, the calibrated robot "

@@ -117,8 +117,8 @@ def build_problems(nominal, meas, train, *, free_names, sigma_mm, tool=None, use
                                 rotation_weight=w, prior_sigma=prior_rad, base_initial=p0.base_initial[0],
                                 tool_rotation0=p0.tool_block.initial[0, :3, :3], elastic=elastic)
     if p0.base_start == "orientations":
-        notes.append("the measured points are (nearly) collinear: the base frame was started from the measured "
-                     "orientations")
+        notes.append("the measured points are (nearly) collinear: the base frame and the tool rotation were started "
+                     "from the measured orientations")
     what = "the tool frame (6 DoF)" if len(targets) == 1 else f"{len(targets)} target point(s) + tool rotation"
     if elastic is not None:
         what += _elastic_words(elastic)

@@ -44,7 +44,8 @@ def _joints_named_as_robot(meas, model, notes):
 
 def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "tracker-csv", pair: str = "index",
                   tolerance_s: float | None = None, offset_s: float = 0.0, id_match: str = "exact",
-                  length_unit: str | None = None, angle_unit: str | None = None) -> dict:
+                  length_unit: str | None = None, angle_unit: str | None = None, name_fields: int | None = None,
+                  joint_columns=None, orientation: str | None = None, orientation_unit: str | None = None) -> dict:
     """Read a tracker export and a joint log and pair them (the arguments of :func:`import_campaign`).
 
     Returns ``{measurements, pairing, notes}`` without writing anything (``robocal calibrate
@@ -55,8 +56,13 @@ def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "
     if pair not in PAIRINGS:
         raise ValueError(f"unknown pairing {pair!r}; expected one of {', '.join(PAIRINGS)}")
     model = load_robot(robot)
-    points = POINT_FORMATS[point_format](points_file, length_unit=length_unit)
-    log = read_joint_log(joints_file, angle_unit=angle_unit)
+    kw = {"orientation": orientation, "orientation_unit": orientation_unit}
+    if point_format == "sa-text":
+        kw["name_fields"] = name_fields
+    elif name_fields is not None:
+        raise ValueError("--name-fields is for --format sa-text (SpatialAnalyzer text exports)")
+    points = POINT_FORMATS[point_format](points_file, length_unit=length_unit, **kw)
+    log = read_joint_log(joints_file, angle_unit=angle_unit, joint_columns=joint_columns or None)
     if pair == "index":
         pairing = pair_by_index(points, log, robot=model)
     elif pair == "id":
@@ -74,21 +80,29 @@ def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "
 def import_campaign(points_file, joints_file, out_file, *, robot: str, point_format: str = "tracker-csv",
                     pair: str = "index", tolerance_s: float | None = None, offset_s: float = 0.0,
                     id_match: str = "exact", length_unit: str | None = None, angle_unit: str | None = None,
-                    overwrite: bool = False) -> dict:
+                    overwrite: bool = False, name_fields: int | None = None, joint_columns=None,
+                    orientation: str | None = None, orientation_unit: str | None = None) -> dict:
     """Read a tracker export and a joint log, pair them and write a robocal measurement file.
 
     point_format: a key of :data:`POINT_FORMATS`. pair: ``index`` (row order), ``id`` (point name
     = pose id; ``id_match="number"`` pairs ``P017`` with ``17``) or ``time`` (nearest time stamp
     within ``tolerance_s`` [s], joint clock + ``offset_s``). length_unit: of the point file
     (``mm``/``m``/``in``; default declared by the file or detected and said). angle_unit: of the
-    joint log (``deg``/``rad``; required unless its header names it).
+    joint log (``deg``/``rad``; required unless its header names it or the controller's column
+    names fix it, as UR RTDE's). name_fields: SpatialAnalyzer name fields before X Y Z (0 .. 3).
+    joint_columns: the joint log's joint column names in order (default: recognised by name).
+    orientation / orientation_unit: convention and unit of the export's orientation angles
+    (:mod:`robocal.io.importers.orientation`); the measurement file then carries the
+    orientations (quaternion columns; Euler angles in the declared convention).
 
     Returns a dict with ``measurements`` (the written :class:`Measurements`), ``pairing`` (the
     :class:`~robocal.io.importers.Pairing`), ``notes`` (list of str) and ``file`` (Path).
     """
     r = read_campaign(points_file, joints_file, robot=robot, point_format=point_format, pair=pair,
                       tolerance_s=tolerance_s, offset_s=offset_s, id_match=id_match, length_unit=length_unit,
-                      angle_unit=angle_unit)
+                      angle_unit=angle_unit, name_fields=name_fields, joint_columns=joint_columns,
+                      orientation=orientation, orientation_unit=orientation_unit)
     meas = r["measurements"]
-    path = write_measurements(out_file, meas, length_unit="mm", angle_unit="deg", overwrite=overwrite)
+    path = write_measurements(out_file, meas, length_unit="mm", angle_unit="deg", overwrite=overwrite,
+                              float_format="short")
     return {**r, "file": path}

@@ -4,8 +4,10 @@ A CSV file (any delimiter, decimal point or comma, see :mod:`.table`) with a hea
 
     Pose;Time;A1 [deg];A2 [deg];A3 [deg];A4 [deg];A5 [deg];A6 [deg]
 
-Joint columns are recognized by name (``A1``, ``J1``, ``joint_1``, ``axis 1``, ``q1``, any case)
-or given explicitly. The angle unit is never guessed: it is declared by the caller or in the
+Joint columns are recognized by name (``A1``, ``J1``, ``joint_1``, ``axis 1``, ``q1``, any case;
+the controllers' own log names: Universal Robots RTDE ``actual_q_0 .. actual_q_5`` (radians,
+numbered from 0), KUKA ``$AXIS_ACT.A1`` / ``AxisAct_A1`` / ``AIPos_A1`` (RSI), ABB
+``rob1_j1`` / ``Rob1 Joint 1``) or given explicitly (``joint_columns=``, ``--joint-columns``). The angle unit is never guessed: it is declared by the caller or in the
 header (``[deg]``, ``[rad]``); a column in ``[mm]`` (or listed in ``prismatic``) is a linear axis.
 """
 
@@ -29,6 +31,13 @@ __all__ = ["JointLog", "read_joint_log", "ID_COLUMNS"]
 #: Accepted names (lower case) of the pose-id column.
 ID_COLUMNS = ("id", "pose", "pose id", "point", "point id", "name", "nr", "no", "index", "#", "step", "punkt")
 _JOINT_NAME = re.compile(r"^(?:a|j|joint|axis|axle|achse|q)\s*[_ ]?\s*(\d{1,2})$")
+#: Controllers' own joint column names (lower case): (pattern, angle unit the controller always logs in or None).
+_VENDOR_JOINT_NAMES = (
+    (re.compile(r"^actual_q_(\d)$"), "rad"),  # Universal Robots RTDE
+    (re.compile(r"^\$?(?:axis_act|axisact|axis_act_meas)[._ ]?a(\d)$"), None),  # KUKA system variable / trace
+    (re.compile(r"^(?:aipos|ai_pos|ripos)[._ ]?a(\d)$"), None),  # KUKA RSI
+    (re.compile(r"^rob\d?[._ ]?(?:j|joint|axis)[._ ]?(\d)$"), None),  # ABB
+)
 _ANGLE_WORDS = {"deg": "deg", "°": "deg", "degree": "deg", "degrees": "deg", "rad": "rad", "radian": "rad",
                 "radians": "rad"}
 _RAD_LOOKS_LIKE_DEG = 4.0 * math.pi  # a revolute joint beyond two turns in rad: the numbers are degrees
@@ -58,12 +67,31 @@ class JointLog:
         return len(self.joints)
 
 
-def _joint_columns(table, joint_columns) -> list[int]:
+def _is_joint_name(name: str) -> bool:
+    return bool(_JOINT_NAME.match(name)) or any(p.match(name) for p, _ in _VENDOR_JOINT_NAMES)
+
+
+def _vendor_columns(names) -> tuple[list[int], str | None]:
+    """Columns of the first controller naming scheme that matches (in joint-number order) and
+    the angle unit that controller logs in (``None``: not fixed)."""
+    for pattern, unit in _VENDOR_JOINT_NAMES:
+        hits = [(int(m.group(1)), i) for i, n in enumerate(names) if (m := pattern.match(n))]
+        if hits:
+            return [i for _, i in sorted(hits)], unit
+    return [], None
+
+
+def _joint_columns(table, joint_columns) -> tuple[list[int], str | None]:
+    """Indices of the joint columns and the unit their naming scheme implies (or ``None``)."""
     if joint_columns is None:
         found = [i for i, n in enumerate(table.names) if _JOINT_NAME.match(n)]
+        if found:
+            return found, None
+        found, unit = _vendor_columns(table.names)
         if not found:
-            table.fail("no joint columns (A1 .., J1 .., joint_1 ..); pass joint_columns=", table.header_line)
-        return found
+            table.fail("no joint columns (A1 .., J1 .., joint_1 .., actual_q_0 ..); name them with --joint-columns "
+                       f"(columns: {', '.join(table.columns)})", table.header_line)
+        return found, unit
     index = []
     for name in joint_columns:
         key = split_name_unit(name)[0]
@@ -71,15 +99,15 @@ def _joint_columns(table, joint_columns) -> list[int]:
         if not hits:
             table.fail(f"no column {name!r} (columns: {', '.join(table.columns)})", table.header_line)
         index.append(hits[0])
-    return index
+    return index, None
 
 
-def _angle_unit(table, cols, linear, declared) -> str:
+def _angle_unit(table, cols, linear, declared, scheme_unit=None) -> str:
     header = {table.units[j] for j, lin in zip(cols, linear) if not lin and table.units[j] is not None}
     words = {_ANGLE_WORDS.get(u) for u in header}
     if None in words or len(words) > 1:
         table.fail(f"joint columns declare units {sorted(header)}; expected one of deg, rad", table.header_line)
-    from_header = words.pop() if words else None
+    from_header = words.pop() if words else scheme_unit
     if declared is not None:
         if declared not in ANGLE_UNITS:
             raise ValueError(f"angle_unit: expected one of {', '.join(ANGLE_UNITS)}, got {declared!r}")
@@ -106,15 +134,16 @@ def read_joint_log(path, *, angle_unit: str | None = None, joint_columns=None, p
     wanted = None if joint_columns is None else {split_name_unit(c)[0] for c in joint_columns}
 
     def is_header(names):
-        return any(wanted is None and _JOINT_NAME.match(n) or wanted and n in wanted for n in names)
+        return any(wanted is None and _is_joint_name(n) or wanted and n in wanted for n in names)
 
-    table = read_table(path, is_header, "e.g. 'Pose;A1 [deg];A2 [deg];...'", delimiter=delimiter,
+    table = read_table(path, is_header, "e.g. 'Pose;A1 [deg];A2 [deg];...' or UR RTDE's 'timestamp actual_q_0 ...'; "
+                       "name other joint columns with --joint-columns", delimiter=delimiter,
                        decimal=decimal, encoding=encoding)
-    cols = _joint_columns(table, joint_columns)
+    cols, scheme_unit = _joint_columns(table, joint_columns)
     lin_names = {p.lower() for p in prismatic}
     linear = [table.units[j] in ("mm", "m") or table.names[j] in lin_names or table.columns[j].lower() in lin_names
               for j in cols]
-    unit = _angle_unit(table, cols, linear, angle_unit)
+    unit = _angle_unit(table, cols, linear, angle_unit, scheme_unit)
     raw = np.array([[number_cell(row[j], table.decimal, path, ln, table.columns[j]) for j in cols]
                     for row, ln in zip(table.rows, table.lines)])
     scale = np.array([LENGTH_FACTORS[table.units[j] or "mm"] if lin else ANGLE_UNITS[unit]

@@ -55,6 +55,27 @@ class Pairing:
         lines += [f"  note: {note}" for note in self.notes]
         return "\n".join(lines)
 
+    def summary(self, max_listed: int = 10) -> list:
+        """Console lines: one summary line (paired, points and joint rows not paired, and with time
+        pairing the median and largest |dt| [s]), then every unpaired *point* (up to
+        ``max_listed``, a count beyond); unpaired joint rows only as a count (a streamed log has
+        many more rows than poses) unless there are at most ``max_listed`` of them."""
+        pts = [u for u in self.unmatched if u.source == "points"]
+        rows = [u for u in self.unmatched if u.source == "joints"]
+        head = (f"{self.measurements.n_poses} pose(s) paired; {len(pts)} point(s) and {len(rows)} joint row(s) "
+                "not paired")
+        dt = self.time_differences
+        if dt is not None and len(dt):
+            a = np.abs(dt)
+            head += f"; |dt| median {np.median(a):.3g} s, max {np.max(a):.3g} s"
+        lines = [head]
+        lines += [f"  not paired: {u}" for u in pts[:max_listed]]
+        if len(pts) > max_listed:
+            lines.append(f"  ... and {len(pts) - max_listed} more point(s) not paired")
+        if rows and len(rows) <= max_listed:
+            lines += [f"  not paired: {u}" for u in rows]
+        return lines
+
 
 def _build(points, log, pairs, unmatched, how, robot, target, dt=None) -> Pairing:
     if not pairs:
@@ -67,9 +88,13 @@ def _build(points, log, pairs, unmatched, how, robot, target, dt=None) -> Pairin
                 "note": "\n".join([f"imported from {points.path} and {log.path}", *notes])}
     if robot is not None:
         metadata["robot"] = getattr(robot, "name", str(robot))
+    rotations = getattr(points, "rotations", None)
+    if rotations is not None:
+        metadata["orientation"] = points.orientation
     meas = Measurements(joints=log.joints[jl], points=points.points[ip][:, None, :], targets=(target,),
                         joint_names=log.joint_names, pose_ids=[points.ids[i] for i in ip],
-                        prismatic=log.prismatic, metadata=metadata)
+                        prismatic=log.prismatic, metadata=metadata,
+                        rotations=None if rotations is None else rotations[ip])
     return Pairing(measurements=meas, unmatched=tuple(unmatched), time_differences=dt, notes=notes)
 
 

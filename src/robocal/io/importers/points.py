@@ -20,6 +20,8 @@ class TrackerPoints:
     times: (N,) time stamps [s] on the clock ``time_kind`` (see :mod:`.timestamps`) or ``None``.
     length_unit: the unit of the file (``"mm"``, ``"m"``, ``"in"``); ``points`` are always mm.
     notes: what the importer assumed or found (units detected, encoding, rows skipped).
+    rotations: (N, 3, 3) measured orientations of a 6-DoF probe in the instrument's frame, or ``None``.
+    orientation: the convention the file's orientation columns were read in (``None`` without).
     """
 
     ids: tuple
@@ -31,6 +33,8 @@ class TrackerPoints:
     time_kind: str | None = None
     length_unit: str = "mm"
     notes: tuple = field(default=())
+    rotations: np.ndarray | None = None
+    orientation: str | None = None
 
     def __post_init__(self):
         p = np.array(self.points, dtype=float).reshape(-1, 3)
@@ -47,6 +51,12 @@ class TrackerPoints:
                 raise ValueError(f"TrackerPoints.times: expected shape ({n},), got {t.shape}")
             t.setflags(write=False)
             object.__setattr__(self, "times", t)
+        if self.rotations is not None:
+            R = np.array(self.rotations, dtype=float)
+            if R.shape != (n, 3, 3):
+                raise ValueError(f"TrackerPoints.rotations: expected shape ({n}, 3, 3), got {R.shape}")
+            R.setflags(write=False)
+            object.__setattr__(self, "rotations", R)
 
     def __len__(self) -> int:
         return len(self.points)

@@ -10,7 +10,10 @@ dialog) followed by X, Y, Z, separated by tabs, runs of spaces or commas::
 
 Lines starting with ``//`` or ``#`` are comments; a comment naming units (``Units: Millimeters``)
 declares the length unit. A header line ending in ``X Y Z`` is skipped. Extra exported fields after
-Z (tolerances, uncertainties, time stamps) need ``name_fields=`` so the columns can be told apart.
+Z (tolerances, uncertainties, time stamps) need ``name_fields=`` (``--name-fields``) so the columns
+can be told apart. Frames (6-DoF) exported as name fields, X Y Z and three angles (or a quaternion)
+are read with ``orientation=`` naming the convention the export used (``--orientation``; SA's
+"Fixed XYZ" angles are ``rpy``).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import numpy as np
 
 from ..header import FileFormatError
 from .points import TrackerPoints
+from .orientation import check_orientation_convention, rotations_from_values
 from .text import decode_file, detect_decimal, number_cell, parse_number
 from .units import LENGTH_FACTORS, length_unit_from_text, resolve_length_unit
 
@@ -56,7 +60,7 @@ def _read_lines(path, encoding):
     return comments, data, used
 
 
-def _name_field_count(path, data, name_fields: int | None) -> int:
+def _name_field_count(path, data, name_fields: int | None, n_values: int = 3) -> int:
     if name_fields is not None:
         if not 0 <= name_fields <= 3:
             raise ValueError(f"name_fields: expected 0 .. 3 (collection, group, point), got {name_fields}")
@@ -67,35 +71,43 @@ def _name_field_count(path, data, name_fields: int | None) -> int:
         raise FileFormatError(path, f"{len(dict(data)[line])} fields, but line {data[0][0]} has "
                                     f"{len(data[0][1])}; expected the same name fields and X Y Z on every line "
                                     "(pass name_fields= if the export has extra columns)", line)
-    k = counts.pop() - 3
+    k = counts.pop() - n_values
     if not 0 <= k <= 3:
-        raise FileFormatError(path, f"{k + 3} fields per line; expected up to 3 name fields (collection, group, "
-                                    "point) and X Y Z (pass name_fields= if the export has extra columns)",
+        raise FileFormatError(path, f"{k + n_values} fields per line; expected up to 3 name fields (collection, "
+                                    f"group, point) and {n_values} values (X Y Z{' and the orientation' if n_values > 3 else ''}); "
+                                    "pass --name-fields if the export has extra columns",
                               data[0][0])
     return k
 
 
 def read_spatialanalyzer(path, *, length_unit: str | None = None, name_fields: int | None = None,
-                         encoding: str | None = None) -> TrackerPoints:
+                         encoding: str | None = None, orientation: str | None = None,
+                         orientation_unit: str | None = None) -> TrackerPoints:
     """Read an SA point export; points come back in mm in SA's working frame.
 
     length_unit: ``"mm"``, ``"m"`` or ``"in"``; ``None`` takes a units comment line, else detects
         the unit from the spread of the points and says so (``notes`` and a warning).
     name_fields: number of name fields before X Y Z (0 .. 3); ``None`` infers it from a constant
         field count (fields - 3). ids are the point names, groups ``collection::group``.
+    orientation: convention of the angles (or ``quaternion``) exported after X Y Z (SA frames);
+        orientation_unit: their unit (deg | rad) unless the values show degrees.
 
     Raises :class:`~robocal.io.header.FileFormatError` naming file, line and column.
     """
     comments, data, used = _read_lines(path, encoding)
     if not data:
         raise FileFormatError(path, "no data lines; expected '[collection] [group] point X Y Z' per line")
-    k = _name_field_count(path, data, name_fields)
+    conv = check_orientation_convention(orientation)
+    n_rot = 0 if conv is None else (4 if conv == "quaternion" else 3)
+    k = _name_field_count(path, data, name_fields, 3 + n_rot)
     decimal = detect_decimal((c for _, f in data for c in f[k:k + 3]), None)
-    ids, groups, rows, lines = [], [], [], []
+    ids, groups, rows, lines, rot = [], [], [], [], []
     for ln, fields in data:
-        if len(fields) < k + 3:
-            raise FileFormatError(path, f"{len(fields)} fields; expected {k} name field(s) and X Y Z", ln)
+        if len(fields) < k + 3 + n_rot:
+            raise FileFormatError(path, f"{len(fields)} fields; expected {k} name field(s), X Y Z"
+                                        + (" and the orientation" if n_rot else ""), ln)
         rows.append([number_cell(fields[k + j], decimal, path, ln, _XYZ[j]) for j in range(3)])
+        rot.append([number_cell(fields[k + 3 + j], decimal, path, ln, f"orientation {j + 1}") for j in range(n_rot)])
         ids.append(fields[k - 1] if k else str(len(ids) + 1))
         groups.append("::".join(fields[:k - 1]) if k > 1 else "")
         lines.append(ln)
@@ -107,5 +119,15 @@ def read_spatialanalyzer(path, *, length_unit: str | None = None, name_fields: i
             break
     unit, notes = resolve_length_unit(path, points, length_unit, file_unit, where or "the file")
     notes = list(notes) + ([f"decoded as {used}"] if used != "utf-8" else [])
+    R = None
+    if n_rot:
+        R, conv, more = rotations_from_values(path, np.array(rot), "quaternion" if n_rot == 4 else "euler", conv,
+                                              angle_unit=orientation_unit, where="(the fields after X Y Z)",
+                                              lines=lines)
+        notes += more
+    elif len(data[0][1]) > k + 3:
+        notes.append(f"{len(data[0][1]) - k - 3} field(s) after X Y Z ignored (frames: pass --orientation to read "
+                     "their angles)")
     return TrackerPoints(ids=tuple(ids), points=points * LENGTH_FACTORS[unit], lines=tuple(lines), path=str(path),
-                         groups=tuple(groups) if k > 1 else None, length_unit=unit, notes=tuple(notes))
+                         groups=tuple(groups) if k > 1 else None, length_unit=unit, notes=tuple(notes),
+                         rotations=R, orientation=conv)

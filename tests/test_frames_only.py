@@ -1,0 +1,109 @@
+"""Issue 31, items 4 and 5: re-registering a calibrated robot in a new cell (``--frames-only``),
+an empty ``--free`` refused, and a 6-D start that converges on a line of 20 poses.
+
+The line-shaped campaign: the flange moves along an 800 mm straight line (20 poses) with its
+orientation varying by ~2 deg, carrying a 6-DoF probe turned by ~170 deg; the robot's geometry is
+known (the "calibrated" model is the truth), the tracker stands somewhere new. With the tool
+rotation started as identity this needed hundreds of iterations; estimated from the data (relative
+rotations turn the same axes in both frames), the default 50 are plenty.
+"""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from robocal.calib.initial import base_and_tool_from_orientations
+from robocal.calib.sanity import Verdict
+from robocal.cli import main
+from robocal.io.measurements import Measurements, write_measurements
+from robocal.kinematics.ik import ik_numeric
+from robocal.robots import load_robot
+from robocal.transforms import so3_exp, so3_log
+from robocal.workflows.calibrate import _non_convergence_first
+
+ROBOT = "kuka_kr150_r3100"
+TOOL_ROTVEC = [2.9, 0.3, 0.2]  # ~170 deg
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def line_campaign(path, seed=5, n=20):
+    m = load_robot(ROBOT)
+    rng = np.random.default_rng(seed)
+    q0 = np.radians([10.0, -80.0, 100.0, 5.0, 40.0, 20.0])
+    T0 = m.fk(q0)
+    d = np.array([0.6, 0.7, -0.2])
+    d /= np.linalg.norm(d)
+    T = np.repeat(T0[None], n, axis=0)
+    T[:, :3, 3] = T0[:3, 3] + np.linspace(-400, 400, n)[:, None] * d
+    T[:, :3, :3] = so3_exp(rng.normal(0, 0.03, (n, 3))) @ T0[:3, :3]
+    q = ik_numeric(m, T, q0).q
+    tool = np.eye(4)
+    tool[:3, :3], tool[:3, 3] = so3_exp(TOOL_ROTVEC), [30.0, 10.0, 150.0]
+    inst = np.eye(4)
+    inst[:3, :3], inst[:3, 3] = so3_exp([0.03, 0.02, -2.2]), [3000.0, -500.0, -400.0]
+    Tm = inst @ m.fk(q) @ tool
+    p = Tm[:, :3, 3] + rng.normal(0, 0.02, (n, 3))
+    R = so3_exp(rng.normal(0, 0.0002, (n, 3))) @ Tm[:, :3, :3]
+    write_measurements(path, Measurements(q, p, joint_names=m.controller_joints, rotations=R,
+                                          metadata={"robot": ROBOT}), orientation="quaternion")
+    return tool, inst
+
+
+@pytest.fixture(scope="module")
+def line(tmp_path_factory):
+    d = tmp_path_factory.mktemp("line")
+    tool, inst = line_campaign(d / "line.csv")
+    r = run("calibrate", ROBOT, d / "line.csv", "--out", d / "cal", "--frames-only", "--holdout", 0, "--no-report")
+    return {"dir": d, "tool": tool, "inst": inst, "run": r, "result": json.loads((d / "cal" / "result.json").read_text())}
+
+
+def test_line_shaped_re_registration_converges_at_defaults(line):
+    r, res = line["run"], line["result"]
+    assert r.exit_code == 0, r.output
+    assert "base frame and the tool rotation were started from the measured orientations" in r.output
+    assert res["baseline"]["converged"] and res["baseline"]["iterations"] < 25, res["baseline"]["iterations"]
+    assert res["solver"]["converged"]
+    T = np.array(res["tool_frame"]["T_flange_measured"])
+    err = so3_log(T[:3, :3] @ line["tool"][:3, :3].T)  # a line with ~2 deg of wrist motion: weakly fixed
+    std = np.array(res["tool_frame"]["std_rotvec_rad"])
+    assert np.all(np.abs(err) < 3 * std), (err, std)
+
+
+def test_frames_only_holds_the_geometry(line):
+    res = line["result"]
+    assert res["metadata"]["free"] == [] and res["metadata"]["frames_only"] is True
+    nominal = load_robot(ROBOT)
+    calibrated = load_robot(line["dir"] / "cal" / "calibrated_robot.toml")
+    np.testing.assert_allclose(calibrated.params.values, nominal.params.values, atol=1e-12)
+    assert res["orientation"]["train"]["calibrated"]["rms"] < 0.05  # deg: 0.0115 deg noise per axis
+
+
+def test_empty_free_and_frames_only_with_free_are_errors(line, tmp_path):
+    r = run("calibrate", ROBOT, line["dir"] / "line.csv", "--out", tmp_path / "a", "--free", "")
+    assert r.exit_code == 1 and "--free names no parameter" in r.output, r.output
+    r = run("calibrate", ROBOT, line["dir"] / "line.csv", "--out", tmp_path / "b", "--frames-only", "--free", "a2")
+    assert r.exit_code == 1 and "--frames-only holds the whole geometry" in r.output, r.output
+
+
+def test_base_and_tool_rotation_from_orientations_are_exact_without_noise():
+    rng = np.random.default_rng(2)
+    R_b, R_t = so3_exp([0.4, -1.2, 2.0]), so3_exp([2.9, 0.3, 0.2])
+    Re = so3_exp(rng.normal(0, 0.05, (8, 3)))  # small, varied wrist motions
+    T, R = base_and_tool_from_orientations(Re, R_b @ Re @ R_t)
+    assert np.allclose(T[:3, :3], R_b, atol=1e-9) and np.allclose(R, R_t, atol=1e-9)
+    with pytest.raises(ValueError, match="cannot be told apart"):  # one axis only, no points
+        base_and_tool_from_orientations(so3_exp(np.outer(np.linspace(0, 1, 5), [0, 0, 1.0])),
+                                        R_b @ so3_exp(np.outer(np.linspace(0, 1, 5), [0, 0, 1.0])) @ R_t)
+
+
+def test_a_failed_gate_after_non_convergence_names_the_non_convergence_first():
+    v = Verdict(("1 parameter(s) changed beyond physical plausibility: likely swapped joint columns",), {})
+    got = _non_convergence_first(v, ["the solver did not converge: maximum iterations reached"], 50)
+    assert got.reasons[0].startswith("the solver did not converge within 50 iterations")
+    assert got.reasons[1] == v.reasons[0]
+    assert _non_convergence_first(v, [], 50) is v

@@ -1,0 +1,221 @@
+"""Issue 31, acceptance: a user's 6-D campaign from the vendors' exports to the result with no
+hand edits. A UR10 carries a 6-DoF probe (a Leica T-Mac-like export: semicolon CSV, decimal comma,
+``Rx, Ry, Rz [deg]`` fixed-axis angles, quote-prefixed time stamps); the controller's joints come
+from a UR RTDE log (``timestamp actual_q_0 .. actual_q_5``, radians). ``robocal import`` and
+``robocal calibrate`` must recover the simulator's hidden probe rotation within 3 sigma and report
+orientation errors; a KUKA log streamed at 10 Hz pairs by time with a one-line summary.
+"""
+
+import json
+from datetime import datetime, timedelta
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from robocal.cli import main
+from robocal.robots import load_robot
+from robocal.sim import VirtualRobot
+from robocal.transforms import euler_from_matrix, so3_exp, so3_log
+
+SIGMA_MM = 0.02
+W = 100.0  # mm per rad: the CLI's default rotation weight (0.02 mm ~ 0.0115 deg)
+T0 = datetime(2022, 10, 11, 15, 6, 48, 43000)
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def true_tool():
+    T = np.eye(4)
+    T[:3, :3] = so3_exp([0.3, -0.2, 0.9])
+    T[:3, 3] = [20.0, -35.0, 140.0]
+    return T
+
+
+def simulate(n=60, seed=11, truth=False):
+    """Joints and measured probe poses (N, 4, 4) in the tracker frame (and, with ``truth``, the
+    virtual robot and the tracker's frame T_inst)."""
+    nominal = load_robot("ur10")
+    rng = np.random.default_rng(seed)
+    virtual = VirtualRobot.perturbed(nominal, rng, joint_noise_deg=0.0)
+    true = virtual.true_model.params.values.copy()
+    for name in ("theta6", "d6", "a6", "alpha6"):  # the probe frame carries the last link's placement
+        i = nominal.params.index(name)
+        true[i] = nominal.params.values[i]
+    virtual = VirtualRobot(nominal, virtual.true_model.with_params(true))
+    q = virtual.random_configurations(n, rng)
+    T_inst = np.eye(4)
+    T_inst[:3, :3] = so3_exp([0.02, -0.05, 2.4])
+    T_inst[:3, 3] = [2800.0, 900.0, -350.0]
+    T = T_inst @ virtual.true_poses(q) @ true_tool()
+    T[:, :3, 3] += rng.normal(0, SIGMA_MM, (n, 3))
+    T[:, :3, :3] = so3_exp(rng.normal(0, SIGMA_MM / W, (n, 3))) @ T[:, :3, :3]
+    return (q, T, virtual, T_inst, rng) if truth else (q, T)
+
+
+def _stamp(t: datetime) -> str:
+    return t.strftime("%d.%m.%Y %H:%M:%S.") + f"{t.microsecond // 1000:03d}"
+
+
+def write_leica(path, T, times):
+    rpy = np.degrees(euler_from_matrix(T[:, :3, :3], "rpy"))
+    lines = ["Leica T-Mac 6DoF export;;;;;;;", "Units: Millimeters;;;;;;;",
+             "Name;X;Y;Z;Rx [deg];Ry [deg];Rz [deg];Time"]
+    for k, (p, r, t) in enumerate(zip(T[:, :3, 3], rpy, times)):
+        cells = [f"P{k + 1:03d}"] + [f"{v:.4f}".replace(".", ",") for v in (*p, *r)] + [f"'{_stamp(t)}"]
+        lines.append(";".join(cells))
+    path.write_text("\n".join(lines) + "\n", encoding="latin-1")
+    return path
+
+
+def write_rtde(path, q):
+    lines = ["timestamp " + " ".join(f"actual_q_{j}" for j in range(6))]
+    lines += [f"{12.5 + 4.0 * k:.3f} " + " ".join(f"{v:.9f}" for v in row) for k, row in enumerate(q)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    d = tmp_path_factory.mktemp("sixd_import")
+    q, T, virtual, T_inst, rng = simulate(truth=True)
+    times = [T0 + timedelta(seconds=4.0 * k) for k in range(len(q))]
+    leica = write_leica(d / "tmac.csv", T, times)
+    rtde = write_rtde(d / "rtde.csv", q)
+    imp = run("import", leica, "--joints", rtde, "--robot", "ur10", "--orientation", "rpy", "--out", d / "m.csv")
+    cal = run("calibrate", "ur10", d / "m.csv", "--out", d / "cal", "--sigma", SIGMA_MM)
+    return {"dir": d, "q": q, "T": T, "virtual": virtual, "T_inst": T_inst, "rng": rng, "import": imp, "calibrate": cal, "leica": leica, "rtde": rtde,
+            "result": json.loads((d / "cal" / "result.json").read_text()) if (d / "cal" / "result.json").exists()
+            else None}
+
+
+def test_import_writes_the_orientations(campaign):
+    r = campaign["import"]
+    assert r.exit_code == 0, r.output
+    assert "60 pose(s) paired; 0 point(s) and 0 joint row(s) not paired" in r.output
+    assert "(positions and orientations)" in r.output
+    text = (campaign["dir"] / "m.csv").read_text()
+    assert "# orientation: rpy" in text
+    # joint values in the unit's precision: no conversion noise such as 255.37100000000004
+    row = text.split("\n")[text.split("\n").index(next(x for x in text.split("\n") if x.startswith("pose,"))) + 1]
+    assert all(len(c.split(".")[-1]) <= 13 for c in row.split(",")[1:]), row
+
+
+def test_six_d_calibration_recovers_the_probe_rotation_within_3_sigma(campaign):
+    r = campaign["calibrate"]
+    assert r.exit_code == 0, r.output
+    res = campaign["result"]
+    tf = res["tool_frame"]
+    T = np.array(tf["T_flange_measured"])
+    err = so3_log(T[:3, :3] @ true_tool()[:3, :3].T)
+    std = np.array(tf["std_rotvec_rad"])
+    assert np.all(std > 0) and np.all(std < 1e-3), std
+    assert np.all(np.abs(err) < 3 * std), (err, std)
+
+
+def test_orientation_errors_printed_and_in_result_json(campaign):
+    out, res = campaign["calibrate"].output, campaign["result"]
+    assert "orientation error [deg]" in out
+    assert "held-out poses, calibrated" in out
+    o = res["orientation"]
+    assert o["unit"] == "deg"
+    held = o["holdout"]["calibrated"]
+    # noise 0.02/100 rad per axis: the angle's RMS is sqrt(3) * 2e-4 rad = 0.02 deg; calibrated near it
+    assert held["rms"] < 0.05 and held["max"] < 0.15, held
+    assert o["holdout"]["baseline"]["rms"] > held["rms"]
+    assert set(o["train"]) == {"nominal", "baseline", "calibrated"}
+    assert "T_flange_tool" in res["baseline"]
+
+
+def test_calibrated_robot_carries_the_probe_frame_as_its_tool(campaign):
+    d = campaign["dir"]
+    robot = load_robot(d / "cal" / "calibrated_robot.toml")
+    assert robot.end_effectors[0].name == "tool"
+    T_tool = np.asarray(robot.end_effectors[0].T_link_ee)
+    assert np.degrees(np.linalg.norm(so3_log(T_tool[:3, :3] @ true_tool()[:3, :3].T))) < 0.05
+    assert np.allclose(T_tool[:3, 3], true_tool()[:3, 3], atol=0.5)
+    # fk of the calibrated file is the probe pose (base frame); --tool 0,0,0 gives the flange back
+    q = campaign["q"][0]
+    res = json.loads(run("fk", d / "cal" / "calibrated_robot.toml", *q, "--json").output)
+    flange = json.loads(run("fk", d / "cal" / "calibrated_robot.toml", *q, "--json", "--tool", "0,0,0").output)
+    R_f, p_f = np.array(flange["rotation"]), np.array(flange["position_mm"])
+    assert np.allclose(res["position_mm"], p_f + R_f @ T_tool[:3, 3], atol=1e-6)
+
+
+def test_calibrate_format_reads_the_exports_directly(campaign, tmp_path):
+    r = run("calibrate", "ur10", campaign["leica"], "--format", "tracker-csv", "--joints", campaign["rtde"],
+            "--orientation", "rpy", "--out", tmp_path / "c", "--sigma", SIGMA_MM, "--no-report")
+    assert r.exit_code == 0, r.output
+    assert "6-D: positions and orientations" in r.output
+
+
+def test_angles_without_a_convention_are_dropped_with_the_reason(campaign, tmp_path):
+    r = run("import", campaign["leica"], "--joints", campaign["rtde"], "--robot", "ur10", "--out", tmp_path / "m.csv")
+    assert r.exit_code == 0, r.output
+    assert "orientation columns (Rx [deg], Ry [deg], Rz [deg]) NOT imported" in r.output and "--orientation" in r.output
+    assert "# orientation:" not in (tmp_path / "m.csv").read_text()
+
+
+def test_time_pairing_with_a_streamed_kuka_log_prints_a_summary(campaign, tmp_path):
+    q = campaign["q"]
+    rows = ["Zeit;AxisAct_A1;AxisAct_A2;AxisAct_A3;AxisAct_A4;AxisAct_A5;AxisAct_A6"]
+    for k in range(len(q)):  # 10 Hz while the robot holds each pose for 4 s
+        for s in range(40):
+            t = T0 + timedelta(seconds=4.0 * k + 0.1 * s - 0.03)
+            rows.append(";".join([_stamp(t)] + [f"{v:.6f}".replace(".", ",") for v in np.degrees(q[k])]))
+    log = tmp_path / "kuka.csv"
+    log.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    r = run("import", campaign["leica"], "--joints", log, "--robot", "ur10", "--angle-unit", "deg", "--orientation",
+            "rpy", "--pair", "time", "--tolerance", 0.05, "--out", tmp_path / "m.csv")
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    head = next(x for x in lines if "pose(s) paired" in x)
+    assert head.startswith("60 pose(s) paired; 0 point(s) and 2340 joint row(s) not paired; |dt| median 0.03 s")
+    assert len(lines) < 20, r.output
+
+
+def test_calibrate_format_takes_the_id_pairing_options(campaign, tmp_path):
+    q = campaign["q"]
+    log = tmp_path / "ids.csv"
+    log.write_text("Pose;J1;J2;J3;J4;J5;J6\n" + "\n".join(
+        f"{k + 1};" + ";".join(f"{v:.9f}" for v in row) for k, row in enumerate(q)) + "\n")
+    r = run("calibrate", "ur10", campaign["leica"], "--format", "tracker-csv", "--joints", log, "--angle-unit", "rad",
+            "--pair", "id", "--id-match", "number", "--orientation", "rpy", "--out", tmp_path / "c", "--no-report",
+            "--sigma", SIGMA_MM)
+    assert r.exit_code == 0, r.output
+
+
+def test_correct_with_the_calibrated_tool_lands_the_true_probe_on_the_targets(campaign, tmp_path):
+    """At the robot: tool-pose targets in the tracker frame, corrected with calibrated_robot.toml
+    (its [tool] = the identified probe frame), executed by the hidden true robot with the true
+    probe."""
+    from robocal.transforms import quaternion_from_matrix
+
+    virtual, T_inst = campaign["virtual"], campaign["T_inst"]
+    q_t = virtual.random_configurations(8, np.random.default_rng(99), margin=0.2)
+    targets = T_inst @ virtual.true_poses(q_t) @ true_tool()
+    quat = quaternion_from_matrix(targets[:, :3, :3])
+    rows = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: quaternion",
+            "# frame: world", "name,x,y,z,qw,qx,qy,qz,J1,J2,J3,J4,J5,J6"]
+    rows += [",".join([f"T{k}"] + [repr(float(v)) for v in (*targets[k, :3, 3], *quat[k], *np.degrees(q_t[k]))])
+             for k in range(len(q_t))]
+    (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
+    r = run("correct", campaign["dir"] / "cal" / "calibrated_robot.toml", tmp_path / "t.csv", "--out",
+            tmp_path / "c.csv")
+    assert r.exit_code == 0, r.output
+    lines = [x for x in (tmp_path / "c.csv").read_text().splitlines() if not x.startswith("#")]
+    cols = lines[0].split(",")
+    q_c = np.radians([[float(row.split(",")[cols.index(j)]) for j in ("J1", "J2", "J3", "J4", "J5", "J6")]
+                      for row in lines[1:]])
+    reached = T_inst @ virtual.true_poses(q_c) @ true_tool()
+    pos_err = np.linalg.norm(reached[:, :3, 3] - targets[:, :3, 3], axis=1)
+    rot_err = np.degrees(np.linalg.norm(so3_log(reached[:, :3, :3] @ np.swapaxes(targets[:, :3, :3], 1, 2)),
+                                        axis=1))
+    assert pos_err.max() < 0.15 and rot_err.max() < 0.05, (pos_err, rot_err)
+
+
+def test_export_options_with_robocal_s_own_file_are_refused(campaign, tmp_path):
+    r = run("calibrate", "ur10", campaign["dir"] / "m.csv", "--orientation", "rpy", "--out", tmp_path / "c")
+    assert r.exit_code == 1 and "--orientation: for --format tracker-csv or sa-text" in r.output, r.output
