@@ -1,0 +1,180 @@
+"""The controller's own model in and out (issue 33): UR calibration.conf import, kinematics YAML and
+URDF export, tables -- against published facts of Universal Robots' driver and description packages.
+
+Facts used (cited, no code copied):
+- the three real arms' [mounting] deltas of ``UniversalRobots/Universal_Robots_ROS2_Driver``,
+  ``ur_calibration/test/calibration_test.cpp`` (tests/data/controller/*.conf);
+- the real UR10e DH table printed in ``ur_calibration/doc/algorithm.rst`` (nominal + deltas);
+- the UR10 forward-kinematics points of the same test file (``ur10_fw_kinematics_real``);
+- the ``hash`` of ``UniversalRobots/Universal_Robots_ROS2_Description``'s
+  ``config/ur10/default_kinematics.yaml`` and ``config/ur10e/default_kinematics.yaml``.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from robocal.cli.main import main
+from robocal.io.ur_controller import parse_calibration_conf, read_kinematics_yaml, ur_driver_hash
+from robocal.kinematics.remodel import EXTENDED_PRECISION, dh_table_fk
+from robocal.robots import load_robot
+from robocal.workflows.controller import UR_PI_2, _dh_mm, _pose_errors, import_ur, random_joints, ur_controller_dh
+
+DATA = Path(__file__).parent / "data" / "controller"
+REAL = [("ur10_driver_test.conf", "ur10"), ("ur10e_driver_test_a.conf", "ur10e"), ("ur10e_driver_test_b.conf", "ur10e")]
+
+needs_ld = pytest.mark.skipif(not EXTENDED_PRECISION, reason="numpy.longdouble is float64 here: the 1e-9 mm "
+                                                             "reference needs 80-bit extended precision")
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_driver_hash_reproduces_ur_description_defaults():
+    # URSim's nominal tables (alphas +-1.570796327) give the hashes ur_description publishes.
+    p2 = UR_PI_2
+    assert ur_driver_hash([0] * 6, [0.1273, 0, 0, 0.163941, 0.1157, 0.0922], [0, -0.612, -0.5723, 0, 0, 0],
+                          [p2, 0, 0, p2, -p2, 0]) == "calib_17227329492635474227"
+    assert ur_driver_hash([0] * 6, [0.1807, 0, 0, 0.17415, 0.11985, 0.11655], [0, -0.6127, -0.57155, 0, 0, 0],
+                          [p2, 0, 0, p2, -p2, 0]) == "calib_5119701370761913513"
+
+
+def test_controller_table_matches_algorithm_rst():
+    # The real UR10e of algorithm.rst: its printed table (15 digits) is nominal + the third test set's deltas,
+    # with the controller's 1.570796327 for pi/2 (with exact pi/2 the alphas would differ in the 10th digit).
+    cal = parse_calibration_conf((DATA / "ur10e_driver_test_b.conf").read_text())
+    dh = ur_controller_dh(load_robot("ur10e"), cal)
+    published = {
+        "theta": "-2.4147806894359e-07 1.60233952386695 -1.68607190752171 0.0837331147700119 -1.01260355871158e-07 "
+                 "3.91986209186124e-08",
+        "a": "2.12234865571206e-05 0.0193171326277006 -0.569251663611088 -4.61409023720934e-05 -6.39280053471802e-05 0",
+        "d": "0.180539811714259 439.140974079901 -446.027059806332 7.0603368964236 0.119811341150314 0.115670917257426",
+        "alpha": "1.57014608044242 0.0013941666682559 0.00693818880325995 1.56998468543761 -1.57038520649543 0",
+    }
+    for key, text in published.items():
+        assert ["%.15g" % v for v in dh[key]] == text.split(), key
+
+
+def test_nominal_ur10_fk_matches_driver_test_points():
+    # ur10_fw_kinematics_real: the UR10 with alphas 1.570796327, FK points in metres to 1e-15 m.
+    dh = ur_controller_dh(load_robot("ur10"), None)
+    th, d, a, al = _dh_mm(dh)
+    q = np.array([[-1.6007002035724084976209269370884, -1.7271001974688928726209269370884,
+                   -2.2029998938189905288709269370884, -0.80799991289247685699592693708837, 1.59510004520416259765625,
+                   -0.03099996248354131012092693708837],
+                  [1.32645022869110107421875, 2.426007747650146484375, 5.951572895050048828125,
+                   1.27409040927886962890625, -0.54105216661562138824592693708837, 0.122173048555850982666015625]])
+    expected_mm = np.array([[-0.179925914147547, -0.606869755162764, 0.230789102067257],
+                            [0.39922988003280424074148413637886, 0.59688365069340565405298093537567,
+                             -0.6677819040276375961440180617501]]) * 1000
+    p = np.asarray(dh_table_fk(th, d, a, al, q)[:, :3, 3], dtype=float)
+    assert np.abs(p - expected_mm).max() < 1e-9
+
+
+@needs_ld
+@pytest.mark.parametrize("conf,robot", REAL)
+def test_real_deltas_import_exactly_and_well_conditioned(conf, robot):
+    r = import_ur(DATA / conf, robot, n_check=1000, seed=3)
+    assert r["verdict"].ok, r["verdict"].reasons
+    m = r["model"]
+    q = random_joints(m, 1000, seed=11)
+    th, d, a, al = _dh_mm(r["dh"])
+    dp, ang = _pose_errors(dh_table_fk(th, d, a, al, q), m.fk(q))
+    assert dp.max() < 1e-9 and ang.max() < 1e-12
+    # the controller table has |d| up to 446 m; the robot file's lengths stay near the nominal arm's
+    assert max(abs(x) for x in r["dh"]["d"]) > 1.0
+    assert max(abs(v) for k, v in m.params.as_dict().items() if k[0] in "ad" and not k.startswith("alpha")) < 700
+    assert max(abs(v) for k, v in r["difference"].items() if k[0] in "ad" and not k.startswith("alpha")) < 2.0
+    assert max(abs(np.degrees(v)) for k, v in r["difference"].items() if k.startswith(("alpha", "beta", "theta"))) < 1
+
+
+@needs_ld
+@pytest.mark.parametrize("conf,robot", REAL)
+def test_round_trip_conf_robot_yaml_robot(tmp_path, conf, robot):
+    a, y, b = tmp_path / "a.toml", tmp_path / "k.yaml", tmp_path / "b.toml"
+    res = run("controller", "import", "ur", DATA / conf, robot, "--out", a)
+    assert res.exit_code == 0, res.output
+    h = ur_controller_hash = import_ur(DATA / conf, robot, n_check=2)["hash"]
+    res = run("controller", "export", "ur", a, "--out", y, "--hash", h)
+    assert res.exit_code == 0, res.output
+    assert read_kinematics_yaml(y)[1] == ur_controller_hash
+    res = run("controller", "import", "ur-kinematics", robot, y, "--out", b)
+    assert res.exit_code == 0, res.output
+    model_b = load_robot(b)
+    dh = ur_controller_dh(load_robot(robot), parse_calibration_conf((DATA / conf).read_text()))
+    th, d, al_, alpha = _dh_mm(dh)
+    q = random_joints(model_b, 1000, seed=5)
+    dp, ang = _pose_errors(dh_table_fk(th, d, al_, alpha, q), model_b.fk(q))
+    assert dp.max() < 1e-9 and ang.max() < 1e-12
+
+
+def test_ur_description_flange_and_tool0_are_the_last_joint_frame():
+    # ur_macro.xacro: wrist_3_link -> flange rpy (0, -pi/2, -pi/2), flange -> tool0 rpy (pi/2, 0, pi/2):
+    # tool0 is wrist_3_link, so the six joint origins end at the controller's flange.
+    from robocal.kinematics.links import frame_from_xyz_rpy
+
+    T = frame_from_xyz_rpy([0, 0, 0], [0, -np.pi / 2, -np.pi / 2]) @ frame_from_xyz_rpy([0, 0, 0], [np.pi / 2, 0,
+                                                                                                       np.pi / 2])
+    assert np.abs(T - np.eye(4)).max() < 1e-15
+
+
+def test_import_cli_json_argument_order_and_gates(tmp_path):
+    out = tmp_path / "r.toml"
+    res = run("controller", "import", "ur", DATA / "ur10_driver_test.conf", "--robot", "ur10", "--out", out, "--json")
+    assert res.exit_code == 0, res.output
+    import json
+
+    doc = json.loads(res.output)
+    assert doc["status"] == "ok" and doc["calibration_status"] == 2 and doc["ur_driver_hash"].startswith("calib_")
+    assert doc["fk_check"]["n"] == 1000
+    # same input, robot first: refused without --overwrite, accepted with it
+    res = run("controller", "import", "ur", "ur10", DATA / "ur10_driver_test.conf", "--out", out)
+    assert res.exit_code == 1 and "exists" in res.output
+    # an output that is the input is refused
+    conf = tmp_path / "calibration.conf"
+    conf.write_text((DATA / "ur10_driver_test.conf").read_text())
+    res = run("controller", "import", "ur", "ur10", conf, "--out", conf, "--overwrite")
+    assert res.exit_code == 1 and "replace the input" in res.output
+    # deltas that do not cancel on the parallel axes: the gate fails, exit 3, no file
+    text = conf.read_text().replace("1.4442162376284788", "1.4942162376284788")
+    bad = tmp_path / "bad.conf"
+    bad.write_text(text)
+    res = run("controller", "import", "ur", "ur10", bad, "--out", tmp_path / "bad.toml")
+    assert res.exit_code == 3 and not (tmp_path / "bad.toml").exists()
+    assert "nominal" in res.output
+
+
+def test_bad_calibration_conf_is_one_line_error(tmp_path):
+    conf = tmp_path / "calibration.conf"
+    conf.write_text("[mounting]\ndelta_theta = [0, 0, 0, 0, 0, 0]\ndelta_a = [0, 0, 0]\n")
+    res = run("controller", "import", "ur", "ur10", conf, "--out", tmp_path / "x.toml")
+    assert res.exit_code == 1
+    assert res.output.count("\n") == 1 and "delta_a" in res.output and "line 3" in res.output
+
+
+def test_export_table_and_urdf(tmp_path):
+    a = tmp_path / "a.toml"
+    assert run("controller", "import", "ur", "ur10", DATA / "ur10_driver_test.conf", "--out", a).exit_code == 0
+    res = run("controller", "export", "table", a, "--out", tmp_path / "t.csv")
+    assert res.exit_code == 0, res.output
+    lines = (tmp_path / "t.csv").read_text().splitlines()
+    header = [ln for ln in lines if not ln.startswith("#")][0]
+    assert header == "joint,alpha_deg,a_mm,beta_deg,theta_deg,d_mm,type"
+    rows = [ln.split(",") for ln in lines if ln.startswith("J")]
+    assert len(rows) == 6 and abs(float(rows[2][2]) + 612.0) < 2  # a3 near the UR10's -612 mm
+    res = run("controller", "export", "urdf", a, "--out", tmp_path / "r.urdf", "--json")
+    assert res.exit_code == 0, res.output
+    import json
+
+    assert json.loads(res.output)["fk_check"]["max_mm"] < 1e-6
+
+
+def test_export_ur_refuses_a_tool_off_the_axis(tmp_path):
+    src = (Path(load_robot("ur10").extra["origin"])).read_text()
+    f = tmp_path / "tool.toml"
+    f.write_text(src + "\n[tool]\nxyz = [10.0, 0.0, 100.0]\nrpy = [0.0, 0.0, 0.0]\n")
+    res = run("controller", "export", "ur", f, "--out", tmp_path / "k.yaml")
+    assert res.exit_code == 1 and "flange" in res.output
