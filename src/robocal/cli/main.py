@@ -46,8 +46,7 @@ _COMMANDS = {
     "closed-chain": ("closed_chain", "closed_chain", "Calibration with a laser spot held on plate targets.", None),
     "fleet": ("fleet", "fleet", "Many robots at once on Dask: calibrate, studies, status.", None),
     "datasets": ("datasets", "datasets", "The real data sets: list them, rerun their protocols.", None),
-    "controller": ("controller", "controller", "The controller's own model: UR calibration in, driver files out, "
-                   "probing, diff.", None),
+    "controller": ("controller", "controller", "The controller's own model in and out, probed, compared.", None),
 }
 
 
