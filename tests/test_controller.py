@@ -178,3 +178,94 @@ def test_export_ur_refuses_a_tool_off_the_axis(tmp_path):
     f.write_text(src + "\n[tool]\nxyz = [10.0, 0.0, 100.0]\nrpy = [0.0, 0.0, 0.0]\n")
     res = run("controller", "export", "ur", f, "--out", tmp_path / "k.yaml")
     assert res.exit_code == 1 and "flange" in res.output
+
+
+# ------------------------------------------------------------------------------------------ probing
+def _true_controller():
+    """The hidden model: a UR10 running the real factory calibration of the UR driver's tests."""
+    return import_ur(DATA / "ur10_driver_test.conf", "ur10", n_check=2)["model"]
+
+
+@pytest.mark.parametrize("controller", ["ur", "abb", "kuka", "doosan"])
+def test_probe_recovers_a_calibrated_controller_within_its_output_rounding(tmp_path, controller):
+    from robocal.sim.controller import probe_pairs_text
+    from robocal.workflows.controller_probe import model_diff
+
+    true = _true_controller()
+    pairs = tmp_path / "pairs.txt"
+    # poses printed to 0.01 mm and 0.001 deg (UR rotation vectors, ABB quaternions: the same step)
+    pairs.write_text(probe_pairs_text(true, random_joints(true, 200, seed=1), controller))
+    out = tmp_path / "probed.toml"
+    res = run("controller", "probe", "ur10", pairs, "--out", out, "--json")
+    assert res.exit_code == 0, res.output
+    import json
+
+    doc = json.loads(res.output)
+    assert doc["runs_nominal"] is False and doc["controller"] == controller
+    assert doc["fit_residual"]["position_mm"]["max"] <= doc["tolerance"]["mm"]
+    # a rounding of +-0.005 mm per coordinate leaves the recovered model ~1 um from the truth
+    d = model_diff(true, load_robot(out), n_poses=1000, seed=7)
+    assert d["position_mm"]["max"] < 0.005 and d["rotation_deg"]["max"] < 0.0005
+    # and the changed parameters are the factory calibration's (same convention as `import ur`)
+    changed = doc["changed_parameters"]
+    assert abs(changed["a4"]["change"] - (true.params.as_dict()["a4"] - (-572.3))) < 5 * changed["a4"]["sigma"] + 1e-3
+
+
+def test_probe_of_a_nominal_controller_and_of_a_non_geometric_compensation(tmp_path):
+    from robocal.sim.controller import probe_pairs_text
+
+    nominal = load_robot("ur10")
+    q = random_joints(nominal, 120, seed=2)
+    pairs = tmp_path / "nominal.txt"
+    pairs.write_text(probe_pairs_text(nominal, q, "kuka"))
+    res = run("controller", "probe", "ur10", pairs)
+    assert res.exit_code == 0, res.output
+    assert "runs the nominal model" in res.output
+    # a controller adding a joint-2 dependent sag (not a rigid-chain effect): a remainder, exit 3, no file
+    sag = tmp_path / "sag.txt"
+    sag.write_text(probe_pairs_text(nominal, q, "kuka",
+                                    compensation=lambda qq: np.stack([0 * qq[:, 0], 0 * qq[:, 0],
+                                                                      -0.3 * np.cos(qq[:, 1]) ** 2], axis=1)))
+    res = run("controller", "probe", "ur10", sag, "--out", tmp_path / "x.toml")
+    assert res.exit_code == 3 and not (tmp_path / "x.toml").exists()
+    assert "not a rigid chain" in res.output
+
+
+def test_probe_programs_are_written_and_their_lines_read_back(tmp_path):
+    from robocal.io.controller_pairs import parse_probe_pairs
+
+    for lang, suffix in (("ur", "script"), ("abb", "mod"), ("kuka", "src"), ("doosan", "py")):
+        out = tmp_path / f"probe.{suffix}"
+        res = run("controller", "probe-program", "ur10", lang, "--count", 12, "--out", out)
+        assert res.exit_code == 0, res.output
+        text = out.read_text()
+        assert text.count("robocal-pair") >= 1
+    assert (tmp_path / "probe.script").read_text().count("get_forward_kin") == 12
+    mod = (tmp_path / "probe.mod").read_text()
+    assert mod.count("p := CalcRobT(jt, tool0") == 1 and mod.count("\n    w ") == 12
+    assert (tmp_path / "probe.src").read_text().count("FORWARD(AX, ERR)") == 12
+    # what the programs print, as a listener or a log records it (URScript's to_str lists, a log prefix)
+    ur = ("2026-11-27 10:00:01 robocal-pair,ur,0,[0.1, -1.2, 1.0, 0.3, 1.5, 0.2],"
+          "p[-0.612, -0.2561, 0.0116, 0.0, 2.2214, -2.2214]\n")
+    p = parse_probe_pairs(ur)
+    assert p.controller == "ur" and np.allclose(p.q[0], [0.1, -1.2, 1.0, 0.3, 1.5, 0.2])
+    assert np.allclose(p.T[0, :3, 3], [-612.0, -256.1, 11.6])
+    abb = "robocal-pair,abb,3,10,20,30,40,50,60,1000.5,-20.25,900,0.5,0.5,0.5,0.5\n"
+    assert np.allclose(parse_probe_pairs(abb).q[0], np.radians([10, 20, 30, 40, 50, 60]))
+
+
+def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):
+    a = tmp_path / "controller.toml"
+    assert run("controller", "import", "ur", "ur10", DATA / "ur10_driver_test.conf", "--out", a).exit_code == 0
+    res = run("controller", "diff", "ur10", a, "--poses", 300, "--cell", tmp_path / "cell.toml", "--json",
+              "--out", tmp_path / "d.csv")
+    assert res.exit_code == 0, res.output
+    import json
+
+    doc = json.loads(res.output)
+    assert 1.0 < doc["position_mm"]["max"] < 20.0  # a factory calibration moves the UR10's flange by mm
+    assert len(doc["accuracy_map"]["by_reach"]) >= 3 and doc["notes"]
+    assert len((tmp_path / "d.csv").read_text().splitlines()) == 301
+    # a model against itself: zero
+    res = run("controller", "diff", a, a, "--poses", 50, "--json")
+    assert json.loads(res.output)["position_mm"]["max"] < 1e-9

@@ -241,3 +241,14 @@ def export_table_cmd(model_file, out_file, overwrite, as_json):
     else:
         click.echo(f"wrote {r['file']} ({r['kind']} table, mm and deg)")
 
+
+
+def _register_probe_commands() -> None:
+    """probe, probe-program and diff live in cli/controller_probe.py (imports inside the commands)."""
+    from .controller_probe import diff_cmd, probe_cmd, probe_program_cmd
+
+    for cmd in (probe_cmd, probe_program_cmd, diff_cmd):
+        controller.add_command(cmd)
+
+
+_register_probe_commands()
