@@ -172,8 +172,9 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, overwrite, a
         for qq, e, a in zip(np.degrees(r["q"]), r["error_mm"], r["rotation_error_deg"]):
             w.writerow([f"{x:.6f}" for x in qq] + [f"{e:.6f}", f"{a:.6f}"])
         atomic_write_text(out_file, buf.getvalue(), overwrite=overwrite)
-    payload = {"status": "ok", "reasons": [], "a": r["a"].name, "b": r["b"].name, "poses": r["n"],
+    payload = {"status": "ok", "reasons": [], "a": model_a, "b": model_b, "poses": r["n"],
                "tool_mm": r["tool_mm"], "position_mm": r["position_mm"], "rotation_deg": r["rotation_deg"],
+               "base_aligned": r["base_aligned"],
                "accuracy_map": r["accuracy_map"], "parameter_differences": r["parameter_differences"],
                "notes": notes, "file": out_file}
     if as_json:
@@ -182,9 +183,13 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, overwrite, a
         click.echo(json.dumps(payload, indent=2))
         return
     p, a = r["position_mm"], r["rotation_deg"]
-    click.echo(f"{r['b'].name} - {r['a'].name}: TCP difference over {r['n']} joint sets")
+    click.echo(f"{model_b} - {model_a}: TCP difference over {r['n']} joint sets (each in its robot base frame)")
     click.echo(f"  position  RMS {p['rms']:.4f}  mean {p['mean']:.4f}  p95 {p['p95']:.4f}  max {p['max']:.4f} mm")
     click.echo(f"  rotation  RMS {a['rms']:.5f}  max {a['max']:.5f} deg")
+    al = r["base_aligned"]
+    click.echo(f"  after a best-fit base ({al['shift_of_base_mm']:.3f} mm, {al['rotation_of_base_deg']:.4f} deg): "
+               f"RMS {al['position_mm']['rms']:.4f}, max {al['position_mm']['max']:.4f} mm, "
+               f"{al['rotation_deg']['max']:.5f} deg")
     for label, title in (("by_reach", "reach from joint 1's axis"), ("by_height", "height")):
         click.echo(f"  by {title} [mm]:")
         for row in r["accuracy_map"][label]:

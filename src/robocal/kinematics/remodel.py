@@ -244,7 +244,9 @@ def well_conditioned_mdh(points, directions, T_base_ee, reference: RobotModel, *
     Returns
     -------
     RobotModel of kind ``mdh`` (every link with ``beta``) whose forward kinematics equal the
-    chain's, joints measured from the same zero.
+    chain's, joints measured from the same zero. The convention's redundant parameters are marked
+    fixed (``beta`` after a non-parallel pair, ``d`` of a frame before a parallel axis), so a
+    calibration that starts from the file identifies the others.
     """
     P = np.asarray(points, dtype=LD)
     U = np.array([_unit(u) for u in np.asarray(directions, dtype=LD)])
@@ -281,9 +283,16 @@ def well_conditioned_mdh(points, directions, T_base_ee, reference: RobotModel, *
         F = _frame(o, x, u)
         alpha, a, beta, theta, d = _mdh_params(F_prev, F)
         lk = reference.links[i]
+        # the convention's held parameters: beta after a non-parallel pair (common normal), d of a frame
+        # whose axis is parallel to the next (Hayati); a calibration of this file leaves them alone
+        held = set()
+        if i == 0 or not parallel[i - 1]:
+            held.add("beta")
+        if i + 1 < n and parallel[i]:
+            held.add("d")
         links.append(Link(lk.name, "revolute", "mdh",
                           {"alpha": float(alpha), "a": float(a), "beta": float(beta), "theta": float(theta),
-                           "d": float(d)}, i - 1, (0.0, 0.0, 1.0)))
+                           "d": float(d)}, i - 1, (0.0, 0.0, 1.0), frozenset(held)))
         F_prev, entry = F, next_entry
     T_ee = inverse_rigid(F_prev) @ Tee
     T_ee = np.asarray(T_ee, dtype=float)

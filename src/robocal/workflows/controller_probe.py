@@ -186,6 +186,15 @@ def _bins(values, edges):
     return np.clip(np.searchsorted(edges, values, side="right") - 1, 0, len(edges) - 2)
 
 
+def _best_fit_rigid(src, dst):
+    """Rotation R (3, 3) and shift t (3,) minimising |R src + t - dst| over points (N, 3) (Kabsch)."""
+    cs, cd = src.mean(axis=0), dst.mean(axis=0)
+    U, _, Vt = np.linalg.svd((src - cs).T @ (dst - cd))
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+    R = Vt.T @ D @ U.T
+    return R, cd - R @ cs
+
+
 def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
     """TCP difference of two robot models over the working range (each in its own base frame).
 
@@ -193,7 +202,9 @@ def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
     uniformly within both models' limits. Returns ``position_mm`` / ``rotation_deg`` statistics, an
     accuracy map (``by_reach``: horizontal distance of the TCP from joint 1's axis; ``by_height``),
     per-parameter differences when both models share parameter names, and the joint sets with
-    their errors (``q`` (N, n) rad, ``error_mm`` (N,)).
+    their errors (``q`` (N, n) rad, ``error_mm`` (N,)), and ``base_aligned``: the same statistics
+    after the best-fit rigid transform of B's base onto A's (the part of the difference a re-taught
+    base frame removes is the rest).
     """
     A = load_robot(model_a) if not isinstance(model_a, RobotModel) else model_a
     B = load_robot(model_b) if not isinstance(model_b, RobotModel) else model_b
@@ -211,6 +222,12 @@ def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
     pb = (Tb[:, :3, :3] @ tcp) + Tb[:, :3, 3]
     e = np.linalg.norm(pb - pa, axis=1)
     rot = np.degrees(np.linalg.norm(rotvec_from_matrix(np.swapaxes(Ta[:, :3, :3], 1, 2) @ Tb[:, :3, :3]), axis=1))
+    # the same after the best-fit rigid base transform (what re-teaching the robot's base removes)
+    R, t = _best_fit_rigid(pb, pa)
+    pb_al = pb @ R.T + t
+    e_al = np.linalg.norm(pb_al - pa, axis=1)
+    rot_al = np.degrees(np.linalg.norm(rotvec_from_matrix(np.swapaxes(Ta[:, :3, :3], 1, 2) @ (R @ Tb[:, :3, :3])),
+                                       axis=1))
     reach = np.hypot(pa[:, 0], pa[:, 1])
     maps = {}
     for label, v in (("by_reach", reach), ("by_height", pa[:, 2])):
@@ -229,6 +246,9 @@ def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
         params = {n: (float((x + math.pi) % (2 * math.pi) - math.pi) if u == "rad" else float(x))
                   for n, x, u in zip(A.params.names, d, A.params.units)}
     return {"a": A, "b": B, "n": int(n_poses), "tool_mm": tcp.tolist(), "position_mm": error_statistics(e),
-            "rotation_deg": error_statistics(rot), "accuracy_map": maps, "parameter_differences": params,
+            "rotation_deg": error_statistics(rot), "accuracy_map": maps,
+            "base_aligned": {"position_mm": error_statistics(e_al), "rotation_deg": error_statistics(rot_al),
+                             "rotation_of_base_deg": float(np.degrees(np.linalg.norm(rotvec_from_matrix(R)))),
+                             "shift_of_base_mm": float(np.linalg.norm(t))}, "parameter_differences": params,
             "bases_differ": not np.allclose(A.T_world_base, B.T_world_base), "q": q, "error_mm": e,
             "rotation_error_deg": rot}
