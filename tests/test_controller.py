@@ -269,3 +269,24 @@ def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):
     # a model against itself: zero
     res = run("controller", "diff", a, a, "--poses", 50, "--json")
     assert json.loads(res.output)["position_mm"]["max"] < 1e-9
+
+
+def test_docs_walk_through_runs_as_written(tmp_path, monkeypatch):
+    import json
+    import re
+    import shlex
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "controller.md").read_text(encoding="utf-8")
+    part = text[text.index("## Walk-through"):]
+    block = re.findall(r"```\n(.*?)```", part, re.S)[0]
+    commands = [ln for ln in block.splitlines() if ln.startswith("robocal ")]
+    assert len(commands) == 6
+    (tmp_path / "calibration.conf").write_text((DATA / "ur10_driver_test.conf").read_text())
+    monkeypatch.chdir(tmp_path)
+    for line in commands:
+        res = CliRunner().invoke(main, shlex.split(line)[1:])
+        assert res.exit_code == 0, (line, res.output)
+    result = json.loads((tmp_path / "calib" / "result.json").read_text())
+    assert result["validation"]["after"]["rms"] < 0.05  # the page quotes 0.038 mm
+    res = run("controller", "diff", "ur10_controller.toml", "calib/calibrated_robot.toml", "--json")
+    assert abs(json.loads(res.output)["position_mm"]["rms"] - 1.69) < 0.01  # the page quotes 1.69 mm RMS

@@ -245,9 +245,9 @@ def export_table_cmd(model_file, out_file, overwrite, as_json):
 
 def _register_probe_commands() -> None:
     """probe, probe-program and diff live in cli/controller_probe.py (imports inside the commands)."""
-    from .controller_probe import diff_cmd, probe_cmd, probe_program_cmd
+    from .controller_probe import diff_cmd, probe_cmd, probe_program_cmd, probe_simulate_cmd
 
-    for cmd in (probe_cmd, probe_program_cmd, diff_cmd):
+    for cmd in (probe_cmd, probe_program_cmd, probe_simulate_cmd, diff_cmd):
         controller.add_command(cmd)
 
 

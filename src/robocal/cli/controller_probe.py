@@ -58,6 +58,33 @@ def probe_program_cmd(robot, language, count, seed, host, port, out_file, overwr
                    f"{c['function']}; read its robocal-pair lines back with `robocal controller probe {robot} FILE`")
 
 
+@click.command("probe-simulate")
+@click.argument("robot")
+@click.argument("language", type=click.Choice(["ur", "abb", "kuka", "doosan"]))
+@click.option("--count", default=100, show_default=True, help="Number of joint sets (as probe-program draws them).")
+@click.option("--seed", default=0, show_default=True, help="Seed of the joint sets (same as probe-program's).")
+@click.option("--noise", "noise_mm", default=0.01, show_default=True,
+              help="Resolution of the printed positions [mm] (the virtual controller rounds to it).")
+@click.option("--orientation-noise", "noise_deg", default=0.001, show_default=True,
+              help="Resolution of the printed orientations [deg].")
+@click.option("--out", "out_file", required=True, type=FILE, help="Pairs file to write (robocal-pair lines).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_file, overwrite):
+    """A virtual controller whose hidden model is ROBOT answers the probe program of LANGUAGE:
+    the robocal-pair lines it would print (for trying `controller probe` without a robot)."""
+    from ..io.atomic import atomic_write_text
+    from ..robots import load_robot
+    from ..sim.controller import probe_pairs_text
+    from ..workflows.controller import random_joints, refuse_same_path
+
+    refuse_same_path(out_file, robot)
+    model = load_robot(robot)
+    text = probe_pairs_text(model, random_joints(model, count, seed), language, resolution_mm=noise_mm,
+                            resolution_deg=noise_deg)
+    atomic_write_text(out_file, text, overwrite=overwrite)
+    click.echo(f"wrote {out_file}: {count} {language} pairs of a virtual controller running {model.name}")
+
+
 @click.command("probe")
 @click.argument("robot")
 @click.argument("pairs", type=FILE)
