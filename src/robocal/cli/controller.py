@@ -145,8 +145,9 @@ def import_ur_cmd(args, robot_opt, out_file, n_check, seed, overwrite, force, as
 @click.argument("yaml_file", type=FILE, metavar="KINEMATICS_YAML")
 @click.option("--out", "out_file", required=True, type=FILE, help="Robot file to write (TOML; mm, deg).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+@click.option("--force", is_flag=True, help="Write the robot file even when the FK check fails (exit code 3 still).")
 @click.option("--json", "as_json", **_JSON)
-def import_ur_kinematics_cmd(robot, yaml_file, out_file, overwrite, as_json):
+def import_ur_kinematics_cmd(robot, yaml_file, out_file, overwrite, force, as_json):
     """Read ur_description's kinematics YAML (as written by ur_calibration or `robocal controller
     export ur`) for the arm type ROBOT into a well-conditioned MDH + beta robot file."""
     from ..workflows.controller import model_from_kinematics_yaml, origins_fk, random_joints, refuse_same_path, save_model
@@ -158,16 +159,22 @@ def import_ur_kinematics_cmd(robot, yaml_file, out_file, overwrite, as_json):
     r = model_from_kinematics_yaml(yaml_file, robot)
     q = random_joints(r["model"], 1000, 0)
     dp, ang = _pose_errors(origins_fk(r["origins"], q), r["model"].fk(q))
-    save_model(r["model"], out_file, overwrite=overwrite,
-               comment=f"Read from the ur_description kinematics YAML {yaml_file} (hash {r['hash']}).")
-    payload = {"status": "ok", "reasons": [], "robot_file": out_file, "hash": r["hash"],
-               "fk_check": {"n": 1000, "max_mm": float(dp.max()), "max_rad": float(ang.max())}}
-    if as_json:
-        _echo_json(payload)
-    else:
+    from ..calib.sanity import Verdict
+
+    ok = dp.max() <= 1e-9 and ang.max() <= 1e-12
+    v = Verdict(() if ok else (f"the robot file's FK differs from the YAML chain's by {dp.max():.3g} mm / "
+                               f"{ang.max():.3g} rad (limit 1e-9 mm, 1e-12 rad)",), {})
+    payload = {"status": v.status, "reasons": list(v.reasons), "robot_file": out_file if ok or force else None,
+               "hash": r["hash"], "fk_check": {"n": 1000, "max_mm": float(dp.max()), "max_rad": float(ang.max())}}
+    if ok or force:
+        save_model(r["model"], out_file, overwrite=overwrite,
+                   comment=f"Read from the ur_description kinematics YAML {yaml_file} (hash {r['hash']}).")
+    if not as_json:
         click.echo(f"{yaml_file} (hash {r['hash']}): FK of the robot file equals the YAML chain's to "
                    f"{dp.max():.2e} mm / {ang.max():.2e} rad at 1000 random joint sets")
-        click.echo(f"wrote {out_file}")
+        if ok or force:
+            click.echo(f"wrote {out_file}")
+    _gate_exit(v, as_json, payload, ok or force)
 
 
 @export_group.command("ur")

@@ -69,7 +69,8 @@ def probe_program_cmd(robot, language, count, seed, host, port, out_file, overwr
               help="Resolution of the printed orientations [deg].")
 @click.option("--out", "out_file", required=True, type=FILE, help="Pairs file to write (robocal-pair lines).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
-def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_file, overwrite):
+@click.option("--json", "as_json", **_JSON)
+def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_file, overwrite, as_json):
     """A virtual controller whose hidden model is ROBOT answers the probe program of LANGUAGE:
     the robocal-pair lines it would print (for trying `controller probe` without a robot)."""
     from ..io.atomic import atomic_write_text
@@ -82,7 +83,13 @@ def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_fi
     text = probe_pairs_text(model, random_joints(model, count, seed), language, resolution_mm=noise_mm,
                             resolution_deg=noise_deg)
     atomic_write_text(out_file, text, overwrite=overwrite)
-    click.echo(f"wrote {out_file}: {count} {language} pairs of a virtual controller running {model.name}")
+    if as_json:
+        import json
+
+        click.echo(json.dumps({"status": "ok", "reasons": [], "file": out_file, "count": count, "controller": language,
+                               "resolution_mm": noise_mm, "resolution_deg": noise_deg}, indent=2))
+    else:
+        click.echo(f"wrote {out_file}: {count} {language} pairs of a virtual controller running {model.name}")
 
 
 @click.command("probe")

@@ -4,7 +4,9 @@
 in its ``[mounting]`` section: ``delta_theta``, ``delta_a``, ``delta_d``, ``delta_alpha`` (six
 numbers each, metres and radians) that the controller adds to its nominal DH table,
 ``calibration_status`` (the file's own comment: 0 notInitialized, 1 notLinearised, 2 Linearised)
-and ``joint_checksum`` (six hexadecimal numbers identifying the joints the calibration belongs to).
+and ``joint_checksum`` (six hexadecimal 32-bit values; the controller streams six such values as the
+``checksum`` of its ``KinematicsInfo``; UR does not document their meaning, robocal records them in
+the robot file's provenance and does not interpret them).
 The controller streams nominal + delta as its ``KinematicsInfo`` package
 (``UniversalRobots/Universal_Robots_Client_Library``, ``kinematics_info.h``).
 

@@ -72,18 +72,16 @@ def _check_serial_revolute(model: RobotModel) -> None:
         raise RemodelError(f"{model.name}: only serial chains are supported, not trees")
     if any(L.joint_type != "revolute" for L in model.links):
         raise RemodelError(f"{model.name}: only chains of revolute joints are supported (no fixed or prismatic links)")
-    if model.coupling.shape[0] != model.coupling.shape[1] or not np.array_equal(model.coupling, np.eye(len(model.coupling))):
-        raise RemodelError(f"{model.name}: the controller joints must drive the model joints one to one (no coupling, "
-                           "no sign flips)")
 
 
 def fk_longdouble(model: RobotModel, q, end_effector=0) -> np.ndarray:
-    """Base-to-end-effector poses in longdouble (no ``T_world_base``): ``q`` (N, n) [rad] -> (N, 4, 4) [mm].
+    """Base-to-end-effector poses in longdouble (no ``T_world_base``): controller joints ``q``
+    (N, n_ctrl) [rad] -> (N, 4, 4) [mm].
 
     A reference for checking conversions of serial revolute chains (slow: plain numpy products).
     """
     _check_serial_revolute(model)
-    q = np.atleast_2d(np.asarray(q, dtype=LD))
+    q = np.atleast_2d(np.asarray(q, dtype=LD)) @ np.asarray(model.coupling, dtype=LD).T  # model joints
     T = np.broadcast_to(np.eye(4, dtype=LD), (len(q), 4, 4)).copy()
     for k, link in enumerate(model.links):
         for code, pname, moves in link_operations(link):
@@ -239,7 +237,9 @@ def well_conditioned_mdh(points, directions, T_base_ee, reference: RobotModel, *
     reference : the nominal model of the same robot (dh, dh_beta or mdh, n revolute joints): it
         decides which axis pairs are treated as parallel, the signs of the common normals and the
         ``d`` kept on parallel axes, so the result stays close to the nominal MDH parameters.
-        Names, joint limits and controller joint names are taken from it; the base is identity.
+        Names, joint limits, controller joint names and the joint coupling (signs, FANUC's J2/J3)
+        are taken from it; the base is identity. ``points``/``directions`` are the model joints'
+        (positive direction = positive model joint) at zero controller joints.
 
     Returns
     -------
@@ -300,6 +300,7 @@ def well_conditioned_mdh(points, directions, T_base_ee, reference: RobotModel, *
         T_ee = np.eye(4)
     ees = [EndEffector("flange", n - 1, T_ee)]
     return RobotModel(name=name or reference.name, kind="mdh", links=links,
-                      controller_joints=reference.controller_joints, coupling=np.eye(n), limits=reference.limits,
+                      controller_joints=reference.controller_joints, coupling=reference.coupling,
+                      limits=reference.limits,
                       T_world_base=np.eye(4), end_effectors=ees, title=title if title is not None else reference.title,
                       source=source, extra={"length_unit": "mm", "angle_unit": "deg"})
