@@ -312,3 +312,27 @@ def test_probe_other_arms_with_sign_flips_and_coupling(tmp_path, robot, controll
     probed = load_robot(out)
     assert np.array_equal(probed.coupling, load_robot(robot).coupling)
     assert model_diff(true, probed, n_poses=500, seed=1)["position_mm"]["max"] < 0.005
+
+
+@pytest.mark.parametrize("robot", ["ur10", "ur10e"])
+def test_ur_description_default_yaml_reads_as_the_nominal_arm(tmp_path, robot):
+    # The published default kinematics (alphas 1.570796327, z of 1e-11 m from ur_calibration's
+    # arithmetic) read as URDF origins about z, ending at tool0 = the DH flange: robocal's nominal arm
+    # to the 1.570796327-vs-pi/2 difference (2e-10 rad over ~1.3 m, < 1e-6 mm).
+    from robocal.workflows.controller import model_from_kinematics_yaml
+
+    f = DATA / f"ur_description_{robot}_default_kinematics.yaml"
+    r = model_from_kinematics_yaml(f, robot)
+    nominal = load_robot(robot)
+    q = random_joints(nominal, 500, seed=2)
+    dp, ang = _pose_errors(nominal.fk(q), r["model"].fk(q))
+    assert dp.max() < 1e-6 and ang.max() < 1e-9
+    assert r["hash"] == {"ur10": "calib_17227329492635474227", "ur10e": "calib_5119701370761913513"}[robot]
+    # and robocal's export of the nominal arm gives the same chain as the published file
+    y = tmp_path / "k.yaml"
+    assert run("controller", "export", "ur", robot, "--out", y).exit_code == 0
+    from robocal.workflows.controller import _origin_from_yaml, origins_fk
+
+    ours = [_origin_from_yaml(xyz, rpy) for xyz, rpy in read_kinematics_yaml(y)[0]]
+    dp, _ = _pose_errors(origins_fk(r["origins"], q), origins_fk(ours, q))
+    assert dp.max() < 1e-6
