@@ -336,3 +336,18 @@ def test_ur_description_default_yaml_reads_as_the_nominal_arm(tmp_path, robot):
     ours = [_origin_from_yaml(xyz, rpy) for xyz, rpy in read_kinematics_yaml(y)[0]]
     dp, _ = _pose_errors(origins_fk(r["origins"], q), origins_fk(ours, q))
     assert dp.max() < 1e-6
+
+
+def test_intrinsic_angles_read_as_urdf_rpy_would_move_the_flange():
+    # The figure of docs/controller.md ("Angle convention, an open point"): robocal's joint origins of the
+    # UR10 test arm, their intrinsic X-Y'-Z'' angles read as URDF rpy: up to 0.043 mm / 0.0036 deg.
+    from robocal.kinematics.links import frame_from_xyz_rpy
+    from robocal.transforms import euler_from_matrix
+    from robocal.workflows.controller import origins_fk, ur_joint_origins
+
+    m = import_ur(DATA / "ur10_driver_test.conf", "ur10", n_check=2)["model"]
+    O = ur_joint_origins(m)
+    mixed = [frame_from_xyz_rpy(T[:3, 3], euler_from_matrix(T[:3, :3], "xyz_intrinsic")) for T in O]
+    q = random_joints(m, 1000, seed=0)
+    dp, ang = _pose_errors(origins_fk(O, q), origins_fk(mixed, q))
+    assert 0.040 < dp.max() < 0.047 and 0.0033 < np.degrees(ang.max()) < 0.0038
