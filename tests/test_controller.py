@@ -351,3 +351,28 @@ def test_intrinsic_angles_read_as_urdf_rpy_would_move_the_flange():
     q = random_joints(m, 1000, seed=0)
     dp, ang = _pose_errors(origins_fk(O, q), origins_fk(mixed, q))
     assert 0.040 < dp.max() < 0.047 and 0.0033 < np.degrees(ang.max()) < 0.0038
+
+
+def test_probe_frees_a_flange_frame_that_differs_by_a_constant(tmp_path):
+    # a controller whose flange convention is KUKA-like (x along the tool, a 90 deg turn about y) on top of a
+    # 0.3 mm / 0.02 deg perturbed chain: --flange auto sees the constant and fits it
+    from robocal.kinematics.links import frame_from_xyz_rpy
+    from robocal.sim.controller import probe_pairs_text
+    from robocal.workflows.controller_probe import model_diff, probe_start_model
+    from robocal.kinematics.model import EndEffector
+
+    start = probe_start_model(load_robot("kuka_kr150_r3100"))
+    rng = np.random.default_rng(6)
+    vals = start.params.values + np.where(start.params.free, rng.normal(0, 1, len(start.params)), 0.0) * np.where(
+        np.array(start.params.units) == "mm", 0.3, np.radians(0.02))
+    T_ee = frame_from_xyz_rpy([0.4, -0.2, 0.0], [0.001, np.pi / 2 + 0.002, 0.0])
+    true = start.with_params(vals).replace(end_effectors=[EndEffector("flange", 5, T_ee)])
+    pairs = tmp_path / "pairs.txt"
+    pairs.write_text(probe_pairs_text(true, random_joints(true, 150, seed=9), "kuka"))
+    out = tmp_path / "probed.toml"
+    res = run("controller", "probe", "kuka_kr150_r3100", pairs, "--out", out)
+    assert res.exit_code == 0, res.output
+    assert "flange frame differs" in res.output
+    assert model_diff(true, load_robot(out), n_poses=500, seed=1)["position_mm"]["max"] < 0.005
+    res = run("controller", "probe", "kuka_kr150_r3100", pairs, "--flange", "fixed")
+    assert res.exit_code == 3

@@ -101,12 +101,16 @@ def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_fi
               help="Resolution of the reported positions [mm] (the rounding of the controller's output).")
 @click.option("--orientation-noise", "noise_deg", default=0.001, show_default=True,
               help="Resolution of the reported orientations [deg].")
+@click.option("--flange", default="auto", show_default=True, type=click.Choice(["auto", "fixed", "free"]),
+              help="The flange frame: fixed (ROBOT's, on joint 6's axis), free (fit its offset and tilt: a controller "
+                   "whose flange convention differs), auto (free when the pairs show a constant flange offset over "
+                   "2 mm / 0.5 deg).")
 @click.option("--out", "out_file", default=None, type=FILE,
               help="Robot file to write with the fitted model (TOML; mm, deg); optional.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
 @click.option("--force", is_flag=True, help="Write the robot file even when a sanity gate fails (exit code 3 still).")
 @click.option("--json", "as_json", **_JSON)
-def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, out_file, overwrite, force, as_json):
+def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, flange, out_file, overwrite, force, as_json):
     """Fit ROBOT's kinematics to PAIRS (joints, pose the controller computed for them): does the
     controller run the nominal model, which parameters does its compensation change and by how much,
     and what remains (about zero for a rigid model)."""
@@ -118,7 +122,7 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, out_file, over
         refuse_same_path(out_file, pairs, robot)
         if Path(out_file).exists() and not overwrite:
             raise click.ClickException(f"{out_file}: output file exists; pass --overwrite to replace it")
-    r = probe_fit(robot, pairs, controller=controller_name, noise_mm=noise_mm, noise_deg=noise_deg)
+    r = probe_fit(robot, pairs, controller=controller_name, noise_mm=noise_mm, noise_deg=noise_deg, flange=flange)
     v = r["verdict"]
     wrote = out_file is not None and (v.ok or force)
     if wrote:
@@ -131,13 +135,18 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, out_file, over
                "runs_nominal": r["runs_nominal"], "nominal_residual": r["nominal_residual"],
                "fit_residual": r["fit_residual"], "tolerance": r["tolerance"],
                "changed_parameters": sig, "all_parameters": r["changes"], "held": r["held"],
-               "held_by_convention": r["held_by_convention"], "converged": r["converged"],
+               "held_by_convention": r["held_by_convention"], "converged": r["converged"], "flange": r["flange"],
                "robot_file": out_file if wrote else None}
     if not as_json:
         nr, fr = r["nominal_residual"], r["fit_residual"]
         click.echo(f"{len(r['pairs'].q)} {r['pairs'].controller} pairs from {pairs}")
         click.echo(f"nominal {r['nominal'].name} vs the controller: max {nr['position_mm']['max']:.4f} mm, "
                    f"{nr['rotation_deg']['max']:.5f} deg (RMS {nr['position_mm']['rms']:.4f} mm)")
+        fl = r["flange"]
+        if fl["free"]:
+            click.echo(f"the controller's flange frame differs from {r['nominal'].name}'s by a constant "
+                       f"{fl['constant_offset_mm']:.3f} mm / {fl['constant_offset_deg']:.3f} deg: fitted as a free "
+                       "flange frame (its x, y, roll, pitch)")
         if r["runs_nominal"]:
             click.echo("-> the controller runs the nominal model (differences within the output resolution)")
         else:

@@ -19,11 +19,12 @@ import numpy as np
 
 from ..calib.sanity import Verdict
 from ..io.controller_pairs import CONTROLLERS, read_probe_pairs
-from ..kinematics.model import RobotModel
+from ..kinematics.links import Link, frame_from_xyz_rpy
+from ..kinematics.model import EndEffector, RobotModel
 from ..kinematics.remodel import RemodelError, model_axes, well_conditioned_mdh
 from ..metrics import error_statistics
 from ..robots import load_robot
-from ..transforms import rotvec_from_matrix
+from ..transforms import euler_from_matrix, rotvec_from_matrix
 from .controller import ControllerInputError, random_joints
 
 __all__ = ["probe_fit", "model_diff", "probe_start_model", "LEVER_MM"]
@@ -42,13 +43,38 @@ def probe_start_model(nominal: RobotModel) -> RobotModel:
         raise ControllerInputError(f"{nominal.name}: {exc}") from None
 
 
+def _constant_offset(model, q, T_meas) -> np.ndarray:
+    """The mean constant transform (4, 4) from the model's flange to the reported one."""
+    T = np.linalg.inv(model.T_world_base)[None] @ model.fk(q)
+    D = np.linalg.inv(T) @ T_meas
+    U, _, Vt = np.linalg.svd(D[:, :3, :3].sum(axis=0))
+    R = U @ np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))]) @ Vt
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = R, D[:, :3, 3].mean(axis=0)
+    return out
+
+
+def _with_flange_frame(model: RobotModel, T_ee) -> RobotModel:
+    """The chain with the flange frame as a fixed ``frame`` link (its xyz/rpy become parameters)."""
+    xyz = np.asarray(T_ee, float)[:3, 3]
+    rpy = euler_from_matrix(np.asarray(T_ee, float)[:3, :3], "rpy")
+    p = {"x": xyz[0], "y": xyz[1], "z": xyz[2], "roll": rpy[0], "pitch": rpy[1], "yaw": rpy[2]}
+    link = Link("flange_frame", "fixed", "frame", {k: float(v) for k, v in p.items()}, len(model.links) - 1)
+    return model.replace(links=list(model.links) + [link],
+                         end_effectors=[EndEffector("flange", len(model.links), np.eye(4))])
+
+
 def _convention_free(model: RobotModel) -> np.ndarray:
     """Free mask (P,) of the convention: hold d of frames before a parallel axis, beta after a
-    non-parallel pair, and nothing else."""
+    non-parallel pair, and a flange frame's z and yaw (they repeat the last joint's d and theta)."""
     z = [np.asarray(F[:3, 2], float) for F in model.link_frames(np.zeros(model.n_joints))]
     n = len(z)
     parallel = [np.linalg.norm(np.cross(z[i], z[i + 1])) < 0.05 for i in range(n - 1)]
     free = np.ones(len(model.params), dtype=bool)
+    for k, link in enumerate(model.links):
+        if link.joint_type == "fixed":
+            for pname in ("z", "yaw"):
+                free[model.params.index(f"{pname}{k + 1}")] = False
     for i in range(n):
         if i + 1 < n and parallel[i]:
             free[model.params.index(f"d{i + 1}")] = False
@@ -88,8 +114,14 @@ def _pose_error_stats(dp, dr) -> dict:
     return {"position_mm": error_statistics(dp), "rotation_deg": error_statistics(np.degrees(np.linalg.norm(dr, axis=1)))}
 
 
-def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise_deg=0.001, max_iterations=50) -> dict:
+def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise_deg=0.001, flange="auto",
+              max_iterations=50) -> dict:
     """Fit the controller's model to probe pairs; see the module docstring.
+
+    ``flange``: ``fixed`` keeps ROBOT's flange frame on joint 6 (UR: the flange is on the axis);
+    ``free`` also fits the flange frame's offset and tilt from joint 6's axis (a controller whose
+    flange convention differs from the robot file's, e.g. KUKA's x-forward flange); ``auto`` frees
+    it when the pairs differ from ROBOT by a constant flange transform of more than 2 mm / 0.5 deg.
 
     ``noise_mm`` / ``noise_deg``: the resolution of the reported poses (position [mm], orientation
     [deg]); they weight the residuals and set the tolerances of the verdicts.
@@ -104,38 +136,53 @@ def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise
     pairs = read_probe_pairs(pairs_path, controller, nominal.n_joints)
     if len(pairs.q) < 10:
         raise ControllerInputError(f"{pairs_path}: {len(pairs.q)} pairs; probing needs at least 10 (50+ recommended)")
+    if flange not in ("auto", "fixed", "free"):
+        raise ControllerInputError(f"flange: {flange!r}, expected auto, fixed or free")
     start = probe_start_model(nominal)
     sp = max(noise_mm, 1e-6) / math.sqrt(12.0)
     sr = math.radians(max(noise_deg, 1e-9)) / math.sqrt(12.0)
     q, T_meas = pairs.q, pairs.T
     dp0, dr0, _ = _residuals(start, start.params.values, q, T_meas, sp, sr)
-    conv = _convention_free(start)
+    offset = _constant_offset(start, q, T_meas)
+    off_mm = float(np.linalg.norm(offset[:3, 3]))
+    off_deg = float(np.degrees(np.linalg.norm(rotvec_from_matrix(offset[:3, :3]))))
+    flange_free = flange == "free" or (flange == "auto" and (off_mm > 2.0 or off_deg > 0.5))
+    fit_model = _with_flange_frame(start, start.end_effectors[0].T_link_ee @ offset) if flange_free else start
+    conv = _convention_free(fit_model)
     idx0 = np.flatnonzero(conv)
-    names = list(start.params.names)
-    J0 = _jacobian(start, start.params.values, q, idx0, sp, sr)
+    names = list(fit_model.params.names)
+    J0 = _jacobian(fit_model, fit_model.params.values, q, idx0, sp, sr)
     keep, dropped = _identifiable(J0, [names[k] for k in idx0])
     free_idx = idx0[keep]
-    x0 = start.params.values.copy()
+    x0 = fit_model.params.values.copy()
+    x_nominal = np.concatenate([start.params.values, x0[len(start.params):]])
 
     def fun(x):
         p = x0.copy()
         p[free_idx] = x
-        return _residuals(start, p, q, T_meas, sp, sr)[2]
+        return _residuals(fit_model, p, q, T_meas, sp, sr)[2]
 
     def jac(x):
         p = x0.copy()
         p[free_idx] = x
-        return _jacobian(start, p, q, free_idx, sp, sr)
+        return _jacobian(fit_model, p, q, free_idx, sp, sr)
 
     res = least_squares(fun, x0[free_idx], jac=jac, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15,
                         max_nfev=max_iterations * (len(free_idx) + 1))
     params = x0.copy()
     params[free_idx] = res.x
-    fitted = start.with_params(params).replace(
+    fitted = start.with_params(params[:len(start.params)])
+    if flange_free:
+        p7 = dict(zip(fit_model.params.names[len(start.params):], params[len(start.params):]))
+        n7 = len(fit_model.links)
+        T_ee = frame_from_xyz_rpy([p7[f"x{n7}"], p7[f"y{n7}"], p7[f"z{n7}"]],
+                                  [p7[f"roll{n7}"], p7[f"pitch{n7}"], p7[f"yaw{n7}"]])
+        fitted = fitted.replace(end_effectors=[EndEffector("flange", len(start.links) - 1, T_ee)])
+    fitted = fitted.replace(
         name=f"{nominal.name}_probed", title=f"{nominal.title or nominal.name} (controller model from probing)",
         source=f"robocal controller probe of {Path(str(pairs_path)).name} ({len(q)} {pairs.controller} pairs, "
                f"{CONTROLLERS[pairs.controller]['function']}) on the nominal {nominal.name}")
-    dp1, dr1, r1 = _residuals(start, params, q, T_meas, sp, sr)
+    dp1, dr1, r1 = _residuals(fit_model, params, q, T_meas, sp, sr)
     dof = max(len(r1) - len(free_idx), 1)
     s2 = max(float(r1 @ r1) / dof, 1.0)  # residual variance in units of the rounding sigma (at least 1)
     J = jac(res.x)
@@ -145,9 +192,11 @@ def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise
     except np.linalg.LinAlgError:
         sig = np.full(len(free_idx), np.nan)
     changes = {}
+    n_chain = len(start.params)
     for k, col in enumerate(free_idx):
-        name, unit = names[col], start.params.units[col]
-        delta = float(params[col] - x0[col])
+        unit = fit_model.params.units[col]
+        name = names[col] if col < n_chain else "flange." + names[col].rstrip("0123456789")
+        delta = float(params[col] - x_nominal[col])
         if unit == "rad":
             delta = (delta + math.pi) % (2 * math.pi) - math.pi
         tiny = 1e-4 if unit == "mm" else 1e-7
@@ -176,7 +225,8 @@ def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise
     verdict = Verdict(tuple(reasons), checks)
     return {"model": fitted, "start": start, "nominal": nominal, "pairs": pairs, "nominal_residual": nominal_res,
             "fit_residual": fit_res, "runs_nominal": bool(runs_nominal), "changes": changes, "held": dropped,
-            "held_by_convention": [names[k] for k in np.flatnonzero(~conv)], "verdict": verdict,
+            "held_by_convention": [names[k] for k in np.flatnonzero(~conv) if k < n_chain], "verdict": verdict,
+            "flange": {"free": bool(flange_free), "constant_offset_mm": off_mm, "constant_offset_deg": off_deg},
             "iterations": int(res.nfev), "converged": bool(res.status > 0), "tolerance": {"mm": tol_mm,
                                                                                           "deg": tol_deg}}
 
