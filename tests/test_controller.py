@@ -376,3 +376,17 @@ def test_probe_frees_a_flange_frame_that_differs_by_a_constant(tmp_path):
     assert model_diff(true, load_robot(out), n_poses=500, seed=1)["position_mm"]["max"] < 0.005
     res = run("controller", "probe", "kuka_kr150_r3100", pairs, "--flange", "fixed")
     assert res.exit_code == 3
+
+
+def test_ur_nominal_tables_reproduce_ur_description_hashes():
+    # every UR type's table: the hash ur_description publishes in config/<type>/default_kinematics.yaml
+    from robocal.workflows.controller import load_nominal
+
+    published = {"ur3": "calib_9122066269688285636", "ur5": "calib_209549117540498681",
+                 "ur10": "calib_17227329492635474227", "ur3e": "calib_16756443741236045476",
+                 "ur5e": "calib_12788084448423163542", "ur10e": "calib_5119701370761913513",
+                 "ur16e": "calib_1935737212149401527", "ur20": "calib_4890363623803256388",
+                 "ur30": "calib_12001109639981648826"}
+    for arm, h in published.items():
+        dh = ur_controller_dh(load_nominal(arm), None)
+        assert ur_driver_hash(dh["theta"], dh["d"], dh["a"], dh["alpha"]) == h, arm

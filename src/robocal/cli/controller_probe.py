@@ -38,12 +38,11 @@ def probe_program_cmd(robot, language, count, seed, host, port, out_file, overwr
     from ..io.atomic import atomic_write_text
     from ..io.controller_pairs import CONTROLLERS
     from ..io.programs.probe import probe_program_text
-    from ..robots import load_robot
-    from ..workflows.controller import random_joints
+    from ..workflows.controller import load_nominal, random_joints
 
     if count < 10:
         raise click.ClickException(f"--count must be at least 10 (50+ recommended), got {count}")
-    model = load_robot(robot)
+    model = load_nominal(robot)
     q = random_joints(model, count, seed)
     text = probe_program_text(language, q, host=host, port=port)
     atomic_write_text(out_file, text, overwrite=overwrite)
@@ -74,12 +73,11 @@ def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_fi
     """A virtual controller whose hidden model is ROBOT answers the probe program of LANGUAGE:
     the robocal-pair lines it would print (for trying `controller probe` without a robot)."""
     from ..io.atomic import atomic_write_text
-    from ..robots import load_robot
     from ..sim.controller import probe_pairs_text
-    from ..workflows.controller import random_joints, refuse_same_path
+    from ..workflows.controller import load_nominal, random_joints, refuse_same_path
 
     refuse_same_path(out_file, robot)
-    model = load_robot(robot)
+    model = load_nominal(robot)
     text = probe_pairs_text(model, random_joints(model, count, seed), language, resolution_mm=noise_mm,
                             resolution_deg=noise_deg)
     atomic_write_text(out_file, text, overwrite=overwrite)

@@ -34,6 +34,52 @@ __all__ = ["UR_PI_2", "ControllerInputError", "ur_controller_dh", "import_ur", "
 UR_PI_2 = 1.570796327
 
 
+#: Nominal DH tables of the UR arm types (d1, a2, a3, d4, d5, d6 [m]; theta 0; alpha 90, 0, 0, 90, -90, 0 deg),
+#: as ur_description's ``config/<type>/default_kinematics.yaml`` encodes them
+#: (UniversalRobots/Universal_Robots_ROS2_Description); each reproduces that file's published driver
+#: ``hash`` (tests/test_controller.py), so the six values are the controller's own to the hash's 6 digits.
+UR_NOMINAL_DH = {
+    "ur3": (0.1519, -0.24365, -0.21325, 0.11235, 0.08535, 0.0819),
+    "ur5": (0.089159, -0.425, -0.39225, 0.10915, 0.09465, 0.0823),
+    "ur10": (0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922),
+    "ur3e": (0.15185, -0.24355, -0.2132, 0.13105, 0.08535, 0.0921),
+    "ur5e": (0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996),
+    "ur10e": (0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655),
+    "ur16e": (0.1807, -0.4784, -0.36, 0.17415, 0.11985, 0.11655),
+    "ur20": (0.2363, -0.862, -0.7287, 0.201, 0.1593, 0.1543),
+    "ur30": (0.2363, -0.637, -0.5037, 0.201, 0.1593, 0.1543),
+}
+
+
+def ur_nominal_model(arm_type: str) -> RobotModel:
+    """The nominal DH model (mm, deg file units) of a UR arm type from :data:`UR_NOMINAL_DH`."""
+    from ..robots.loader import parse_robot
+
+    d1, a2, a3, d4, d5, d6 = UR_NOMINAL_DH[arm_type]
+    rows = [(d1, 0, 90), (0, a2, 0), (0, a3, 0), (d4, 0, 90), (d5, 0, -90), (d6, 0, 0)]
+    joints = [{"name": f"J{i + 1}", "type": "revolute", "theta": 0.0, "d": round(d * 1000, 9), "a": round(a * 1000, 9),
+               "alpha": float(al), "limits": [-360.0, 360.0]} for i, (d, a, al) in enumerate(rows)]
+    data = {"format": "robocal-robot/1", "name": arm_type, "title": f"Universal Robots {arm_type.upper()} (nominal)",
+            "model": "dh", "length_unit": "mm", "angle_unit": "deg",
+            "source": f"UR nominal DH of the {arm_type.upper()} as ur_description's config/{arm_type}/"
+                      "default_kinematics.yaml encodes it (robocal.workflows.controller.UR_NOMINAL_DH); limits +-360 deg",
+            "controller_joints": [f"J{i + 1}" for i in range(6)], "joints": joints}
+    return parse_robot(data, origin=f"<UR nominal {arm_type}>")
+
+
+def load_nominal(name) -> RobotModel:
+    """A robot by name or file (:func:`robocal.robots.load_robot`); a UR arm type that robocal does
+    not ship as a file (``ur5e``, ``ur16e``, ...) comes from :data:`UR_NOMINAL_DH`."""
+    from ..robots import RobotFileError
+
+    try:
+        return load_robot(name)
+    except RobotFileError:
+        if str(name).lower() in UR_NOMINAL_DH:
+            return ur_nominal_model(str(name).lower())
+        raise
+
+
 class ControllerInputError(InputError):
     """Inputs of a ``robocal controller`` command do not fit together (the message says how)."""
 
@@ -184,7 +230,7 @@ def import_ur(conf_path, nominal_name, *, n_check: int = 1000, seed: int = 0, to
     ``verdict`` (sanity gates).
     """
     cal = read_calibration_conf(conf_path)
-    nominal = load_robot(nominal_name)
+    nominal = load_nominal(nominal_name)
     dh = ur_controller_dh(nominal, cal)
     th, d, a, al = _dh_mm(dh)
     P, U, T_last = dh_table_axes(th, d, a, al)
@@ -301,7 +347,7 @@ def export_ur(model_path, out, *, hash_value=None, overwrite=False, n_check=1000
     random joint sets. Returns a dict with ``file``, ``hash``, ``agreement``, ``base_left_out``.
     """
     refuse_same_path(out, model_path)
-    model = load_robot(model_path)
+    model = load_nominal(model_path)
     origins = ur_joint_origins(model)
     if hash_value is None:
         from ..kinematics.fingerprint import model_fingerprint
@@ -347,7 +393,7 @@ def model_from_kinematics_yaml(path, nominal_name) -> dict:
     ``nominal_name``: the arm type's nominal robot (names, limits, branch choices). Returns
     ``{"model", "hash", "origins"}`` (origins (4, 4) longdouble [mm]).
     """
-    nominal = load_robot(nominal_name)
+    nominal = load_nominal(nominal_name)
     raw, h = read_kinematics_yaml(path)
     origins = [_origin_from_yaml(xyz, rpy) for xyz, rpy in raw]
     LD = np.longdouble
@@ -417,7 +463,7 @@ def table_text(model: RobotModel) -> str:
 
 def export_table(model_path, out, *, overwrite=False) -> dict:
     refuse_same_path(out, model_path)
-    model = load_robot(model_path)
+    model = load_nominal(model_path)
     path = atomic_write_text(out, table_text(model), overwrite=overwrite)
     return {"file": path, "kind": model.kind if model.kind != "urdf" else "urdf", "model": model}
 
@@ -427,7 +473,7 @@ def export_urdf(model_path, out, *, overwrite=False, n_check=1000, seed=0) -> di
     from ..io.urdf import read_urdf, write_urdf
 
     refuse_same_path(out, model_path)
-    model = load_robot(model_path)
+    model = load_nominal(model_path)
     path = write_urdf(model, out, overwrite=overwrite)
     back = read_urdf(path)
     q = random_joints(model, n_check, seed)

@@ -23,9 +23,8 @@ from ..kinematics.links import Link, frame_from_xyz_rpy
 from ..kinematics.model import EndEffector, RobotModel
 from ..kinematics.remodel import RemodelError, model_axes, well_conditioned_mdh
 from ..metrics import error_statistics
-from ..robots import load_robot
 from ..transforms import euler_from_matrix, rotvec_from_matrix
-from .controller import ControllerInputError, random_joints
+from .controller import ControllerInputError, load_nominal, random_joints
 
 __all__ = ["probe_fit", "model_diff", "probe_start_model", "LEVER_MM"]
 
@@ -132,7 +131,7 @@ def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise
     """
     from scipy.optimize import least_squares
 
-    nominal = load_robot(nominal_name)
+    nominal = load_nominal(nominal_name)
     pairs = read_probe_pairs(pairs_path, controller, nominal.n_joints)
     if len(pairs.q) < 10:
         raise ControllerInputError(f"{pairs_path}: {len(pairs.q)} pairs; probing needs at least 10 (50+ recommended)")
@@ -256,8 +255,8 @@ def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
     after the best-fit rigid transform of B's base onto A's (the part of the difference a re-taught
     base frame removes is the rest).
     """
-    A = load_robot(model_a) if not isinstance(model_a, RobotModel) else model_a
-    B = load_robot(model_b) if not isinstance(model_b, RobotModel) else model_b
+    A = load_nominal(model_a) if not isinstance(model_a, RobotModel) else model_a
+    B = load_nominal(model_b) if not isinstance(model_b, RobotModel) else model_b
     if A.n_joints != B.n_joints:
         raise ControllerInputError(f"{A.name} has {A.n_joints} joints, {B.name} {B.n_joints}")
     lo = np.maximum(A.limits[:, 0], B.limits[:, 0])
