@@ -390,3 +390,39 @@ def test_ur_nominal_tables_reproduce_ur_description_hashes():
     for arm, h in published.items():
         dh = ur_controller_dh(load_nominal(arm), None)
         assert ur_driver_hash(dh["theta"], dh["d"], dh["a"], dh["alpha"]) == h, arm
+
+
+def test_table_reproduces_the_model_fk(tmp_path):
+    # the MDH table read by its own header formula (written here independently of robocal's kernels)
+    a = tmp_path / "a.toml"
+    assert run("controller", "import", "ur", "ur10e", DATA / "ur10e_driver_test_b.conf", "--out", a).exit_code == 0
+    assert run("controller", "export", "table", a, "--out", tmp_path / "t.csv").exit_code == 0
+    lines = [ln for ln in (tmp_path / "t.csv").read_text().splitlines() if not ln.startswith("#")]
+    cols = lines[0].split(",")
+    rows = [dict(zip(cols, ln.split(","))) for ln in lines[1:]]
+
+    def rx(t):
+        c, s = np.cos(t), np.sin(t)
+        return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+
+    def ry(t):
+        c, s = np.cos(t), np.sin(t)
+        return np.array([[c, 0, s, 0], [0, 1, 0, 0], [-s, 0, c, 0], [0, 0, 0, 1.0]])
+
+    def rz(t):
+        c, s = np.cos(t), np.sin(t)
+        return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+
+    def tr(x, y, z):
+        T = np.eye(4)
+        T[:3, 3] = (x, y, z)
+        return T
+
+    model = load_robot(a)
+    for q in random_joints(model, 50, seed=4):
+        T = np.eye(4)
+        for r, qi in zip(rows, q):
+            T = (T @ rx(np.radians(float(r["alpha_deg"]))) @ tr(float(r["a_mm"]), 0, 0)
+                 @ ry(np.radians(float(r["beta_deg"]))) @ rz(np.radians(float(r["theta_deg"])) + qi)
+                 @ tr(0, 0, float(r["d_mm"])))
+        assert np.abs(T - model.fk(q)).max() < 1e-9

@@ -418,46 +418,60 @@ _TABLE_COLUMNS = {
     "dh_beta": (("theta", "deg"), ("d", "mm"), ("a", "mm"), ("alpha", "deg"), ("beta", "deg")),
     "mdh": (("alpha", "deg"), ("a", "mm"), ("beta", "deg"), ("theta", "deg"), ("d", "mm")),
     "urdf": (("x", "mm"), ("y", "mm"), ("z", "mm"), ("roll", "deg"), ("pitch", "deg"), ("yaw", "deg"),
-             ("theta", "deg")),
+             ("theta", "deg"), ("d", "mm")),
 }
 _FORMULAS = {
-    "dh": "link i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)  (standard DH; Hayati's beta)",
-    "dh_beta": "link i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)  (standard DH; Hayati's beta)",
-    "mdh": "link i = Rx(alpha_i) Tx(a_i) Ry(beta_i) Rz(theta_i + q_i) Tz(d_i)  (Craig's modified DH with beta)",
-    "urdf": "link i = Txyz(x_i, y_i, z_i) Rz(yaw_i) Ry(pitch_i) Rx(roll_i) Rz(theta_i + q_i)  (URDF origin, axis z)",
+    "dh": "link i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)  (standard DH; Hayati's beta)",
+    "dh_beta": "link i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)  (standard DH; Hayati's beta)",
+    "mdh": "link i = Rx(alpha_i) Tx(a_i) Ry(beta_i) Rz(theta_i) Tz(d_i)  (Craig's modified DH with beta)",
+    "urdf": "link i = Txyz(x_i, y_i, z_i) Rz(yaw_i) Ry(pitch_i) Rx(roll_i) R_axis(theta_i) T_axis(d_i)  (URDF origin, "
+            "then the motion about / along the unit axis)",
 }
 
 
 def table_text(model: RobotModel) -> str:
     """A controller-neutral CSV table of the model's kinematic parameters with units.
 
-    ``#`` lines give the link formula, the base and the flange transforms; the header names each
-    column with its unit (``theta_deg``, ``d_mm`` ...); one row per joint.
+    ``#`` lines give the link formula, the joint coupling, the base and the end-effector transforms;
+    the header names each column with its unit (``theta_deg``, ``d_mm`` ...); one row per link.
+    DH-family models whose links all share the model's convention are written in it; any other
+    model as URDF origins with ``axis_x, axis_y, axis_z`` columns. A ``parent`` column appears for trees.
     """
-    if model.kind in ("dh", "dh_beta", "mdh"):
-        kind = model.kind
-    else:
+    kind = model.kind
+    if kind not in ("dh", "dh_beta", "mdh") or any(L.convention != kind for L in model.links):
         kind = "urdf"
         model = to_urdf_kind(model)
-        if any(np.abs(np.asarray(L.axis) - (0, 0, 1.0)).max() > 0 for L in model.links if L.moves):
-            raise ControllerInputError(f"{model.name}: a table needs joints turning about their own z axis")
     cols = _TABLE_COLUMNS[kind]
     lines = [f"# robocal kinematic table of {model.title or model.name} ({model.name}), model kind {kind}",
-             f"# {_FORMULAS[kind]}; q_i the controller joint value (sign/coupling below if any)",
-             "# FK = T_base * link_1 * ... * link_n * T_flange; lengths in mm, angles in degrees"]
-    for label, T in (("T_base", model.T_world_base), ("T_flange", model.end_effectors[0].T_link_ee)):
+             f"# {_FORMULAS[kind]}",
+             "# a moving joint adds its model joint value q_i to theta_i (revolute) or d_i (prismatic); "
+             "q_model = C q_controller",
+             "# FK = T_base * link_1 * ... * link_n * T_end_effector; lengths in mm, angles in degrees"]
+    if not (model.coupling.shape[0] == model.coupling.shape[1] and np.array_equal(model.coupling,
+                                                                                   np.eye(len(model.coupling)))):
+        lines.append(f"# coupling C (model joints x controller joints {list(model.controller_joints)}) = "
+                     f"{model.coupling.tolist()}")
+    names = [L.name for L in model.links]
+    frames = [("T_base", "", model.T_world_base)] + [
+        (f"T_end_effector {e.name}", f" on {names[e.link] if e.link >= 0 else 'the base'}", e.T_link_ee)
+        for e in model.end_effectors]
+    for label, where, T in frames:
         rpy = np.degrees(euler_from_matrix(np.asarray(T)[:3, :3], "rpy"))
-        lines.append(f"# {label}: xyz_mm = [{', '.join(repr(float(v)) for v in np.asarray(T)[:3, 3])}], "
+        lines.append(f"# {label}{where}: xyz_mm = [{', '.join(repr(float(v)) for v in np.asarray(T)[:3, 3])}], "
                      f"rpy_deg = [{', '.join(repr(float(v)) for v in rpy)}] (R = Rz(yaw) Ry(pitch) Rx(roll))")
-    if not np.array_equal(model.coupling, np.eye(len(model.coupling))) or model.coupling.shape[0] != model.n_joints:
-        lines.append(f"# joint coupling q_model = C q_controller, C = {model.coupling.tolist()}")
-    lines.append("joint," + ",".join(f"{n}_{u}" for n, u in cols) + ",type")
+    tree = not model.is_serial
+    header = ["joint"] + [f"{n}_{u}" for n, u in cols] + (["axis_x", "axis_y", "axis_z"] if kind == "urdf" else [])
+    header += ["type"] + (["parent"] if tree else [])
+    lines.append(",".join(header))
     for L in model.links:
         vals = []
         for n, u in cols:
             v = L.params.get(n, 0.0)
             vals.append(repr(float(math.degrees(v) if u == "deg" else v)))
-        lines.append(f"{L.name}," + ",".join(vals) + f",{L.joint_type}")
+        if kind == "urdf":
+            vals += [repr(float(a)) for a in L.axis]
+        row = [L.name] + vals + [L.joint_type] + ([names[L.parent] if L.parent >= 0 else "base"] if tree else [])
+        lines.append(",".join(row))
     return "\n".join(lines) + "\n"
 
 
