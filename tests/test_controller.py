@@ -426,3 +426,23 @@ def test_table_reproduces_the_model_fk(tmp_path):
                  @ ry(np.radians(float(r["beta_deg"]))) @ rz(np.radians(float(r["theta_deg"])) + qi)
                  @ tr(0, 0, float(r["d_mm"])))
         assert np.abs(T - model.fk(q)).max() < 1e-9
+
+
+def test_probe_reads_a_ur_rtde_recording(tmp_path):
+    # UR's RTDE record.py layout: a space-separated header with actual_q_* and actual_TCP_pose_* columns
+    from robocal.transforms import pose_from_transform
+
+    true = _true_controller()
+    q = random_joints(true, 80, seed=12)
+    pose = pose_from_transform(true.fk(q), "rotvec", "m", "rad")
+    header = "timestamp " + " ".join(f"actual_q_{k}" for k in range(6)) + " " + " ".join(
+        f"actual_TCP_pose_{k}" for k in range(6))
+    rows = [" ".join(f"{v:.9f}" for v in [0.002 * i, *q[i], *pose[i]]) for i in range(len(q))]
+    f = tmp_path / "robot_data.csv"
+    f.write_text(header + "\n" + "\n".join(rows) + "\n")
+    res = run("controller", "probe", "ur10", f, "--json", "--noise", 0.001, "--orientation-noise", 0.0001)
+    assert res.exit_code == 0, res.output
+    import json
+
+    doc = json.loads(res.output)
+    assert doc["controller"] == "ur" and doc["pairs"] == 80 and not doc["runs_nominal"]

@@ -7,7 +7,8 @@ controller for the flange pose of each joint set with its own forward kinematics
 
     robocal-pair,<controller>,<index>,<6 joint values>,<6 or 7 pose values>
 
-in the controller's own units and orientation convention (:data:`CONTROLLERS`). Anything before
+in the controller's own units and orientation convention (:data:`CONTROLLERS`). A UR RTDE
+recording (``actual_q_*`` and ``actual_TCP_pose_*`` columns, TCP zero) is read as pairs too. Anything before
 ``robocal-pair`` on a line (log time stamps, a socket listener's prefix) and brackets or a ``p``
 in front of lists (URScript's ``to_str``) are ignored, so a controller log or a socket transcript
 can be read as it is.
@@ -72,6 +73,8 @@ def parse_probe_pairs(text: str, origin: str = "<pairs>", controller: str | None
 
     ``controller``: expected controller name (default: the one the lines name; mixed names raise).
     """
+    if "robocal-pair" not in text and "actual_q_0" in text and "actual_TCP_pose_0" in text:
+        return _parse_rtde(text, origin, controller, n_joints)
     rows, found = [], None
     for no, raw in enumerate(text.splitlines(), 1):
         k = raw.find("robocal-pair")
@@ -112,6 +115,39 @@ def parse_probe_pairs(text: str, origin: str = "<pairs>", controller: str | None
     except ValueError as exc:
         raise ProbePairsError(None, f"{origin}: {exc}") from None
     return ProbePairs(q, T, arr[:, 0].astype(int), found, origin)
+
+
+def _parse_rtde(text: str, origin: str, controller, n_joints: int) -> ProbePairs:
+    """Pairs from a UR RTDE recording (``record.py`` of UR's RTDE client: a header naming the columns,
+    space or comma separated) with ``actual_q_0..5`` [rad] and ``actual_TCP_pose_0..5`` [m, rotation
+    vector rad] -- both from the same controller cycle, so each row is a pair. The installation's TCP
+    must be zero (the flange) while recording."""
+    if controller not in (None, "ur"):
+        raise ProbePairsError(None, f"{origin}: an RTDE recording comes from a UR controller, not {controller!r}")
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    head_at = next(i for i, ln in enumerate(lines) if "actual_q_0" in ln)
+    sep = "," if "," in lines[head_at] else None
+    header = [h.strip() for h in lines[head_at].split(sep)]
+    try:
+        qc = [header.index(f"actual_q_{k}") for k in range(n_joints)]
+        pc = [header.index(f"actual_TCP_pose_{k}") for k in range(6)]
+    except ValueError as exc:
+        raise ProbePairsError(None, f"{origin}: RTDE header lacks a column ({exc})") from None
+    rows = []
+    for no, ln in enumerate(lines[head_at + 1:], head_at + 2):
+        cells = [c.strip() for c in ln.split(sep)]
+        try:
+            rows.append([float(cells[k]) for k in qc + pc])
+        except (ValueError, IndexError):
+            raise ProbePairsError(None, f"{origin}, row {no}: expected numbers in the actual_q / actual_TCP_pose "
+                                        "columns") from None
+    if not rows:
+        raise ProbePairsError(None, f"{origin}: the RTDE recording has no rows")
+    arr = np.array(rows)
+    if not np.isfinite(arr).all():
+        raise ProbePairsError(None, f"{origin}: a value is not finite")
+    T = transform_from_pose(arr[:, n_joints:], "rotvec", "m", "rad")
+    return ProbePairs(arr[:, :n_joints], T, np.arange(len(arr)), "ur", origin)
 
 
 def read_probe_pairs(path, controller: str | None = None, n_joints: int = 6) -> ProbePairs:

@@ -114,7 +114,7 @@ def _pose_error_stats(dp, dr) -> dict:
 
 
 def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise_deg=0.001, flange="auto",
-              max_iterations=50) -> dict:
+              max_iterations=50, max_pairs=2000) -> dict:
     """Fit the controller's model to probe pairs; see the module docstring.
 
     ``flange``: ``fixed`` keeps ROBOT's flange frame on joint 6 (UR: the flange is on the axis);
@@ -133,6 +133,10 @@ def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise
 
     nominal = load_nominal(nominal_name)
     pairs = read_probe_pairs(pairs_path, controller, nominal.n_joints)
+    if len(pairs.q) > max_pairs:  # a long recording: evenly spaced rows are enough
+        keep_rows = np.unique(np.linspace(0, len(pairs.q) - 1, max_pairs).round().astype(int))
+        pairs = type(pairs)(pairs.q[keep_rows], pairs.T[keep_rows], pairs.index[keep_rows], pairs.controller,
+                            pairs.origin)
     if len(pairs.q) < 10:
         raise ControllerInputError(f"{pairs_path}: {len(pairs.q)} pairs; probing needs at least 10 (50+ recommended)")
     if flange not in ("auto", "fixed", "free"):
