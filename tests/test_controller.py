@@ -446,3 +446,13 @@ def test_probe_reads_a_ur_rtde_recording(tmp_path):
 
     doc = json.loads(res.output)
     assert doc["controller"] == "ur" and doc["pairs"] == 80 and not doc["runs_nominal"]
+
+
+def test_well_conditioned_form_is_a_fixed_point():
+    # remodelling a calibrated (non-parallel) MDH + beta model with itself as reference gives it back
+    from robocal.kinematics.remodel import model_axes, well_conditioned_mdh
+
+    m = import_ur(DATA / "ur10e_driver_test_a.conf", "ur10e", n_check=2)["model"]
+    again = well_conditioned_mdh(*model_axes(m), m)
+    assert np.allclose(again.params.values, m.params.values, atol=1e-9)
+    assert [L.fixed for L in again.links] == [L.fixed for L in m.links]

@@ -35,6 +35,11 @@ LD = np.longdouble
 EXTENDED_PRECISION = bool(np.finfo(LD).eps < 1e-18)
 
 
+#: Consecutive axes of the reference model count as parallel below this sine of their angle (0.05:
+#: ~2.9 deg; nominal arms have 0 or 90 deg, a calibrated model a few hundredths of a degree off).
+PARALLEL_SIN = 0.05
+
+
 class RemodelError(InputError):
     """A chain cannot be described as a well-conditioned MDH + beta model (the message says why)."""
 
@@ -172,7 +177,7 @@ def _reference_frames(reference: RobotModel):
             T = T @ _elementary(code, LD(link.params[pname]))
         frames.append(T.copy())
     z = np.array([F[:3, 2] for F in frames])
-    parallel = np.array([np.linalg.norm(np.cross(z[i], z[i + 1])) < 1e-6 for i in range(len(z) - 1)])
+    parallel = np.array([np.linalg.norm(np.cross(z[i], z[i + 1])) < PARALLEL_SIN for i in range(len(z) - 1)])
     return ref, np.array(frames), parallel
 
 

@@ -21,7 +21,7 @@ from ..calib.sanity import Verdict
 from ..io.controller_pairs import CONTROLLERS, read_probe_pairs
 from ..kinematics.links import Link, frame_from_xyz_rpy
 from ..kinematics.model import EndEffector, RobotModel
-from ..kinematics.remodel import RemodelError, model_axes, well_conditioned_mdh
+from ..kinematics.remodel import PARALLEL_SIN, RemodelError, model_axes, well_conditioned_mdh
 from ..metrics import error_statistics
 from ..transforms import euler_from_matrix, rotvec_from_matrix
 from .controller import ControllerInputError, load_nominal, random_joints
@@ -68,7 +68,7 @@ def _convention_free(model: RobotModel) -> np.ndarray:
     non-parallel pair, and a flange frame's z and yaw (they repeat the last joint's d and theta)."""
     z = [np.asarray(F[:3, 2], float) for F in model.link_frames(np.zeros(model.n_joints))]
     n = len(z)
-    parallel = [np.linalg.norm(np.cross(z[i], z[i + 1])) < 0.05 for i in range(n - 1)]
+    parallel = [np.linalg.norm(np.cross(z[i], z[i + 1])) < PARALLEL_SIN for i in range(n - 1)]
     free = np.ones(len(model.params), dtype=bool)
     for k, link in enumerate(model.links):
         if link.joint_type == "fixed":
