@@ -152,8 +152,8 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, flange, out_fi
                        "(change +- 1 sigma):")
             for name, c in sig.items():
                 val, u = _show(c["change"], c["unit"])
-                s, _ = _show(c["sigma"], c["unit"])
-                click.echo(f"   {name:<8}{val:+12.5f} +- {s:.5f} {u}")
+                s = "n/a" if c["sigma"] is None else f"{_show(c['sigma'], c['unit'])[0]:.5f}"
+                click.echo(f"   {name:<8}{val:+12.5f} +- {s} {u}")
         click.echo(f"residual after the fit: max {fr['position_mm']['max']:.4f} mm, {fr['rotation_deg']['max']:.5f} "
                    f"deg (RMS {fr['position_mm']['rms']:.4f} mm; the resolution allows {r['tolerance']['mm']:.4f} mm)")
         if r["held"]:

@@ -203,8 +203,9 @@ def probe_fit(nominal_name, pairs_path, *, controller=None, noise_mm=0.01, noise
         if unit == "rad":
             delta = (delta + math.pi) % (2 * math.pi) - math.pi
         tiny = 1e-4 if unit == "mm" else 1e-7
-        changes[name] = {"value": float(params[col]), "change": delta, "sigma": float(sig[k]), "unit": unit,
-                         "significant": bool(abs(delta) > max(3 * sig[k], tiny))}
+        sigma = float(sig[k]) if np.isfinite(sig[k]) else None
+        changes[name] = {"value": float(params[col]), "change": delta, "sigma": sigma, "unit": unit,
+                         "significant": bool(abs(delta) > max(3 * (sigma if sigma is not None else 0.0), tiny))}
     nominal_res = _pose_error_stats(dp0, dr0)
     fit_res = _pose_error_stats(dp1, dr1)
     # a reported pose rounded to the resolution is off by at most half a step per coordinate
