@@ -79,7 +79,7 @@ def _split_robot_conf(args, robot_opt):
     return a, b
 
 
-@import_group.command("ur")
+@import_group.command("ur", short_help="UR calibration.conf -> exact, well-conditioned robot file.")
 @click.argument("args", nargs=-1, required=True, metavar="ROBOT CALIBRATION_CONF")
 @click.option("--robot", "robot_opt", default=None, metavar="NAME",
               help="The arm type's nominal robot (alias of the ROBOT argument), e.g. ur10, ur10e or a DH robot file.")
@@ -140,7 +140,7 @@ def import_ur_cmd(args, robot_opt, out_file, n_check, seed, overwrite, force, as
     _gate_exit(v, as_json, payload, wrote)
 
 
-@import_group.command("ur-kinematics")
+@import_group.command("ur-kinematics", short_help="ur_description kinematics YAML -> robot file.")
 @click.argument("robot")
 @click.argument("yaml_file", type=FILE, metavar="KINEMATICS_YAML")
 @click.option("--out", "out_file", required=True, type=FILE, help="Robot file to write (TOML; mm, deg).")
@@ -177,7 +177,7 @@ def import_ur_kinematics_cmd(robot, yaml_file, out_file, overwrite, force, as_js
     _gate_exit(v, as_json, payload, ok or force)
 
 
-@export_group.command("ur")
+@export_group.command("ur", short_help="Robot file -> ur_description kinematics YAML.")
 @click.argument("model_file", type=FILE, metavar="MODEL")
 @click.option("--out", "out_file", required=True, type=FILE,
               help="kinematics YAML file to write (ur_description's format: metres, radians).")
@@ -210,7 +210,7 @@ def export_ur_cmd(model_file, out_file, hash_value, overwrite, as_json):
     _gate_exit(Verdict(tuple(reasons), {}), as_json, payload, True)
 
 
-@export_group.command("urdf")
+@export_group.command("urdf", short_help="Robot file -> URDF, checked against the model.")
 @click.argument("model_file", type=FILE, metavar="MODEL")
 @click.option("--out", "out_file", required=True, type=FILE, help="URDF file to write (metres, radians).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
@@ -232,7 +232,7 @@ def export_urdf_cmd(model_file, out_file, overwrite, as_json):
     _gate_exit(Verdict(tuple(reasons), {}), as_json, payload, True)
 
 
-@export_group.command("table")
+@export_group.command("table", short_help="Robot file -> DH / MDH table with units (CSV).")
 @click.argument("model_file", type=FILE, metavar="MODEL")
 @click.option("--out", "out_file", required=True, type=FILE,
               help="CSV file to write: one row per joint, columns named with units (theta_deg, d_mm, ...).")

@@ -20,7 +20,7 @@ def _show(value, unit):
     return value * f, u
 
 
-@click.command("probe-program")
+@click.command("probe-program", short_help="Write the program that prints a controller's own FK.")
 @click.argument("robot")
 @click.argument("language", type=click.Choice(["ur", "abb", "kuka", "doosan"]))
 @click.option("--count", default=100, show_default=True, help="Number of joint sets to probe.")
@@ -57,7 +57,7 @@ def probe_program_cmd(robot, language, count, seed, host, port, out_file, overwr
                    f"{c['function']}; read its robocal-pair lines back with `robocal controller probe {robot} FILE`")
 
 
-@click.command("probe-simulate")
+@click.command("probe-simulate", short_help="A virtual controller's answer to the probe program.")
 @click.argument("robot")
 @click.argument("language", type=click.Choice(["ur", "abb", "kuka", "doosan"]))
 @click.option("--count", default=100, show_default=True, help="Number of joint sets (as probe-program draws them).")
@@ -90,7 +90,7 @@ def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_fi
         click.echo(f"wrote {out_file}: {count} {language} pairs of a virtual controller running {model.name}")
 
 
-@click.command("probe")
+@click.command("probe", short_help="Fit ROBOT to (joints, controller pose) pairs.")
 @click.argument("robot")
 @click.argument("pairs", type=FILE)
 @click.option("--controller", "controller_name", default=None, type=click.Choice(["ur", "abb", "kuka", "doosan"]),
@@ -163,7 +163,7 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, flange, out_fi
     _gate_exit(v, as_json, payload, wrote or out_file is None)
 
 
-@click.command("diff")
+@click.command("diff", short_help="TCP difference of two models over the working range.")
 @click.argument("model_a", metavar="MODEL_A")
 @click.argument("model_b", metavar="MODEL_B")
 @click.option("--cell", default=None, type=FILE,
