@@ -252,6 +252,10 @@ def test_probe_programs_are_written_and_their_lines_read_back(tmp_path):
     assert np.allclose(p.T[0, :3, 3], [-612.0, -256.1, 11.6])
     abb = "robocal-pair,abb,3,10,20,30,40,50,60,1000.5,-20.25,900,0.5,0.5,0.5,0.5\n"
     assert np.allclose(parse_probe_pairs(abb).q[0], np.radians([10, 20, 30, 40, 50, 60]))
+    # a file whose records ran together (a printf without its newline)
+    kuka = ("robocal-pair,kuka,0,1,2,3,4,5,6,1000,0,1500,10,20,30\\n"
+            "robocal-pair,kuka,1,6,5,4,3,2,1,900,10,1400,-10,-20,-30\\n")
+    assert parse_probe_pairs(kuka).q.shape == (2, 6)
 
 
 def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):

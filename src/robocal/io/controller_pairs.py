@@ -76,11 +76,10 @@ def parse_probe_pairs(text: str, origin: str = "<pairs>", controller: str | None
     if "robocal-pair" not in text and "actual_q_0" in text and "actual_TCP_pose_0" in text:
         return _parse_rtde(text, origin, controller, n_joints)
     rows, found = [], None
-    for no, raw in enumerate(text.splitlines(), 1):
-        k = raw.find("robocal-pair")
-        if k < 0:
-            continue
-        rest = raw[k + len("robocal-pair"):].lstrip(" ,;:")
+    records = [(no, chunk) for no, raw in enumerate(text.splitlines(), 1)
+               for chunk in raw.split("robocal-pair")[1:]]  # a record per occurrence, several per line allowed
+    for no, chunk in records:
+        rest = chunk.lstrip(" ,;:")
         name = re.match(r"([A-Za-z]+)", rest)
         if not name:
             raise ProbePairsError(None, f"{origin}, line {no}: 'robocal-pair' without a controller name")

@@ -32,14 +32,14 @@ def _f(x: float, digits: int = 12) -> str:
 def _ur(q, host, port, name):
     lines = [f"def {name}():",
              "  # robocal controller probe-program ur: the controller's own forward kinematics at "
-             f"{len(q)} joint sets",
+             f"{len(q)} joint sets; run it as a program (e.g. sent to the controller's port 30002)",
              "  # (no motion). Listen on the PC first, e.g.  nc -l " + str(port) + " > pairs.txt",
              f'  socket_open("{host}", {port}, "robocal")']
     for i, row in enumerate(q):
         lines.append(f"  q = [{', '.join(_f(v) for v in row)}]")
         lines.append(f'  socket_send_line(str_cat("robocal-pair,ur,{i},", str_cat(to_str(q), str_cat(",", '
                      'to_str(get_forward_kin(q, p[0,0,0,0,0,0]))))), "robocal")')
-    lines += ['  socket_close("robocal")', "end", f"{name}()", ""]
+    lines += ['  socket_close("robocal")', "end", ""]
     return "\n".join(lines)
 
 
@@ -47,7 +47,8 @@ def _abb(q, name):
     qd = np.degrees(q)
     lines = [f"MODULE {name}",
              "  ! robocal controller probe-program abb: CalcRobT (the controller's own forward kinematics,",
-             f"  ! tool0 in wobj0) at {len(q)} joint sets, no motion; writes HOME:/robocal_pairs.txt",
+             f"  ! tool0 in wobj0) at {len(q)} joint sets, no motion; writes HOME:/robocal_pairs.txt;",
+             f"  ! load the module and call {name}_run",
              "  LOCAL VAR iodev f;",
              "  LOCAL PROC w(num i, jointtarget jt)",
              "    VAR robtarget p;",
@@ -61,7 +62,7 @@ def _abb(q, name):
              '    Write f, NumToStr(p.rot.q2, 8) + "," + NumToStr(p.rot.q3, 8) + "," \\NoNewLine;',
              "    Write f, NumToStr(p.rot.q4, 8);",
              "  ENDPROC",
-             "  PROC main()",
+             f"  PROC {name}_run()",
              '    Open "HOME:" \\File:="robocal_pairs.txt", f \\Write;']
     for i, row in enumerate(qd):
         lines.append(f"    w {i}, [[{', '.join(_f(v, 10) for v in row)}], [9E9, 9E9, 9E9, 9E9, 9E9, 9E9]];")
