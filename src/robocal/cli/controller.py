@@ -186,50 +186,50 @@ def import_ur_kinematics_cmd(robot, yaml_file, out_file, overwrite, force, as_js
                    "controller's own calibration; default robocal_<fingerprint>, which the driver reports as not "
                    "matching the robot.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+@click.option("--force", is_flag=True, help="Write the file even when its FK check fails (exit code 3 still).")
 @click.option("--json", "as_json", **_JSON)
-def export_ur_cmd(model_file, out_file, hash_value, overwrite, as_json):
+def export_ur_cmd(model_file, out_file, hash_value, overwrite, force, as_json):
     """Write MODEL (a 6-joint robot file ending at the flange) as the kinematics parameter file that
-    ur_robot_driver / ur_description load, and check its FK against the model's."""
+    ur_robot_driver / ur_description load, checked against the model's FK (1e-9 mm) before it is written."""
     from ..workflows.controller import export_ur
 
-    r = export_ur(model_file, out_file, hash_value=hash_value, overwrite=overwrite)
-    a = r["agreement"]
-    ok = a["max_mm"] <= 1e-9 and a["max_rad"] <= 1e-12
-    reasons = [] if ok else [f"the written file's FK differs from the model's by {a['max_mm']:.3g} mm / "
-                             f"{a['max_rad']:.3g} rad (limit 1e-9 mm, 1e-12 rad)"]
-    payload = {"status": "ok" if ok else "failed", "reasons": reasons, "file": str(r["file"]), "hash": r["hash"],
-               "fk_check": a, "base_left_out": r["base_left_out"]}
+    r = export_ur(model_file, out_file, hash_value=hash_value, overwrite=overwrite, force=force)
+    a, v = r["agreement"], r["verdict"]
+    payload = {"status": v.status, "reasons": list(v.reasons), "checks": v.checks,
+               "file": None if r["file"] is None else str(r["file"]), "hash": r["hash"], "fk_check": a,
+               "base_left_out": r["base_left_out"]}
     if not as_json:
-        click.echo(f"wrote {r['file']} (hash {r['hash']}); its chain's FK equals the model's to {a['max_mm']:.2e} mm / "
-                   f"{a['max_rad']:.2e} rad at {a['n']} random joint sets")
+        click.echo(f"the kinematics file's chain equals the model's FK to {a['max_mm']:.2e} mm / {a['max_rad']:.2e} rad "
+                   f"at {a['n']} random joint sets")
+        if r["file"] is not None:
+            click.echo(f"wrote {r['file']} (hash {r['hash']})")
         if r["base_left_out"]:
             click.echo("note: the model's [base] (robot base in the instrument frame) is not part of the kinematics "
                        "file; the file runs from the robot base to the flange")
-    from ..calib.sanity import Verdict
-
-    _gate_exit(Verdict(tuple(reasons), {}), as_json, payload, True)
+    _gate_exit(v, as_json, payload, r["file"] is not None)
 
 
 @export_group.command("urdf", short_help="Robot file -> URDF, checked against the model.")
 @click.argument("model_file", type=FILE, metavar="MODEL")
 @click.option("--out", "out_file", required=True, type=FILE, help="URDF file to write (metres, radians).")
 @click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+@click.option("--force", is_flag=True, help="Write the file even when its FK check fails (exit code 3 still).")
 @click.option("--json", "as_json", **_JSON)
-def export_urdf_cmd(model_file, out_file, overwrite, as_json):
-    """Write MODEL as URDF (calibrated joint origins) and check the file's FK against the model's."""
+def export_urdf_cmd(model_file, out_file, overwrite, force, as_json):
+    """Write MODEL as URDF (calibrated joint origins), checked against the model's FK (1e-6 mm) before
+    it is written."""
     from ..workflows.controller import export_urdf
 
-    r = export_urdf(model_file, out_file, overwrite=overwrite)
-    a = r["agreement"]
-    ok = a["max_mm"] <= 1e-6 and a["max_rad"] <= 1e-9
-    reasons = [] if ok else [f"the URDF's FK differs from the model's by {a['max_mm']:.3g} mm (limit 1e-6 mm)"]
-    payload = {"status": "ok" if ok else "failed", "reasons": reasons, "file": str(r["file"]), "fk_check": a}
+    r = export_urdf(model_file, out_file, overwrite=overwrite, force=force)
+    a, v = r["agreement"], r["verdict"]
+    payload = {"status": v.status, "reasons": list(v.reasons), "checks": v.checks,
+               "file": None if r["file"] is None else str(r["file"]), "fk_check": a}
     if not as_json:
-        click.echo(f"wrote {r['file']}; read back, its FK equals the model's to {a['max_mm']:.2e} mm / "
-                   f"{a['max_rad']:.2e} rad at {a['n']} random joint sets")
-    from ..calib.sanity import Verdict
-
-    _gate_exit(Verdict(tuple(reasons), {}), as_json, payload, True)
+        click.echo(f"the URDF read back equals the model's FK to {a['max_mm']:.2e} mm / {a['max_rad']:.2e} rad at "
+                   f"{a['n']} random joint sets")
+        if r["file"] is not None:
+            click.echo(f"wrote {r['file']}")
+    _gate_exit(v, as_json, payload, r["file"] is not None)
 
 
 @export_group.command("table", short_help="Robot file -> DH / MDH table with units (CSV).")

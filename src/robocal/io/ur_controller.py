@@ -35,7 +35,7 @@ from .atomic import atomic_write_text
 from .header import FileFormatError
 
 __all__ = ["UrCalibration", "read_calibration_conf", "parse_calibration_conf", "ur_driver_hash",
-           "UR_KINEMATICS_JOINTS", "write_kinematics_yaml", "kinematics_yaml_text", "read_kinematics_yaml",
+           "UR_KINEMATICS_JOINTS", "write_kinematics_yaml", "kinematics_yaml_text", "read_kinematics_yaml", "parse_kinematics_yaml",
            "UrFileError", "CALIBRATION_STATUS"]
 
 #: ``calibration_status`` values as the controller's file comments them.
@@ -238,6 +238,12 @@ def read_kinematics_yaml(path):
         text = p.read_text(encoding="utf-8")
     except OSError as exc:
         raise UrFileError(f"{p}: cannot read: {exc.strerror or exc}") from None
+    return parse_kinematics_yaml(text, str(p))
+
+
+def parse_kinematics_yaml(text: str, origin: str = "<kinematics.yaml>"):
+    """:func:`read_kinematics_yaml` of a text; ``origin`` names it in errors."""
+    p = origin
     top, joint, table, hash_value = None, None, {}, None
     for no, raw in enumerate(text.splitlines(), 1):
         line = raw.split("#", 1)[0].rstrip()

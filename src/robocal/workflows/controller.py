@@ -14,8 +14,8 @@ import numpy as np
 from ..calib.sanity import Verdict
 from ..errors import InputError
 from ..io.atomic import atomic_write_text
-from ..io.ur_controller import (read_calibration_conf, read_kinematics_yaml, ur_driver_hash,
-                                write_kinematics_yaml)
+from ..io.ur_controller import (kinematics_yaml_text, parse_kinematics_yaml, read_calibration_conf,
+                                read_kinematics_yaml, ur_driver_hash)
 from ..kinematics.convert import dh_to_mdh, to_urdf_kind
 from ..kinematics.model import RobotModel
 from ..kinematics.remodel import (EXTENDED_PRECISION, RemodelError, dh_table_axes, dh_table_fk, fk_longdouble, inverse_rigid,
@@ -337,16 +337,21 @@ def _yaml_origins(origins):
             for O in origins]
 
 
-def export_ur(model_path, out, *, hash_value=None, overwrite=False, n_check=1000, seed=0) -> dict:
-    """Write a robot file's kinematics as ur_description's ``kinematics`` YAML and check it.
+def export_ur(model_path, out, *, hash_value=None, overwrite=False, force=False, n_check=1000, seed=0,
+              tol_mm=1e-9, tol_rad=1e-12) -> dict:
+    """Write a robot file's kinematics as ur_description's ``kinematics`` YAML, checked first.
 
     ``hash_value``: the driver hash to write (``robocal controller import ur`` prints the
     controller's); default ``robocal_<fingerprint>``, which never matches a controller (the driver
     then logs that the file is not the controller's calibration, which is true of a model calibrated
-    with an instrument). The file is read back and its FK compared with the model's at ``n_check``
-    random joint sets. Returns a dict with ``file``, ``hash``, ``agreement``, ``base_left_out``.
+    with an instrument). The YAML text is parsed back and its FK compared with the model's at
+    ``n_check`` random joint sets; the file is written only when that check passes (or ``force``).
+    Returns a dict with ``file`` (None when not written), ``hash``, ``agreement``, ``verdict``,
+    ``base_left_out``.
     """
     refuse_same_path(out, model_path)
+    if Path(out).exists() and not overwrite:
+        raise FileExistsError(f"{out}: output file exists; pass --overwrite to replace it")
     model = load_nominal(model_path)
     origins = ur_joint_origins(model)
     if hash_value is None:
@@ -358,19 +363,23 @@ def export_ur(model_path, out, *, hash_value=None, overwrite=False, n_check=1000
                "(R = Rz(yaw) Ry(pitch) Rx(roll)); each joint turns about its own z. hash: the UR driver's\n"
                "calib_<std::hash of the controller DH table> when this is the controller's own calibration,\n"
                "else a robocal fingerprint (the driver then warns that it is not the controller's model).")
-    path = write_kinematics_yaml(out, _yaml_origins(origins), hash_value, comment, overwrite=overwrite)
-    back, _ = read_kinematics_yaml(path)
+    text = kinematics_yaml_text(_yaml_origins(origins), hash_value, comment)
+    back, _ = parse_kinematics_yaml(text, str(out))
     back_origins = [_origin_from_yaml(xyz, rpy) for xyz, rpy in back]
     q = random_joints(model, n_check, seed)
-    ref = fk_longdouble(model, q) if model.kind != "urdf" else None
-    if ref is None:
-        ref = np.asarray(model.fk(q), np.longdouble)
-        ref = inverse_rigid(np.asarray(model.T_world_base, np.longdouble))[None] @ ref
+    if model.kind != "urdf":
+        ref = fk_longdouble(model, q)
+    else:
+        ref = inverse_rigid(np.asarray(model.T_world_base, np.longdouble))[None] @ np.asarray(model.fk(q), np.longdouble)
     dp, ang = _pose_errors(ref, origins_fk(back_origins, q))
-    base_left_out = not np.allclose(model.T_world_base, np.eye(4))
-    return {"file": path, "hash": hash_value, "agreement": {"n": n_check, "max_mm": float(dp.max()),
-                                                             "max_rad": float(ang.max())},
-            "base_left_out": base_left_out, "model": model}
+    agreement = {"n": n_check, "max_mm": float(dp.max()), "max_rad": float(ang.max())}
+    ok = agreement["max_mm"] <= tol_mm and agreement["max_rad"] <= tol_rad
+    verdict = Verdict(() if ok else (f"the kinematics file's FK differs from the model's by {agreement['max_mm']:.3g} mm"
+                                     f" / {agreement['max_rad']:.3g} rad (limit {tol_mm:g} mm, {tol_rad:g} rad)",),
+                      {"fk_position": {"value": agreement["max_mm"], "limit": tol_mm, "unit": "mm", "passed": ok}})
+    path = atomic_write_text(out, text, overwrite=overwrite) if ok or force else None
+    return {"file": path, "hash": hash_value, "agreement": agreement, "verdict": verdict,
+            "base_left_out": not np.allclose(model.T_world_base, np.eye(4)), "model": model}
 
 
 def _origin_from_yaml(xyz_m, rpy):
@@ -482,18 +491,32 @@ def export_table(model_path, out, *, overwrite=False) -> dict:
     return {"file": path, "kind": model.kind if model.kind != "urdf" else "urdf", "model": model}
 
 
-def export_urdf(model_path, out, *, overwrite=False, n_check=1000, seed=0) -> dict:
-    """Write the model as URDF and check the file's FK (read back) against the model's."""
+def export_urdf(model_path, out, *, overwrite=False, force=False, n_check=1000, seed=0, tol_mm=1e-6,
+                tol_rad=1e-9) -> dict:
+    """Write the model as URDF, checked first: the URDF text is written to a scratch folder, read
+    back and its FK compared with the model's; the output is written only when that passes (or
+    ``force``)."""
     from ..io.urdf import read_urdf, write_urdf
 
+    import tempfile
+
     refuse_same_path(out, model_path)
+    if Path(out).exists() and not overwrite:
+        raise FileExistsError(f"{out}: output file exists; pass --overwrite to replace it")
     model = load_nominal(model_path)
-    path = write_urdf(model, out, overwrite=overwrite)
-    back = read_urdf(path)
+    with tempfile.TemporaryDirectory() as tmp:  # written and read back before the real output exists
+        trial = write_urdf(model, Path(tmp) / Path(out).name)
+        text = Path(trial).read_text(encoding="utf-8")
+        back = read_urdf(trial)
     q = random_joints(model, n_check, seed)
     dp, ang = _pose_errors(model.fk(q), back.fk(q))
-    return {"file": path, "agreement": {"n": n_check, "max_mm": float(dp.max()), "max_rad": float(ang.max())},
-            "model": model}
+    agreement = {"n": n_check, "max_mm": float(dp.max()), "max_rad": float(ang.max())}
+    ok = agreement["max_mm"] <= tol_mm and agreement["max_rad"] <= tol_rad
+    verdict = Verdict(() if ok else (f"the URDF's FK differs from the model's by {agreement['max_mm']:.3g} mm / "
+                                     f"{agreement['max_rad']:.3g} rad (limit {tol_mm:g} mm, {tol_rad:g} rad)",),
+                      {"fk_position": {"value": agreement["max_mm"], "limit": tol_mm, "unit": "mm", "passed": ok}})
+    path = atomic_write_text(out, text, overwrite=overwrite) if ok or force else None
+    return {"file": path, "agreement": agreement, "verdict": verdict, "model": model}
 
 
 def save_model(model: RobotModel, out, *, overwrite=False, comment=None) -> Path:
