@@ -17,15 +17,17 @@ from ..io.atomic import atomic_write_text
 from ..io.ur_controller import (kinematics_yaml_text, parse_kinematics_yaml, read_calibration_conf,
                                 read_kinematics_yaml, ur_driver_hash)
 from ..kinematics.convert import dh_to_mdh, to_urdf_kind
-from ..kinematics.model import RobotModel
-from ..kinematics.remodel import (EXTENDED_PRECISION, RemodelError, dh_table_axes, dh_table_fk, fk_longdouble, inverse_rigid,
-                                  well_conditioned_mdh)
-from ..robots import load_robot, save_robot
 from ..kinematics.links import frame_from_xyz_rpy
+from ..kinematics.model import RobotModel
+from ..kinematics.remodel import (EXTENDED_PRECISION, RemodelError, dh_table_axes, dh_table_fk, fk_longdouble,
+                                  inverse_rigid, well_conditioned_mdh)
+from ..robots import load_robot, save_robot
 from ..transforms import euler_from_matrix
 
-__all__ = ["UR_PI_2", "ControllerInputError", "ur_controller_dh", "import_ur", "ur_joint_origins", "export_ur",
-           "model_from_kinematics_yaml", "fk_agreement", "export_table", "export_urdf", "refuse_same_path"]
+__all__ = ["UR_PI_2", "UR_NOMINAL_DH", "ControllerInputError", "ur_nominal_model", "load_nominal", "ur_controller_dh",
+           "random_joints", "fk_agreement", "import_ur", "controller_comment", "ur_joint_origins", "origins_fk",
+           "export_ur", "model_from_kinematics_yaml", "table_text", "export_table", "export_urdf", "save_model",
+           "refuse_same_path"]
 
 #: The value UR controllers store for pi/2 in their nominal DH alphas: 1.570796327 (10 digits).
 #: Evidence: the UR driver's tests ("This is what the simulated robot reports as pi/2") and the real
