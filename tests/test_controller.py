@@ -460,3 +460,17 @@ def test_well_conditioned_form_is_a_fixed_point():
     again = well_conditioned_mdh(*model_axes(m), m)
     assert np.allclose(again.params.values, m.params.values, atol=1e-9)
     assert [L.fixed for L in again.links] == [L.fixed for L in m.links]
+
+
+def test_import_gate_on_calibration_status_and_force(tmp_path):
+    conf = tmp_path / "calibration.conf"
+    conf.write_text((DATA / "ur10_driver_test.conf").read_text().replace("calibration_status = 2",
+                                                                          "calibration_status = 1"))
+    out = tmp_path / "r.toml"
+    res = run("controller", "import", "ur", "ur10", conf, "--out", out)
+    assert res.exit_code == 3 and not out.exists() and "notLinearised" in res.output
+    res = run("controller", "import", "ur", "ur10", conf, "--out", out, "--force", "--json")
+    assert res.exit_code == 3 and out.exists()
+    import json
+
+    assert json.loads(res.output)["status"] == "failed"
