@@ -295,6 +295,11 @@ def well_conditioned_mdh(points, directions, T_base_ee, reference: RobotModel, *
             held.add("beta")
         if i + 1 < n and parallel[i]:
             held.add("d")
+        # held values are the convention's exact ones; what the construction returns differs by rounding only
+        if "beta" in held and abs(beta) < 1e-12:
+            beta = LD(0)
+        if "d" in held and abs(d - LD(ref.links[i].params["d"])) < 1e-9:
+            d = LD(ref.links[i].params["d"])
         links.append(Link(lk.name, "revolute", "mdh",
                           {"alpha": float(alpha), "a": float(a), "beta": float(beta), "theta": float(theta),
                            "d": float(d)}, i - 1, (0.0, 0.0, 1.0), frozenset(held)))
