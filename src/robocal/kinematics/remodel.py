@@ -298,7 +298,7 @@ def well_conditioned_mdh(points, directions, T_base_ee, reference: RobotModel, *
         # held values are the convention's exact ones; what the construction returns differs by rounding only
         if "beta" in held and abs(beta) < 1e-12:
             beta = LD(0)
-        if "d" in held and abs(d - LD(ref.links[i].params["d"])) < 1e-9:
+        if "d" in held and abs(d - LD(ref.links[i].params["d"])) < 1e-12:
             d = LD(ref.links[i].params["d"])
         links.append(Link(lk.name, "revolute", "mdh",
                           {"alpha": float(alpha), "a": float(a), "beta": float(beta), "theta": float(theta),
