@@ -262,7 +262,7 @@ def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):
     a = tmp_path / "controller.toml"
     assert run("controller", "import", "ur", "ur10", DATA / "ur10_driver_test.conf", "--out", a).exit_code == 0
     res = run("controller", "diff", "ur10", a, "--poses", 300, "--cell", tmp_path / "cell.toml", "--json",
-              "--out", tmp_path / "d.csv")
+              "--out", tmp_path / "d.csv", "--plot", tmp_path / "map.png")
     assert res.exit_code == 0, res.output
     import json
 
@@ -270,6 +270,7 @@ def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):
     assert 1.0 < doc["position_mm"]["max"] < 20.0  # a factory calibration moves the UR10's flange by mm
     assert len(doc["accuracy_map"]["by_reach"]) >= 3 and doc["notes"]
     assert len((tmp_path / "d.csv").read_text().splitlines()) == 301
+    assert (tmp_path / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # a model against itself: zero
     res = run("controller", "diff", a, a, "--poses", 50, "--json")
     assert json.loads(res.output)["position_mm"]["max"] < 1e-9

@@ -173,9 +173,12 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, flange, out_fi
 @click.option("--tool", default=None, metavar="X,Y,Z", help="TCP in the flange frame [mm] (default: the flange).")
 @click.option("--out", "out_file", default=None, type=FILE,
               help="CSV file to write with every joint set [deg] and its TCP difference [mm, deg]; optional.")
-@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+@click.option("--plot", "plot_file", default=None, type=FILE,
+              help="PNG file to write: the accuracy map (top and side views coloured by the TCP difference [mm], and "
+                   "its histogram); optional.")
+@click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--json", "as_json", **_JSON)
-def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, overwrite, as_json):
+def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, plot_file, overwrite, as_json):
     """TCP difference between two robot models (nominal, the controller's, tracker-calibrated) over
     the working range: statistics and an accuracy map by reach and height."""
     import numpy as np
@@ -192,10 +195,11 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, overwrite, a
             raise click.ClickException(f"--tool: expected X,Y,Z [mm], got {tool!r}") from None
         if len(tcp) != 3:
             raise click.ClickException(f"--tool: expected X,Y,Z [mm], got {tool!r}")
-    if out_file is not None:
-        refuse_same_path(out_file, model_a, model_b, cell)
-        if Path(out_file).exists() and not overwrite:
-            raise click.ClickException(f"{out_file}: output file exists; pass --overwrite to replace it")
+    for f in (out_file, plot_file):
+        if f is not None:
+            refuse_same_path(f, model_a, model_b, cell)
+            if Path(f).exists() and not overwrite:
+                raise click.ClickException(f"{f}: output file exists; pass --overwrite to replace it")
     if n_poses < 10:
         raise click.ClickException(f"--poses must be at least 10, got {n_poses}")
     r = model_diff(model_a, model_b, n_poses=n_poses, seed=seed, tool=tcp)
@@ -213,7 +217,12 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, overwrite, a
         for qq, e, a in zip(np.degrees(r["q"]), r["error_mm"], r["rotation_error_deg"]):
             w.writerow([f"{x:.6f}" for x in qq] + [f"{e:.6f}", f"{a:.6f}"])
         atomic_write_text(out_file, buf.getvalue(), overwrite=overwrite)
-    payload = {"status": "ok", "reasons": [], "a": model_a, "b": model_b, "poses": r["n"],
+    if plot_file is not None:
+        from ..report.plots import plot_accuracy_map
+
+        plot_accuracy_map(r["positions_mm"], r["error_mm"], plot_file,
+                          f"{model_b} - {model_a}: TCP difference over {r['n']} joint sets")
+    payload = {"status": "ok", "reasons": [], "a": model_a, "b": model_b, "plot": plot_file, "poses": r["n"],
                "tool_mm": r["tool_mm"], "position_mm": r["position_mm"], "rotation_deg": r["rotation_deg"],
                "base_aligned": r["base_aligned"],
                "accuracy_map": r["accuracy_map"], "parameter_differences": r["parameter_differences"],
@@ -245,5 +254,6 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, overwrite, a
             f"{_show(v, r['a'].params.units[r['a'].params.index(n)])[1]}" for n, v in big))
     for n in notes:
         click.echo(f"note: {n}")
-    if out_file:
-        click.echo(f"wrote {out_file}")
+    for f in (out_file, plot_file):
+        if f:
+            click.echo(f"wrote {f}")

@@ -305,4 +305,5 @@ def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
                              "rotation_of_base_deg": float(np.degrees(np.linalg.norm(rotvec_from_matrix(R)))),
                              "shift_of_base_mm": float(np.linalg.norm(t))}, "parameter_differences": params,
             "bases_differ": not np.allclose(A.T_world_base, B.T_world_base), "q": q, "error_mm": e,
+            "positions_mm": pa,
             "rotation_error_deg": rot}
