@@ -19,7 +19,8 @@ OLD_NAMES = {"--sigma", "--joint-noise-deg", "--joint-resolution", "--euler", "-
 UNIT_IN_HELP = {"--noise": "[mm]", "--joint-noise": "[deg]", "--time-tolerance": "[s]",
                 "--distance-tolerance": "[mm]", "--tool": "[mm]"}
 #: an optional robot that only overrides what the inputs say stays an option (docs/cli.md)
-OPTIONAL_ROBOT_OPTION = {"handeye solve"}
+#: `controller import ur` takes the robot first *and* `--robot NAME`, the spelling issue 33 names
+OPTIONAL_ROBOT_OPTION = {"handeye solve", "controller import ur"}
 #: commands that produce a result but have no --json yet (docs/cli.md lists them)
 JSON_PENDING = set()
 

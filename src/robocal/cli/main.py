@@ -57,6 +57,7 @@ _COMMANDS = {
     "datasets": ("datasets", "datasets", "The real data sets: list them, rerun their protocols.", None),
     "iso9283": ("iso9283", "iso9283", "ISO 9283 performance test: plan, evaluate.", None),
     "verify": ("verify", "verify", "Check a calibrated robot with a few poses.", None),
+    "controller": ("controller", "controller", "The controller's own model in and out, probed, compared.", None),
 }
 
 
