@@ -52,7 +52,12 @@ def _args(path, cmd, binary, out_dir, db):
     args = list(path)
     for p in cmd.params:
         if isinstance(p, click.Argument):
-            args += ["0"] * 6 if p.nargs == -1 else [binary]
+            if isinstance(p.type, click.Choice):
+                args += [p.type.choices[0]]  # a valid choice: the hostile part is the files
+            elif p.nargs == -1:
+                args += ["0"] * 6 if p.name in ("joints", "pose") else [binary, binary]
+            else:
+                args += [binary]
         elif p.required or p.name in ("db", "history"):
             value = db if p.name in ("db", "history") else binary
             if _is_output(p):

@@ -46,6 +46,8 @@ def _show_robocal_warning(original):
     leaves every other warning to ``original``."""
 
     def show(message, category, filename, lineno, file=None, line=None):
+        if category.__name__ == "NotConvergedWarning" and category.__module__ == "robocal.calib.solve":
+            return  # every fitting command reports its fits' convergence itself: one Warning: line (finish_convergence)
         if issubclass(category, RobocalWarning):
             click.echo(f"Warning: {' '.join(str(message).split())}", err=True)
         else:

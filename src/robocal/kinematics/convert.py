@@ -39,8 +39,11 @@ def dh_with_beta(model: RobotModel) -> RobotModel:
     that has none: identical kinematics, and the betas can then be set (``with_params(beta2=...)``)."""
     if model.kind not in ("dh", "dh_beta"):
         raise ConversionError(f"{model.name}: dh_with_beta needs a dh or dh_beta model, got {model.kind}")
-    links = [L if L.convention not in ("dh", "dh_beta") or "beta" in L.params else
-             Link(L.name, L.joint_type, "dh_beta", {**L.params, "beta": 0.0}, L.parent, L.axis, L.fixed)
+    # every DH link becomes a dh_beta link (a link may already carry the beta the loader adds
+    # between parallel axes while still named 'dh'; the file format needs one convention)
+    links = [L if L.convention not in ("dh", "dh_beta") else
+             Link(L.name, L.joint_type, "dh_beta", {**L.params, "beta": L.params.get("beta", 0.0)}, L.parent, L.axis,
+                  L.fixed)
              for L in model.links]
     return model.replace(kind="dh_beta", links=links)
 
