@@ -96,7 +96,7 @@ def test_box_and_path():
     mid = np.radians([90, -45, 0, -90, 0, 0])
     assert not feasible(fenced, ur, mid[None])[0]
     assert path_feasible(fenced, ur, a, b[None]).tolist() == [False]
-    order, left = order_poses(cell, ur, np.array([a, b, mid]))
+    _, order, left = order_poses(cell, ur, np.array([a, b, mid]))
     assert order.tolist() == [0, 2, 1] and left.size == 0
 
 

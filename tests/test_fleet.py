@@ -312,7 +312,7 @@ def test_monte_carlo_plan_on_dask_equals_the_serial_loop_and_the_first_order_pre
     from robocal.robots import load_robot
 
     model = load_robot("ur10")
-    qk = candidate_poses(model, 30, 400, 2)
+    qk, _ = candidate_poses(model, 30, 400, 2)
     q_plan = qk[plan_campaign(model, qk, 30)["indices"]]
     kw = dict(samples=14, noise_mm=0.02, check_poses=100, seed=4)
     dask_run = monte_carlo_plan("ur10", q_plan, client=client, **kw)

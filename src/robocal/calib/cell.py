@@ -20,7 +20,7 @@ from ..kinematics.collision import default_link_radii, link_segments, segment_bo
     segment_plane_distance, segment_segment_distance
 
 __all__ = ["Box", "Instrument", "Cell", "default_cell", "pose_feasibility", "feasible", "path_points",
-           "path_feasible", "order_poses", "path_length", "sample_feasible", "REASONS", "PATH_REASONS",
+           "path_feasible", "order_poses", "nearest_equivalent", "path_length", "sample_feasible", "REASONS", "PATH_REASONS",
            "PATH_STEP_DEG"]
 
 #: Names of the feasibility checks, in the order they are reported.
@@ -174,7 +174,7 @@ def pose_feasibility(cell: Cell, model, q) -> dict:
     for k in ("range", "acceptance", "line_of_sight"):
         out[k] = np.zeros(len(q), dtype=bool)
     if ins is not None:
-        T = np.asarray(cell.T_cell_base) @ model.replace(T_world_base=np.eye(4)).fk(q)
+        T = np.asarray(cell.T_cell_base) @ np.linalg.inv(model.T_world_base) @ model.fk(q)
         refl = T[:, :3, 3] + T[:, :3, :3] @ cell.reflector_mm
         axis = T[:, :3, :3] @ np.asarray(cell.tool_axis, dtype=float)
         sight = np.asarray(ins.position, dtype=float) - refl
@@ -228,36 +228,81 @@ def path_feasible(cell: Cell, model, q_from, q_to_many, step: float = np.radians
     return np.array([bool(np.all(ok[e - len(p):e])) for p, e in zip(paths, ends)], dtype=bool)
 
 
-def order_poses(cell: Cell, model, q, *, start: int = 0, batch: int = 6) -> tuple[np.ndarray, np.ndarray]:
+def nearest_equivalent(q, q_ref, limits, revolute) -> np.ndarray:
+    """``q`` (M, n) with every revolute joint moved by whole turns (2 pi) to be nearest ``q_ref``
+    (n,) while staying within ``limits`` (n, 2) [rad] and one turn: the same pose, a shorter move (a UR's
+    +-360 deg joints)."""
+    q = np.array(q, dtype=float, copy=True)
+    lo, hi = limits[:, 0], limits[:, 1]
+    for k in np.flatnonzero(revolute):
+        for turn in (-2.0 * np.pi, 2.0 * np.pi):
+            alt = q[:, k] + turn
+            better = ((np.abs(alt - q_ref[k]) < np.abs(q[:, k] - q_ref[k])) & (alt >= lo[k]) & (alt <= hi[k])
+                      & (np.abs(alt) <= 2.0 * np.pi))  # measurement files refuse more than a turn
+            q[better, k] = alt[better]
+    return q
+
+
+def order_poses(cell: Cell, model, q, *, start: int = 0, batch: int = 6) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Order the poses ``q`` (N, n) for a short path whose every move is feasible.
 
     Greedy nearest neighbour in joint space (distance: the largest joint move, what sets the
     motion time) from pose ``start``, each move checked with :func:`path_feasible` (the ``batch``
-    nearest tried at once). Returns ``(order, left_out)``: indices in driving order, and the poses
-    no feasible move reaches from where the path stands (left out; the caller re-plans them).
+    nearest tried at once); a revolute joint with more than a turn of range takes the equivalent
+    angle nearest the previous pose (:func:`nearest_equivalent`). A pose the greedy path cannot
+    reach is inserted between two poses it joins by feasible moves (cheapest first). Returns ``(q_driven, order,
+    left_out)``: the poses in driving order (joint values as driven), their indices into ``q``, and
+    the indices of poses that fit nowhere (the caller re-plans them).
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
+    lim = cell.limits(model)
+    revolute = ~model.prismatic_joints
     remaining = [i for i in range(len(q)) if i != start]
-    order = [start]
+    order, driven = [start], [q[start]]
     left_out = []
     while remaining:
-        cur = q[order[-1]]
+        cur = driven[-1]
         rem = np.array(remaining)
-        dist = np.max(np.abs(q[rem] - cur), axis=1)
-        rem = rem[np.argsort(dist, kind="stable")]
+        qr = nearest_equivalent(q[rem], cur, lim, revolute)
+        sort = np.argsort(np.max(np.abs(qr - cur), axis=1), kind="stable")
+        rem, qr = rem[sort], qr[sort]
         nxt = None
         for k in range(0, len(rem), batch):
-            cand = rem[k:k + batch]
-            ok = path_feasible(cell, model, cur, q[cand])
+            ok = path_feasible(cell, model, cur, qr[k:k + batch])
             if ok.any():
-                nxt = int(cand[np.argmax(ok)])
+                nxt = k + int(np.argmax(ok))
                 break
         if nxt is None:
-            left_out.extend(rem.tolist())
             break
-        order.append(nxt)
-        remaining.remove(nxt)
-    return np.array(order, dtype=int), np.array(sorted(left_out), dtype=int)
+        order.append(int(rem[nxt]))
+        driven.append(qr[nxt])
+        remaining.remove(int(rem[nxt]))
+    for i in remaining:  # stuck: insert each pose left where both moves around it are feasible
+        if not _insert(cell, model, q[i], i, order, driven, lim, revolute):
+            left_out.append(i)
+    return np.array(driven), np.array(order, dtype=int), np.array(sorted(left_out), dtype=int)
+
+
+def _insert(cell, model, qi, i, order, driven, lim, revolute, tries: int = 24) -> bool:
+    """Insert pose ``qi`` (index ``i``) into the path ``driven`` between two poses it joins by feasible
+    moves (cheapest added motion first; at the end too); False when no place of ``tries`` works."""
+    D = np.array(driven)
+    cand = np.empty_like(D)
+    for k in range(len(D)):
+        cand[k] = nearest_equivalent(qi[None], D[k], lim, revolute)[0]
+    step = np.max(np.abs(np.diff(D, axis=0)), axis=1) if len(D) > 1 else np.zeros(0)
+    to_prev = np.max(np.abs(cand - D), axis=1)  # pose k -> qi
+    cost = np.append(to_prev[:-1] + np.max(np.abs(cand[:-1] - D[1:]), axis=1) - step, to_prev[-1])
+    for k in np.argsort(cost, kind="stable")[:tries]:  # insert after driven[k]
+        qk = cand[k]
+        if not path_feasible(cell, model, D[k], qk[None])[0]:
+            continue
+        if k + 1 < len(D) and not path_feasible(cell, model, qk, D[k + 1][None])[0]:
+            continue
+        order.insert(k + 1, i)
+        driven.insert(k + 1, qk)
+        return True
+    return False
 
 
 def path_length(q) -> float:

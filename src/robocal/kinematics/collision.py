@@ -121,8 +121,9 @@ def link_segments(model, q, *, tool_mm=None, min_length_mm: float = 1.0) -> Link
     origin through the tool's points (body of the last link). Segments shorter than
     ``min_length_mm`` are dropped. Returns :class:`LinkSegments`.
     """
-    m = model.replace(T_world_base=np.eye(4))
-    F = m.link_frames(np.atleast_2d(np.asarray(q, dtype=float)))  # (N, n_model, 4, 4)
+    F = model.link_frames(np.atleast_2d(np.asarray(q, dtype=float)))  # (N, n_model, 4, 4) in the world
+    if not np.allclose(model.T_world_base, np.eye(4)):
+        F = np.linalg.inv(model.T_world_base) @ F
     N, n = F.shape[:2]
     frames = np.concatenate([np.broadcast_to(np.eye(4), (N, 1, 4, 4)), F], axis=1)
     points, bodies, tool = [frames[:, 0, :3, 3]], [], []

@@ -26,15 +26,16 @@ import warnings
 import numpy as np
 
 from ..calib import solve
+from ..calib.cell import default_cell, sample_feasible
 from ..calib.solve import NotConvergedWarning
-from ..calib.plan import plan_campaign, predicted_model_std
+from ..calib.plan import predicted_model_std
 from ..calib.problem import CalibrationProblem, Target
 from ..metrics import error_statistics
 from ..robots import load_robot
 from ..sim.robot import VirtualRobot
 from .fleet_chunks import MAX_OVERHEAD_SHARE, chunk_size, chunks, measure_task_overhead, overhead_share
 from .fleet_cluster import run_tasks, default_workers
-from .plan_poses import candidate_poses
+from .plan_poses import plan_cell, plan_in_cell
 
 __all__ = ["monte_carlo_plan", "pose_set_selection", "thermal_screening", "mc_samples", "pose_sets"]
 
@@ -75,10 +76,11 @@ def mc_samples(span, *, robot, q_plan, q_check, tool, noise_mm, spread, seed, n_
 # -- pose selection over candidate sets -------------------------------------------------------------
 
 def _plan_one(model, count, candidates, seed, tool, sigma_mm, tracker_at, workspace):
-    qk = candidate_poses(model, count, candidates, seed, workspace=workspace, tracker_at=tracker_at, tool=tool)
-    plan = plan_campaign(model, qk, count, tool=tool, sigma_mm=sigma_mm)
+    cell = plan_cell(model, None, tracker_at, tool)
+    plan = plan_in_cell(model, cell, count=count, candidates=candidates, workspace=workspace, sigma_mm=sigma_mm,
+                        seed=seed, efficiency=False)
     return {"seed": int(seed), "holdout_rms_mm": plan["holdout_rms_mm"],
-            "holdout_model_std_mm": plan["holdout_model_std_mm"], "n_candidates": int(len(qk)),
+            "holdout_model_std_mm": plan["holdout_model_std_mm"], "n_candidates": int(plan["n_candidates"]),
             "n_identifiable": len(plan["identifiable"])}
 
 
@@ -123,7 +125,7 @@ def monte_carlo_plan(robot, q_plan, *, samples: int = 200, noise_mm: float = 0.0
     """Monte-Carlo accuracy of calibrating ``robot`` from the poses ``q_plan`` (N, n) [rad | mm].
 
     samples: virtual robots; noise_mm: tracker noise per coordinate; check_poses: seeded random
-    poses where each calibrated model is compared with its truth; tool: reflector in the flange
+    poses the robot can take on its floor (docs/cells.md) where each calibrated model is compared with its truth; tool: reflector in the flange
     frame [mm]; spread: (length sigma [mm], angle sigma [deg], joint offset sigma [deg]) of the
     hidden true parameters. Returns the per-sample RMS before/after [mm], their statistics, the
     samples whose solve stopped at the iteration limit (``unconverged_samples``, reported, kept),
@@ -135,9 +137,7 @@ def monte_carlo_plan(robot, q_plan, *, samples: int = 200, noise_mm: float = 0.0
         raise ValueError(f"--noise must be a positive number of mm, got {noise_mm}")
     model = load_robot(robot)
     q_plan = np.asarray(q_plan, dtype=float)
-    lo, hi = model.limits[:, 0], model.limits[:, 1]
-    q_check = np.random.default_rng([seed, 1]).uniform(lo + 0.05 * (hi - lo), hi - 0.05 * (hi - lo),
-                                                       (check_poses, model.n_joints))
+    q_check, _ = sample_feasible(default_cell(tool), model, check_poses, np.random.default_rng([seed, 1]))
     kwargs = {"robot": robot, "q_plan": q_plan, "q_check": q_check, "tool": tuple(tool), "noise_mm": noise_mm,
               "spread": tuple(spread), "seed": seed, "n_samples": samples}
     items, report = _chunked(client, mc_samples, samples, kwargs, _workers(client), progress)
