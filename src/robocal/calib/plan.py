@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .identifiability import analyse_identifiability
 from .poses import pose_jacobians, select_poses
 from .problem import CalibrationProblem, Target
 
-__all__ = ["visible_candidates", "plan_campaign", "predicted_covariance", "predicted_model_std"]
+__all__ = ["visible_candidates", "plan_campaign", "predicted_covariance", "predicted_model_std",
+           "calibration_identifiability", "TYPICAL_DEVIATION"]
 
 
 def visible_candidates(points, z_axes, tracker_at, *, range_mm=(1000.0, 15000.0), max_incidence_deg=60.0):
@@ -39,11 +39,49 @@ def _point_problem(model, q, tool, free, sigma_mm):
                               free=free, base_initial=np.eye(4), point_sigma_mm=sigma_mm)
 
 
-def _plan_covariance(problem, Jb, idx, sigma_mm):
-    """Identifiability at the poses ``idx``, the identifiable columns and their covariance."""
-    ident = analyse_identifiability(Jb[idx].reshape(-1, Jb.shape[-1]), problem.names, problem.blocks)
+#: The typical robot a plan is judged on: its free parameters off the nominal ones by these standard
+#: deviations (length [mm], angle [deg], joint zero offset [deg]; the simulator's defaults), seed 0.
+TYPICAL_DEVIATION = (0.5, 0.05, 0.05)
+
+
+def _typical_robot(model):
+    """The nominal model with its free parameters moved by :data:`TYPICAL_DEVIATION` (seeded draw)."""
+    rng = np.random.default_rng(0)
+    units = np.array(model.params.units)
+    sigma = np.where(units == "mm", TYPICAL_DEVIATION[0], np.radians(TYPICAL_DEVIATION[1]))
+    return model.with_params(model.params.values + rng.standard_normal(len(sigma)) * sigma * model.params.free)
+
+
+def calibration_identifiability(model, q, *, tool=(0.0, 0.0, 100.0), free=None):
+    """The identifiability verdict ``robocal calibrate`` gives on point measurements at the poses
+    ``q`` (N, n): the same analysis (:func:`robocal.calib.solve`: at the start, then again at the
+    solution), the same tolerance (:data:`~robocal.calib.identifiability.IDENTIFIABILITY_TOL`), on
+    noise-free data of a typical robot (:data:`TYPICAL_DEVIATION`; a real robot's small deviations
+    break symmetries the exact nominal geometry has, e.g. a reflector on the joint-6 axis).
+    Returns ``(report, jacobian)``: the :class:`IdentifiabilityReport` and the Jacobian (3N, n) [mm
+    per unit] at the solution, columns in ``problem.names`` order."""
+    from .solve import solve  # solve imports this module's siblings; keep the import local
+
+    m0 = model.replace(T_world_base=np.eye(4))
+    T = _typical_robot(m0).fk(q)
+    pts = (T[:, :3, 3] + T[:, :3, :3] @ np.asarray(tool, dtype=float))[:, None]
+    problem = CalibrationProblem(m0, q, [Target("reflector", point=tuple(tool))], pts, free=free,
+                                 base_initial="fit")
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = solve(problem)
+    return res.identifiability, res.jacobian
+
+
+def _plan_covariance(problem, Jb, idx, sigma_mm, model=None, tool=None, free=None):
+    """Identifiability at the poses ``idx`` (the calibration's verdict,
+    :func:`calibration_identifiability`), the identifiable columns and their covariance."""
+    ident, J = calibration_identifiability(model, problem.q[idx], tool=tool, free=free)
     cols = [problem.names.index(n) for n in ident.identifiable]
-    return ident, cols, predicted_covariance(Jb, idx, cols, sigma_mm)
+    Jc = J[:, cols]
+    return ident, cols, sigma_mm**2 * np.linalg.inv(Jc.T @ Jc)
 
 
 def _rms_model_std(J_other, cols, cov) -> float:
@@ -60,7 +98,7 @@ def predicted_model_std(model, q_plan, q_check, *, tool=(0.0, 0.0, 100.0), free=
     q_plan = np.asarray(q_plan, dtype=float)
     problem = _point_problem(model, np.vstack([q_plan, np.asarray(q_check, dtype=float)]), tool, free, sigma_mm)
     Jb = pose_jacobians(problem)
-    _, cols, cov = _plan_covariance(problem, Jb, np.arange(len(q_plan)), sigma_mm)
+    _, cols, cov = _plan_covariance(problem, Jb, np.arange(len(q_plan)), sigma_mm, model, tool, free)
     return _rms_model_std(Jb[len(q_plan):], cols, cov)
 
 
@@ -76,7 +114,7 @@ def plan_campaign(model, q_candidates, count: int, *, tool=(0.0, 0.0, 100.0), fr
     Jb = pose_jacobians(problem)  # (N, 3, n): prediction derivatives, mm per unit
     sel = select_poses(Jb, count, names=problem.names, blocks=problem.blocks)
     idx = np.asarray(sel["indices"])
-    ident, cols, cov = _plan_covariance(problem, Jb, idx, sigma_mm)
+    ident, cols, cov = _plan_covariance(problem, Jb, idx, sigma_mm, model, tool, free)
     rest = np.setdiff1d(np.arange(len(Jb)), idx)
     holdout = _rms_model_std(Jb[rest], cols, cov) if len(rest) else float("nan")
     return {"indices": idx, "names": list(ident.identifiable), "std": np.sqrt(np.diag(cov)), "covariance": cov,
