@@ -189,6 +189,8 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    coverage = _coverage(nominal, meas, train, hold, setup["problem"], result, free_names)
+    verdict = verdict + coverage["verdict"]
     write_robot = verdict.ok or force
     step(5, total, "writing result.json" + (", calibrated robot (TOML, URDF)" if write_robot else
                                             " (FAILED the sanity gates: no calibrated robot file)"))
@@ -209,6 +211,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     }
     rdict = _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy, metadata, convergence_warnings)
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
+    rdict["joint_coverage"] = coverage["table"]
     elastic_out = None
     if elastic_model is not None:
         from .calibrate_elastic import elastic_summary, torque_plot, with_elastic
@@ -226,6 +229,29 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
     return {"result": rdict, "files": files, "notes": notes, "calibration_result": result,
             "problem": setup["problem"], "verdict": verdict, "six_d": bool(setup["six_d"]),
             "description": setup["description"], "convergence_warnings": convergence_warnings}
+
+
+def _coverage(nominal, meas, train, hold, problem, result, free_names) -> dict:
+    """The coverage gates (:mod:`robocal.calib.coverage`) of the calibration poses: ``{verdict, table}``.
+    The full reference campaign (identified-parameter gate): seeded poses a floor-mounted robot can
+    take, spread over the joint limits (serial robots; others skip that gate)."""
+    from ..calib.cell import default_cell, sample_feasible
+    from ..calib.coverage import REFERENCE_POSES, coverage_verdict, joint_coverage
+
+    targets = np.asarray(result.state.targets, dtype=float)
+    ref = None
+    if nominal.is_serial and len(train):
+        try:
+            ref, _ = sample_feasible(default_cell(tuple(targets[0])), nominal, REFERENCE_POSES,
+                                     np.random.default_rng(0))
+        except ValueError:
+            ref = None
+    identified = [n for n in result.identifiability.identifiable if n in set(nominal.params.names)]
+    q_hold = meas.joints[hold] if len(hold) else None
+    verdict = coverage_verdict(nominal, meas.joints[train], q_hold, targets_mm=targets,
+                               ee_of_target=tuple(int(e) for e in problem.ee_of_target), identified=identified,
+                               free=free_names, reference_q=ref)
+    return {"verdict": verdict, "table": joint_coverage(nominal, meas.joints[train], q_hold)}
 
 
 def _check_options(out: Path, names, overwrite, loss, sigma_mm, method) -> None:
@@ -393,7 +419,12 @@ def _write_outputs(paths, rdict, result, nominal, meas, data, train, validation,
             "title": f"{nominal.name}: predicted uncertainty of the calibrated model at the measured poses",
             "note": "Flange positions in the robot base frame, coloured by the predicted 1-std position uncertainty "
                     "(J Cov J^T over the identified variables, base frame included)."}
+    cov_rows = [[c["joint"], c["unit"], f"{c['min']:.4g}", f"{c['max']:.4g}", f"{c['span']:.4g}",
+                 "unlimited" if c["range"] is None else f"{c['range']:.4g}",
+                 "" if c["fraction"] is None else f"{100 * c['fraction']:.0f} %"] for c in rdict.get("joint_coverage", [])]
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap,
+                                   extra_tables={"Joint-range coverage of the calibration poses": (
+                                       ["joint", "unit", "min", "max", "span", "range", "covered"], cov_rows)},
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}",
                                    extra_plots={**convergence_plots(result),
                                                 **(elastic[1]() if elastic is not None and elastic[1] else {})})
