@@ -54,7 +54,8 @@ def test_plan_program_round_trips_through_its_reader(tmp_path, language, suffix)
     r = CliRunner().invoke(main, ["plan-poses", "ur10", "--count", "8", "--candidates", "60", "--tracker-at",
                                   "2500,800,1200", "--language", language, "--out", str(out)])
     assert r.exit_code == 0, r.output
-    assert "D-efficiency against the plan without the cell" in r.output
+    eff = float(r.output.split("D-efficiency against the plan without the cell: ")[1].split()[0])
+    assert 0.3 < eff <= 1.5, eff  # reported, and a cell costs some but not all of the information
     model = load_robot("ur10")
     table = read_joint_program(out, model).joints
     prog = read_program(out.with_suffix(suffix))

@@ -68,6 +68,12 @@ def calibration_identifiability(model, q, *, tool=(0.0, 0.0, 100.0), free=None):
     pts = (T[:, :3, 3] + T[:, :3, :3] @ np.asarray(tool, dtype=float))[:, None]
     problem = CalibrationProblem(m0, q, [Target("reflector", point=tuple(tool))], pts, free=free,
                                  base_initial="fit")
+    state = problem.initial_state()
+    _, J, _ = problem.evaluate(state)
+    if J.shape[0] < J.shape[1]:  # fewer measurements than unknowns: calibrate refuses; judge the start
+        from .identifiability import analyse_identifiability
+
+        return analyse_identifiability(J, problem.names, problem.blocks), J, (problem, state)
     import warnings
 
     with warnings.catch_warnings():

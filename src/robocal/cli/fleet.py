@@ -276,7 +276,7 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
                f"--count {count} --candidates {candidates} --seed {best['seed']} --out poses.csv")
     n_within = len(r["within_noise"])
     if r["differences_within_noise"]:
-        click.echo(f"differences within noise: {n_within} of {sets} sets (the median among them) are within one "
+        click.echo(f"differences within noise: {n_within} of {sets} sets, the median among them, are within one "
                    f"campaign's spread of the best (+{100 * best['relative_spread']:.0f} %, up to "
                    f"{r['noise_band_mm']:.4f} mm): the choice among them is noise")
     else:

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..calib.cell import Cell, Instrument, default_cell, feasible, nearest_equivalent, order_poses, path_feasible, \
     path_length
-from ..calib.plan import plan_campaign
+from ..calib.plan import _jacobian_at, plan_campaign
 from ..io.cell_file import read_cell
 from ..io.programs import JointProgram, write_joint_program
 from ..robots import load_robot
@@ -141,13 +141,10 @@ def d_efficiency(model, q_plan, q_free_candidates, count: int, *, tool) -> float
     ``count`` poses from ``q_free_candidates`` (no cell): 1.0 = nothing lost, 0.8 = each
     identifiable direction 20 % less informed (geometric mean)."""
     free = plan_campaign(model, q_free_candidates, count, tool=tool)
-    problem = free["problem"]
-    from ..calib.poses import pose_jacobians
-
-    cols = [problem.names.index(n) for n in free["identifiable"]]
-    Jf = pose_jacobians(problem)[free["indices"]][..., cols].reshape(-1, len(cols))
-    p2 = plan_campaign(model, q_plan, len(q_plan), tool=tool)["problem"]
-    Jp = pose_jacobians(p2)[..., cols].reshape(-1, len(cols))
+    at = free["typical"]  # both plans judged at the same typical robot (calib.plan.calibration_identifiability)
+    cols = [at[0].names.index(n) for n in free["identifiable"]]
+    Jf = _jacobian_at(at, q_free_candidates[free["indices"]])[..., cols].reshape(-1, len(cols))
+    Jp = _jacobian_at(at, np.asarray(q_plan, dtype=float))[..., cols].reshape(-1, len(cols))
     scale = np.linalg.norm(Jf, axis=0)
     ld = [np.linalg.slogdet((J / scale).T @ (J / scale)) for J in (Jp, Jf)]
     if ld[0][0] <= 0:
