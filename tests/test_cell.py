@@ -141,3 +141,22 @@ def test_cell_file(tmp_path):
     p.write_text(CELL.replace("J4 =", "J9 ="), encoding="utf-8")
     with pytest.raises(CellFileError, match="J9"):
         read_cell(p, ur)
+
+
+def test_link_radius_from_the_robot_file():
+    import tomllib
+
+    from robocal.robots.loader import parse_robot, robot_path
+
+    data = tomllib.loads(robot_path("ur10").read_text(encoding="utf-8"))
+    data["joints"][1]["link_radius"] = 80.0   # the upper arm (J2)
+    data["joints"][2]["link_radius"] = 0.07   # in mm: 0.07 mm, not plausible but accepted as given
+    ur = parse_robot(data, "ur10-with-radii")
+    # per body: the base and J1 take the first radius given (J2's), J4..J6 their predecessor's
+    assert ur.extra["link_radii_mm"] == [80.0, 80.0, 80.0, 0.07, 0.07, 0.07, 0.07]
+    # upper arm tilted 5 deg down: the elbow and the level forearm 74 mm above the floor -- clear of
+    # 49 mm default capsules + 10 mm clearance, not of an 80 mm upper arm
+    q = np.radians([0, 5.0, -5.0, -90, 0, 0])[None]
+    default = pose_feasibility(default_cell(), load_robot("ur10"), q)["mounting_plane"][0]
+    thick = pose_feasibility(default_cell(), ur, q)["mounting_plane"][0]
+    assert thick and not default
