@@ -66,3 +66,50 @@ def test_plan_program_round_trips_through_its_reader(tmp_path, language, suffix)
     assert text.count("measure P0") == 8  # a wait/trigger comment at every measurement point
     if language == "krl":
         assert text.count("PTP XP0") == 8
+
+
+CELL = """
+format = "robocal-cell/1"
+length_unit = "mm"
+angle_unit = "deg"
+[mounting]
+kind = "floor"
+[[box]]
+name = "table"
+min = [500.0, -600.0, 0.0]
+max = [1300.0, 600.0, 700.0]
+[instrument]
+position = [-2200.0, 1500.0, 1400.0]
+acceptance = 30
+[tool]
+points = [[0.0, 0.0, 80.0], [20.0, 0.0, 120.0]]
+[joints]
+J6 = [-180.0, 180.0]
+"""
+
+
+def test_cell_file_drives_plan_and_simulation(tmp_path):
+    from robocal.io.cell_file import read_cell
+    from robocal.io.measurements import read_measurements
+
+    cell_file = tmp_path / "cell.toml"
+    cell_file.write_text(CELL, encoding="utf-8")
+    model = load_robot("ur10")
+    cell = read_cell(cell_file, model)
+    r = CliRunner().invoke(main, ["plan-poses", "ur10", "--count", "10", "--candidates", "60", "--cell", str(cell_file),
+                                  "--out", str(tmp_path / "p.csv")])
+    assert r.exit_code == 0, r.output
+    q = read_joint_program(tmp_path / "p.csv", model).joints
+    f = pose_feasibility(cell, model, _driven_points(q))
+    assert not any(v.any() for k, v in f.items() if k in ("box", "mounting_plane", "self_collision", "joint_range"))
+    assert not any(pose_feasibility(cell, model, q)[k].any() for k in ("acceptance", "line_of_sight", "range"))
+    r = CliRunner().invoke(main, ["simulate", "tracker", "ur10", "--poses", "12", "--cell", str(cell_file),
+                                  "--out", str(tmp_path / "m.csv")])
+    assert r.exit_code == 0, r.output
+    qs = read_measurements(tmp_path / "m.csv").joints
+    f = pose_feasibility(cell, model, _driven_points(qs))
+    assert not (f["box"] | f["mounting_plane"] | f["self_collision"] | f["joint_range"]).any()
+    g = pose_feasibility(cell, model, qs)  # the simulated reflector is the cell's
+    assert not (g["acceptance"] | g["line_of_sight"] | g["range"]).any()
+    truth = __import__("json").loads((tmp_path / "m.truth.json").read_text())
+    assert np.allclose(truth["reflectors_mm"], [[20.0, 0.0, 120.0]])

@@ -199,7 +199,7 @@ class LaserTracker:
     def cell_for(self, robot: VirtualRobot, cell=None):
         """The cell ``cell`` (default :func:`~robocal.calib.cell.default_cell`) with this tracker as its
         instrument (position from ``T_tracker_world`` and the nominal base, unless the cell names
-        one) and the reflectors' centroid as the tool point."""
+        one) and the reflectors' centroid as the tool's last point (the cell's tool polyline kept)."""
         from dataclasses import replace
 
         from ..calib.cell import Instrument, default_cell
@@ -209,7 +209,7 @@ class LaserTracker:
             T_base_tracker = invert_transforms(self.T_tracker_world @ robot.nominal.T_world_base)
             pos = cell.T_cell_base[:3, :3] @ T_base_tracker[:3, 3] + cell.T_cell_base[:3, 3]
             cell = cell.with_instrument(Instrument(tuple(pos)))
-        return replace(cell, tool_mm=(tuple(self.reflectors.mean(axis=0)),))
+        return replace(cell, tool_mm=tuple(cell.tool_mm[:-1]) + (tuple(self.reflectors.mean(axis=0)),))
 
     def feasible_poses(self, robot: VirtualRobot, n_poses: int, rng, cell, *, margin: float = 0.05) -> np.ndarray:
         """``n_poses`` poses (n, n_ctrl) of the nominal robot that ``cell`` allows (every reflector
@@ -220,7 +220,7 @@ class LaserTracker:
         from ..calib.cell import feasible, order_poses, sample_feasible
 
         model = robot.nominal
-        cells = [replace(cell, tool_mm=(tuple(r),)) for r in self.reflectors]
+        cells = [replace(cell, tool_mm=tuple(cell.tool_mm[:-1]) + (tuple(r),)) for r in self.reflectors]
         q = np.zeros((0, model.n_joints))
         for _ in range(20):
             want = n_poses - len(q)

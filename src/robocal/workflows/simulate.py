@@ -75,6 +75,8 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
                                      joint_noise_deg=joint_noise_deg, joint_noise_mm=0.0)
     if cell is not None and not isinstance(cell, Cell):
         cell = read_cell(cell, nominal)
+    if cell is not None and reflectors == 1:  # the cell's reflector (the last tool point)
+        reflectors = np.atleast_2d(cell.reflector_mm)
     at = None
     if cell is not None and cell.instrument is not None:  # the world frame is the robot base frame here
         T_base_cell = np.linalg.inv(cell.T_cell_base)
