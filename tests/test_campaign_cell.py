@@ -113,3 +113,14 @@ def test_cell_file_drives_plan_and_simulation(tmp_path):
     assert not (g["acceptance"] | g["line_of_sight"] | g["range"]).any()
     truth = __import__("json").loads((tmp_path / "m.truth.json").read_text())
     assert np.allclose(truth["reflectors_mm"], [[20.0, 0.0, 120.0]])
+
+
+def test_outputs_never_replace_the_cell_file_or_clash(tmp_path):
+    cell_file = tmp_path / "cell.toml"
+    cell_file.write_text(CELL, encoding="utf-8")
+    for args in (["plan-poses", "ur10", "--count", "5", "--cell", str(cell_file), "--out", str(cell_file), "--overwrite"],
+                 ["simulate", "tracker", "ur10", "--cell", str(cell_file), "--out", str(cell_file), "--overwrite"],
+                 ["plan-poses", "ur10", "--count", "5", "--language", "krl", "--out", str(tmp_path / "p.src")]):
+        r = CliRunner().invoke(main, args)
+        assert r.exit_code == 1 and r.output.startswith("Error:"), r.output
+    assert cell_file.read_text(encoding="utf-8") == CELL

@@ -70,6 +70,20 @@ def plan_poses(robot, out_file, *, count: int, candidates: int = 1000, workspace
     plan relative to the plan from as many candidates without the cell), ``path_rad`` (largest
     joint move summed over the path, and ``path_rad_unordered``), ``file``.
     """
+    if language is not None:  # refuse before any work
+        from ..io.programs.campaign import CAMPAIGN_LANGUAGES
+
+        suffixes = [CAMPAIGN_LANGUAGES.get(language, ("", ""))[1]] + ([".src"] if language == "krl" else [])
+        if any(sx and Path(out_file).with_suffix(sx).resolve() == Path(out_file).resolve() for sx in suffixes):
+            raise ValueError(f"--out {out_file}: the joint table and the {language} program would be the same file")
+        if not overwrite:
+            for sx in suffixes:
+                if Path(out_file).with_suffix(sx).exists():
+                    raise FileExistsError(f"{Path(out_file).with_suffix(sx)}: file exists; pass --overwrite to replace it")
+    if cell is not None and not isinstance(cell, Cell):
+        outs = [Path(out_file)] + ([Path(out_file).with_suffix(sx) for sx in suffixes] if language else [])
+        if any(o.resolve() == Path(cell).resolve() for o in outs):
+            raise ValueError(f"--out {out_file}: would replace the cell file {cell} (an input of this command)")
     model = load_robot(robot)
     cell = plan_cell(model, cell, tracker_at, tool)
     out = plan_in_cell(model, cell, count=count, candidates=candidates, workspace=workspace, sigma_mm=sigma_mm,
@@ -79,12 +93,6 @@ def plan_poses(robot, out_file, *, count: int, candidates: int = 1000, workspace
     note = (f"robocal plan-poses: {count} of {out['n_candidates']} feasible candidates (seed {seed}, cell: "
             f"{cell.source}), D-optimal, in driving order; predicted held-out RMS {out['holdout_rms_mm']:.4f} mm at "
             f"{sigma_mm} mm noise")
-    if language is not None:  # refuse before writing anything
-        from ..io.programs.campaign import CAMPAIGN_LANGUAGES
-
-        suffix = CAMPAIGN_LANGUAGES.get(language, ("", ""))[1]
-        if suffix and Path(out_file).with_suffix(suffix).resolve() == Path(out_file).resolve():
-            raise ValueError(f"--out {out_file}: the joint table and the {language} program would be the same file")
     out["file"] = write_joint_program(out_file, prog, model, overwrite=overwrite, metadata={"note": note})
     if language is not None:
         from ..io.programs.campaign import write_campaign_program

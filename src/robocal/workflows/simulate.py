@@ -62,6 +62,9 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
     """
     out_path = Path(out_path)
     truth_path = check_simulation_outputs(out_path, overwrite)
+    if cell is not None and not isinstance(cell, Cell) and Path(cell).resolve() in (out_path.resolve(),
+                                                                                   truth_path.resolve()):
+        raise ValueError(f"--out {out_path}: would replace the cell file {cell} (an input of this command)")
     if n_poses < 1:
         raise ValueError(f"n_poses must be at least 1, got {n_poses}")
     if reflectors not in (1, 3):
