@@ -22,7 +22,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["IdentifiabilityReport", "analyse_identifiability", "observability_indices", "DEFAULT_PRIORITY"]
+__all__ = ["IdentifiabilityReport", "analyse_identifiability", "observability_indices", "DEFAULT_PRIORITY",
+           "IDENTIFIABILITY_TOL"]
+
+#: The one tolerance of every identifiability verdict (planner and calibration): a column is
+#: identifiable when its part independent of the columns kept before it exceeds this fraction of
+#: its norm (unit-norm columns).
+IDENTIFIABILITY_TOL = 1e-6
 
 #: Blocks are tried in this order: frames the measurement setup always needs come first, so a
 #: robot parameter that only duplicates a base or target coordinate is the one reported.
@@ -69,7 +75,7 @@ class IdentifiabilityReport:
         return "\n".join(f"{d['name']}: {d['why']}" for d in self.dropped)
 
 
-def analyse_identifiability(J, names, blocks=None, *, tol: float = 1e-6, priority=DEFAULT_PRIORITY,
+def analyse_identifiability(J, names, blocks=None, *, tol: float = IDENTIFIABILITY_TOL, priority=DEFAULT_PRIORITY,
                             explain: bool = True, column_blocks=None) -> IdentifiabilityReport:
     """Analyse the columns of ``J`` (M, n) named ``names``; ``blocks`` (n,) gives each column's
     identifiability group (priority order ``priority``, other groups after them);

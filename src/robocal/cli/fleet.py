@@ -291,10 +291,19 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
     r = _study("sets", scheduler, workers, pose_set_selection, robot, sets=sets, count=count, candidates=candidates,
                sigma_mm=sigma_mm, tool=tool, seed=seed)
     s, best = r["spread_mm"], r["best"]
-    click.echo(f"{r['robot']}: {sets} candidate sets of {candidates}, {count} poses each; predicted held-out RMS "
-               f"min {s['min']:.4f} / median {s['median']:.4f} / max {s['max']:.4f} mm")
-    click.echo(f"best: seed {best['seed']} ({best['holdout_rms_mm']:.4f} mm): robocal plan-poses {robot} --count {count} "
-               f"--candidates {candidates} --seed {best['seed']} --out poses.csv")
+    click.echo(f"{r['robot']}: {sets} candidate sets of {candidates}, {count} poses each; predicted workspace accuracy "
+               f"(model error over the working range, noise-free criterion) min {s['min']:.4f} / median "
+               f"{s['median']:.4f} / max {s['max']:.4f} mm")
+    click.echo(f"best: seed {best['seed']} ({best['workspace_model_std_mm']:.4f} mm): robocal plan-poses {robot} "
+               f"--count {count} --candidates {candidates} --seed {best['seed']} --out poses.csv")
+    n_within = len(r["within_noise"])
+    if r["differences_within_noise"]:
+        click.echo(f"differences within noise: {n_within} of {sets} sets, the median among them, are within one "
+                   f"campaign's spread of the best (+{100 * best['relative_spread']:.0f} %, up to "
+                   f"{r['noise_band_mm']:.4f} mm): the choice among them is noise")
+    else:
+        click.echo(f"{n_within} of {sets} sets within one campaign's spread of the best (+{100 * best['relative_spread']:.0f} %); "
+                   "the best is better than the median beyond noise")
     _chunk_line(r["chunking"])
     _write_json(r, out_file)
     set_json_result(r)

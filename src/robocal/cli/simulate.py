@@ -25,7 +25,10 @@ def simulate():
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="Measurement CSV file; the truth goes to <name>.truth.json next to it.")
 @click.option("--overwrite", is_flag=True, help="Replace existing files.")
-def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, seed, out_file, overwrite):
+@click.option("--cell", "cell_file", default=None, type=click.Path(dir_okay=False, exists=True),
+              help="Cell file (robocal-cell/1, docs/cells.md; lengths in its length_unit); default: the robot on "
+                   "the floor, the floor an obstacle, the tracker as instrument.")
+def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, seed, out_file, overwrite, cell_file):
     """Simulate a laser-tracker campaign of ROBOT with hidden true parameters."""
     from ..workflows.simulate import simulate_tracker
 
@@ -33,7 +36,7 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
         raise click.ClickException(f"--poses must be at least 1, got {n_poses}")
     try:
         r = simulate_tracker(robot, out_file, n_poses=n_poses, noise_mm=noise_mm, reflectors=int(reflectors),
-                             joint_noise_deg=joint_noise_deg, seed=seed, overwrite=overwrite)
+                             joint_noise_deg=joint_noise_deg, seed=seed, overwrite=overwrite, cell=cell_file)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
     click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm)")

@@ -151,6 +151,9 @@ def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
     T_world_base = _frame(f"{origin}: [base]", data.get("base"), ls, as_)
     ees = _end_effectors(data, origin, names, len(links), ls, as_)
     extra = {"length_unit": lu, "angle_unit": au, "origin": origin}
+    radii = _link_radii(origin, entries, links, ls)
+    if radii is not None:
+        extra["link_radii_mm"] = radii
     if "elastic" in data:
         from .elastic_section import parse_elastic
 
@@ -168,6 +171,26 @@ def parse_robot(data: dict, origin: str = "<robot>") -> RobotModel:
         )
     except ValueError as exc:
         raise RobotFileError(f"{origin}: {exc}") from None
+
+
+def _link_radii(origin, entries, links, ls):
+    """(n_moving + 1,) capsule radius [mm] of the base and every moving link from the joints'
+    optional ``link_radius`` (the base takes the first joint's; a joint without one its parent's),
+    or None when no joint gives one (then the cell model's defaults apply, docs/cells.md)."""
+    if not any("link_radius" in j for j in entries):
+        return None
+    out, last = [], None
+    for j, link in zip(entries, links):
+        if "link_radius" in j:
+            v = j["link_radius"]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+                raise RobotFileError(f"{origin}: joint {link.name!r}: link_radius must be a positive number, got {v!r}")
+            last = float(v) * ls
+        if link.moves:
+            out.append(last)
+    first = next(v for v in out if v is not None)
+    out = [first] + [first if v is None else v for v in out]
+    return out
 
 
 def _header(data: dict, origin: str):

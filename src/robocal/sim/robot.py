@@ -162,6 +162,18 @@ class VirtualRobot:
         span = hi - lo
         return rng.uniform(lo + margin * span, hi - margin * span, size=(int(n), self.nominal.n_joints))
 
+    def feasible_configurations(self, n: int, rng, margin: float = 0.05, cell=None) -> np.ndarray:
+        """``n`` configurations (n, n_ctrl) [rad | mm] uniform within the joint limits that the robot
+        can take in ``cell`` (default: on the floor, the floor an obstacle, no link in another;
+        docs/cells.md). A robot that is not a serial chain gets :meth:`random_configurations`."""
+        if not self.nominal.is_serial:
+            return self.random_configurations(n, rng, margin)
+        from ..calib.cell import default_cell, sample_feasible
+
+        q, _ = sample_feasible(default_cell() if cell is None else cell, self.nominal, int(n), as_rng(rng),
+                               margin=margin, batch=max(200, 4 * int(n)))
+        return q
+
     # ------------------------------------------------------------------ motion
     def encoder_noise(self, q, rng) -> np.ndarray:
         """Joint positions really reached for commanded ``q``: ``q`` plus Gaussian encoder noise."""

@@ -71,7 +71,7 @@ def compare_with_tracker(nominal, *, n_poses: int = 30, seed: int = 0, pixel_noi
         return (problem.model_at(res.state).replace(T_world_base=np.eye(4)),
                 np.asarray(problem.value(res.state, "targets")).reshape(-1)[:3])
 
-    q_hold = robot.random_configurations(n_holdout, rng, margin=0.1)
+    q_hold = robot.feasible_configurations(n_holdout, rng, margin=0.1)
     measured = tracker.measure(robot, q_hold, rng).points[:, 0]
 
     def holdout(model, reflector):
@@ -82,7 +82,7 @@ def compare_with_tracker(nominal, *, n_poses: int = 30, seed: int = 0, pixel_noi
 
     refl = tracker.reflectors[0]
     same = holdout(*tracker_model(q))
-    rand = holdout(*tracker_model(robot.random_configurations(n_poses, rng, margin=0.1)))
+    rand = holdout(*tracker_model(robot.feasible_configurations(n_poses, rng, margin=0.1)))
     selfcal = holdout(sc.model, refl)
     return {"robot": nominal.name, "n_poses": n_poses, "seed": seed, "nominal_mm": holdout(nominal, refl),
             "self_calibration_mm": selfcal, "tracker_same_poses_mm": same, "tracker_random_poses_mm": rand,

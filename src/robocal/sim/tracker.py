@@ -101,13 +101,14 @@ class LaserTracker:
         self.name = name
 
     @classmethod
-    def placed(cls, rng_seed, reflectors=1, *, distance_mm=(2500.0, 4000.0), height_mm=(-500.0, 1500.0),
-               sigma_mm: float = 0.02, ppm: float = 0.0, **kwargs) -> "LaserTracker":
+    def placed(cls, rng_seed, reflectors=1, *, distance_mm=(2500.0, 4000.0), height_mm=(500.0, 1800.0),
+               sigma_mm: float = 0.02, ppm: float = 0.0, position=None, **kwargs) -> "LaserTracker":
         """A tracker at a random (seeded) place and orientation in the cell.
 
         The tracker origin is at a horizontal distance uniform in ``distance_mm`` from the world
-        origin (the robot base), at a height uniform in ``height_mm``, with a uniformly random
-        orientation. ``reflectors`` is a (k, 3) array [mm], or 1 (one reflector 60 mm above the
+        origin (the robot base), at a height uniform in ``height_mm`` (a tripod on the floor the
+        robot stands on), with a uniformly random orientation; ``position`` (3,) [mm, world frame]
+        puts it at a given place instead (the orientation stays random). ``reflectors`` is a (k, 3) array [mm], or 1 (one reflector 60 mm above the
         flange, off its axis) or 3 (:func:`reflector_triangle`).
         """
         rng = as_rng(rng_seed)
@@ -121,6 +122,8 @@ class LaserTracker:
         r = rng.uniform(*distance_mm)
         phi = rng.uniform(-np.pi, np.pi)
         p_world_tracker = np.array([r * np.cos(phi), r * np.sin(phi), rng.uniform(*height_mm)])
+        if position is not None:
+            p_world_tracker = np.asarray(position, dtype=float).reshape(3)
         quat = rng.standard_normal(4)
         R_world_tracker = matrix_from_quaternion(quat / np.linalg.norm(quat))
         T_tracker_world = invert_transforms(transforms_from(R_world_tracker, p_world_tracker))
@@ -193,12 +196,52 @@ class LaserTracker:
             "units": "lengths mm, angles rad; T_a_b is frame b written in frame a",
         }
 
+    def cell_for(self, robot: VirtualRobot, cell=None):
+        """The cell ``cell`` (default :func:`~robocal.calib.cell.default_cell`) with this tracker as its
+        instrument (position from ``T_tracker_world`` and the nominal base, unless the cell names
+        one) and the reflectors' centroid as the tool's last point (the cell's tool polyline kept)."""
+        from dataclasses import replace
+
+        from ..calib.cell import Instrument, default_cell
+
+        cell = default_cell() if cell is None else cell
+        if cell.instrument is None:
+            T_base_tracker = invert_transforms(self.T_tracker_world @ robot.nominal.T_world_base)
+            pos = cell.T_cell_base[:3, :3] @ T_base_tracker[:3, 3] + cell.T_cell_base[:3, 3]
+            cell = cell.with_instrument(Instrument(tuple(pos)))
+        return replace(cell, tool_mm=tuple(cell.tool_mm[:-1]) + (tuple(self.reflectors.mean(axis=0)),))
+
+    def feasible_poses(self, robot: VirtualRobot, n_poses: int, rng, cell, *, margin: float = 0.05) -> np.ndarray:
+        """``n_poses`` poses (n, n_ctrl) of the nominal robot that ``cell`` allows (every reflector
+        in range, within its acceptance angle and in sight, no collision), in a driving order whose
+        every move is feasible (:func:`~robocal.calib.cell.order_poses`)."""
+        from dataclasses import replace
+
+        from ..calib.cell import feasible, order_poses, sample_feasible
+
+        model = robot.nominal
+        cells = [replace(cell, tool_mm=tuple(cell.tool_mm[:-1]) + (tuple(r),)) for r in self.reflectors]
+        q = np.zeros((0, model.n_joints))
+        for _ in range(20):
+            want = n_poses - len(q)
+            draw, _ = sample_feasible(cells[0], model, 2 * want + 4, rng, margin=margin)
+            for c in cells[1:]:
+                draw = draw[feasible(c, model, draw)]
+            q = np.vstack([q, draw[:want]])
+            q, _, _ = order_poses(cells[0], model, q)
+            if len(q) >= n_poses:
+                return q[:n_poses]
+        raise ValueError(f"{model.name}: could not connect {n_poses} feasible poses in the cell ({cell.source})")
+
     def campaign(self, robot: VirtualRobot, n_poses: int, seed, *, margin: float = 0.05, end_effector=None,
                  orientation: bool | None = None, measurements_path=None, truth_path=None,
-                 overwrite: bool = False, length_unit: str = "mm", angle_unit: str = "deg"):
-        """Simulate a measurement campaign: random poses within limits, measured by this tracker.
+                 overwrite: bool = False, length_unit: str = "mm", angle_unit: str = "deg", cell="default"):
+        """Simulate a measurement campaign: poses the robot can take in its cell, measured by this tracker.
 
         seed: integer seed (or Generator) for the poses, encoder noise and tracker noise.
+        cell: a :class:`~robocal.calib.cell.Cell`, ``"default"`` (a floor-mounted robot, this
+            tracker as the instrument: :meth:`cell_for`) or None (uniform poses within the joint
+            limits, no cell: poses a real robot may not take).
         measurements_path / truth_path: when given, the measurements are written as a
             ``robocal-measurements/1`` CSV file and the truth as JSON (atomic writes; an existing
             file raises ``FileExistsError`` unless ``overwrite``).
@@ -209,7 +252,11 @@ class LaserTracker:
                 if p is not None and Path(p).exists():
                     raise FileExistsError(f"{p}: file exists; pass overwrite=True to replace it")
         rng = as_rng(seed)
-        q = robot.random_configurations(n_poses, rng, margin=margin)
+        if cell is None:
+            q = robot.random_configurations(n_poses, rng, margin=margin)
+        else:
+            q = self.feasible_poses(robot, n_poses, rng,
+                                    self.cell_for(robot, None if isinstance(cell, str) else cell), margin=margin)
         meas = self.measure(robot, q, rng, end_effector=end_effector, orientation=orientation)
         truth = self.truth(robot)
         truth["seed"] = seed if isinstance(seed, (int, np.integer)) else None

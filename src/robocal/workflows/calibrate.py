@@ -231,6 +231,8 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
         holdout_before_mm=validation["before"]["rms"] if validation else None,
         holdout_after_mm=validation["after"]["rms"] if validation else None,
         parameters=(nominal.params.names, nominal.params.units, nominal.params.values, result.state.params))
+    coverage = _coverage(nominal, meas, train, hold, setup["problem"], result, free_names)
+    verdict = verdict + coverage["verdict"]
     verdict = _non_convergence_first(verdict, convergence_warnings, max_iterations)
     elastic_json = None
     if elastic_model is not None:  # the plausibility gate of the compliances and mass parameters
@@ -262,6 +264,7 @@ def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, fr
     if setup["six_d"]:
         rdict["baseline"]["T_flange_tool"] = json_ready(res0.state.tool[0])
     rdict["status"], rdict["reasons"], rdict["sanity_checks"] = verdict.status, list(verdict.reasons), verdict.checks
+    rdict["joint_coverage"] = coverage["table"]
     rdict["convergence"] = convergence.as_dict()
     if elastic_model is not None:
         rdict["elastic"] = json_ready(elastic_json)
@@ -358,6 +361,29 @@ def _non_convergence_first(verdict, convergence_warnings, max_iterations):
              "from an unfinished solve (try --max-iterations, better starting values or fewer free parameters) "
              "before suspecting the causes below")
     return Verdict((first,) + tuple(verdict.reasons), dict(verdict.checks))
+
+
+def _coverage(nominal, meas, train, hold, problem, result, free_names) -> dict:
+    """The coverage gates (:mod:`robocal.calib.coverage`) of the calibration poses: ``{verdict, table}``.
+    The full reference campaign (identified-parameter gate): seeded poses a floor-mounted robot can
+    take, spread over the joint limits (serial robots; others skip that gate)."""
+    from ..calib.cell import default_cell, sample_feasible
+    from ..calib.coverage import REFERENCE_POSES, coverage_verdict, joint_coverage
+
+    targets = np.asarray(result.state.targets, dtype=float)
+    ref = None
+    if nominal.is_serial and len(train):
+        try:
+            ref, _ = sample_feasible(default_cell(tuple(targets[0])), nominal, REFERENCE_POSES,
+                                     np.random.default_rng(0))
+        except ValueError:
+            ref = None
+    identified = [n for n in result.identifiability.identifiable if n in set(nominal.params.names)]
+    q_hold = meas.joints[hold] if len(hold) else None
+    verdict = coverage_verdict(nominal, meas.joints[train], q_hold, targets_mm=targets,
+                               ee_of_target=tuple(int(e) for e in problem.ee_of_target), identified=identified,
+                               free=free_names, reference_q=ref)
+    return {"verdict": verdict, "table": joint_coverage(nominal, meas.joints[train], q_hold)}
 
 
 def _check_options(out: Path, names, overwrite, loss, sigma_mm, method) -> None:
@@ -554,7 +580,12 @@ def _write_outputs(paths, rdict, calibrated, nominal, meas, data, train, validat
             "title": f"{nominal.name}: predicted uncertainty of the calibrated model at the measured poses",
             "note": "Flange positions in the robot base frame, coloured by the predicted 1-std position uncertainty "
                     "(J Cov J^T over the identified variables, base frame included)."}
+    cov_rows = [[c["joint"], c["unit"], f"{c['min']:.4g}", f"{c['max']:.4g}", f"{c['span']:.4g}",
+                 "unlimited" if c["range"] is None else f"{c['range']:.4g}",
+                 "" if c["fraction"] is None else f"{100 * c['fraction']:.0f} %"] for c in rdict.get("joint_coverage", [])]
     files["report"] = write_report(paths["report"], rdict, accuracy_map=amap,
+                                   extra_tables={"Joint-range coverage of the calibration poses": (
+                                       ["joint", "unit", "min", "max", "span", "range", "covered"], cov_rows)},
                                    title=f"Calibration of {nominal.name} from {Path(str(data)).name}",
                                    extra_plots={**convergence_plots(result),
                                                 **(torque_plots() if torque_plots is not None else {})})

@@ -77,7 +77,7 @@ def _tracker_calibration(cell, nominal, n_poses, rng, free_names):
     """A tracker calibration of the same robot with ``n_poses`` random poses; returns the model."""
     robot, readout = cell.robot, cell.readout
     tracker = LaserTracker.placed(rng, 1, sigma_mm=0.02)
-    q_link = robot.random_configurations(n_poses, rng)
+    q_link = robot.feasible_configurations(n_poses, rng)
     q_read = readout.read(readout.encoder_angles(q_link), rng)
     T = tracker.T_tracker_world @ robot.true_model.fk(q_link)
     pts = transform_points(T[:, None], tracker.reflectors[None])
@@ -121,7 +121,7 @@ def _run_seed(seed: int, *, robot: str = "abb_irb140", plates: int = 2, targets:
     rng = np.random.default_rng(np.random.SeedSequence([seed, 16]).spawn(1)[0])
     n_poses = spots.n_rows
     tracker_model = _tracker_calibration(cell, nominal, n_poses, rng, free_names)
-    q_link = cell.robot.random_configurations(n_holdout, rng)
+    q_link = cell.robot.feasible_configurations(n_holdout, rng)
     q_read = cell.readout.read(cell.readout.encoder_angles(q_link), rng)
     measured = transform_points(cell.robot.true_model.fk(q_link), TOOL_MM) + rng.normal(0.0, 0.02, (n_holdout, 3))
     cc_model = result.model.replace(T_world_base=np.eye(4))

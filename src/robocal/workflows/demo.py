@@ -39,7 +39,7 @@ def write_json(path, data, overwrite: bool = True) -> Path:
 
 
 def _problem(nominal, virtual, rng, n_poses, n_repeats):
-    q = virtual.random_configurations(n_poses, rng, margin=0.1)
+    q = virtual.feasible_configurations(n_poses, rng, margin=0.1)
     T_true = virtual.reach(q, rng)
     T_nominal = nominal.fk(q)
     err = np.linalg.norm(T_true[:, :3, 3] - T_nominal[:, :3, 3], axis=1)

@@ -7,8 +7,9 @@
   against its truth at other poses: the distribution of the accuracy the plan delivers, beside
   the first-order prediction of :func:`robocal.calib.plan.plan_campaign`.
 * :func:`pose_set_selection`: many candidate sets (one per seed, drawn exactly as ``robocal
-  plan-poses --seed S`` draws them), each planned by D-optimal selection with its predicted
-  held-out RMS; the best seed is reported (``robocal plan-poses --seed <best>`` writes that plan).
+  plan-poses --seed S`` draws them), each planned by D-optimal selection and ranked by its
+  predicted workspace accuracy (noise-free); the best seed is reported (``robocal plan-poses --seed
+  <best>`` writes that plan), and whether the differences are within one campaign's noise.
 * :func:`thermal_screening`: ``robocal thermal screen`` on each robot's run folder, one task per
   robot.
 
@@ -26,15 +27,16 @@ import warnings
 import numpy as np
 
 from ..calib import solve
+from ..calib.cell import default_cell, sample_feasible
 from ..calib.solve import NotConvergedWarning
-from ..calib.plan import plan_campaign, predicted_model_std
+from ..calib.plan import predicted_model_std, predicted_workspace_accuracy
 from ..calib.problem import CalibrationProblem, Target
 from ..metrics import error_statistics
 from ..robots import load_robot
 from ..sim.robot import VirtualRobot
 from .fleet_chunks import MAX_OVERHEAD_SHARE, chunk_size, chunks, measure_task_overhead, overhead_share
 from .fleet_cluster import run_tasks, default_workers
-from .plan_poses import candidate_poses
+from .plan_poses import plan_cell, plan_in_cell
 
 __all__ = ["monte_carlo_plan", "pose_set_selection", "thermal_screening", "mc_samples", "pose_sets"]
 
@@ -74,18 +76,33 @@ def mc_samples(span, *, robot, q_plan, q_check, tool, noise_mm, spread, seed, n_
 
 # -- pose selection over candidate sets -------------------------------------------------------------
 
-def _plan_one(model, count, candidates, seed, tool, sigma_mm, tracker_at, workspace):
-    qk = candidate_poses(model, count, candidates, seed, workspace=workspace, tracker_at=tracker_at, tool=tool)
-    plan = plan_campaign(model, qk, count, tool=tool, sigma_mm=sigma_mm)
-    return {"seed": int(seed), "holdout_rms_mm": plan["holdout_rms_mm"],
-            "holdout_model_std_mm": plan["holdout_model_std_mm"], "n_candidates": int(len(qk)),
+#: Reference poses of the workspace accuracy a pose set is ranked by (seeded, the same for every set).
+WORKSPACE_POSES = 200
+
+
+def workspace_poses(model, tool, seed: int = 0) -> np.ndarray:
+    """The reference poses (R, n) of :func:`pose_set_selection`: poses a floor-mounted robot can take,
+    spread over its joint limits (seeded by ``seed`` alone: every candidate set is judged on them)."""
+    q, _ = sample_feasible(default_cell(tool), model, WORKSPACE_POSES, np.random.default_rng([seed, 2]))
+    return q
+
+
+def _plan_one(model, count, candidates, seed, tool, sigma_mm, tracker_at, workspace, q_ref):
+    cell = plan_cell(model, None, tracker_at, tool)
+    plan = plan_in_cell(model, cell, count=count, candidates=candidates, workspace=workspace, sigma_mm=sigma_mm,
+                        seed=seed, efficiency=False)
+    acc = predicted_workspace_accuracy(model, plan, q_ref, tool=tuple(cell.reflector_mm))
+    return {"seed": int(seed), "workspace_model_std_mm": acc["rms_mm"], "relative_spread": acc["relative_spread"],
+            "holdout_rms_mm": plan["holdout_rms_mm"],
+            "holdout_model_std_mm": plan["holdout_model_std_mm"], "n_candidates": int(plan["n_candidates"]),
             "n_identifiable": len(plan["identifiable"])}
 
 
 def pose_sets(span, *, robot, count, candidates, seed, tool, sigma_mm, tracker_at=None, workspace=None) -> list:
     """The candidate sets ``seed + span[0] .. seed + span[1] - 1`` (one task), each planned."""
     model = load_robot(robot)
-    return [_plan_one(model, count, candidates, seed + i, tool, sigma_mm, tracker_at, workspace)
+    q_ref = workspace_poses(model, tool, seed)
+    return [_plan_one(model, count, candidates, seed + i, tool, sigma_mm, tracker_at, workspace, q_ref)
             for i in range(*span)]
 
 
@@ -123,7 +140,7 @@ def monte_carlo_plan(robot, q_plan, *, samples: int = 200, noise_mm: float = 0.0
     """Monte-Carlo accuracy of calibrating ``robot`` from the poses ``q_plan`` (N, n) [rad | mm].
 
     samples: virtual robots; noise_mm: tracker noise per coordinate; check_poses: seeded random
-    poses where each calibrated model is compared with its truth; tool: reflector in the flange
+    poses the robot can take on its floor (docs/cells.md) where each calibrated model is compared with its truth; tool: reflector in the flange
     frame [mm]; spread: (length sigma [mm], angle sigma [deg], joint offset sigma [deg]) of the
     hidden true parameters. Returns the per-sample RMS before/after [mm], their statistics, the
     samples whose solve stopped at the iteration limit (``unconverged_samples``, reported, kept),
@@ -135,9 +152,7 @@ def monte_carlo_plan(robot, q_plan, *, samples: int = 200, noise_mm: float = 0.0
         raise ValueError(f"--noise must be a positive number of mm, got {noise_mm}")
     model = load_robot(robot)
     q_plan = np.asarray(q_plan, dtype=float)
-    lo, hi = model.limits[:, 0], model.limits[:, 1]
-    q_check = np.random.default_rng([seed, 1]).uniform(lo + 0.05 * (hi - lo), hi - 0.05 * (hi - lo),
-                                                       (check_poses, model.n_joints))
+    q_check, _ = sample_feasible(default_cell(tool), model, check_poses, np.random.default_rng([seed, 1]))
     kwargs = {"robot": robot, "q_plan": q_plan, "q_check": q_check, "tool": tuple(tool), "noise_mm": noise_mm,
               "spread": tuple(spread), "seed": seed, "n_samples": samples}
     items, report = _chunked(client, mc_samples, samples, kwargs, _workers(client), progress)
@@ -155,17 +170,23 @@ def pose_set_selection(robot, *, sets: int = 100, count: int = 40, candidates: i
                        tool=(0.0, 0.0, 100.0), tracker_at=None, workspace=None, seed: int = 0, client=None,
                        progress=None) -> dict:
     """``sets`` candidate sets of ``robot`` (seeds ``seed .. seed + sets - 1``), each planned as
-    ``robocal plan-poses`` plans it; the best by predicted held-out RMS."""
+    ``robocal plan-poses`` plans it, ranked by the predicted workspace accuracy (a noise-free
+    criterion: the first-order model error over :func:`workspace_poses`, without the instrument noise
+    a held-out RMS adds). ``within_noise``: the sets whose accuracy is within one real campaign's
+    spread (``relative_spread`` of the best) of the best -- the choice among them is noise."""
     if sets < 2:
         raise ValueError(f"--sets must be at least 2, got {sets}")
     kwargs = {"robot": robot, "count": count, "candidates": candidates, "seed": seed, "tool": tuple(tool),
               "sigma_mm": sigma_mm, "tracker_at": tracker_at, "workspace": workspace}
     items, report = _chunked(client, pose_sets, sets, kwargs, _workers(client), progress)
-    rms = np.array([it["holdout_rms_mm"] for it in items])
-    best = items[int(np.argmin(rms))]
-    return {"robot": load_robot(robot).name, "sets": items, "best": best,
-            "spread_mm": {"min": float(rms.min()), "median": float(np.median(rms)), "max": float(rms.max())},
-            "chunking": report}
+    acc = np.array([it["workspace_model_std_mm"] for it in items])
+    best = items[int(np.argmin(acc))]
+    band = best["workspace_model_std_mm"] * (1.0 + best["relative_spread"])
+    within = [it["seed"] for it in items if it["workspace_model_std_mm"] <= band]
+    return {"robot": load_robot(robot).name, "sets": items, "best": best, "criterion": "workspace_model_std_mm",
+            "spread_mm": {"min": float(acc.min()), "median": float(np.median(acc)), "max": float(acc.max())},
+            "noise_band_mm": float(band), "within_noise": within,
+            "differences_within_noise": bool(np.median(acc) <= band), "chunking": report}
 
 
 # -- thermal screening per robot -------------------------------------------------------------------

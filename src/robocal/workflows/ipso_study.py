@@ -138,7 +138,7 @@ def tracker_experiment(seed: int, robot: str = "ur10_dh_beta", n_train: int = 10
     vr = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0)
     tracker = LaserTracker.placed(seed + 100, reflectors=np.array([[30.0, 40.0, 100.0]]), sigma_mm=sigma_mm)
     rng = np.random.default_rng(seed + 200)
-    q = vr.random_configurations(n_train + n_hold, rng, margin=0.1)
+    q = vr.feasible_configurations(n_train + n_hold, rng, margin=0.1)
     pts = tracker.measure(vr, q, rng).points
     truth = tracker.true_points(vr, q).reshape(len(q), 1, 3)
     problem = CalibrationProblem(nominal, q[:n_train], [Target("r1", None, (0.0, 0.0, 50.0))], pts[:n_train],

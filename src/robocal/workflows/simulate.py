@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..calib.cell import Cell
+from ..io.cell_file import read_cell
 from ..robots import load_robot
 from ..sim import LaserTracker, VirtualRobot, write_truth
 
@@ -43,7 +45,7 @@ def check_simulation_outputs(out_path, overwrite: bool) -> Path:
 def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: int, reflectors: int = 1,
                      joint_noise_deg: float = 0.0, ppm: float = 0.0, length_sigma_mm: float = 0.5,
                      angle_sigma_deg: float = 0.05, offset_sigma_deg: float = 0.05, margin: float = 0.05,
-                     overwrite: bool = False) -> dict:
+                     overwrite: bool = False, cell=None) -> dict:
     """Simulate a laser-tracker campaign of ``robot`` and write the measurement and truth files.
 
     robot: shipped robot name or robot file path. n_poses: random poses within the joint limits
@@ -60,6 +62,9 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
     """
     out_path = Path(out_path)
     truth_path = check_simulation_outputs(out_path, overwrite)
+    if cell is not None and not isinstance(cell, Cell) and Path(cell).resolve() in (out_path.resolve(),
+                                                                                   truth_path.resolve()):
+        raise ValueError(f"--out {out_path}: would replace the cell file {cell} (an input of this command)")
     if n_poses < 1:
         raise ValueError(f"n_poses must be at least 1, got {n_poses}")
     if reflectors not in (1, 3):
@@ -71,15 +76,24 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
     virtual = VirtualRobot.perturbed(nominal, s_robot, length_sigma_mm=length_sigma_mm,
                                      angle_sigma_deg=angle_sigma_deg, offset_sigma_deg=offset_sigma_deg,
                                      joint_noise_deg=joint_noise_deg, joint_noise_mm=0.0)
-    tracker = LaserTracker.placed(s_tracker, reflectors, sigma_mm=noise_mm, ppm=ppm)
+    if cell is not None and not isinstance(cell, Cell):
+        cell = read_cell(cell, nominal)
+    if cell is not None and reflectors == 1:  # the cell's reflector (the last tool point)
+        reflectors = np.atleast_2d(cell.reflector_mm)
+    at = None
+    if cell is not None and cell.instrument is not None:  # the world frame is the robot base frame here
+        T_base_cell = np.linalg.inv(cell.T_cell_base)
+        at = T_base_cell[:3, :3] @ np.asarray(cell.instrument.position) + T_base_cell[:3, 3]
+    tracker = LaserTracker.placed(s_tracker, reflectors, sigma_mm=noise_mm, ppm=ppm, position=at)
     meas, truth = tracker.campaign(virtual, n_poses, s_campaign, margin=margin, measurements_path=out_path,
-                                   overwrite=overwrite)
+                                   overwrite=overwrite, cell="default" if cell is None else cell)
     truth["seed"] = int(seed)
     truth["n_poses"] = int(n_poses)
     truth["simulation"] = {
         "seed_streams": "numpy.random.SeedSequence(seed).spawn(3): robot parameters, tracker placement, campaign",
         "length_sigma_mm": length_sigma_mm, "angle_sigma_deg": angle_sigma_deg,
         "offset_sigma_deg": offset_sigma_deg, "joint_noise_deg": joint_noise_deg, "margin": margin,
+        "cell": "default (floor-mounted, the tracker as instrument)" if cell is None else cell.source,
         "measurements_file": out_path.name,
     }
     write_truth(truth_path, truth, overwrite=overwrite)
