@@ -85,7 +85,9 @@ def test_verify_command_ok_and_fault(tmp_path):
     # a healthy check: ten new poses of the same robot
     assert run(main, ["simulate", "tracker", "abb_irb140", "--poses", "10", "--seed", "3",
                       "--out", str(tmp_path / "v.csv")]).exit_code == 0
-    r = run(main, ["verify", str(tmp_path / "cal"), str(tmp_path / "v.csv"), "--json"])
+    db = ["--db", str(tmp_path / "h.sqlite"), "--robot-id", "irb140-cell2", "--instrument", "AT960 #42"]
+    r = run(main, ["verify", str(tmp_path / "cal"), str(tmp_path / "v.csv"), "--json", "--time", "2026-05-01T06:00Z",
+                   "--temperature", "23.5"] + db)
     assert r.exit_code == 0, r.output
     assert json.loads(r.output)["decision"] == "ok"
     # J3's encoder jumped by 0.2 deg: the joint readings of the check are off by it
@@ -99,8 +101,23 @@ def test_verify_command_ok_and_fault(tmp_path):
         v[k] = repr(float(v[k]) - 0.2)
         out.append(",".join(v))
     (tmp_path / "f.csv").write_text("\n".join(out) + "\n")
-    r = run(main, ["verify", str(tmp_path / "cal"), str(tmp_path / "f.csv"), "--json"])
+    r = run(main, ["verify", str(tmp_path / "cal"), str(tmp_path / "f.csv"), "--json", "--time", "2026-06-01T06:00Z"]
+            + db)
     assert r.exit_code == 6, r.output
     res = json.loads(r.output)
     assert res["decision"] == "mechanical fault suspected" and res["suspect_joint"] == "J3"
     assert res["suspect_offset"]["value"] == pytest.approx(0.2, abs=0.02)
+    # both checks are in the robot's history, with time, temperature and instrument
+    r = run(main, ["history", "irb140-cell2", "--db", str(tmp_path / "h.sqlite"), "--json"])
+    assert r.exit_code == 0, r.output
+    ver = json.loads(r.output)["verifications"]
+    assert [v["decision"] for v in ver] == ["ok", "mechanical fault suspected"]
+    assert ver[0]["time"].startswith("2026-05-01T06:00") and ver[0]["temperature_c"] == 23.5
+    assert ver[1]["suspect"] == "J3 offset" and ver[1]["instrument"] == "AT960 #42"
+    assert abs(ver[1]["suspect_value"]) == pytest.approx(np.radians(0.2), abs=np.radians(0.02))
+    r = run(main, ["history", "irb140-cell2", "--db", str(tmp_path / "h.sqlite"), "--plot", str(tmp_path / "v.png")])
+    assert r.exit_code == 0 and "mechanical fault suspected" in r.output
+    # fleet status lists the last verification and flags the robot
+    r = run(main, ["fleet", "status", "--db", str(tmp_path / "h.sqlite"), "--no-plots", "--json"])
+    row = json.loads(r.output)["robots"][0]
+    assert row["last_verification"]["decision"] == "mechanical fault suspected" and row["verification_failed"]
