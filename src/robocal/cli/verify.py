@@ -29,7 +29,9 @@ __all__ = ["verify"]
 def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool, as_json, db, robot_id, when,
            temperature_c, instrument):
     """Check a calibrated robot (MODEL: the calibration folder or its robot file) against a few
-    measured poses (MEASUREMENTS, a robocal measurement file in the calibration's instrument frame).
+    measured poses (MEASUREMENTS, a robocal measurement file in the calibration's instrument frame;
+    optional columns approach_J1 ... hold each joint's approach direction, +1 or -1, for the
+    backlash diagnosis).
 
     Exit 0: ok; 3: recalibrate; 6: mechanical fault suspected (a joint named)."""
     from ..errors import RobocalError
@@ -61,7 +63,8 @@ def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool
             click.echo(f"  {reason}")
         if "suspect_offset" in r:
             s = r["suspect_offset"]
-            click.echo(f"  {r['suspect_joint']} offset jump {s['value']:+.4f} ± {s['std']:.4f} {s['unit']}")
+            what = "offset jump" if r["suspect_cause"] == "offset" else "backlash"
+            click.echo(f"  {r['suspect_joint']} {what} {s['value']:+.4f} ± {s['std']:.4f} {s['unit']}")
         click.echo(f"decision: {r['decision'].upper()}")
         if db is not None:
             click.echo(f"recorded in the history of {robot_id!r} (cycle {r['history']['cycle_id']})")
