@@ -62,6 +62,40 @@ def test_a_version_2_database_gains_the_iso_and_verification_tables(tmp_path):
         assert s.check() == []
 
 
+@pytest.fixture(params=["sqlite", "postgresql"])
+def any_db(request, tmp_path):
+    if request.param == "sqlite":
+        return str(tmp_path / "h.sqlite")
+    return request.getfixturevalue("fresh_server_db")
+
+
+def test_iso_figures_and_verifications_round_trip(any_db):
+    """The new tables on SQLite and on a PostgreSQL server: written by the workflow helpers, read back."""
+    from robocal.workflows.iso9283_history import record_iso_run, record_verification
+
+    run = {"pose": {"P1": {"AP_mm": 0.8, "AP_x_mm": 0.1, "AP_y_mm": -0.2, "AP_z_mm": 0.77, "RP_mm": 0.06,
+                           "AP_a_deg": -0.01, "RP_a_deg": 0.004},
+                    "P2": {"AP_mm": 1.1, "AP_x_mm": 0.0, "AP_y_mm": 0.0, "AP_z_mm": 1.1, "RP_mm": 0.05}},
+           "vap": {}, "distance": {"AD_mm": -0.3, "RD_mm": 0.04}, "drift": None,
+           "path": {"line": {"AT_mm": 0.9, "RT_mm": 0.07}},
+           "adequacy": {"RP_mm.P1": {"U_mm": 0.03, "adequate": False}, "AP_mm.P2": {"U_mm": 0.03, "adequate": True}}}
+    cid = record_iso_run(any_db, "r1", run, time="2026-04-01T10:00Z", temperature_c=25.0, instrument="AT960")
+    record_verification(any_db, "r1", {"decision": "recalibrate", "statistic": 80.0, "dof": 30, "threshold": 50.9,
+                                       "false_alarm_rate": 0.01, "n_poses": 10, "rms_mm": 0.09, "max_mm": 0.2,
+                                       "suspect_joint": None, "time": "2026-05-01T10:00Z", "instrument": "AT960",
+                                       "temperature_c": None, "model": "cal/calibrated_robot.toml"})
+    with HistoryStore.open(any_db, create=False) as s:
+        figs = {(f["symbol"], f["pose"]): f for f in s.iso_figures(cid)}
+        assert figs["AP", ""]["value"] == pytest.approx(1.1) and figs["AP", ""]["adequate"] is True
+        assert figs["RP", ""]["value"] == pytest.approx(0.06) and figs["RP", ""]["adequate"] is False
+        assert figs["AP_a", "P1"]["unit"] == "rad" and figs["AP_a", "P1"]["value"] == pytest.approx(math.radians(-0.01))
+        assert figs["AP_a", ""]["value"] == pytest.approx(math.radians(0.01))     # worst = largest magnitude
+        assert figs["AD", ""]["value"] == pytest.approx(-0.3) and figs["AT", "line"]["value"] == pytest.approx(0.9)
+        assert s.metric_history("r1", "iso9283.RP").values == pytest.approx([0.06])
+        (v,) = s.verifications("r1")
+        assert v["decision"] == "recalibrate" and v["suspect"] is None and v["time"].month == 5
+
+
 def test_bad_iso_figures_and_verifications_are_refused(tmp_path):
     with HistoryStore.open(tmp_path / "h.sqlite") as s:
         with pytest.raises(HistoryInputError, match="convert to radians"):
