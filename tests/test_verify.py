@@ -123,9 +123,9 @@ def test_verify_command_ok_and_fault(tmp_path):
     assert row["last_verification"]["decision"] == "mechanical fault suspected" and row["verification_failed"]
 
 
-@pytest.mark.parametrize("joint", [1, 2, 4])
+@pytest.mark.parametrize("joint", [0, 1, 2, 3, 4])
 def test_a_backlash_of_01_deg_is_detected_and_named_from_the_approach_directions(joint):
-    """A 0.1 deg backlash of J2, J3 or J5 (the joint stops b/2 short in the direction it moved:
+    """A 0.1 deg backlash of any of J1-J5 (the joint stops b/2 short in the direction it moved:
     the simulator's model of backlash), 10 poses approached from random sides, the rest as above:
     detected in >= 95 %, named as that joint's backlash in >= 80 % of 100 trials; an offset jump of
     the same joint with the same approach data stays an offset."""
