@@ -198,3 +198,13 @@ def test_verify_command_names_a_backlash_from_approach_columns(tmp_path):
     (tmp_path / "x.csv").write_text("\n".join(bad) + "\n")
     r = run(main, ["verify", str(tmp_path / "cal"), str(tmp_path / "x.csv")])
     assert r.exit_code == 1 and "approach_J9" in r.output
+
+
+def test_approach_signs_are_checked_before_the_test():
+    p = np.zeros((4, 3))
+    with pytest.raises(ValueError, match="approach signs"):
+        verify_positions(p, p, instrument_sigma_mm=0.02, joint_jacobian=np.ones((4, 3, 6)),
+                         approach_signs=np.ones((4, 5)))
+    with pytest.raises(ValueError, match=r"\+1, -1 or 0"):
+        verify_positions(p, p, instrument_sigma_mm=0.02, joint_jacobian=np.ones((4, 3, 6)),
+                         approach_signs=np.full((4, 6), 2.0))

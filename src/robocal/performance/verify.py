@@ -156,6 +156,13 @@ def verify_positions(measured_mm, predicted_mm, *, instrument_sigma_mm: float, p
         raise InputError(f"instrument noise must be > 0 mm, got {instrument_sigma_mm}")
     if not 0 < false_alarm_rate < 0.5:
         raise InputError(f"false-alarm rate must be in (0, 0.5), got {false_alarm_rate}")
+    if approach_signs is not None:
+        S = np.asarray(approach_signs, float)
+        n_q = None if joint_jacobian is None else np.shape(joint_jacobian)[-1]
+        if S.ndim != 2 or S.shape[0] != N or (n_q is not None and S.shape[1] != n_q):
+            raise InputError(f"approach signs must have shape ({N}, {n_q or 'n_joints'}), got {S.shape}")
+        if not np.all(np.isin(S, (-1.0, 0.0, 1.0))):
+            raise InputError("approach signs must be +1, -1 or 0 (unknown)")
     cov = np.eye(3 * N) * instrument_sigma_mm ** 2
     if prediction_covariance_mm2 is not None:
         C = np.asarray(prediction_covariance_mm2, float)
@@ -190,10 +197,6 @@ def verify_positions(measured_mm, predicted_mm, *, instrument_sigma_mm: float, p
     candidates = [(names[k], "offset", J[:, :, k]) for k in range(n)]
     if approach_signs is not None:
         S = np.asarray(approach_signs, float)
-        if S.shape != (N, n):
-            raise InputError(f"approach signs must have shape ({N}, {n}), got {S.shape}")
-        if not np.all(np.isin(S, (-1.0, 0.0, 1.0))):
-            raise InputError("approach signs must be +1, -1 or 0 (unknown)")
         for k in range(n):
             if len(np.unique(S[:, k][S[:, k] != 0])) == 2:     # both sides: backlash differs from an offset
                 candidates.append((names[k], "backlash", -0.5 * J[:, :, k] * S[:, k:k + 1]))
