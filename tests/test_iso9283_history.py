@@ -207,3 +207,13 @@ def test_history_lists_and_plots_ap_rp_over_time(fleet_db, tmp_path):
     assert data["iso9283"]["RP"]["values"] == pytest.approx(
         [results["worn", k]["runs"][0]["summary"]["RP_mm"] for k in range(3)], abs=1e-12)
     assert data["verifications"] == []
+
+
+def test_history_options_are_checked_before_any_work(fleet_db, tmp_path):
+    d, _, _ = fleet_db
+    base = ["iso9283", "evaluate", d / "plan", d / "worn0.csv", "--out", tmp_path / "ev"]
+    r = _run(base + ["--db", tmp_path / "h.sqlite"])
+    assert r.exit_code == 1 and "--db and --robot-id go together" in r.output
+    r = _run(base + ["--db", tmp_path / "h.sqlite", "--robot-id", "r1", "--time", "2026-05-01 08:00"])
+    assert r.exit_code == 1 and "no time zone" in r.output
+    assert not (tmp_path / "ev").exists() and not (tmp_path / "h.sqlite").exists()

@@ -30,9 +30,20 @@ def history_options(f):
     return f
 
 
-def check_history_options(db, robot_id) -> None:
+def check_history_options(db, robot_id, when=None) -> None:
+    """``--db`` and ``--robot-id`` together, a valid robot id and ``--time``, before any work."""
+    from ..store import HistoryInputError
+    from ..store._validate import check_robot_id, parse_time
+
     if (db is None) != (robot_id is None):
         raise click.ClickException("--db and --robot-id go together (which database, which robot)")
+    try:
+        if robot_id is not None:
+            check_robot_id(robot_id)
+        if when is not None:
+            parse_time(when, "--time")
+    except HistoryInputError as exc:
+        raise click.ClickException(str(exc)) from None
 
 
 def _xyz(text, option):
@@ -161,7 +172,7 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
 
     if (mpe is None) != (instrument_at is None):
         raise click.ClickException("--mpe and --instrument-at go together (the MPE depends on the distance)")
-    check_history_options(db, robot_id)
+    check_history_options(db, robot_id, when)
     m = _mpe(mpe) if mpe else None
     st = _xyz(instrument_at, "--instrument-at") if instrument_at else None
     try:

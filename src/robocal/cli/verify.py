@@ -38,7 +38,7 @@ def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool
     from ..workflows.verify import run_verify
     from .iso9283 import _xyz
 
-    check_history_options(db, robot_id)
+    check_history_options(db, robot_id, when)
     point = _xyz(tool, "--tool") if tool else None
     try:
         r = run_verify(model, measurements, noise_mm=noise_mm, false_alarm_rate=false_alarm_rate,
