@@ -3,7 +3,7 @@
 * per commanded pose, three projected views (x–y, x–z, y–z of the base frame) of the attained
   positions around their barycentre, with the repeatability sphere (its projection: a circle of
   radius RP) and the direction and distance to the commanded position (AP);
-* the drift of P1: AP and RP per block over the drift run;
+* the drift of P1: AP and RP per block over the drift run, as changes from the first block;
 * the path deviation: per evaluation plane, the distance of the crossings' barycentre from the
   commanded path (AT's terms) and l̄ + 3·S (RT's terms), for the line and the circle.
 
@@ -71,15 +71,20 @@ def pose_cloud_svgs(name: str, pose: dict, attained_mm) -> list[str]:
 
 
 def drift_svg(drift: dict) -> str:
-    """AP and RP of P1 per block [mm] against the time of the block [min]."""
+    """AP and RP of P1 per block as changes from the first block [mm] (dAP and dRP are the last
+    block's) against the time of the block [min]: AP itself is often a hundred times the drift."""
     blocks = drift["per_block"]
     t = [b["time_min"] for b in blocks]
-    p = Panel(700, 280, title=f"drift of P1: dAP {drift['dAP_mm']:.4f} mm, dRP {drift['dRP_mm']:.4f} mm",
-              x_label="time since the start of the drift run [min]", y_label="[mm]")
-    p.line(t, [b["AP_mm"] for b in blocks], colour="blue", label="AP per block")
-    p.points(t, [b["AP_mm"] for b in blocks], colour="blue", radius=3)
-    p.line(t, [b["RP_mm"] for b in blocks], colour="orange", label="RP per block")
-    p.points(t, [b["RP_mm"] for b in blocks], colour="orange", radius=3)
+    ap = np.array([b["AP_mm"] for b in blocks]) - blocks[0]["AP_mm"]
+    rp = np.array([b["RP_mm"] for b in blocks]) - blocks[0]["RP_mm"]
+    p = Panel(700, 280, title=f"drift of P1: dAP {drift['dAP_mm']:.4f} mm, dRP {drift['dRP_mm']:.4f} mm "
+              f"(AP {blocks[0]['AP_mm']:.3f}, RP {blocks[0]['RP_mm']:.4f} mm in the first block)",
+              x_label="time since the start of the drift run [min]", y_label="change from the first block [mm]")
+    p.hline(0.0, colour="grey")
+    p.line(t, ap, colour="blue", label="AP − AP(first block)")
+    p.points(t, ap, colour="blue", radius=3)
+    p.line(t, rp, colour="orange", label="RP − RP(first block)")
+    p.points(t, rp, colour="orange", radius=3)
     return p.svg()
 
 
