@@ -477,18 +477,19 @@ def test_reader_sees_only_committed_cycles_while_a_writer_is_open(tmp_path):
 def test_sqlite_file_settings_and_schema(tmp_path):
     db = tmp_path / "h.sqlite"
     with HistoryStore.open(db) as s:
-        assert s.schema_version == 2
+        assert s.schema_version == 3
         assert s._backend.conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
         assert s._backend.conn.execute("PRAGMA foreign_keys").fetchone()[0] == 1
     con = sqlite3.connect(db)
     tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
-    assert tables == {"schema_version", "robots", "cycles", "measurements", "parameters", "metrics", "corrections"}
+    assert tables == {"schema_version", "robots", "cycles", "measurements", "parameters", "metrics", "corrections",
+                      "iso9283_figures", "verifications"}
     with pytest.raises(sqlite3.IntegrityError):  # the schema itself refuses unknown kinds
         con.execute("INSERT INTO robots (name, created_at) VALUES ('x', '2024')")
         con.execute("INSERT INTO cycles (robot_id, kind, status, started_at) VALUES (1, 'party', 'committed', '2024')")
     con.close()
     with HistoryStore.open(db) as s:  # reopening does not migrate twice
-        assert s._read("SELECT COUNT(*) AS n FROM schema_version")[0]["n"] == 2
+        assert s._read("SELECT COUNT(*) AS n FROM schema_version")[0]["n"] == 3
 
 
 
@@ -762,7 +763,7 @@ def test_version_1_database_is_migrated_lambda_to_percent_and_demo_truth_errors_
     finally:
         _schema.MIGRATIONS, _schema.SCHEMA_VERSION = v2, v2[-1].version
     with HistoryStore.open(db) as s:
-        assert s.schema_version == 2
+        assert s.schema_version == _schema.SCHEMA_VERSION
         demo, real, thermal = s.cycles("kr")
         assert set(demo.metrics) == {"workspace_error_nominal_rms", "workspace_error_calibrated_rms"}
         assert demo.metrics["workspace_error_nominal_rms"].value == 1.5

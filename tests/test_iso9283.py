@@ -181,3 +181,56 @@ def test_before_after_with_a_calibrated_program(tmp_path):
     assert after["AP_mm"] < 0.25 * before["AP_mm"], (before["AP_mm"], after["AP_mm"])
     assert after["AT_mm_line"] < before["AT_mm_line"]
     assert {row["characteristic"] for row in res["comparison"]} >= {"AP_mm", "RP_mm", "AD_mm"}
+
+
+def test_report_has_the_figures(iso_run):
+    """The HTML report parses; per pose three projected views (every attained position, the
+    barycentre, the RP circle), the drift plot and the two path plots are there as SVG."""
+    import re
+    import xml.etree.ElementTree as ET
+    from html.parser import HTMLParser
+
+    d, _, out = iso_run
+    text = (d / "ev-run.csv" / "report.html").read_text(encoding="utf-8")
+
+    class Figures(HTMLParser):
+        def __init__(self):
+            super().__init__()
+            self.depth, self.start, self.svgs, self.headings, self._h3 = 0, None, [], [], False
+
+        def handle_starttag(self, tag, attrs):
+            if tag == "svg":
+                if self.depth == 0:
+                    self.start = self.getpos()
+                self.depth += 1
+            self._h3 = tag == "h3"
+
+        def handle_endtag(self, tag):
+            if tag == "svg":
+                self.depth -= 1
+                if self.depth == 0:
+                    self.svgs.append(self.start)
+
+        def handle_data(self, data):
+            if self._h3:
+                self.headings.append(data)
+                self._h3 = False
+
+    f = Figures()
+    f.feed(text)
+    run = out["run.csv"]["runs"][0]
+    n_cycles = len(run["attained_mm"]["P1"])
+    assert n_cycles == 30
+    assert len(f.svgs) == 5 * 3 + 1 + 2
+    assert any(h.startswith("P1: attained positions") for h in f.headings)
+    assert "drift of P1: AP and RP per block" in f.headings
+    assert any(h.startswith("path circle: deviation") for h in f.headings)
+    # every figure is well-formed SVG; P1's x-y view has one dot per cycle, the barycentre and the RP circle
+    starts = [m.start() for m in re.finditer("<svg xmlns", text)] + [len(text)]
+    svgs = [text[a:b].split("</div>")[0] for a, b in zip(starts[:-1], starts[1:])]
+    trees = [ET.fromstring(s) for s in svgs]
+    ns = "{http://www.w3.org/2000/svg}"
+    p1 = trees[0]
+    assert len(p1.findall(f".//{ns}circle")) == n_cycles + 1
+    assert len(p1.findall(f".//{ns}polyline")) == 2           # the RP circle and the line to the commanded pose
+    assert "RP" in "".join(p1.itertext())

@@ -143,10 +143,17 @@ def _exit_on_failures(failed, total) -> None:
 @click.option("--plots", "plot_dir", default="drift-plots", show_default=True, type=click.Path(file_okay=False),
               help="Folder for <robot>_drift.png per flagged robot.")
 @click.option("--no-plots", is_flag=True, help="Write no drift plots.")
+@click.option("--ap-tolerance", "ap_tolerance_mm", type=float, default=None, metavar="MM",
+              help="Flag a robot whose ISO 9283 AP trend (worst pose, line through its tests, at now) exceeds this [mm].")
+@click.option("--rp-tolerance", "rp_tolerance_mm", type=float, default=None, metavar="MM",
+              help="Flag a robot whose ISO 9283 RP trend exceeds this [mm].")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no_plots, as_json):
-    """Robots whose last calibration is older than --max-age or whose drift trend crosses the
-    tolerance, from the history database (SQLite or PostgreSQL). Exit code 3 when any is flagged."""
+def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no_plots, ap_tolerance_mm,
+               rp_tolerance_mm, as_json):
+    """Robots whose last calibration is older than --max-age, whose drift trend crosses the
+    tolerance, whose ISO 9283 AP/RP trend crosses --ap-tolerance/--rp-tolerance or whose last
+    verification was not ok, from the history database (SQLite or PostgreSQL); each robot's last
+    verification is listed. Exit code 3 when any is flagged."""
     import json
 
     from ..store import HistoryError
@@ -154,7 +161,8 @@ def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no
 
     try:
         r = fleet_status(db, max_age_days=max_age_days, tolerance_mm=tolerance_mm, tolerance_deg=tolerance_deg,
-                         kind=kind, plot_dir=None if no_plots else plot_dir)
+                         kind=kind, plot_dir=None if no_plots else plot_dir, ap_tolerance_mm=ap_tolerance_mm,
+                         rp_tolerance_mm=rp_tolerance_mm)
     except (ValueError, OSError, HistoryError) as exc:
         raise _user_error(exc) from None
     if as_json:
@@ -163,9 +171,14 @@ def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no
         click.echo(f"{len(r['robots'])} robots in {r['database']}: {len(r['flagged'])} need attention "
                    f"(stale after {max_age_days:g} days; drift tolerance {tolerance_mm:g} mm, {tolerance_deg:g} deg)")
         for row in r["robots"]:
-            state = ", ".join(s for s, on in (("STALE", row["stale"]), ("DRIFTING", row["drifting"])) if on) or "ok"
+            state = ", ".join(s for s, on in (("STALE", row["stale"]), ("DRIFTING", row["drifting"]),
+                                              ("ISO", row["performance_drifting"]),
+                                              ("VERIFY", row["verification_failed"])) if on) or "ok"
             age = "-" if row["age_days"] is None else f"{row['age_days']:.1f} d"
-            click.echo(f"  {row['robot']:<24} {state:<16} calibrations {row['calibrations']:>3}  last {age:>9}")
+            lv = row["last_verification"]
+            ver = "-" if lv is None else f"{lv['time'][:10]} {lv['decision']}"
+            click.echo(f"  {row['robot']:<24} {state:<16} calibrations {row['calibrations']:>3}  last {age:>9}"
+                       f"  last verification {ver}")
             for reason in row["reasons"]:
                 click.echo(f"      {reason}")
             if row.get("plot"):

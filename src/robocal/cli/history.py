@@ -106,6 +106,7 @@ def history_cmd(robot, db, params, kinds, since, plot_path, as_json):
     _echo_cycles(view, robot)
     click.echo("")
     _echo_drift(view)
+    _echo_performance(view)
     if plot_path is not None:
         click.echo("")
         click.echo(f"plot: {plot_path}")
@@ -134,18 +135,31 @@ def _read_history(target, robot, names, kind, since_t) -> SimpleNamespace:
             s = store.metric_history(robot, m, kind=kind, since=since_t)
             if len(s):
                 metric_series[m] = s
+        iso = {}
+        for sym in ("AP", "RP"):
+            s = store.iso_figure_history(robot, sym, since=since_t)
+            if len(s):
+                iso[sym] = s
+        verifications = store.verifications(robot, since=since_t)
         return SimpleNamespace(cycles=cycles, stored=stored, series=series, metric_series=metric_series,
-                               metric_columns=_metric_columns(cycles), where=store.url)
+                               metric_columns=_metric_columns(cycles), where=store.url, iso=iso,
+                               verifications=verifications)
 
 
 def _plot(view, robot, plot_path) -> None:
     from ..report.history_plot import plot_history
 
-    plot_metrics = {m: view.metric_series[m] for m in view.metric_columns if m in view.metric_series}
-    plot_metrics |= {m: s for m, s in view.metric_series.items() if m not in plot_metrics}
+    # ISO 9283 AP/RP first (one panel each), then the table's metrics, then the others
+    plot_metrics = {f"ISO 9283 {k} (worst pose)": s for k, s in view.iso.items()}
+    iso_names = {"iso9283.AP", "iso9283.RP", "verify.rms", "verify.T"} if view.iso or view.verifications else set()
+    plot_metrics |= {m: view.metric_series[m] for m in view.metric_columns
+                     if m in view.metric_series and m not in iso_names}
+    plot_metrics |= {m: s for m, s in view.metric_series.items() if m not in plot_metrics and m not in iso_names}
     events = [(c.started_at, c.kind) for c in view.cycles if c.status == "committed"]
+    outcomes = [(v["time"], v["decision"]) for v in view.verifications]
     try:
-        plot_history(view.series, plot_metrics, plot_path, f"{robot}: drift over time", events=events)
+        plot_history(view.series, plot_metrics, plot_path, f"{robot}: drift over time", events=events,
+                     verifications=outcomes)
     except ValueError as exc:
         raise click.ClickException(f"--plot: {exc}") from None
     except OSError as exc:
@@ -162,6 +176,8 @@ def _history_json(view, robot, plot_path) -> dict:
                     "n_corrections": c.n_corrections} for c in view.cycles],
         "parameters": {n: _series_json(s) for n, s in view.series.items()},
         "metrics": {n: _series_json(s) for n, s in view.metric_series.items()},
+        "iso9283": {n: _series_json(s) for n, s in view.iso.items()},
+        "verifications": [dict(v, time=v["time"].isoformat()) for v in view.verifications],
     }
     if plot_path is not None:
         out["plot"] = str(plot_path)
@@ -207,3 +223,46 @@ def _echo_drift(view) -> None:
     for line in _table(["name", "unit", "cycles", "first", "last", "change", "min", "max"], rows,
                        [False, False, True, True, True, True, True, True]):
         click.echo(line)
+
+
+def _iso_cell(s, cycle_id) -> str:
+    """The figure of ``cycle_id`` in the series ``s`` with its uncertainty U (2 std) [mm]."""
+    if s is None:
+        return "-"
+    k = np.flatnonzero(s.cycle_ids == cycle_id)
+    if not k.size:
+        return "-"
+    v, sd = s.values[k[0]], s.std[k[0]]
+    return f"{v:.4f}" + (f" ± {2 * sd:.4f}" if math.isfinite(sd) else "")
+
+
+def _echo_performance(view) -> None:
+    """ISO 9283 tests (worst AP and RP over the poses, with the instrument's uncertainty) and the
+    quick verifications (decision, statistic, suspect), oldest first."""
+    if view.iso:
+        click.echo("")
+        click.echo("ISO 9283 performance tests (worst pose; U: the instrument's uncertainty)")
+        ap, rp = view.iso.get("AP"), view.iso.get("RP")
+        base = ap if ap is not None else rp
+        rows = []
+        for cid, t in zip(base.cycle_ids, base.times):
+            rows.append([int(cid), str(t.astype("datetime64[s]")).replace("T", " "), _iso_cell(ap, cid),
+                         _iso_cell(rp, cid)])
+        for line in _table(["id", "measured (UTC)", "AP [mm]", "RP [mm]"], rows, [True, False, True, True]):
+            click.echo(line)
+    if view.verifications:
+        click.echo("")
+        click.echo("verifications")
+        rows = []
+        for v in view.verifications:
+            sus = "-"
+            if v["suspect"]:
+                val = v["suspect_value"]
+                sus = v["suspect"] + ("" if val is None else (f" {math.degrees(val):+.4f} deg" if v["suspect_unit"] == "rad"
+                                                              else f" {val:+.4f} mm"))
+            rows.append([v["cycle_id"], v["time"].strftime("%Y-%m-%d %H:%M:%S"), v["decision"],
+                         f"{v['statistic']:.1f} / {v['threshold']:.1f}", _fmt(v["rms_mm"]), sus,
+                         v["instrument"] or "-", _fmt(v["temperature_c"])])
+        for line in _table(["id", "measured (UTC)", "decision", "T / threshold", "rms [mm]", "suspect", "instrument",
+                            "temp [degC]"], rows, [True, False, False, True, True, False, False, True]):
+            click.echo(line)

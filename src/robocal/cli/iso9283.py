@@ -9,10 +9,41 @@ import sys
 
 import click
 
+from ..errors import RobocalError
 from ._common import EXIT_FAILED_RESULT, _robot, _user_error
 from ._json import json_option, set_json_result
 
-__all__ = ["iso9283", "simulate_iso9283_cmd", "xyz_option"]
+__all__ = ["iso9283", "simulate_iso9283_cmd", "xyz_option", "history_options", "check_history_options"]
+
+
+def history_options(f):
+    """``--db``, ``--robot-id``, ``--time``, ``--temperature``, ``--instrument``: record the result
+    in the history database."""
+    f = click.option("--instrument", default=None, help="Instrument name/serial, recorded.")(f)
+    f = click.option("--temperature", "temperature_c", type=float, default=None,
+                     help="Robot temperature during the measurement [degC], recorded.")(f)
+    f = click.option("--time", "when", default=None, metavar="ISO_TIME",
+                     help="When it was measured (ISO 8601 with a zone, e.g. 2026-05-01T06:00Z; default now), recorded.")(f)
+    f = click.option("--robot-id", default=None, help="The robot's id in the history database (with --db).")(f)
+    f = click.option("--db", default=None, metavar="URL_OR_FILE",
+                     help="Record the result in this history database (an SQLite file or a URL; created if absent).")(f)
+    return f
+
+
+def check_history_options(db, robot_id, when=None) -> None:
+    """``--db`` and ``--robot-id`` together, a valid robot id and ``--time``, before any work."""
+    from ..store import HistoryInputError
+    from ..store._validate import check_robot_id, parse_time
+
+    if (db is None) != (robot_id is None):
+        raise click.ClickException("--db and --robot-id go together (which database, which robot)")
+    try:
+        if robot_id is not None:
+            check_robot_id(robot_id)
+        if when is not None:
+            parse_time(when, "--time")
+    except HistoryInputError as exc:
+        raise click.ClickException(str(exc)) from None
 
 
 def _xyz(text, option):
@@ -127,8 +158,13 @@ def _mpe(text):
 @xyz_option("--instrument-at", "Instrument position in the robot's base frame [mm] (for --mpe).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--overwrite", is_flag=True, help="Replace an earlier evaluation in the folder.")
-def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json, overwrite):
-    """Every ISO 9283 characteristic MEASUREMENTS support (a second file AFTER: before/after)."""
+@history_options
+def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json, overwrite, db, robot_id,
+                 when, temperature_c, instrument):
+    """Every ISO 9283 characteristic MEASUREMENTS support (a second file AFTER: before/after).
+
+    With --db and --robot-id the figures are recorded in the history database (the AFTER run's
+    when two are given: the robot as it will work, with the corrected program)."""
     from ..io.iso9283_files import read_iso_measurements
     from ..workflows.iso9283_evaluate import compare_runs, evaluate_iso_run, iso_table_lines
     from ..workflows.iso9283_report import write_iso_outputs
@@ -136,6 +172,7 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
 
     if (mpe is None) != (instrument_at is None):
         raise click.ClickException("--mpe and --instrument-at go together (the MPE depends on the distance)")
+    check_history_options(db, robot_id, when)
     m = _mpe(mpe) if mpe else None
     st = _xyz(instrument_at, "--instrument-at") if instrument_at else None
     try:
@@ -149,7 +186,15 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
         if after:
             result["comparison"] = compare_runs(runs[0], runs[1])
         files = write_iso_outputs(out_dir, result, overwrite=overwrite)
-    except (ValueError, OSError) as exc:
+        if db is not None:
+            from ..workflows.iso9283_history import record_iso_run
+
+            result["history"] = {"database": db, "robot_id": robot_id, "cycle_id": record_iso_run(
+                db, robot_id, runs[-1], time=when, temperature_c=temperature_c,
+                instrument=instrument or (f"MPE {mpe}" if mpe else None),
+                meta={"plan": str(plan), "measurements": str(after or measurements),
+                      "corrected_program": bool(after)})}
+    except (ValueError, OSError, RobocalError) as exc:
         raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(result, indent=1, default=float))
@@ -161,6 +206,8 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
         for row in result["comparison"]:
             click.echo(f"{row['characteristic']:<16}{row['before']:>10.4f}{row['after']:>10.4f}{row['gain']:>+10.4f}")
     click.echo(f"wrote {', '.join(files.values())}")
+    if db is not None:
+        click.echo(f"recorded in the history of {robot_id!r} (cycle {result['history']['cycle_id']})")
     if runs[0]["missing"] and len(runs[0]["missing"]) == len(protocol["measurements"]):
         sys.exit(EXIT_FAILED_RESULT)
 

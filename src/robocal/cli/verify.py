@@ -8,6 +8,7 @@ import sys
 import click
 
 from ._common import EXIT_FAILED_RESULT, EXIT_MECHANICAL_FAULT, _user_error
+from .iso9283 import check_history_options, history_options
 
 __all__ = ["verify"]
 
@@ -23,23 +24,34 @@ __all__ = ["verify"]
               help="The instrument was moved: re-fit its frame on the same poses (a J1 offset is then not checked).")
 @click.option("--tool", "tool", default=None, metavar="X,Y,Z",
               help="The measured point on the flange, X,Y,Z [mm] (default: the calibration's identified target).")
-@click.option("--temperature", "temperature_c", type=float, default=None, help="Robot temperature [°C], recorded.")
-@click.option("--instrument", default=None, help="Instrument name/serial, recorded.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool, temperature_c, instrument, as_json):
+@history_options
+def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool, as_json, db, robot_id, when,
+           temperature_c, instrument):
     """Check a calibrated robot (MODEL: the calibration folder or its robot file) against a few
-    measured poses (MEASUREMENTS, a robocal measurement file in the calibration's instrument frame).
+    measured poses (MEASUREMENTS, a robocal measurement file in the calibration's instrument frame;
+    optional columns approach_J1 ... hold each joint's approach direction, +1 or -1, for the
+    backlash diagnosis).
 
     Exit 0: ok; 3: recalibrate; 6: mechanical fault suspected (a joint named)."""
+    from ..errors import RobocalError
     from ..workflows.verify import run_verify
     from .iso9283 import _xyz
 
+    check_history_options(db, robot_id, when)
     point = _xyz(tool, "--tool") if tool else None
     try:
         r = run_verify(model, measurements, noise_mm=noise_mm, false_alarm_rate=false_alarm_rate,
                        register_frame=register_frame, tool_point_mm=point, temperature_c=temperature_c,
                        instrument=instrument)
-    except (ValueError, OSError) as exc:
+        if when is not None:
+            r["time"] = when
+        if db is not None:
+            from ..workflows.iso9283_history import record_verification
+
+            r["history"] = {"database": db, "robot_id": robot_id,
+                            "cycle_id": record_verification(db, robot_id, r)}
+    except (ValueError, OSError, RobocalError) as exc:
         raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(r, indent=1))
@@ -51,8 +63,11 @@ def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool
             click.echo(f"  {reason}")
         if "suspect_offset" in r:
             s = r["suspect_offset"]
-            click.echo(f"  {r['suspect_joint']} offset jump {s['value']:+.4f} ± {s['std']:.4f} {s['unit']}")
+            what = "offset jump" if r["suspect_cause"] == "offset" else "backlash"
+            click.echo(f"  {r['suspect_joint']} {what} {s['value']:+.4f} ± {s['std']:.4f} {s['unit']}")
         click.echo(f"decision: {r['decision'].upper()}")
+        if db is not None:
+            click.echo(f"recorded in the history of {robot_id!r} (cycle {r['history']['cycle_id']})")
     if r["decision"] == "recalibrate":
         sys.exit(EXIT_FAILED_RESULT)
     if r["decision"] == "mechanical fault suspected":

@@ -13,6 +13,14 @@ of a single offset ``δ_j`` along the joint's column of the position Jacobian. I
 offset explains the residual (the remaining statistic passes its own χ² test with one degree of
 freedom fewer, and the reduction is significant) the decision is **mechanical fault suspected**,
 naming the joint and the size of the jump; otherwise **recalibrate**.
+
+When the approach direction of every joint is known per pose (``s_ij = +1`` when joint j arrived
+at pose i moving in its positive direction, −1 in its negative one), each joint's **backlash** is
+a candidate too: a joint with backlash ``b`` stops ``b/2`` short of where it was sent, so the
+residual it leaves is ``−J_ij · s_ij · b/2`` (the sign follows the approach). Its column is fitted
+like an offset's; a joint approached from one side only at every pose cannot be told from an
+offset and gets no backlash candidate. The best candidate of all (offsets and backlashes) decides,
+and the result names the cause (``offset`` or ``backlash``).
 """
 
 from __future__ import annotations
@@ -48,9 +56,12 @@ class VerificationResult:
     rms_mm, max_mm : float
         Position residual statistics [mm].
     suspect_joint : str or None
-        The joint whose offset alone explains the residual (decision "mechanical fault suspected").
+        The joint whose offset (or backlash) alone explains the residual (decision "mechanical
+        fault suspected").
+    suspect_cause : str or None
+        ``"offset"`` or ``"backlash"``.
     suspect_offset : float or None
-        Its fitted offset [rad | mm].
+        Its fitted offset, or the full backlash ``b`` [rad | mm].
     suspect_offset_sigma : float or None
     joint_statistics : dict
         Remaining statistic after each joint's single-offset fit.
@@ -66,6 +77,7 @@ class VerificationResult:
     rms_mm: float
     max_mm: float
     suspect_joint: str | None = None
+    suspect_cause: str | None = None
     suspect_offset: float | None = None
     suspect_offset_sigma: float | None = None
     joint_statistics: dict = field(default_factory=dict)
@@ -102,7 +114,7 @@ def _remaining(Wr: np.ndarray, WA: np.ndarray | None) -> float:
 
 def verify_positions(measured_mm, predicted_mm, *, instrument_sigma_mm: float, prediction_covariance_mm2=None,
                      joint_jacobian=None, joint_names=None, false_alarm_rate: float = 0.01,
-                     register_frame: bool = False) -> VerificationResult:
+                     register_frame: bool = False, approach_signs=None) -> VerificationResult:
     """The χ² verification of measured against predicted positions, and the fault diagnosis.
 
     Parameters
@@ -122,6 +134,9 @@ def verify_positions(measured_mm, predicted_mm, *, instrument_sigma_mm: float, p
     register_frame : bool
         Re-fit the instrument frame (6 DoF) on the same points: use when the instrument was moved
         since the calibration. Base-like errors (including a J1 offset) are then not checked.
+    approach_signs : array_like, shape (N, n_joints), optional
+        +1 / −1: the direction each joint moved in when it arrived at each pose (0: unknown). With
+        it, each joint's backlash is a candidate of the diagnosis as well.
 
     Returns
     -------
@@ -141,6 +156,13 @@ def verify_positions(measured_mm, predicted_mm, *, instrument_sigma_mm: float, p
         raise InputError(f"instrument noise must be > 0 mm, got {instrument_sigma_mm}")
     if not 0 < false_alarm_rate < 0.5:
         raise InputError(f"false-alarm rate must be in (0, 0.5), got {false_alarm_rate}")
+    if approach_signs is not None:
+        S = np.asarray(approach_signs, float)
+        n_q = None if joint_jacobian is None else np.shape(joint_jacobian)[-1]
+        if S.ndim != 2 or S.shape[0] != N or (n_q is not None and S.shape[1] != n_q):
+            raise InputError(f"approach signs must have shape ({N}, {n_q or 'n_joints'}), got {S.shape}")
+        if not np.all(np.isin(S, (-1.0, 0.0, 1.0))):
+            raise InputError("approach signs must be +1, -1 or 0 (unknown)")
     cov = np.eye(3 * N) * instrument_sigma_mm ** 2
     if prediction_covariance_mm2 is not None:
         C = np.asarray(prediction_covariance_mm2, float)
@@ -172,18 +194,25 @@ def verify_positions(measured_mm, predicted_mm, *, instrument_sigma_mm: float, p
     J = np.asarray(joint_jacobian, float)
     n = J.shape[-1]
     names = list(joint_names) if joint_names is not None else [f"J{k + 1}" for k in range(n)]
+    candidates = [(names[k], "offset", J[:, :, k]) for k in range(n)]
+    if approach_signs is not None:
+        S = np.asarray(approach_signs, float)
+        for k in range(n):
+            if len(np.unique(S[:, k][S[:, k] != 0])) == 2:     # both sides: backlash differs from an offset
+                candidates.append((names[k], "backlash", -0.5 * J[:, :, k] * S[:, k:k + 1]))
     stats = {}
     fits = {}
-    for k in range(n):
-        col = J[:, :, k].reshape(-1, 1)
+    for name, cause, colk in candidates:
+        col = colk.reshape(-1, 1)
         if np.linalg.norm(col) < 1e-9:
             continue
         WAk = np.hstack([WA, W @ col])
         Tk = _remaining(Wr, WAk)
-        stats[names[k]] = Tk
+        key = name if cause == "offset" else f"{name} backlash"
+        stats[key] = Tk
         coef, *_ = np.linalg.lstsq(WAk, Wr, rcond=None)
         cov_k = np.linalg.pinv(WAk.T @ WAk)
-        fits[names[k]] = (float(coef[-1]), float(np.sqrt(max(cov_k[-1, -1], 0.0))))
+        fits[key] = (name, cause, float(coef[-1]), float(np.sqrt(max(cov_k[-1, -1], 0.0))))
     if not stats:
         return VerificationResult("recalibrate", reasons=reasons, joint_statistics=stats, **common)
     best = min(stats, key=stats.get)
@@ -191,12 +220,15 @@ def verify_positions(measured_mm, predicted_mm, *, instrument_sigma_mm: float, p
     thr1 = float(chi2.ppf(1 - false_alarm_rate, dof - 1))
     lr_thr = float(chi2.ppf(1 - false_alarm_rate, 1))
     if T_best <= thr1 and T - T_best > lr_thr:
-        delta, sd = fits[best]
-        reasons.append(f"one offset of {best} explains it: remaining T = {T_best:.1f} <= {thr1:.1f}")
+        joint, cause, delta, sd = fits[best]
+        reasons.append(f"one {cause} of {joint} explains it: remaining T = {T_best:.1f} <= {thr1:.1f}")
         others = [k for k, v in stats.items() if k != best and v <= thr1]
         if others:
-            reasons.append(f"also consistent with an offset of {', '.join(others)} (less likely)")
-        return VerificationResult("mechanical fault suspected", suspect_joint=best, suspect_offset=delta,
-                                  suspect_offset_sigma=sd, joint_statistics=stats, reasons=reasons, **common)
-    reasons.append(f"no single joint offset explains it (best {best}: remaining T = {T_best:.1f} > {thr1:.1f})")
+            reasons.append(f"also consistent with {', '.join(o if ' ' in o else o + ' offset' for o in others)} "
+                           "(less likely)")
+        return VerificationResult("mechanical fault suspected", suspect_joint=joint, suspect_cause=cause,
+                                  suspect_offset=delta, suspect_offset_sigma=sd, joint_statistics=stats,
+                                  reasons=reasons, **common)
+    reasons.append(f"no single joint offset{' or backlash' if approach_signs is not None else ''} explains it "
+                   f"(best {best}: remaining T = {T_best:.1f} > {thr1:.1f})")
     return VerificationResult("recalibrate", joint_statistics=stats, reasons=reasons, **common)

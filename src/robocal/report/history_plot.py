@@ -23,7 +23,7 @@ def _display(unit: str):
 
 
 def plot_history(parameters: dict, metrics: dict, path, title: str, *, events=(), max_metrics: int = 4,
-                 field: str = "delta"):
+                 field: str = "delta", verifications=()):
     """Parameters grouped by unit (one panel per unit: lengths in mm, angles in deg) and one panel
     per metric, against time (UTC).
 
@@ -37,7 +37,8 @@ def plot_history(parameters: dict, metrics: dict, path, title: str, *, events=()
         if len(s):
             groups.setdefault(s.unit, []).append((name, s))
     mets = [(n, s) for n, s in metrics.items() if len(s)][:max_metrics]
-    n_panels = len(groups) + len(mets)
+    verifications = list(verifications)
+    n_panels = len(groups) + len(mets) + bool(verifications)
     if n_panels == 0:
         raise ValueError("nothing to plot: no parameter or metric values in the selection")
     fig, axes = plt.subplots(n_panels, 1, figsize=(11, 2.6 * n_panels + 0.8), sharex=True, squeeze=False,
@@ -49,6 +50,8 @@ def plot_history(parameters: dict, metrics: dict, path, title: str, *, events=()
         _parameter_panel(ax, unit, groups[unit], label)
     for ax, (name, s) in zip(axes[len(units):], mets):
         _metric_panel(ax, name, s)
+    if verifications:
+        _verification_panel(axes[-1], verifications)
     _event_lines(fig, axes, events)
     axes[-1].set_xlabel("time (UTC)")
     for lab in axes[-1].get_xticklabels():
@@ -81,6 +84,22 @@ def _metric_panel(ax, name: str, s) -> None:
     ax.plot(s.times, s.values * k, marker="o", ms=3, lw=1.2, color="tab:purple")
     ax.set_ylabel(f"[{shown}]")
     ax.set_title(name, loc="left", fontsize=10)
+    ax.grid(alpha=0.3)
+
+
+_OUTCOMES = (("ok", "tab:green"), ("recalibrate", "tab:orange"), ("mechanical fault suspected", "tab:red"))
+
+
+def _verification_panel(ax, verifications) -> None:
+    """One panel: each quick verification's decision (ok / recalibrate / fault) at its time."""
+    for level, (decision, colour) in enumerate(_OUTCOMES):
+        ts = [np.datetime64(t.astimezone(timezone.utc).replace(tzinfo=None), "us") if isinstance(t, datetime) else t
+              for t, d in verifications if d == decision]
+        if ts:
+            ax.plot(ts, [level] * len(ts), "o", color=colour, ms=7)
+    ax.set_yticks(range(len(_OUTCOMES)), [d for d, _ in _OUTCOMES], fontsize=8)
+    ax.set_ylim(-0.5, len(_OUTCOMES) - 0.5)
+    ax.set_title("verifications", loc="left", fontsize=10)
     ax.grid(alpha=0.3)
 
 

@@ -148,6 +148,45 @@ class HistoryQueries:
             f"WHERE {where} AND m.name = :mname ORDER BY c.started_at, c.id", params | {"mname": name})
         return self._series(name, rows)
 
+    def iso_figure_history(self, robot: str, symbol: str, pose: str = "", *, since=None, until=None) -> Series:
+        """An ISO 9283 figure (``AP``, ``RP``, ``vAP``, ``AT``, ...) of one pose (``""``: the
+        run's worst value over the poses) over the robot's committed performance tests, oldest
+        first; ``std`` holds the instrument's uncertainty U/2 where it was stated (NaN otherwise).
+        Empty when none was stored."""
+        self._require_robot(robot)
+        where, params = self._filters(robot, None, since, until, True)
+        rows = self._read(
+            "SELECT c.id, c.kind, c.started_at, f.value AS v, f.uncertainty / 2.0 AS std, f.unit FROM iso9283_figures f "
+            "JOIN cycles c ON c.id = f.cycle_id JOIN robots r ON r.id = c.robot_id "
+            f"WHERE {where} AND f.symbol = :sym AND f.pose = :pose ORDER BY c.started_at, c.id",
+            params | {"sym": symbol, "pose": pose or ""})
+        return self._series(symbol if not pose else f"{symbol}.{pose}", rows)
+
+    def iso_figures(self, cycle_id: int) -> list:
+        """Every ISO 9283 figure one cycle stored: dicts with symbol, pose, value, unit,
+        uncertainty (or None) and adequate (True, False or None)."""
+        rows = self._read("SELECT symbol, pose, value, unit, uncertainty, adequate FROM iso9283_figures "
+                          "WHERE cycle_id = :id ORDER BY id", {"id": int(cycle_id)})
+        for r in rows:
+            r["adequate"] = None if r["adequate"] is None else bool(r["adequate"])
+        return rows
+
+    def verifications(self, robot: str, *, since=None, until=None) -> list:
+        """The robot's quick verifications (committed), oldest first: dicts with the cycle's id and
+        start time (``time``, UTC datetime), ``decision``, ``statistic``, ``dof``, ``threshold``,
+        ``false_alarm_rate``, ``n_poses``, ``rms_mm``, ``max_mm``, ``suspect``, ``suspect_value``,
+        ``suspect_unit``, ``instrument``, ``temperature_c``, ``model``."""
+        self._require_robot(robot)
+        where, params = self._filters(robot, None, since, until, True)
+        rows = self._read(
+            "SELECT c.id AS cycle_id, c.started_at, v.decision, v.statistic, v.dof, v.threshold, v.false_alarm_rate, "
+            "v.n_poses, v.rms_mm, v.max_mm, v.suspect, v.suspect_value, v.suspect_unit, v.instrument, "
+            "v.temperature_c, v.model FROM verifications v JOIN cycles c ON c.id = v.cycle_id "
+            f"JOIN robots r ON r.id = c.robot_id WHERE {where} ORDER BY c.started_at, c.id", params)
+        for r in rows:
+            r["time"] = parse_time(r.pop("started_at"))
+        return rows
+
     @staticmethod
     def _series(name, rows) -> Series:
         units = sorted({r["unit"] for r in rows})

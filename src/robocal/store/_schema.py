@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 from ._validate import CYCLE_KINDS
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 CYCLE_STATUSES = ("running", "committed", "failed")
 
 
@@ -125,9 +125,45 @@ V2_EXTRA = (
     "(SELECT id FROM cycles WHERE kind = 'geometric_calibration' AND notes LIKE 'robocal demo%')",
 )
 
+#: Version 3 (issue 32): the ISO 9283 figures of a performance test and the outcome of a quick
+#: verification, each child rows of a cycle (kind ``measurement``: a test or a check measures the
+#: robot; the child table says which). New tables only, so every older database gains them as is.
+V3_TABLES = (
+    Tab("iso9283_figures", (
+        Col("id", "pk"),
+        Col("cycle_id", "int", nullable=False, references="cycles.id"),
+        Col("symbol", "name", nullable=False),      # AP, RP, AP_x, AP_a, vAP, AD, RD, dAP, dRP, AT, RT
+        Col("pose", "name", nullable=False),        # P1..P5, line, circle; "" for the run's worst value
+        Col("value", "real", nullable=False),
+        Col("unit", "name", nullable=False),        # mm | rad
+        Col("uncertainty", "real"),                 # the instrument's U for this figure, same unit, or NULL
+        Col("adequate", "int"),                     # 1 | 0 | NULL (not assessed)
+    ), unique=(("cycle_id", "symbol", "pose"),), indexes=(("ix_iso9283_figures_cycle", ("cycle_id",)),)),
+    Tab("verifications", (
+        Col("id", "pk"),
+        Col("cycle_id", "int", nullable=False, unique=True, references="cycles.id"),
+        Col("decision", "name", nullable=False),    # ok | recalibrate | mechanical fault suspected
+        Col("statistic", "real", nullable=False),
+        Col("dof", "int", nullable=False),
+        Col("threshold", "real", nullable=False),
+        Col("false_alarm_rate", "real", nullable=False),
+        Col("n_poses", "int", nullable=False),
+        Col("rms_mm", "real"),
+        Col("max_mm", "real"),
+        Col("suspect", "name"),                     # e.g. "J3 offset", "J2 backlash"
+        Col("suspect_value", "real"),
+        Col("suspect_unit", "name"),                # rad | mm
+        Col("instrument", "text"),
+        Col("temperature_c", "real"),
+        Col("model", "text"),                       # the calibration verified against
+    ), checks=(("ck_verifications_decision",
+                _in("decision", ("ok", "recalibrate", "mechanical fault suspected"))),)),
+)
+
 MIGRATIONS = (
     Migration(1, "robots, cycles, measurements, parameters, metrics, corrections", V1_TABLES),
     Migration(2, "lambda in %; the demo's workspace errors named as such (not residuals)", (), V2_EXTRA),
+    Migration(3, "ISO 9283 figures and verification outcomes", V3_TABLES),
 )
 assert MIGRATIONS[-1].version == SCHEMA_VERSION
 

@@ -37,6 +37,8 @@ class CycleWriter:
         self._params = set()
         self._metrics = set()
         self._corr_keys = set()
+        self._iso_keys = set()
+        self._verified = False
         self.counts = {"measurements": 0, "parameters": 0, "metrics": 0, "corrections": 0}
 
     # -- times ---------------------------------------------------------------------------------
@@ -195,3 +197,76 @@ class CycleWriter:
         self._corr_keys |= keys
         self.counts["corrections"] += m
         return m
+
+    # -- performance tests and verifications (schema version 3) --------------------------------
+    def add_iso_figures(self, figures) -> int:
+        """ISO 9283 figures of one performance test: an iterable of dicts with ``symbol`` (``AP``,
+        ``RP``, ``AP_x``, ``AP_a``, ``vAP``, ``AD``, ``RD``, ``dAP``, ``dRP``, ``AT``, ``RT``, ...),
+        ``pose`` (``P1``..``P5``, ``line``, ``circle``; ``""`` for the run's worst value), ``value``,
+        ``unit`` (``mm`` or ``rad``) and optionally ``uncertainty`` (same unit) and ``adequate``
+        (bool: the instrument is good enough to state the figure). Returns the number of rows."""
+        self._check_open()
+        rows, keys = [], set()
+        for i, f in enumerate(figures):
+            if not isinstance(f, dict):
+                raise HistoryInputError(f"iso figure {i}: expected a dict, got {f!r}")
+            sym = check_name(f.get("symbol"), f"iso figure {i} symbol")
+            pose = f.get("pose") or ""
+            if not isinstance(pose, str) or len(pose) > 255:
+                raise HistoryInputError(f"iso figure {sym!r}: pose must be a name, got {pose!r}")
+            unit = check_unit(f.get("unit"), f"iso figure {sym!r}")
+            if unit not in ("mm", "rad"):
+                raise HistoryInputError(f"iso figure {sym!r}: unit must be 'mm' or 'rad', got {unit!r}")
+            val = check_number(f.get("value"), f"iso figure {sym!r} {pose!r} value")
+            u = check_number(f.get("uncertainty"), f"iso figure {sym!r} {pose!r} uncertainty", allow_none=True)
+            ad = f.get("adequate")
+            if ad is not None and not isinstance(ad, bool):
+                raise HistoryInputError(f"iso figure {sym!r}: adequate must be True, False or None, got {ad!r}")
+            key = (sym, pose)
+            if key in keys or key in self._iso_keys:
+                raise HistoryInputError(f"iso figure {sym!r} of pose {pose!r} was already added to this cycle")
+            keys.add(key)
+            rows.append({"cycle_id": self.id, "symbol": sym, "pose": pose, "value": val, "unit": unit,
+                         "uncertainty": u, "adequate": None if ad is None else int(ad)})
+        self._write(self._tx.insert_many, "iso9283_figures", rows)
+        self._iso_keys |= keys
+        self.counts["iso9283_figures"] = self.counts.get("iso9283_figures", 0) + len(rows)
+        return len(rows)
+
+    def add_verification(self, *, decision: str, statistic, dof: int, threshold, false_alarm_rate, n_poses: int,
+                         rms_mm=None, max_mm=None, suspect: str | None = None, suspect_value=None,
+                         suspect_unit: str | None = None, instrument: str | None = None, temperature_c=None,
+                         model: str | None = None) -> None:
+        """The outcome of one quick verification (``robocal verify``): the decision (``ok``,
+        ``recalibrate``, ``mechanical fault suspected``), the chi-square statistic, its degrees of
+        freedom and threshold [1], the false-alarm rate [1], the number of poses, residual RMS and
+        max [mm], the suspected cause (``"J3 offset"``, ``"J2 backlash"``) with its size in
+        ``suspect_unit`` (rad or mm), the instrument, the temperature [degC] and the calibration
+        checked against. One per cycle."""
+        self._check_open()
+        if decision not in ("ok", "recalibrate", "mechanical fault suspected"):
+            raise HistoryInputError(f"verification decision {decision!r} is not known")
+        if self._verified:
+            raise HistoryInputError("a verification was already added to this cycle")
+        if isinstance(dof, bool) or not isinstance(dof, int) or dof < 1:
+            raise HistoryInputError(f"verification dof must be a positive integer, got {dof!r}")
+        if isinstance(n_poses, bool) or not isinstance(n_poses, int) or n_poses < 1:
+            raise HistoryInputError(f"verification n_poses must be a positive integer, got {n_poses!r}")
+        if suspect_unit is not None and suspect_unit not in ("rad", "mm"):
+            raise HistoryInputError(f"verification suspect_unit must be 'rad' or 'mm', got {suspect_unit!r}")
+        for name, text in (("suspect", suspect), ("instrument", instrument), ("model", model)):
+            if text is not None and (not isinstance(text, str) or len(text) > 1000):
+                raise HistoryInputError(f"verification {name} must be a string, got {text!r}")
+        row = {"cycle_id": self.id, "decision": decision,
+               "statistic": check_number(statistic, "verification statistic"), "dof": dof,
+               "threshold": check_number(threshold, "verification threshold"),
+               "false_alarm_rate": check_number(false_alarm_rate, "verification false_alarm_rate"),
+               "n_poses": n_poses, "rms_mm": check_number(rms_mm, "verification rms_mm", allow_none=True),
+               "max_mm": check_number(max_mm, "verification max_mm", allow_none=True), "suspect": suspect,
+               "suspect_value": check_number(suspect_value, "verification suspect_value", allow_none=True),
+               "suspect_unit": suspect_unit, "instrument": instrument,
+               "temperature_c": check_number(temperature_c, "verification temperature_c", allow_none=True),
+               "model": model}
+        self._write(self._tx.insert, "verifications", row)
+        self._verified = True
+        self.counts["verifications"] = 1

@@ -11,6 +11,13 @@ one kind (default ``geometric_calibration``):
   ``|b| (now - t_first) > tolerance_mm``, an angle when it exceeds ``tolerance_deg``. It needs two
   calibrations at different times (with two, the line is through both).
 
+* **performance**: the trend of the worst-pose ISO 9283 AP or RP over the robot's performance tests
+  (``robocal iso9283 evaluate --db``) crosses ``ap_tolerance_mm`` / ``rp_tolerance_mm``: the
+  least-squares line through the tests, evaluated at ``now`` (with one test, that test's value),
+  exceeds the tolerance;
+* **verification**: the last quick verification (``robocal verify --db``) did not end in ``ok``.
+  Every robot's last verification is listed.
+
 A drift plot per flagged robot (the drifting parameters and the accuracy metrics over time) is
 written with :func:`robocal.report.history_plot.plot_history`.
 """
@@ -23,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["drift_trend", "fleet_status"]
+__all__ = ["drift_trend", "fleet_status", "trend_at"]
 
 _DAY_US = 86400e6
 
@@ -80,6 +87,56 @@ def _robot_status(store, robot, kind, now, max_age_days, tol_mm, tol_rad) -> dic
     return row
 
 
+def trend_at(times, values, now) -> float:
+    """The least-squares line through ``values`` (N,) at ``times`` (N,) ``datetime64`` evaluated at
+    ``now`` (aware datetime); the single value with one point (or several at one time: their mean);
+    NaN with none. Same unit as ``values``."""
+    t = np.asarray(times, dtype="datetime64[us]")
+    v = np.asarray(values, dtype=float)
+    ok = np.isfinite(v)
+    t, v = t[ok], v[ok]
+    if len(v) == 0:
+        return math.nan
+    x = (t - t[0]).astype(float) / _DAY_US
+    if len(v) < 2 or np.ptp(x) <= 0:
+        return float(np.mean(v))
+    b, a = np.polyfit(x, v, 1)
+    x_now = (np.datetime64(now.astimezone(timezone.utc).replace(tzinfo=None), "us") - t[0]).astype(float) / _DAY_US
+    return float(a + b * x_now)
+
+
+def _performance(store, robot, now, ap_tol, rp_tol) -> dict:
+    """The ISO 9283 trend and the last verification of one robot (see the module docstring)."""
+    out = {"iso_tests": 0, "iso": {}, "performance_drifting": False, "last_verification": None,
+           "verification_failed": False, "perf_reasons": []}
+    for sym, tol in (("AP", ap_tol), ("RP", rp_tol)):
+        s = store.iso_figure_history(robot, sym)
+        if not len(s):
+            continue
+        out["iso_tests"] = max(out["iso_tests"], len(s))
+        at_now = trend_at(s.times, s.values, now)
+        slope = drift_trend(s.times, s.values, now)[0]
+        item = {"last_mm": float(s.values[-1]), "trend_now_mm": at_now,
+                "slope_mm_per_day": None if not math.isfinite(slope) else slope, "n": len(s), "tolerance_mm": tol,
+                "over": bool(tol is not None and at_now > tol)}
+        out["iso"][sym] = item
+        if item["over"]:
+            out["performance_drifting"] = True
+            out["perf_reasons"].append(f"ISO 9283 {sym} trend {at_now:.4f} mm now (last test {item['last_mm']:.4f} mm, "
+                                       f"{len(s)} tests; tolerance {tol:g} mm)")
+    ver = store.verifications(robot)
+    if ver:
+        v = ver[-1]
+        out["last_verification"] = {"time": v["time"].isoformat(), "decision": v["decision"],
+                                    "statistic": v["statistic"], "threshold": v["threshold"], "suspect": v["suspect"],
+                                    "instrument": v["instrument"]}
+        if v["decision"] != "ok":
+            out["verification_failed"] = True
+            out["perf_reasons"].append(f"last verification ({v['time']:%Y-%m-%d}): {v['decision']}"
+                                       + (f" ({v['suspect']})" if v["suspect"] else ""))
+    return out
+
+
 def _plot(store, row, kind, plot_dir: Path) -> str:
     from ..report.history_plot import plot_history
 
@@ -95,14 +152,17 @@ def _plot(store, row, kind, plot_dir: Path) -> str:
 
 
 def fleet_status(db, *, max_age_days: float = 90.0, tolerance_mm: float = 0.1, tolerance_deg: float = 0.01,
-                 kind: str = "geometric_calibration", now=None, plot_dir=None) -> dict:
-    """Every robot of the history database ``db`` (path or URL) with ``stale`` and ``drifting``
-    (see the module docstring) and the reasons; ``flagged`` lists the robots with either. now:
-    aware datetime (default: the current UTC time). plot_dir: a folder for ``<robot>_drift.png``
-    per flagged robot (None: no plots)."""
+                 kind: str = "geometric_calibration", now=None, plot_dir=None, ap_tolerance_mm: float | None = None,
+                 rp_tolerance_mm: float | None = None) -> dict:
+    """Every robot of the history database ``db`` (path or URL) with ``stale``, ``drifting``,
+    ``performance_drifting`` and ``verification_failed`` (see the module docstring) and the
+    reasons; ``flagged`` lists the robots with any. now: aware datetime (default: the current UTC
+    time). plot_dir: a folder for ``<robot>_drift.png`` per flagged robot (None: no plots).
+    ap_tolerance_mm, rp_tolerance_mm [mm]: the ISO 9283 AP/RP tolerance (None: not checked)."""
     from ..store import HistoryStore
 
-    for name, v in (("max_age_days", max_age_days), ("tolerance_mm", tolerance_mm), ("tolerance_deg", tolerance_deg)):
+    for name, v in (("max_age_days", max_age_days), ("tolerance_mm", tolerance_mm), ("tolerance_deg", tolerance_deg),
+                    ("ap_tolerance_mm", ap_tolerance_mm or 1.0), ("rp_tolerance_mm", rp_tolerance_mm or 1.0)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ValueError(f"{name} must be a positive number, got {v!r}")
     now = now or datetime.now(timezone.utc)
@@ -112,6 +172,10 @@ def fleet_status(db, *, max_age_days: float = 90.0, tolerance_mm: float = 0.1, t
     with HistoryStore.open(db, create=False) as store:
         rows = [_robot_status(store, r, kind, now, max_age_days, tolerance_mm, math.radians(tolerance_deg))
                 for r in store.robots()]
+        for row in rows:
+            perf = _performance(store, row["robot"], now, ap_tolerance_mm, rp_tolerance_mm)
+            row["reasons"] += perf.pop("perf_reasons")
+            row.update(perf)
         if plot_dir is not None:
             plot_dir = Path(plot_dir)
             for row in rows:
@@ -119,6 +183,8 @@ def fleet_status(db, *, max_age_days: float = 90.0, tolerance_mm: float = 0.1, t
                     plot_dir.mkdir(parents=True, exist_ok=True)
                     row["plot"] = _plot(store, row, kind, plot_dir)
         where = store.url
-    flagged = [r["robot"] for r in rows if r["stale"] or r["drifting"]]
+    flagged = [r["robot"] for r in rows
+               if r["stale"] or r["drifting"] or r["performance_drifting"] or r["verification_failed"]]
     return {"database": where, "now": now.isoformat(), "kind": kind, "max_age_days": max_age_days,
-            "tolerance_mm": tolerance_mm, "tolerance_deg": tolerance_deg, "robots": rows, "flagged": flagged}
+            "tolerance_mm": tolerance_mm, "tolerance_deg": tolerance_deg, "ap_tolerance_mm": ap_tolerance_mm,
+            "rp_tolerance_mm": rp_tolerance_mm, "robots": rows, "flagged": flagged}

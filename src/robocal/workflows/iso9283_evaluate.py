@@ -75,12 +75,14 @@ def evaluate_iso_run(protocol: dict, meas, *, mpe: InstrumentMPE | None = None, 
     dict
         ``pose`` (per pose P1–P5: AP/RP ...), ``vap`` (P1, P2, P4), ``distance`` (P2–P4),
         ``drift``, ``path`` (line, circle), ``adequacy``, ``missing`` (plan ids without data) and
-        ``summary`` (the worst value of each characteristic, keyed by the standard's symbols).
+        ``summary`` (the worst value of each characteristic, keyed by the standard's symbols),
+        ``attained_mm`` (per pose, the attained positions (n, 3) [mm], for the report's figures).
     """
     poses = protocol["poses"]
     ms = protocol["measurements"]
     out = {"robot": protocol.get("robot"), "n_points_measured": int(sum(len(v) for v in meas.positions.values())),
-           "pose": {}, "vap": {}, "distance": None, "drift": None, "path": {}, "adequacy": {}, "missing": []}
+           "pose": {}, "vap": {}, "distance": None, "drift": None, "path": {}, "adequacy": {}, "missing": [],
+           "attained_mm": {}}
     planned = {m["id"] for m in ms}
     out["missing"] = sorted(planned - set(meas.positions))
     unknown = sorted(set(meas.positions) - planned)
@@ -107,6 +109,8 @@ def evaluate_iso_run(protocol: dict, meas, *, mpe: InstrumentMPE | None = None, 
         Rc = np.asarray(pose["R"], float)
         pc = pose_characteristics(P, pose["position_mm"], R, Rc if R is not None else None)
         out["pose"][name] = pc.as_dict()
+        out["pose"][name]["commanded_mm"] = [float(v) for v in pose["position_mm"]]
+        out["attained_mm"][name] = P.tolist()
         pose_cycles[name] = {m["cycle"]: i for i, m in enumerate(m for m in ms if m["id"] in ids
                                                                  and m["id"] in meas.positions)}
         adequacy(f"AP_mm.{name}", pc.AP_mm, P)

@@ -6,6 +6,7 @@ import html
 import json
 from pathlib import Path
 
+from ..report.iso9283_figures import iso_figures
 from .iso9283_evaluate import iso_table_lines
 from .outputs import ensure_writable_dir, staged_outputs
 
@@ -17,7 +18,8 @@ NAMES = ["iso9283.json", "iso9283.txt", "report.html"]
 def _html(result: dict) -> str:
     parts = ["<!doctype html><meta charset='utf-8'><title>ISO 9283 performance test</title>",
              "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}pre{background:#f6f6f6;padding:8px}"
-             "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}</style>",
+             "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
+             ".figs{display:flex;flex-wrap:wrap;gap:6px}.figs svg{max-width:100%;height:auto}</style>",
              f"<h1>ISO 9283 performance test: {html.escape(str(result.get('robot')))}</h1>"]
     cond = result.get("conditions") or {}
     if cond:
@@ -26,6 +28,8 @@ def _html(result: dict) -> str:
     for i, run in enumerate(result["runs"]):
         label = ("before" if i == 0 else "after") if len(result["runs"]) == 2 else "result"
         parts.append(f"<h2>{label}</h2><pre>{html.escape(chr(10).join(iso_table_lines(run)))}</pre>")
+        for heading, svgs in iso_figures(run):
+            parts.append(f"<h3>{html.escape(heading)}</h3><div class='figs'>" + "".join(svgs) + "</div>")
         if run["drift"]:
             blocks = run["drift"]["per_block"]
             parts.append("<h3>drift of P1 per block</h3><table><tr><th>time [min]</th><th>AP [mm]</th>"

@@ -20,7 +20,54 @@ from ..performance.verify import verify_positions
 from ..robots import load_robot
 from ..transforms import so3_exp
 
-__all__ = ["calibration_files", "predicted_points", "run_verify"]
+__all__ = ["calibration_files", "predicted_points", "run_verify", "split_approach_columns"]
+
+#: the approach-direction column of a joint: ``approach_J1`` ... (+1 / -1; 0 or empty: unknown)
+APPROACH_PREFIX = "approach_"
+
+
+def split_approach_columns(path, joint_names) -> tuple[str, np.ndarray | None]:
+    """The measurement file's text without its ``approach_<joint>`` columns, and the signs (N,
+    n_joints) they held (+1: the joint arrived moving in its positive direction, -1: negative,
+    0: unknown or not given); (the text unchanged, None) when the file has no such column."""
+    from ..errors import InputFileError
+
+    text = Path(path).read_text(encoding="utf-8")
+    lines = text.splitlines()
+    head = next((i for i, s in enumerate(lines) if s.strip() and not s.lstrip().startswith("#")), None)
+    if head is None:
+        return text, None
+    cols = [c.strip() for c in lines[head].split(",")]
+    idx = [j for j, c in enumerate(cols) if c.startswith(APPROACH_PREFIX)]
+    if not idx:
+        return text, None
+    unknown = [cols[j] for j in idx if cols[j][len(APPROACH_PREFIX):] not in joint_names]
+    if unknown:
+        raise InputFileError(f"{path}: line {head + 1}: column {unknown[0]!r} names no joint of the robot "
+                             f"(approach columns: {', '.join(APPROACH_PREFIX + j for j in joint_names)})")
+    keep = [j for j in range(len(cols)) if j not in idx]
+    out, signs = lines[:head] + [",".join(cols[j] for j in keep)], []
+    for ln, row in enumerate(lines[head + 1:], start=head + 2):
+        if not row.strip() or row.lstrip().startswith("#"):
+            out.append(row)
+            continue
+        cells = row.split(",")
+        if len(cells) != len(cols):
+            out.append(row)          # the reader reports the wrong field count
+            continue
+        s_row = np.zeros(len(joint_names))
+        for j in idx:
+            v = cells[j].strip()
+            if v in ("", "0"):
+                continue
+            if v not in ("+1", "1", "-1", "+", "-"):
+                raise InputFileError(f"{path}: line {ln}: column {cols[j]!r}: approach direction must be +1 or -1 "
+                                     f"(or 0 / empty: unknown), got {v!r}")
+            s_row[joint_names.index(cols[j][len(APPROACH_PREFIX):])] = -1.0 if v.startswith("-") else 1.0
+        signs.append(s_row)
+        out.append(",".join(cells[j] for j in keep))
+    return "\n".join(out) + "\n", np.array(signs)
+
 
 
 def calibration_files(model_path) -> tuple[Path, Path | None]:
@@ -99,7 +146,21 @@ def run_verify(model_path, measurements_path, *, noise_mm: float, false_alarm_ra
     """Verify a calibrated robot; returns the JSON-ready result (decision, statistic, reasons...)."""
     toml, result_path = calibration_files(model_path)
     model = load_robot(toml)
-    meas = read_measurements(measurements_path, model)
+    text, signs = split_approach_columns(measurements_path, list(model.controller_joints))
+    if signs is None:
+        meas = read_measurements(measurements_path, model)
+    else:                           # the reader takes a file: the same name, without the approach columns
+        import tempfile
+
+        with tempfile.TemporaryDirectory(prefix="robocal-verify-") as tmp:
+            stripped = Path(tmp) / Path(measurements_path).name
+            stripped.write_text(text, encoding="utf-8")
+            meas = read_measurements(stripped, model)
+        if len(signs) != len(meas.joints):
+            from ..errors import InputFileError
+
+            raise InputFileError(f"{measurements_path}: {len(signs)} rows with approach directions, "
+                                 f"{len(meas.joints)} poses read")
     point = np.zeros(3)
     cov_names = cov = None
     if result_path is not None:
@@ -118,7 +179,7 @@ def run_verify(model_path, measurements_path, *, noise_mm: float, false_alarm_ra
     pred, C, Jq = predicted_points(model, q, point, cov_names, cov)
     v = verify_positions(measured, pred, instrument_sigma_mm=noise_mm, prediction_covariance_mm2=C,
                          joint_jacobian=Jq, joint_names=model.controller_joints, false_alarm_rate=false_alarm_rate,
-                         register_frame=register_frame)
+                         register_frame=register_frame, approach_signs=signs)
     out = {"format": "robocal-verification/1", "robot": model.name, "model": str(toml),
            "measurements": str(measurements_path), "n_poses": int(len(q)),
            "time": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -126,11 +187,12 @@ def run_verify(model_path, measurements_path, *, noise_mm: float, false_alarm_ra
            "instrument_noise_mm": noise_mm, "covariance_used": C is not None, "register_frame": register_frame,
            "decision": v.decision, "statistic": v.statistic, "dof": v.dof, "threshold": v.threshold,
            "false_alarm_rate": v.false_alarm_rate, "p_value": v.p_value, "rms_mm": v.rms_mm, "max_mm": v.max_mm,
-           "suspect_joint": v.suspect_joint, "reasons": v.reasons}
+           "suspect_joint": v.suspect_joint, "suspect_cause": v.suspect_cause,
+           "approach_directions": signs is not None, "reasons": v.reasons}
     if v.suspect_joint is not None:
         k = model.controller_joints.index(v.suspect_joint)
         deg = not model.prismatic_joints[k]
         f = np.degrees if deg else (lambda x: x)
         out["suspect_offset"] = {"value": float(f(v.suspect_offset)), "std": float(f(v.suspect_offset_sigma)),
-                                 "unit": "deg" if deg else "mm"}
+                                 "unit": "deg" if deg else "mm", "cause": v.suspect_cause}
     return out
