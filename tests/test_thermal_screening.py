@@ -405,9 +405,9 @@ def test_stability_of_a_clear_screening():
 
 
 def test_stability_exposes_interchangeable_parameters():
-    """p6 does not drift but is a near copy of p5 (columns 0.5 % apart): the full run happens to
-    keep p6, and which of the two survives depends on the cycles (measured 57 / 43 % over 30
-    resamples); p0 and p2 are kept by every resample."""
+    """p6 does not drift but is a near copy of p5 (columns 0.5 % apart): the full run keeps one
+    of the two, and which one survives depends on the cycles (both between 20 and 80 % of 30
+    resamples; measured 57 / 43 %); p0 and p2 are kept by every resample."""
     from robocal.thermal.stability import screening_stability
 
     rng = np.random.default_rng(8)
@@ -421,7 +421,8 @@ def test_stability_exposes_interchangeable_parameters():
     p2 = ScreeningProblem(prob.names, M, Y, J, before)
     rep = screening_stability(p2, 30, 2, n_keep=3, threshold_mm=0.08)
     assert rep.frequency["p0"] == 1.0 and rep.frequency["p2"] == 1.0
-    assert rep.full == ("p0", "p2", "p6")
+    # which of the near copies the full run keeps is arbitrary (measured: p6); p0 and p2 are not
+    assert rep.full[:2] == ("p0", "p2") and rep.full[2] in {"p5", "p6"}
     assert 0.2 < rep.frequency["p5"] < 0.8 and 0.2 < rep.frequency["p6"] < 0.8
     assert rep.frequency["p5"] + rep.frequency["p6"] == pytest.approx(1.0)
     assert 0.2 < rep.agreement < 0.8 and set(rep.unstable()) == {"p5", "p6"}
