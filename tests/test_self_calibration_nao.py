@@ -148,20 +148,6 @@ def test_joint_reading_noise_needs_the_per_image_joint_corrections():
 
 
 # ------------------------------------------------------------------------------------------ effects the model lacks
-def _views(model, q, on, T_ee_camera, boards, X, camera):
-    """Corner pixels (N, P, 2) of the boards ``{carrier: T_carrier_board}`` through ``model`` (the
-    simulator's geometry, :func:`camera_board_poses`, not the solver's)."""
-    from robocal.sim.self_calibration_views import camera_board_poses
-
-    out = np.empty((len(q), len(X), 2))
-    for c in dict.fromkeys(on):
-        i = np.asarray(on) == c
-        T = camera_board_poses(model, q[i], "camera_top", T_ee_camera, c, boards[c])
-        p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
-        out[i] = camera.project(p.reshape(-1, 3)).pixels.reshape(int(i.sum()), -1, 2)
-    return out
-
-
 def test_link_length_errors_and_a_bent_board_bias_the_offsets_as_first_order_theory_predicts():
     """The "within 3 sigma" tests above use a simulator equal to the model. Here the simulator's
     realistic options add what the joint-offset model lacks: link-length errors (0.2 mm per length
@@ -181,6 +167,8 @@ def test_link_length_errors_and_a_bent_board_bias_the_offsets_as_first_order_the
     effects are biases, not noise: the message says "still optimistic"); the variance factor
     flags the misfit. Measured: effects 2.75 px RMS before the fit, variance factor 2.9, bias up to
     0.12 deg, naive max |z| 25 (scaled sigmas), corrected max 1.04 (noise sigmas)."""
+    from _first_order import corner_views, self_calibration_offset_bias
+
     from robocal.sim.robot import parameter_kinds
     from robocal.sim.self_calibration import simulate_self_calibration
 
@@ -198,30 +186,12 @@ def test_link_length_errors_and_a_bent_board_bias_the_offsets_as_first_order_the
         if not lengths[m.params.index(n)]:
             geo[m.params.index(n)] += v
     assert any(lengths[m.params.index(n)] for n in run.parameter_errors)
-    e = run.image_points_true - _views(m.with_params(geo), q, on, run.T_ee_camera, run.T_ee_board, X, cam)
+    e = run.image_points_true - corner_views(m.with_params(geo), q, on, "camera_top", run.T_ee_camera, run.T_ee_board,
+                                             X, cam)
     assert np.sqrt(np.mean(e**2)) > 3 * NOISE_PX  # the effects are far above the corner noise
 
-    held = {r["name"] for r in res.joint_report if not r["identifiable"]}
-    names = [n for n in res.joint_offset_names if n not in held]
-    h, vals = 1e-6, res.model.params.values
-
-    def corners(values=vals, mount=res.camera_mount, boards=res.boards):
-        return _views(res.model.with_params(values), q, on, mount, boards, X, cam).ravel()
-
-    def twist(k):
-        w = np.zeros(6)
-        w[k] = h
-        return transforms_from(so3_exp(w[:3]), w[3:])
-
-    base, cols = corners(), []
-    for n in names:
-        v = vals.copy()
-        v[m.params.index(n)] += h
-        cols.append(corners(values=v))
-    cols += [corners(mount=res.camera_mount @ twist(k)) for k in range(6)]
-    cols += [corners(boards={**res.boards, c: res.boards[c] @ twist(k)}) for c in HANDS for k in range(6)]
-    J = (np.array(cols) - base).T / h
-    delta = dict(zip(names, np.linalg.lstsq(J, e.ravel(), rcond=None)[0]))
+    delta = self_calibration_offset_bias(res, q, on, "camera_top", X, cam, e)
+    names = list(delta)
     est = dict(zip(res.joint_offset_names, res.joint_offsets))
     sig = dict(zip(res.joint_offset_names, res.joint_offset_sigma))
     truth = {r["name"]: run.joint_offsets_rad[r["joint"]] for r in res.joint_report}
