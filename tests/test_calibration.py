@@ -73,6 +73,66 @@ def test_simulated_campaign_reaches_the_noise_floor(name):
     assert 0.8 < np.sqrt(np.mean(z**2)) < 1.2  # the reported std is the real scale of the errors
 
 
+@pytest.mark.parametrize("name", ["kuka_kr150_r3100", "ur10"])
+def test_unmodelled_effects_bias_the_fit_as_first_order_theory_predicts(name):
+    """The same campaign on the ``realistic`` preset of :mod:`robocal.sim.campaign_effects`:
+    reducer transmission error (0.005 / 0.003 deg once / twice per revolution), 20 ppm warm-up
+    of the arm during the campaign and a 5 ppm tracker scale error -- effects the DH (+beta)
+    model lacks. The test above ("within 3 sigma" on a simulator equal to the model) cannot see
+    them; here the tolerance the effects allow is derived from the hidden truth, to first order:
+    with ``e`` the effect in the training measurements (measured minus the true robot's
+    geometric points, noise-free) and ``J`` the fit's Jacobian, the estimate is biased by
+    ``delta = J^+ e``; the hold-out error then is ``Jh delta - e_h`` (``e_h``: the effect in where
+    the robot really was) plus the noise part of the test above.
+
+    Asserted: every compared parameter within 3-4 sigma of truth + delta (as in the test above),
+    the plain "within 3 sigma of truth" claim fails (the effects are far above the noise: the
+    test can tell), and the hold-out RMS against where the robot really was within 10 % of the
+    first-order prediction and far above the noise floor. Measured: naive max |z| 6-61, hold-out
+    0.08 mm (UR10) and 0.17-0.19 mm (KR150) against 0.011 mm at the noise floor."""
+    from robocal.sim.campaign_effects import CampaignEffects, measure_with_effects
+
+    effects = CampaignEffects.realistic()
+    z_naive, z_bias, ho, ho_pred, ho_floor = [], [], [], [], []
+    for seed in range(2):
+        nominal = load_robot(name)
+        robot = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0)
+        tracker = LaserTracker.placed(seed + 100, reflectors=np.atleast_2d(TOOL), sigma_mm=SIGMA)
+        q = robot.random_configurations(300, np.random.default_rng(seed + 200), margin=0.1)
+        m = measure_with_effects(robot, tracker, q, effects, seed + 300)
+        n = 100
+        prob, res = fit(nominal, q[:n], m["points"][:n])
+        assert res.converged, res.summary()
+        # first-order bias from the hidden truth: the noise-free measurement minus the model's point
+        seen = m["reached"] * (1.0 + effects.tracker_scale_ppm * 1e-6)
+        e_train = (seen[:n] - m["model"][:n]).reshape(-1)
+        active = np.isfinite(np.diag(res.covariance))
+        _, Jt = prob.predict_points(res.state, q=q[:n], jacobian=True)
+        delta = np.zeros(prob.n_variables)
+        delta[active] = np.linalg.lstsq(Jt.reshape(-1, prob.n_variables)[:, active], e_train, rcond=None)[0]
+        true_vals = robot.true_model.params.values
+        partners = {p for d in res.identifiability.dropped for p, _ in d["trades_off_with"]}
+        for i, nm in enumerate(prob.free_params):
+            if nm in res.identifiability.identifiable and nm not in partners:
+                err = res.values[i] - true_vals[nominal.params.index(nm)]
+                z_naive.append(err / res.std[i])
+                z_bias.append((err - delta[prob.names.index(nm)]) / res.std[i])
+        pred = prob.predict_points(res.state, q=q[n:])
+        ho.append(np.mean(np.sum((pred - m["reached"][n:]) ** 2, axis=-1)))
+        _, Jh = prob.predict_points(res.state, q=q[n:], jacobian=True)
+        miss = Jh.reshape(-1, prob.n_variables) @ delta - (m["reached"][n:] - m["model"][n:]).reshape(-1)
+        floor = expected_holdout_mse(prob, res, q[n:], SIGMA)
+        ho_floor.append(floor)
+        ho_pred.append(np.sum(miss**2) / (len(q) - n) + floor)
+    z_bias, z_naive = np.abs(z_bias), np.abs(z_naive)
+    assert np.all(z_bias < 4), z_bias.max()
+    assert np.mean(z_bias < 3) >= 0.95
+    assert 0.5 < np.sqrt(np.mean(z_bias**2)) < 1.5
+    assert z_naive.max() > 5, z_naive.max()  # the effects are visible: "within 3 sigma of truth" is false
+    assert 0.9 < np.sqrt(np.mean(ho) / np.mean(ho_pred)) < 1.1, (ho, ho_pred)
+    assert np.sqrt(np.mean(ho)) > 4 * np.sqrt(np.mean(ho_floor))  # far above the noise floor
+
+
 def test_ur10_in_dh_beta_form_identifies_what_plain_dh_cannot():
     """UR10's parallel axes 2-3-4: plain DH alone shows only d2 + d3 + d4 (two parameters lost);
     with Hayati's beta on links 2 and 3 the count is the full 27 of a 6R arm measured by points.

@@ -13,9 +13,10 @@ from robocal.io.datasets import HILTI_SETS, datasets_root
 from robocal.workflows.datasets import calibrate_boby, calibrate_justin
 
 ROOT = datasets_root()
-# today's geometric holdout RMS per set [mm] (docs/datasets.md)
-HILTI_GEOMETRIC = {"flat": 3.97, "pallet": 4.65, "orthogonal_wood": 3.63, "wood_left_track": 6.15, "seesaw": 6.07,
-                   "diagonal_wood": 4.81, "outdoor": 4.62}
+# the independent reference fit's calibrated (geometric) RMS per set [mm], printed to 0.1 mm
+# (../shared/datasets/hilti_trailblazer/README.md, "Reference calibration"; as tests/test_real_data.py)
+HILTI_REFERENCE = {"flat": 4.1, "pallet": 4.7, "orthogonal_wood": 3.7, "wood_left_track": 6.2, "seesaw": 6.1,
+                   "diagonal_wood": 4.9, "outdoor": 4.7}
 
 
 def _need(folder):
@@ -46,8 +47,11 @@ def test_boby_fanuc_joint_compliance_below_0_40_mm():
 
 @_need("hilti_trailblazer")
 def test_hilti_elastic_joint_beats_every_set_from_the_command_line():
-    """elastic-joint on every set: measured 2.68-5.49 mm RMS against 3.63-6.15 geometric
-    (elastic-full, ~10x slower here: 2.36-5.49, docs/elastic.md)."""
+    """elastic-joint on every set: at least 0.5 mm below the geometric fit of the same run, and
+    below the independent reference fit (a geometric one) by as much; the geometric fit itself at
+    or below the reference, as docs/datasets.md accepts. Measured 2.68-5.49 mm RMS against
+    3.63-6.15 geometric and 3.7-6.2 reference (elastic-full, ~10x slower here: 2.36-5.49,
+    docs/elastic.md)."""
     pytest.importorskip("yaml", reason="the Hilti files need PyYAML (extra 'yaml')")
     out = CliRunner().invoke(main, ["datasets", "run", "hilti_trailblazer", "--model", "elastic-joint", "--json"])
     assert out.exit_code == 0, out.output
@@ -55,8 +59,10 @@ def test_hilti_elastic_joint_beats_every_set_from_the_command_line():
     assert "warnings" not in rec  # the solver converged
     assert rec["model"] == "elastic-joint" and [s["set"] for s in rec["sets"]] == list(HILTI_SETS)
     for s in rec["sets"]:
-        assert s["holdout_rms_mm"] < HILTI_GEOMETRIC[s["set"]] - 0.5, s  # measured 0.58-1.06 mm lower
-        assert s["geometric"]["rms"] == pytest.approx(HILTI_GEOMETRIC[s["set"]], abs=0.01)
+        ref = HILTI_REFERENCE[s["set"]]
+        assert s["geometric"]["rms"] <= ref + 0.05, s  # + half the printed resolution
+        assert s["holdout_rms_mm"] < s["geometric"]["rms"] - 0.5, s  # measured 0.58-1.06 mm lower
+        assert s["holdout_rms_mm"] < ref - 0.5, s
         assert s["holdout_mean_mm"] < s["holdout_rms_mm"] < s["holdout_max_mm"]
 
 

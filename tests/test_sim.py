@@ -202,3 +202,45 @@ def test_campaign_files_and_reproducibility(kuka, tmp_path):
     assert not (tmp_path / "other.json").exists()
     tr.campaign(vr, 40, 99, measurements_path=mpath, truth_path=tpath, overwrite=True)
     assert mpath.read_bytes() != before[0]
+
+
+# ------------------------------------------------------------------ campaign effects (issue 25)
+
+
+def test_campaign_effects_are_what_their_definitions_say(kuka):
+    """Each effect of :mod:`robocal.sim.campaign_effects` checked against its definition (no
+    recorded numbers): ideal = the true geometric robot; the transmission error is bounded by the
+    sum of its amplitudes and periodic in 2 pi; the growth is 0 at the first pose and
+    ``growth_ppm`` of the distance from the base origin at the last; the tracker scale multiplies
+    the tracker-frame distances; the noise has the tracker's sigma."""
+    from robocal.sim.campaign_effects import CampaignEffects, measure_with_effects
+
+    robot = VirtualRobot.perturbed(kuka, 3, joint_noise_deg=0.0)
+    tracker = LaserTracker.placed(4, sigma_mm=0.0)
+    q = robot.random_configurations(400, np.random.default_rng(5), margin=0.1)
+    ideal = measure_with_effects(robot, tracker, q, "ideal", 6)
+    np.testing.assert_allclose(ideal["points"], ideal["model"], atol=1e-9)
+    np.testing.assert_allclose(ideal["reached"], ideal["model"], atol=1e-9)
+
+    eff = CampaignEffects(transmission_deg=(0.01, 0.004), name="joints")
+    dq = eff.joint_positions(robot, q, 7) - q
+    assert np.abs(dq).max() <= math.radians(0.014) + 1e-15 and np.abs(dq).max() > math.radians(0.008)
+    np.testing.assert_allclose(eff.joint_positions(robot, q + 2 * np.pi, 7) - (q + 2 * np.pi), dq, atol=1e-12)
+
+    grow = CampaignEffects(growth_ppm=20.0, name="growth")
+    g = measure_with_effects(robot, tracker, q, grow, 6)
+    T_tb = tracker.T_tracker_world @ robot.true_model.T_world_base
+    base = transform_points(invert_transforms(T_tb)[None, None], g["model"])
+    moved = np.linalg.norm(g["reached"] - g["model"], axis=-1)[:, 0]
+    assert moved[0] < 1e-9
+    assert moved[-1] == pytest.approx(20e-6 * np.linalg.norm(base[-1, 0]), rel=1e-6)
+    assert np.all(np.diff(moved / np.linalg.norm(base[:, 0], axis=-1)) > 0)
+
+    scale = measure_with_effects(robot, tracker, q, CampaignEffects(tracker_scale_ppm=5.0), 6)
+    np.testing.assert_allclose(scale["reached"], scale["model"], atol=1e-9)
+    np.testing.assert_allclose(scale["points"], scale["model"] * (1 + 5e-6), rtol=1e-12, atol=1e-9)
+
+    noisy = measure_with_effects(robot, LaserTracker.placed(4, sigma_mm=0.02), q, "ideal", 6)
+    assert np.std(noisy["points"] - noisy["model"]) == pytest.approx(0.02, rel=0.1)
+    with pytest.raises(ValueError, match="unknown campaign preset"):
+        CampaignEffects.preset("hall")

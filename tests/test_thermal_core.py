@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from robocal.robots import load_robot
+from robocal.sim import VirtualRobot
 from robocal.thermal import (
     CycleRecord,
     RankDeficientError,
@@ -117,6 +118,46 @@ def test_system_calibration_accuracy_at_0_02_mm_noise(kuka):
     wins = (ls < th).sum(axis=0)
     assert np.all((10 <= wins) & (wins <= 16)), wins
     assert 5 <= np.all(ls < th, axis=1).sum() <= 11
+
+
+def test_system_calibration_on_a_robot_that_differs_from_its_model(kuka):
+    """The system calibration takes the robot model as exact; a calibrated robot is not. The true
+    robot here keeps 0.1 mm / 0.01 deg per parameter (the absolute error left after a calibration,
+    as the realistic barrier cell, robocal.sim.barrier_effects), which the 9-unknown model lacks.
+
+    The tolerance it allows, from the hidden truth to first order: with ``e`` the sphere centres of
+    the true robot minus the model's (noise-free) and ``J`` the Jacobian of the centres with respect
+    to ``T_sensor_base`` and ``P_e`` at the solution (finite differences of ``predict_sphere``),
+    ``P_e`` is biased by the last three components of ``J^+ e``. Asserted over 10 seeds: ``P_e``
+    within 3.5 sigma of truth + bias, the z-scores of unit size; "within 3 sigma of truth" fails
+    (the bias, 0.1-0.26 mm, is several sigma); the residual shows the misfit (above twice the
+    noise). Measured: naive max |z| 24, corrected max 2.7, RMS 1.01; residual RMS 0.05-0.13 mm."""
+    naive, corrected, rms = [], [], []
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        T_sb = _sensor(rng)
+        q = design_sphere_poses(kuka, CENTRE, P_E, 9, rng, spread_mm=FOV, tilt_deg=60)
+        true = VirtualRobot.perturbed(kuka, 500 + seed, length_sigma_mm=0.1, angle_sigma_deg=0.01,
+                                      offset_sigma_deg=0.01).true_model
+        P_true = predict_sphere(true, T_sb, P_E, q)
+        e = P_true - predict_sphere(kuka, T_sb, P_E, q)
+        r = calibrate_system(kuka, q, P_true + rng.normal(0, 0.02, (9, 3)), point_sigma_mm=0.02)
+        assert r.converged
+        h = 1e-6
+        base, cols = predict_sphere(kuka, r.T_sensor_base, r.P_e, q).ravel(), []
+        for k in range(6):
+            D = np.eye(4)
+            D[:3, :3], D[:3, 3] = so3_exp(h * np.eye(6)[k, :3]), h * np.eye(6)[k, 3:]
+            cols.append(predict_sphere(kuka, D @ r.T_sensor_base, r.P_e, q).ravel())
+        cols += [predict_sphere(kuka, r.T_sensor_base, r.P_e + h * np.eye(3)[k], q).ravel() for k in range(3)]
+        bias = np.linalg.lstsq((np.array(cols) - base).T / h, e.ravel(), rcond=None)[0][6:]
+        naive.append((r.P_e - P_E) / r.std_P_e_mm)
+        corrected.append((r.P_e - P_E - bias) / r.std_P_e_mm)
+        rms.append(np.sqrt(np.mean(r.residuals_mm ** 2)))
+    naive, corrected = np.abs(naive), np.abs(corrected)
+    assert corrected.max() < 3.5 and 0.6 < np.sqrt(np.mean(corrected ** 2)) < 1.4, corrected
+    assert naive.max() > 5.0, naive
+    assert np.median(rms) > 2 * 0.02, rms
 
 
 def test_system_calibration_uncertainty_and_summary(kuka):

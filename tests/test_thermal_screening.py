@@ -1,7 +1,7 @@
 """Thermal simulator, parameter screening (thesis 3.2, fig. 3-5) and the thesis-like experiment
-(tables 5-1, 5-2): table 5-2 as medians over 20 seeds of the realistic preset, the screening's
-mechanics on synthetic problems with a known answer, and its stability over resamples.
-Everything seeded."""
+(tables 5-1, 5-2): table 5-2 over 6 seeds of the realistic preset compared with the thesis's
+printed runs, the screening's mechanics on synthetic problems with a known answer, and its
+stability over resamples. Everything seeded."""
 
 import math
 
@@ -42,61 +42,79 @@ def cell():
 
 
 # ------------------------------------------------------------------------------------------ table 5-2
+# The thesis's table 5-2 (../shared/seeds/thesis-accuracy-maintenance.zh.md, 5.1.3; METHODS.md 4):
+# share [%] of monitored directions whose residual is better than 0.1 mm, three test runs of one
+# KR150 R3100 after screening on a separate long run (so all three are evaluation runs), 90 cycles.
+THESIS_TABLE_5_2 = {"before": (43.18, 49.41, 48.05), "traditional": (73.86, 80.00, 87.01),
+                    "screened": (90.91, 96.47, 94.81)}
+# and the thesis's selection (5.1.2; one of its eight names is lost in the extraction: "a3, a3")
+THESIS_SELECTED = {"d4", "d6", "a1", "a2", "a3", "a4", "beta2"}
+
+
 @pytest.fixture(scope="module")
 def seeds():
-    """Table 5-2 on the realistic preset over 20 seeds; 20 cycles per run to stay cheap (~12 s;
-    the full 90-cycle experiment is ``robocal thermal experiment``, docs/thermal.md)."""
+    """Table 5-2 on the realistic preset in the thesis's setting (90 cycles per run) over 6 seeds
+    (12 evaluation runs; ~15 s, the 20-seed table is ``robocal thermal experiment``, docs/thermal.md)."""
     from robocal.workflows.thermal_seeds import run_thermal_seeds
 
-    return run_thermal_seeds(preset="realistic", seeds=20, first_seed=1, n_cycles=20)
+    return run_thermal_seeds(preset="realistic", seeds=6, first_seed=1, n_cycles=90)
 
 
-# Medians of seeds 1-20, and the tolerance: the largest range of the same median over five
-# disjoint groups of 20 seeds (1-20, 21-40, ..., 81-100), measured per statistic -- rms: before
-# 49.5-53.9 / 58.8-63.2, traditional 79.4-82.4 / 85.3-87.3, screened 95.6-97.6 / 95.1-96.6
-# (screening / evaluation runs); max: before 16.2-19.6 / 21.6-23.0, traditional 33.8-36.8 /
-# 38.7-43.6, screened 44.6-48.5 / 44.6-49.0.
-MEDIANS = {"rms": {"screening": (52.94, 79.41, 95.59), "evaluation": (61.76, 86.27, 95.59)},
-           "max": {"screening": (16.18, 36.76, 44.61), "evaluation": (22.06, 41.18, 45.59)}}
-TOLERANCE = {"rms": 4.5, "max": 5.0}
+def thesis_band(column):
+    """The thesis's three runs widened on each side by their own spread (max - min): a simulated
+    cell is another robot in another hall, and cannot be expected to agree with the thesis closer
+    than the thesis's runs agree with one another."""
+    lo, hi = min(THESIS_TABLE_5_2[column]), max(THESIS_TABLE_5_2[column])
+    return lo - (hi - lo), min(hi + (hi - lo), 100.0)
 
 
-def test_table_5_2_medians_over_20_seeds(seeds):
-    for st, roles in MEDIANS.items():
-        for role, expected in roles.items():
-            got = [seeds["tables"][st][role][c]["median"] for c in ("before", "traditional", "screened")]
-            assert got == pytest.approx(expected, abs=TOLERANCE[st]), (st, role, got)
+def test_table_5_2_medians_within_the_thesis_range(seeds):
+    """The median over the evaluation runs of each column lies in the thesis's band (before
+    36.95-55.64 %, traditional 60.71-100 %, screened 85.35-100 %). It fails when the drift, the
+    compensation or the screening regress to another level (e.g. a screening that picks the
+    traditional set, ~73 %, or a sign error in the compensation, at or below "before").
+    Measured, seeds 1-6 (thesis statistic): 41.7 / 72.1 / 95.6; seeds 7-12 and 13-18: before 41.7
+    and 43.6, traditional 74.5 and 71.1, screened 96.1 and 95.6."""
+    t = seeds["tables"]["rms"]["evaluation"]
+    for column in THESIS_TABLE_5_2:
+        lo, hi = thesis_band(column)
+        assert lo <= t[column]["median"] <= hi, (column, t[column]["median"], (lo, hi))
 
 
-def test_table_5_2_ordering_over_20_seeds(seeds):
-    """screened > traditional > before: in the medians of both statistics and both roles, and per
-    run in at least 80 % of the evaluation runs with the thesis's statistic (measured 87.5-95 %
-    over the five groups); with the strict statistic screened beats traditional less often
-    (measured 60-75 %)."""
+def test_table_5_2_ordering_over_seeds(seeds):
+    """The thesis's finding, screened > traditional > before in each of its three runs: in the
+    medians of both statistics and both roles, and per run in at least 80 % of the evaluation runs
+    with the thesis's statistic (measured 100 %); with the strict statistic (every cycle within
+    0.1 mm, not the thesis's) in more than half of them (measured 75-100 % over three groups of 6
+    seeds)."""
     for st in ("rms", "max"):
         for role in ("screening", "evaluation"):
             t = seeds["tables"][st][role]
             assert t["screened"]["median"] > t["traditional"]["median"] > t["before"]["median"], (st, role)
             for c in ("before", "traditional", "screened"):
-                assert t[c]["q25"] <= t[c]["median"] <= t[c]["q75"] and t[c]["n"] == (20 if role == "screening" else 40)
+                assert t[c]["q25"] <= t[c]["median"] <= t[c]["q75"] and t[c]["n"] == (6 if role == "screening" else 12)
     assert seeds["ordering"]["rms"]["evaluation"]["strict_order"] >= 0.8
-    assert 0.45 <= seeds["ordering"]["max"]["evaluation"]["strict_order"] <= 0.9
+    assert seeds["ordering"]["max"]["evaluation"]["strict_order"] > 0.5
     # a direction that never left the band has an rms below it: the strict share is never larger
     for s in seeds["per_seed"]:
         for r in s["rows"]:
             assert all(r["lambda"]["max"][c] <= r["lambda"]["rms"][c] for c in ("before", "traditional", "screened"))
 
 
-def test_selection_frequency_over_seeds(seeds):
-    """Every seed selects 8 parameters, so the frequencies add up to 8; the set is not the same
-    across seeds -- one parameter is nearly always chosen, the rest vary (measured: a2 95 %,
-    next 70 %, and 12 parameters between 20 % and 80 %)."""
+def test_selection_over_seeds_agrees_with_the_thesis(seeds):
+    """Every seed selects 8 parameters, so the frequencies add up to 8. The thesis's finding
+    (5.1.2): heat moves only some parameters, and not only the non-zero lengths -- every seed's
+    set holds a parameter outside the traditional set; the parameter selected most often is one
+    the thesis selected, and more than half of the thesis's set is selected in at least half of
+    the seeds (measured over three groups of 6 seeds: a2 first every time, 4-5 of the thesis's 7
+    in at least half of the seeds)."""
     f = seeds["selection"]
     assert sum(f.values()) == pytest.approx(8.0)
     assert list(f.values()) == sorted(f.values(), reverse=True)
-    top = list(f.values())
-    assert top[0] >= 0.9 and top[1] <= 0.85
-    assert sum(0.2 <= v <= 0.8 for v in f.values()) >= 8
+    assert next(iter(f)) in THESIS_SELECTED
+    assert sum(f.get(n, 0.0) >= 0.5 for n in THESIS_SELECTED) > len(THESIS_SELECTED) / 2
+    traditional = set(traditional_parameters(load_robot("kuka_kr150_r3100")))
+    assert all(set(s["screened"]) - traditional for s in seeds["per_seed"])
 
 
 def test_experiment_structure(experiment):
@@ -388,9 +406,9 @@ def test_stability_of_a_clear_screening():
 
 
 def test_stability_exposes_interchangeable_parameters():
-    """p6 does not drift but is a near copy of p5 (columns 0.5 % apart): the full run happens to
-    keep p6, and which of the two survives depends on the cycles (measured 57 / 43 % over 30
-    resamples); p0 and p2 are kept by every resample."""
+    """p6 does not drift but is a near copy of p5 (columns 0.5 % apart): the full run keeps one
+    of the two, and which one survives depends on the cycles (both between 20 and 80 % of 30
+    resamples; measured 57 / 43 %); p0 and p2 are kept by every resample."""
     from robocal.thermal.stability import screening_stability
 
     rng = np.random.default_rng(8)
@@ -404,7 +422,8 @@ def test_stability_exposes_interchangeable_parameters():
     p2 = ScreeningProblem(prob.names, M, Y, J, before)
     rep = screening_stability(p2, 30, 2, n_keep=3, threshold_mm=0.08)
     assert rep.frequency["p0"] == 1.0 and rep.frequency["p2"] == 1.0
-    assert rep.full == ("p0", "p2", "p6")
+    # which of the near copies the full run keeps is arbitrary (measured: p6); p0 and p2 are not
+    assert rep.full[:2] == ("p0", "p2") and rep.full[2] in {"p5", "p6"}
     assert 0.2 < rep.frequency["p5"] < 0.8 and 0.2 < rep.frequency["p6"] < 0.8
     assert rep.frequency["p5"] + rep.frequency["p6"] == pytest.approx(1.0)
     assert 0.2 < rep.agreement < 0.8 and set(rep.unstable()) == {"p5", "p6"}
