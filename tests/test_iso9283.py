@@ -234,3 +234,51 @@ def test_report_has_the_figures(iso_run):
     assert len(p1.findall(f".//{ns}circle")) == n_cycles + 1
     assert len(p1.findall(f".//{ns}polyline")) == 2           # the RP circle and the line to the commanded pose
     assert "RP" in "".join(p1.itertext())
+
+
+@pytest.mark.parametrize("language", ["krl", "rapid", "tp", "urscript"])
+def test_plan_as_a_robot_program_round_trips(language, tmp_path):
+    """The ISO test written as a controller program reads back (by the language's own reader) as
+    the plan's joint targets, in driving order."""
+    from robocal.io.programs import read_program
+    from robocal.io.programs.joint_table import read_joint_program
+    from robocal.robots import load_robot
+
+    r = CliRunner().invoke(main, ["iso9283", "plan", "abb_irb140", "--out", str(tmp_path / "p"), "--cycles", "2",
+                                  "--path-cycles", "2", "--language", language])
+    assert r.exit_code == 0, r.output
+    model = load_robot("abb_irb140")
+    table = read_joint_program(tmp_path / "p" / "program.csv", model)
+    suffix = {"krl": ".dat", "rapid": ".mod", "tp": ".ls", "urscript": ".script"}[language]
+    prog = read_program(tmp_path / "p" / f"iso9283{suffix}")
+    q = np.array([t.joints for t in prog.targets if t.kind == "joint"])
+    assert q.shape == table.joints.shape
+    assert np.abs(q - table.joints).max() < np.radians(1e-3)   # written with 3 decimals of a degree (UR: rad)
+
+
+def test_plan_respects_a_cell_obstacle(tmp_path):
+    """A table in front of the robot: the cube moves or shrinks so that no pose and no link meets it."""
+    from robocal.calib.cell import feasible
+    from robocal.io.cell_file import read_cell
+    from robocal.robots import load_robot
+
+    cell = tmp_path / "cell.toml"
+    cell.write_text('format = "robocal-cell/1"\nlength_unit = "mm"\nangle_unit = "deg"\nclearance = 10.0\n'
+                    '[mounting]\nkind = "floor"\nxyz = [0.0, 0.0, 0.0]\nplane = true\n'
+                    '[[box]]\nname = "table"\nmin = [300.0, -600.0, 0.0]\nmax = [900.0, 600.0, 250.0]\n')
+    r = CliRunner().invoke(main, ["iso9283", "plan", "abb_irb140", "--out", str(tmp_path / "p"), "--cycles", "2",
+                                  "--path-cycles", "2", "--cell", str(cell), "--json"])
+    assert r.exit_code == 0, r.output
+    plan = json.loads(r.output)
+    model = load_robot("abb_irb140")
+    c = read_cell(cell, model)
+    protocol = json.loads((tmp_path / "p" / "protocol.json").read_text())
+    q = np.array([p["joints_rad"] for p in protocol["poses"].values()]
+                 + [p["joints_rad"] for p in protocol["approach_points"].values()]
+                 + protocol["paths"]["line"]["joints_rad"] + protocol["paths"]["circle"]["joints_rad"])
+    assert feasible(c, model, q).all()
+    # the cube's lowest face is above the table where it overlaps it in x and y
+    lo = np.array(plan["cube"]["centre_mm"]) - plan["cube"]["edge_mm"] / 2
+    hi = np.array(plan["cube"]["centre_mm"]) + plan["cube"]["edge_mm"] / 2
+    overlaps = lo[0] < 900 and hi[0] > 300
+    assert not overlaps or lo[2] > 250

@@ -102,24 +102,30 @@ def iso9283():
 @click.option("--min-height", "min_height_mm", default=100.0, show_default=True,
               help="The cube's lowest face above the mounting plane [mm].")
 @click.option("--language", type=click.Choice(["krl", "rapid", "tp", "urscript"]), default=None,
-              help="Also write the test as a robot program in this language (not yet: see docs/iso9283.md).")
+              help="Also write the test as a robot program: KUKA KRL (.dat + .src), ABB RAPID (.mod), FANUC TP "
+                   "(.ls), UR script (.script); joint targets in driving order, a wait at each point.")
+@click.option("--cell", "cell_file", default=None, type=click.Path(dir_okay=False, exists=True),
+              help="Cell file (robocal-cell/1, docs/cells.md): mounting, obstacles, joint ranges the test must "
+                   "respect; default: the robot on the floor, the floor an obstacle.")
 @click.option("--json", "as_json", is_flag=True, help="Print the plan's summary as JSON.")
 @click.option("--overwrite", is_flag=True, help="Replace an earlier plan in the folder.")
 def plan_cmd(robot, out_dir, tool, cycles, path_cycles, drift_hours, load, speed_percent, min_height_mm, language,
-             as_json, overwrite):
+             cell_file, as_json, overwrite):
     """The ISO 9283 test of ROBOT: the largest cube in its working range, P1-P5, the sequences."""
     from ..workflows.iso9283_plan import build_iso_plan, write_iso_plan
 
     model = _robot(robot)
-    if language is not None:
-        raise click.ClickException("--language: the ISO plan is written as a joint program (program.csv); "
-                                   "program output per controller language is not implemented yet")
     T_tool = _frame6(tool, "--tool") if tool else None
     try:
+        cell = None
+        if cell_file:
+            from ..io.cell_file import read_cell
+
+            cell = read_cell(cell_file, model)
         plan = build_iso_plan(model, T_flange_tool=T_tool, cycles=cycles, path_cycles=path_cycles,
                               drift_hours=drift_hours, load=load, speed_percent=speed_percent,
-                              min_height_mm=min_height_mm)
-        files = write_iso_plan(out_dir, plan, model, overwrite=overwrite)
+                              min_height_mm=min_height_mm, cell=cell)
+        files = write_iso_plan(out_dir, plan, model, overwrite=overwrite, language=language)
     except (ValueError, OSError) as exc:
         raise _user_error(exc) from None
     cube = plan["cube"]
@@ -135,7 +141,8 @@ def plan_cmd(robot, out_dir, tool, cycles, path_cycles, drift_hours, load, speed
         p = v["position_mm"]
         click.echo(f"  {k}: ({p[0]:9.2f}, {p[1]:9.2f}, {p[2]:9.2f}) mm")
     click.echo(f"load: {plan['conditions']['load']}; speed {speed_percent:g} % of rated")
-    click.echo(f"{len(plan['measurements'])} measurements; wrote {files['protocol']} and {files['program']}")
+    extra = "".join(f", {f}" for f in files.get("robot_program", []))
+    click.echo(f"{len(plan['measurements'])} measurements; wrote {files['protocol']}, {files['program']}{extra}")
 
 
 def _mpe(text):

@@ -80,7 +80,7 @@ def iso_cube_points(centre_mm, edge_mm: float) -> np.ndarray:
 
 
 def reachable_on_one_branch(model, points_mm, R_base_tool, T_flange_tool=None, *, q_seed=None,
-                            min_link_z_mm: float | None = 0.0, multi_start: bool = True):
+                            min_link_z_mm: float | None = 0.0, multi_start: bool = True, feasible=None):
     """Joints reaching every point with one orientation on one arm configuration, or None.
 
     Parameters
@@ -95,6 +95,9 @@ def reachable_on_one_branch(model, points_mm, R_base_tool, T_flange_tool=None, *
         Start of the numerical IK (robots without a closed form).
     multi_start : bool
         Numerical IK: also try a few deterministic starts across the ranges of J2 and J3.
+    feasible : callable, optional
+        ``feasible(q) -> (M,) bool``: the cell's checks (obstacles, self-collision, the user's
+        joint ranges; :func:`robocal.calib.cell.feasible`). Every pose must pass.
     min_link_z_mm : float or None
         Every link frame's z in the base frame must be at least this (None: not checked).
 
@@ -113,6 +116,8 @@ def reachable_on_one_branch(model, points_mm, R_base_tool, T_flange_tool=None, *
     inv_base = np.linalg.inv(model.T_world_base)
 
     def links_ok(q):
+        if feasible is not None and not bool(np.all(feasible(q))):
+            return False
         if min_link_z_mm is None:
             return True
         frames = inv_base @ model.link_frames(q)
@@ -148,7 +153,7 @@ def reachable_on_one_branch(model, points_mm, R_base_tool, T_flange_tool=None, *
 
 
 def largest_iso_cube(model, R_base_tool=None, T_flange_tool=None, *, min_height_mm: float = 100.0,
-                     n_radial: int = 12, n_height: int = 10, q_seed=None) -> IsoCube:
+                     n_radial: int = 12, n_height: int = 10, q_seed=None, feasible=None) -> IsoCube:
     """The largest ISO cube in front of the robot (centre on the base x axis, y = 0).
 
     Parameters
@@ -162,6 +167,8 @@ def largest_iso_cube(model, R_base_tool=None, T_flange_tool=None, *, min_height_
         plane (z = 0 of the base) [mm].
     n_radial, n_height : int
         Grid of candidate centres.
+    feasible : callable, optional
+        The cell's pose checks (see :func:`reachable_on_one_branch`).
 
     Returns
     -------
@@ -186,7 +193,8 @@ def largest_iso_cube(model, R_base_tool=None, T_flange_tool=None, *, min_height_
 
             if c[2] < min_height_mm:
                 continue
-            found = reachable_on_one_branch(model, c[None], R, T_flange_tool, q_seed=q_seed, min_link_z_mm=0.0)
+            found = reachable_on_one_branch(model, c[None], R, T_flange_tool, q_seed=q_seed, min_link_z_mm=0.0,
+                                            feasible=feasible)
             if found is None:
                 continue
             q_c = found[0][0]
@@ -195,7 +203,7 @@ def largest_iso_cube(model, R_base_tool=None, T_flange_tool=None, *, min_height_
                 if c[2] - edge / 2 < min_height_mm:
                     return None
                 return reachable_on_one_branch(model, iso_cube_points(c, edge), R, T_flange_tool,
-                                               q_seed=q_c, min_link_z_mm=0.0, multi_start=False)
+                                               q_seed=q_c, min_link_z_mm=0.0, multi_start=False, feasible=feasible)
 
             lo, hi = 0.0, 2.0 * reach
             if best is not None and fits(best.edge_mm) is None:
@@ -218,5 +226,5 @@ def largest_iso_cube(model, R_base_tool=None, T_flange_tool=None, *, min_height_
     # a round edge (whole 10 mm, as test plans state it)
     edge = np.floor(best.edge_mm / 10.0) * 10.0 if best.edge_mm >= 20 else best.edge_mm
     q_b = reachable_on_one_branch(model, iso_cube_points(best.centre_mm, edge), R, T_flange_tool, q_seed=q_seed,
-                                  min_link_z_mm=0.0)
+                                  min_link_z_mm=0.0, feasible=feasible)
     return IsoCube(best.centre_mm, float(edge), R, q_b[1] if q_b else best.branch)

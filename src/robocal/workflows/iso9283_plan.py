@@ -37,7 +37,7 @@ def _pose(p, R) -> dict:
 
 def build_iso_plan(model, *, T_flange_tool=None, cycles: int = 30, path_cycles: int = 10,
                    drift_hours: float = 0.0, drift_interval_min: float = 10.0, load: str | None = None,
-                   speed_percent: float = 100.0, min_height_mm: float = 100.0) -> dict:
+                   speed_percent: float = 100.0, min_height_mm: float = 100.0, cell=None) -> dict:
     """The ISO 9283 test plan for ``model`` (in memory).
 
     Parameters
@@ -56,6 +56,10 @@ def build_iso_plan(model, *, T_flange_tool=None, cycles: int = 30, path_cycles: 
         The load the test assumes, as text (default: the rated load at its rated offset).
     speed_percent : float
         Speed as a share of the rated speed [%].
+    cell : robocal.calib.cell.Cell, optional
+        The cell (mounting, obstacles, user joint ranges; docs/cells.md). Default: a floor-mounted
+        robot whose floor is an obstacle. Every commanded pose and the motion between consecutive
+        poses must be feasible in it.
 
     Returns
     -------
@@ -71,7 +75,18 @@ def build_iso_plan(model, *, T_flange_tool=None, cycles: int = 30, path_cycles: 
         raise InputError(f"speed must be in (0, 100] %, got {speed_percent}")
     if drift_hours < 0 or drift_hours > 48:
         raise InputError(f"drift run must be 0-48 h, got {drift_hours}")
-    cube = largest_iso_cube(model, T_flange_tool=T_flange_tool, min_height_mm=min_height_mm)
+    from ..calib.cell import default_cell, feasible as cell_feasible
+
+    tool_pt = (0.0, 0.0, 0.0) if T_flange_tool is None else tuple(np.asarray(T_flange_tool, float)[:3, 3])
+    the_cell = cell if cell is not None else default_cell(tool_pt)
+
+    def feasible(q):
+        q = np.atleast_2d(q)
+        lim = the_cell.limits(model)
+        inside = np.all((q >= lim[:, 0] - 1e-9) & (q <= lim[:, 1] + 1e-9), axis=1)
+        return inside & cell_feasible(the_cell, model, q)
+
+    cube = largest_iso_cube(model, T_flange_tool=T_flange_tool, min_height_mm=min_height_mm, feasible=feasible)
     c, L, R = cube.centre_mm, cube.edge_mm, cube.R_base_tool
     from ..performance.iso_cube import iso_test_poses
 
@@ -89,7 +104,7 @@ def build_iso_plan(model, *, T_flange_tool=None, cycles: int = 30, path_cycles: 
     approach = {f"{name}{d}": P[i] + d_approach * np.array(vec) for i, name in ((0, "P1"), (1, "P2"), (3, "P4"))
                 for d, vec in DIRECTIONS.items()}
     all_pts = np.vstack([P, np.array(list(approach.values())), path_line, path_circle])
-    found = reachable_on_one_branch(model, all_pts, R, T_flange_tool)
+    found = reachable_on_one_branch(model, all_pts, R, T_flange_tool, feasible=feasible)
     if found is None:
         raise InputError(f"{model.name}: the ISO test's poses are not reachable on one arm configuration "
                          f"(cube {L:.0f} mm at {np.round(c, 1).tolist()} mm)")
@@ -154,21 +169,34 @@ def _program_rows(protocol: dict) -> tuple[list, list]:
     return names, q
 
 
-def write_iso_plan(out_dir, protocol: dict, model, *, overwrite: bool = False) -> dict:
-    """Write ``protocol.json`` and the joint program ``program.csv`` into ``out_dir`` (atomically)."""
+def write_iso_plan(out_dir, protocol: dict, model, *, overwrite: bool = False, language: str | None = None) -> dict:
+    """Write ``protocol.json`` and the joint program ``program.csv`` into ``out_dir`` (atomically);
+    with ``language`` (krl, rapid, tp, urscript) also the test as a robot program (``iso9283.<suffix>``:
+    joint targets in driving order, a wait/trigger comment at each point)."""
+    from ..io.programs.campaign import CAMPAIGN_LANGUAGES, write_campaign_program
     from .outputs import check_outputs_free, ensure_writable_dir
 
     out = Path(out_dir)
-    check_outputs_free(out, ["protocol.json", "program.csv"], overwrite)
+    program_names = []
+    if language is not None:
+        suffix = CAMPAIGN_LANGUAGES[language][1]
+        program_names = [f"iso9283{suffix}"] + (["iso9283.src"] if language == "krl" else [])
+    check_outputs_free(out, ["protocol.json", "program.csv"] + program_names, overwrite)
     ensure_writable_dir(out)
     names, q = _program_rows(protocol)
+    files = {}
+    if language is not None:
+        # identifiers every controller accepts: letters, digits, underscores
+        ids = [n.replace(".", "_").replace("+", "p") for n in names]
+        files["robot_program"] = [str(p) for p in write_campaign_program(
+            out / "iso9283.csv", language, np.array(q), ids, overwrite=overwrite, prismatic=model.prismatic_joints)]
     prog = JointProgram(np.array(q), tuple(names), tuple(model.controller_joints),
                         {"robot": model.name, "angle_unit": "deg",
                          "note": "ISO 9283 test: measure at every point not ending in '.approach' "
                                  "(wait for the robot to settle, then trigger the instrument)"})
     write_joint_program(out / "program.csv", prog, model, overwrite=overwrite)
     atomic_write_text(out / "protocol.json", json.dumps(protocol, indent=1) + "\n", overwrite=overwrite)
-    return {"protocol": str(out / "protocol.json"), "program": str(out / "program.csv")}
+    return {"protocol": str(out / "protocol.json"), "program": str(out / "program.csv"), **files}
 
 
 def read_iso_plan(path) -> dict:
