@@ -375,13 +375,13 @@ def test_fleet_calibrate_command_on_an_existing_cluster(campaigns, client, tmp_p
             "--scheduler", client.scheduler.address]
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 3, res.output  # one robot failed
-    assert "3 robots: 2 ok, 1 failed, 0 unchanged" in res.output
+    assert "3 robots: 2 ok, 1 failed, 0 not converged, 0 unchanged" in res.output
     assert "FAILED lost:" in res.output and "nowhere.csv not found" in res.output
     assert res.output.strip().splitlines()[-1] == "Error: 1 of 3 robots failed (reasons above)"
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["history"] == str(tmp_path / "out" / "history.sqlite")
     again = CliRunner().invoke(main, args)
-    assert "3 robots: 2 ok, 1 failed, 2 unchanged" in again.output
+    assert "3 robots: 2 ok, 1 failed, 0 not converged, 2 unchanged" in again.output
     both = CliRunner().invoke(main, args + ["--workers", "2"])
     assert both.exit_code == 1 and "either --scheduler" in both.output
 
