@@ -312,8 +312,10 @@ def test_experiment_json_is_the_librarys_multi_seed_table():
     assert r["selection_frequency"] == pytest.approx(lib["selection"])
     assert sum(r["selection_frequency"].values()) == pytest.approx(8.0)       # 8 parameters per seed
     assert [s["seed"] for s in r["per_seed"]] == [5, 6]
+    assert r["fits"] == {"n": 2, "not_converged": 0}  # the system calibration behind each seed's figures
     text = ok("experiment", "--seeds", 1, "--cycles", 8, "--preset", "ideal").output
     assert "rms residual < 0.1 mm (thesis)" in text and "every cycle < 0.1 mm (strict)" in text
+    assert "system calibrations (least squares, one per seed): 0 of 1 did not converge" in text
     assert "selection frequency over seeds" in text
     assert run("experiment", "--preset", "warm").exit_code != 0
     assert run("experiment", "--seeds", 0).exit_code != 0
