@@ -157,3 +157,18 @@ def test_datasets_run_counts_unconverged_fits_and_exits_4(lm_one_iteration):
     rec = json.loads(r.stdout)
     assert rec["convergence"]["n_fits"] == 10 and rec["convergence"]["n_not_converged"] >= 5
     assert len([line for line in r.stderr.splitlines() if line.startswith("Warning:")]) == 1
+
+
+def test_tcp_seven_point_not_converged_exits_4_and_prints_no_tool_data(tmp_path, lm_one_iteration):
+    f = _touch_csv(tmp_path / "touch.csv", n=5)
+    lines = f.read_text().splitlines()
+    last = lines[-1].split(",")
+    for k, dx in ((6, (0.0, 0.0, 0.0)), (7, (50.0, 0.0, 0.0)), (8, (50.0, 0.0, 40.0))):  # P5, P6, P7
+        row = [f"P{k}"] + [f"{float(v) + (dx[i] if i < 3 else 0.0):.9f}" for i, v in enumerate(last[1:])]
+        lines.append(",".join(row))
+    f.write_text("\n".join(lines) + "\n")
+    r = run("tcp", "seven-point", f)
+    assert r.exit_code == 4, r.output
+    assert len(warnings_of(r)) == 1 and "TOOL_DATA" not in r.output
+    r = run("tcp", "seven-point", f, "--allow-unconverged")
+    assert r.exit_code == 0 and "TOOL_DATA" in r.output

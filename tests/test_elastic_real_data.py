@@ -37,12 +37,15 @@ def test_dlr_justin_joint_compliance_reaches_the_source_figure():
 
 @_need("boby_fanuc")
 def test_boby_fanuc_joint_compliance_below_0_40_mm():
-    """Seeds 0 and 3 (the best and the worst geometric split): elastic-joint holdout RMS 0.223 and
-    0.308 mm against 0.348 and 0.536 mm geometric (all five seeds: 0.265 mm mean, docs/datasets.md)."""
-    for seed, limit in ((0, 0.25), (3, 0.35)):
+    """Seeds 0 and 3 (the best and the worst geometric split), every fit converged (issue 25: the
+    LM needs 98-558 iterations here; the earlier 200-iteration cap stopped three of five seeds and
+    gave lower figures): elastic-joint holdout RMS 0.276 and 0.309 mm against 0.348 and 0.536 mm
+    geometric (all five seeds: 0.276 mm mean, docs/datasets.md); the target is < 0.40 mm."""
+    for seed in (0, 3):
         r = calibrate_boby(seed, model="elastic-joint")
-        assert r["calibrated"]["rms"] < limit, (seed, r["calibrated"])
-        assert r["calibrated"]["rms"] < 0.8 * r["geometric"]["rms"]
+        assert r["result"].converged and r["nominal_result"].converged
+        assert r["calibrated"]["rms"] < 0.40, (seed, r["calibrated"])
+        assert r["calibrated"]["rms"] < 0.85 * r["geometric"]["rms"]
 
 
 @_need("hilti_trailblazer")
@@ -56,7 +59,7 @@ def test_hilti_elastic_joint_beats_every_set_from_the_command_line():
     out = CliRunner().invoke(main, ["datasets", "run", "hilti_trailblazer", "--model", "elastic-joint", "--json"])
     assert out.exit_code == 0, out.output
     rec = json.loads(out.stdout)
-    assert "warnings" not in rec  # the solver converged
+    assert rec["convergence"]["converged"] and rec["convergence"]["n_fits"] == 2  # every fit converged
     assert rec["model"] == "elastic-joint" and [s["set"] for s in rec["sets"]] == list(HILTI_SETS)
     for s in rec["sets"]:
         ref = HILTI_REFERENCE[s["set"]]

@@ -439,3 +439,15 @@ def test_a_robot_whose_fit_does_not_converge_gets_no_robot_file_and_exit_4(campa
     r = run_fleet_calibration(fleet, tmp_path / "b", client=None, report=False, allow_unconverged=True)
     assert r["summary"]["counts"]["ok"] == 2 and r["summary"]["robots"][0]["converged"] is False
     assert (tmp_path / "b" / "robot-0" / "calibrated_robot.toml").exists()
+
+
+def test_fleet_calibrate_command_exits_4_when_a_fit_does_not_converge(campaigns, client, tmp_path, lm_one_iteration):
+    """Issue 25 through the command line: no failure, but fits that did not converge -> exit 4."""
+    fleet = fleet_toml(tmp_path, good_entries(campaigns, 2))
+    args = ["fleet", "calibrate", str(fleet), "--out", str(tmp_path / "out"), "--no-report", "--no-history",
+            "--scheduler", client.scheduler.address]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 4, res.output
+    assert "2 not converged" in res.output
+    assert sum(line.startswith("Warning:") for line in res.output.splitlines()) == 1
+    assert not (tmp_path / "out" / "robot-0" / "calibrated_robot.toml").exists()

@@ -56,7 +56,8 @@ def _z(res, offsets):
 
 
 def test_every_identifiable_nao_joint_offset_within_three_sigma(nao):
-    offsets, both, _ = nao
+    offsets, both, alone = nao
+    assert both.converged and all(a.converged for a in alone.values()), both.message  # figures at an optimum
     z = _z(both, offsets)
     assert len(z) == 9  # 12 joints; HeadPitch (camera mount) and both WristYaw (board transforms) held
     assert max(abs(v) for v in z.values()) < 3.0
@@ -120,6 +121,7 @@ def test_nao_model_simulator_run_end_to_end_without_rendering(simulated_run):
     for r, v, s in zip(res.joint_report, res.joint_offsets, res.joint_offset_sigma):
         if r["identifiable"]:
             z.append((v - run.joint_offsets_rad[r["joint"]]) / s)
+    assert res.converged, res.message
     assert len(z) == 9 and max(abs(x) for x in z) < 3.0  # measured 1.59 (docs figure, robocal.docs.figures)
     assert abs(res.rms_px / np.sqrt(2) / NOISE_PX - 1.0) < 0.1  # measured 0.304 px
 

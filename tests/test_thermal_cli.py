@@ -312,8 +312,10 @@ def test_experiment_json_is_the_librarys_multi_seed_table():
     assert r["selection_frequency"] == pytest.approx(lib["selection"])
     assert sum(r["selection_frequency"].values()) == pytest.approx(8.0)       # 8 parameters per seed
     assert [s["seed"] for s in r["per_seed"]] == [5, 6]
+    assert r["fits"] == {"n": 2, "not_converged": 0}  # the system calibration behind each seed's figures
     text = ok("experiment", "--seeds", 1, "--cycles", 8, "--preset", "ideal").output
     assert "rms residual < 0.1 mm (thesis)" in text and "every cycle < 0.1 mm (strict)" in text
+    assert "system calibrations (least squares, one per seed): 0 of 1 did not converge" in text
     assert "selection frequency over seeds" in text
     assert run("experiment", "--preset", "warm").exit_code != 0
     assert run("experiment", "--seeds", 0).exit_code != 0
@@ -354,3 +356,19 @@ def test_calibrate_sensor_that_does_not_converge_exits_4_without_a_sensor_file(c
     r = run("calibrate-sensor", ROBOT, cell["dir"] / "run1" / "sphere_cold.csv", "--out", tmp_path / "s.json",
             "--allow-unconverged")
     assert r.exit_code == 0 and (tmp_path / "s.json").exists()
+
+
+def test_compensate_exits_5_when_a_corrected_point_is_not_reached(cell, tmp_path, monkeypatch):
+    """Issue 25: a correction whose joints do not converge is reported as `robocal correct` does:
+    the table flags the points, one stderr line names them, exit code 5 (no iteration allowed here)."""
+    import robocal.thermal as thermal_pkg
+
+    compensate = thermal_pkg.compensate_program
+    monkeypatch.setattr(thermal_pkg, "compensate_program", lambda *a, **k: compensate(*a, **{**k, "max_iterations": 0}))
+    d, s = cell["dir"], cell["screen"]
+    poses = ",".join(f"c{CYCLES:03d}-{p}" for p in s["online_poses"]["screened"])
+    r = run("compensate", ROBOT, "--sensor", cell["sensor"], "--sphere", d / "run2" / "sphere.csv", "--poses", poses,
+            "--cold", d / "run2" / "sphere_cold.csv", "--params", ",".join(s["selected"]), "--program",
+            d / "program.csv", "--out", tmp_path / "c.csv")
+    assert r.exit_code == 5, r.output
+    assert "not converged" in r.output and "not reached:" in r.output

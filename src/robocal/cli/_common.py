@@ -93,10 +93,24 @@ def _item_progress(i: int, n: int, text: str) -> None:
 
 
 def allow_unconverged_option(f):
-    """The ``--allow-unconverged`` flag of every command that fits something (one help text)."""
+    """The ``--allow-unconverged`` flag of every command that fits something (one help text); the
+    command runs with the solver's own ``NotConvergedWarning`` silenced: it reports non-convergence
+    in one ``Warning:`` line (:func:`finish_convergence`)."""
+    import functools
+
+    @functools.wraps(f)
+    def quiet(*args, **kwargs):
+        import warnings
+
+        from ..calib.solve import NotConvergedWarning
+
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", category=NotConvergedWarning)
+            return f(*args, **kwargs)
+
     return click.option("--allow-unconverged", is_flag=True,
                         help="Accept a fit that did not converge: write its model file and exit 0 "
-                             f"(otherwise no model file is written and the exit code is {EXIT_NOT_CONVERGED}).")(f)
+                             f"(otherwise no model file is written and the exit code is {EXIT_NOT_CONVERGED}).")(quiet)
 
 
 def finish_convergence(convergence, allow_unconverged: bool) -> None:

@@ -61,7 +61,9 @@ from .swarm_progress import swarm_progress_bar
               help="Calibrate on these pose ids (comma separated, repeatable, or @FILE); default: seeded split.")
 @click.option("--holdout-ids", multiple=True, metavar="IDS",
               help="Validate on these pose ids (comma separated, repeatable, or @FILE).")
-@click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
+@click.option("--max-iterations", default=1000, show_default=True,
+              help="Iteration limit of the solver; a fit that stops there did not converge (exit 4). Elastic fits "
+                   "of real robots need up to ~750.")
 @allow_unconverged_option
 @click.option("--no-report", is_flag=True, help="Do not write report.html (batch runs: the plots take longer than the solve).")
 @click.option("--force", is_flag=True,

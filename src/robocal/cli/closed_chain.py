@@ -66,7 +66,8 @@ def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_m
 @click.option("--holdout", default=0.2, show_default=True,
               help="Share of each spot's configurations held out for validation.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the calibration/held-out split.")
-@click.option("--max-iterations", default=50, show_default=True, help="Iteration limit of the solver.")
+@click.option("--max-iterations", default=1000, show_default=True,
+              help="Iteration limit of the solver; a fit that stops there did not converge (exit 4).")
 @allow_unconverged_option
 @click.option("--no-report", is_flag=True, help="Do not write report.html.")
 @click.option("--force", is_flag=True, help="Write the calibrated robot files even when the sanity gates fail.")

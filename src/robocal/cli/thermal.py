@@ -342,6 +342,14 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
         if res["out"] is not None:
             _echo_corrected(res)
     _exit_if_failed(Verdict(tuple(res["reasons"])))
+    missed = [p["point"] for p in res["points"] if not p["converged"]]
+    if res["out"] is not None and missed:  # as `robocal correct`: exit 5 when a corrected point is not reached
+        from ._common import EXIT_TARGETS_NOT_REACHED
+
+        click.echo(f"not reached: {', '.join(missed[:10])}" + (f" and {len(missed) - 10} more" if len(missed) > 10
+                                                              else "") + " (the corrected joints did not converge within tolerance; see the table)",
+                   err=True)
+        raise SystemExit(EXIT_TARGETS_NOT_REACHED)
 
 
 def _echo_drift(res) -> None:

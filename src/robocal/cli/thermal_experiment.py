@@ -35,7 +35,7 @@ def experiment_json(res: dict) -> dict:
                            "lambda": r["lambda"]} for r in s["rows"]]} for s in res["per_seed"]]
     return _clean({"settings": res["settings"], "lambda": res["tables"], "ordering": res["ordering"],
                    "selection_frequency": res["selection"], "bootstrap_frequency": res["bootstrap_frequency"],
-                   "per_seed": per_seed, "elapsed_s": res["elapsed_s"]})
+                   "per_seed": per_seed, "fits": res.get("fits"), "elapsed_s": res["elapsed_s"]})
 
 
 @click.command("experiment", short_help="Table 5-2 over N seeds: median and spread of lambda, selection frequency.")

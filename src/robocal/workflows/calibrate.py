@@ -123,7 +123,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
                     seed: int = 0, loss: str = "linear", sigma_mm: float | None = None, tool=None,
                     overwrite: bool = False, progress=None, method: str = "lm", rotation_weight: float | None = None,
                     prior=None, train_ids=(), holdout_ids=(), measurements=None, use_orientation: bool = True,
-                    max_iterations: int = 50, report: bool = True, force: bool = False,
+                    max_iterations: int = 1000, report: bool = True, force: bool = False,
                     drop_duplicates: bool = False, particles: int = 20, generations: int = 2000,
                     swarm_progress=None, elastic: str | None = None, payload=None,
                     allow_unconverged: bool = False, frames_only: bool = False) -> dict:

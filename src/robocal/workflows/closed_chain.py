@@ -192,7 +192,7 @@ def _calibrate(nominal, spots, train, free_names, kw, state0, max_iterations):
 def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_mm=None,
                                  spacing_sigma_mm: float = 0.02, sigma_mm=None, holdout: float = 0.2,
                                  seed: int = 0, free=None, free_all: bool = False, fix=(), overwrite: bool = False,
-                                 report: bool = True, force: bool = False, max_iterations: int = 50,
+                                 report: bool = True, force: bool = False, max_iterations: int = 1000,
                                  progress=None, allow_unconverged: bool = False) -> dict:
     """Calibrate ``robot`` from the held-spot file ``spots_file``; write the outputs into ``out_dir``.
 

@@ -159,6 +159,7 @@ def _summary(rows) -> dict:
                                                                   "param_mrad", "seconds")}
     out = {k: float(np.median(v)) for k, v in a.items()}
     out["at_floor"] = f"{sum(r['at_floor'] for r in rows)}/{len(rows)}"
+    out["not_converged"] = f"{sum(not r['converged'] for r in rows)}/{len(rows)}"  # next to every figure
     return out
 
 
@@ -203,12 +204,13 @@ def per_seed_csv(tables: dict) -> str:
 
 def _print(title, table):
     print(f"\n### {title}\nnoise floor (true model) {table['floor_mm']:.4g} mm; nominal model {table['nominal_mm']:.4g} mm")
-    print("| method | holdout pos. [mm] | holdout orient. [deg] | param. error lengths [mm] | angles [mrad] | time [s] | at floor |")
-    print("|---|---|---|---|---|---|---|")
+    print("| method | holdout pos. [mm] | holdout orient. [deg] | param. error lengths [mm] | angles [mrad] | time [s] | "
+          "at floor | not converged |")
+    print("|---|---|---|---|---|---|---|---|")
     for m, r in table.items():
         if isinstance(r, dict):
             print(f"| {m} | {r['holdout_mm']:.4g} | {r['holdout_deg']:.4g} | {r['param_mm']:.4g} | "
-                  f"{r['param_mrad']:.4g} | {r['seconds']:.3g} | {r['at_floor']} |")
+                  f"{r['param_mrad']:.4g} | {r['seconds']:.3g} | {r['at_floor']} | {r['not_converged']} |")
 
 
 def main(argv=None):

@@ -233,7 +233,8 @@ def _sensor_frame(run: dict, model, sensor_file):
         return s["T_sensor_base"], s["P_e"], sensor_file
     cal = calibrate_system(model, run["q_sphere"], run["sphere_cold"])
     return (cal.T_sensor_base, cal.P_e,
-            f"calibrated from sphere_cold.csv ({cal.n_poses} poses, residual RMS {cal.rms_mm:.3f} mm)")
+            f"calibrated from sphere_cold.csv ({cal.n_poses} poses, residual RMS {cal.rms_mm:.3f} mm"
+            + (")" if cal.converged else f"; NOT converged: {cal.message})"))
 
 
 def _check_given_set(given, prob, model) -> None:

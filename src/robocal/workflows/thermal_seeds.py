@@ -73,7 +73,9 @@ def run_thermal_seeds(*, preset="realistic", seeds: int = 20, first_seed: int = 
                                    n_online_poses=n_online_poses, n_keep=n_keep, preset=preset,
                                    system_calibration=system_calibration, stability=resamples)
         rep = r["stability"]
+        cal = r.get("system_calibration")
         per_seed.append({"seed": seed, "screened": list(r["screened"]),
+                         "system_calibration_converged": None if cal is None else bool(cal.converged),
                          "stable": None if rep is None else list(rep.selected),
                          "bootstrap_frequency": None if rep is None else rep.frequency,
                          "rows": [{k: v for k, v in row.items()} for row in r["rows"]],
@@ -94,6 +96,9 @@ def run_thermal_seeds(*, preset="realistic", seeds: int = 20, first_seed: int = 
         "selection": selection_frequency([s["screened"] for s in per_seed]),
         "bootstrap_frequency": boot,
         "per_seed": per_seed,
+        # the fits behind the figures (one system calibration per seed): how many did not converge
+        "fits": {"n": sum(s["system_calibration_converged"] is not None for s in per_seed),
+                 "not_converged": sum(s["system_calibration_converged"] is False for s in per_seed)},
         "elapsed_s": time.perf_counter() - t0,
     }
 
@@ -113,6 +118,10 @@ def format_seeds_table(res: dict) -> str:
         o = res["ordering"][st]["evaluation"]
         lines.append(f"evaluation runs ordered screened > traditional > before: {100 * o['strict_order']:.0f} %; "
                      f"screened >= traditional: {100 * o['screened_not_worse']:.0f} %")
+    fits = res.get("fits")
+    if fits and fits["n"]:
+        lines += ["", f"system calibrations (least squares, one per seed): {fits['not_converged']} of {fits['n']} "
+                      "did not converge"]
     lines += ["", "selection frequency over seeds: " +
               ", ".join(f"{n} {100 * f:.0f} %" for n, f in res["selection"].items())]
     if res.get("bootstrap_frequency"):
