@@ -1,9 +1,14 @@
 """Planning a measurement campaign: which poses to measure, and what the plan will deliver.
 
-:func:`visible_candidates` keeps candidate poses an instrument can see (range and incidence on the
-reflector); :func:`plan_campaign` picks ``count`` of them by greedy D-optimal selection
+:func:`plan_campaign` picks ``count`` candidate poses by greedy D-optimal selection
 (:func:`robocal.calib.poses.select_poses`) and predicts, to first order, the standard deviation of
 every identifiable variable and the accuracy on the other candidates (the held-out error to expect).
+Which variables are identifiable is the calibration's own verdict
+(:func:`calibration_identifiability`: ``solve`` on noise-free data of a typical robot, the same
+tolerance), so plan and calibration agree; the covariance and every prediction Jacobian are taken
+at that typical robot. :func:`predicted_workspace_accuracy` is the noise-free criterion a set of
+plans is ranked by. Which poses a robot can take is the cell's business (:mod:`robocal.calib.cell`);
+:func:`visible_candidates` is the older range-and-incidence test without the arm (kept for callers).
 """
 
 from __future__ import annotations

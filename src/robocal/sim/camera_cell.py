@@ -132,6 +132,17 @@ def simulate_hand_eye_poses(object_points: np.ndarray, *, setup: str = "eye_in_h
                         float(pose_noise_mm), float(pose_noise_deg))
 
 
+def _feasible_branches(model, q, valid) -> np.ndarray:
+    """``valid`` (N, B) narrowed to the branches ``q`` (N, B, n) the robot can take on its floor
+    (docs/cells.md: no link at the floor or in another link)."""
+    from ..calib.cell import default_cell, feasible
+
+    valid = np.array(valid, dtype=bool, copy=True)
+    if valid.any():
+        valid[valid] = feasible(default_cell(), model, q[valid])
+    return valid
+
+
 def _ik_branches(model, T_base_flange: np.ndarray):
     from ..kinematics.ik_analytic import ik_analytic, is_analytic
 
@@ -140,6 +151,7 @@ def _ik_branches(model, T_base_flange: np.ndarray):
                          "(closed-form inverse kinematics)")
     T = np.asarray(model.T_world_base) @ np.asarray(T_base_flange, dtype=float).reshape(-1, 4, 4)
     q, valid = ik_analytic(model, T, within_limits=True)
+    valid = _feasible_branches(model, q, valid)
     cost = np.where(valid, np.nansum(q ** 2, axis=2), np.inf)
     best = np.argmin(cost, axis=1)
     rows = np.arange(len(T))
@@ -154,7 +166,7 @@ def reachable(model, T_base_flange: np.ndarray) -> np.ndarray:
 def robot_joints(model, T_base_flange: np.ndarray) -> np.ndarray:
     """(N, n) controller joints [rad] that put ``model``'s flange at ``T_base_flange`` (N, 4, 4) [mm,
     the model's base frame]: its closed-form inverse kinematics within the joint limits, the branch
-    closest to the zero configuration. ``ValueError`` naming the poses it cannot reach."""
+    closest to the zero configuration among those the robot can take on its floor (docs/cells.md). ``ValueError`` naming the poses it cannot reach."""
     q, ok = _ik_branches(model, T_base_flange)
     if not ok.all():
         raise ValueError(f"robot {model.name} cannot reach the flange poses of images {np.flatnonzero(~ok).tolist()} "

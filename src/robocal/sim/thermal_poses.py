@@ -34,7 +34,11 @@ def car_body_points(rng, n: int = 34, *, centre=(2100.0, 0.0, 600.0), size=(1000
 def _ik_pose(model, T_base_flange, prev):
     from ..kinematics import ik_analytic
 
+    from ..calib.cell import default_cell, feasible
+
     qs, ok = ik_analytic(model, model.T_world_base @ T_base_flange, within_limits=True)
+    if ok.any():
+        ok[ok] = feasible(default_cell(), model, qs[ok])  # a branch the robot can take on its floor
     if not ok.any():
         return None
     cand = qs[ok]
