@@ -1,0 +1,158 @@
+"""Sanity gates of a hand-eye solution, in the form of :mod:`robocal.calib.sanity` (a
+:class:`~robocal.calib.sanity.Verdict` with ``status``/``reasons``/``checks``).
+
+A refinement always returns a transform with a small formal sigma, even for data that cannot
+describe one camera on one robot (images paired with the wrong poses, inverted poses, a wrong
+orientation convention or set-up, wrong intrinsics). The gates compare
+
+* **reprojection**: the back-projection RMS through the reported flange poses against the corner
+  noise seen by per-image PnP (``HANDEYE_NOISE_FACTOR`` x) and an absolute floor
+  ``HANDEYE_RMS_FLOOR_PX`` (a real robot's pose error alone gives pixels: 2.3-2.6 px on the
+  ROS-Industrial sets);
+* **motion consistency**: the screw invariants of every pair of images (:mod:`.consistency`): the
+  median angle mismatch against ``MOTION_ANGLE_LIMIT_DEG``; images whose own median exceeds
+  ``IMAGE_ANGLE_LIMIT_DEG`` (and 3 x the overall median) are named;
+* **agreement with the linear start**: the refined camera pose against the linear solution it
+  started from (``LINEAR_POSITION_LIMIT_MM``, ``LINEAR_ROTATION_LIMIT_DEG``).
+
+Likely causes (:func:`cause_reasons`) are named from hypotheses the caller evaluated (shifted
+pairing, another convention, the other set-up or inverted poses, intrinsics calibrated on the same
+images). Every bound is a module constant, listed in docs/reliability.md. Math only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..calib.sanity import Verdict, _check
+from .consistency import MotionMismatch
+
+__all__ = ["HANDEYE_NOISE_FACTOR", "HANDEYE_RMS_FLOOR_PX", "MOTION_ANGLE_LIMIT_DEG", "IMAGE_ANGLE_LIMIT_DEG",
+           "LINEAR_POSITION_LIMIT_MM", "LINEAR_ROTATION_LIMIT_DEG", "HYPOTHESIS_RMS_FACTOR", "IMAGE_RMS_FACTOR", "handeye_verdict", "disagreeing_images",
+           "Hypothesis", "cause_reasons"]
+
+#: Back-projection RMS above this multiple of the per-image PnP RMS (the corner noise as this camera
+#: model sees it) fails, unless below ``HANDEYE_RMS_FLOOR_PX``.
+HANDEYE_NOISE_FACTOR = 10.0
+#: Back-projection RMS [px] that always passes (robot pose errors of a real arm give a few pixels).
+HANDEYE_RMS_FLOOR_PX = 5.0
+#: A hypothesis for the cause fits when its linear solution back-projects within this multiple of the
+#: gate's RMS limit.
+HYPOTHESIS_RMS_FACTOR = 4.0
+#: Median over all pairs of |angle(flange motion) - angle(camera motion)| [deg] above this fails
+#: (ROS-Industrial sets: 0.45 and 1.95 deg; one pose row shifted: 12.7-19.9 deg).
+MOTION_ANGLE_LIMIT_DEG = 5.0
+#: An image whose own median angle mismatch exceeds this [deg] (and 3 x the overall median) is named.
+IMAGE_ANGLE_LIMIT_DEG = 8.0
+#: An image back-projecting worse than this multiple of the RMS limit (and 3 x the median image) is
+#: named (ROS-Industrial 10x10: its worst image, 2.png, 7.3 px against the 5 px limit).
+IMAGE_RMS_FACTOR = 2.0
+#: The refined camera pose farther than this from its linear start [mm] / [deg] fails (ROS-Industrial
+#: sets: 7.3 mm / 0.58 deg and 37.6 mm / 2.5 deg).
+LINEAR_POSITION_LIMIT_MM = 100.0
+LINEAR_ROTATION_LIMIT_DEG = 10.0
+
+
+def disagreeing_images(mismatch: MotionMismatch) -> np.ndarray:
+    """Indices of the images whose pairs disagree (median angle mismatch above
+    ``IMAGE_ANGLE_LIMIT_DEG`` and above 3 x the median over all pairs)."""
+    per = mismatch.per_image_angle_deg
+    limit = max(IMAGE_ANGLE_LIMIT_DEG, 3.0 * (mismatch.angle_deg_median if math.isfinite(mismatch.angle_deg_median)
+                                              else 0.0))
+    return np.flatnonzero(np.isfinite(per) & (per > limit))
+
+
+def _times(ratio: float) -> str:
+    return "over 1000 x" if ratio > 1000 else f"{ratio:.0f} x"
+
+
+def _names(indices, labels, images, k: int = 8) -> str:
+    items = [f"{images[i]} (pose {labels[i]})" if str(labels[i]) not in str(images[i]) else str(images[i])
+             for i in indices]
+    return ", ".join(items[:k]) + (f" and {len(items) - k} more" if len(items) > k else "")
+
+
+def handeye_verdict(*, backprojection_rms_px: float, pnp_rms_px: float, mismatch: MotionMismatch,
+                    linear_difference: tuple, image_names, pose_labels,
+                    per_image_backprojection_px=None) -> Verdict:
+    """The gates of a hand-eye solution (module docstring).
+
+    backprojection_rms_px: RMS [px] of the target projected through the reported flange poses and
+    the solution; pnp_rms_px: the RMS [px] of per-image PnP with the same camera; mismatch: the
+    screw-invariant mismatch of the data (:func:`~robocal.handeye.consistency.motion_mismatch`);
+    linear_difference: ``(mm, deg)`` between the refined camera pose and its linear start;
+    image_names, pose_labels (N): to name the images that disagree; per_image_backprojection_px (N):
+    each image's back-projection RMS [px] (images far above the others are named).
+    """
+    checks: dict = {}
+    reasons = []
+    noise = max(float(pnp_rms_px), 1e-3) if math.isfinite(pnp_rms_px) else float("nan")
+    limit = max(HANDEYE_RMS_FLOOR_PX, HANDEYE_NOISE_FACTOR * noise) if math.isfinite(noise) else HANDEYE_RMS_FLOOR_PX
+    if not _check(checks, "reprojection_vs_corner_noise", backprojection_rms_px, limit, "px"):
+        reasons.append(f"back-projection RMS {backprojection_rms_px:.4g} px through the reported flange poses is "
+                       f"{_times(backprojection_rms_px / noise)} the corner noise (per-image PnP RMS {noise:.3g} px; "
+                       f"limit max({HANDEYE_RMS_FLOOR_PX:g} px, {HANDEYE_NOISE_FACTOR:g} x)): the flange poses and "
+                       "the images do not describe one camera on one robot")
+    if not _check(checks, "motion_angle_consistency", mismatch.angle_deg_median, MOTION_ANGLE_LIMIT_DEG, "deg"):
+        reasons.append(f"the flange and camera motions between image pairs rotate by different angles (median "
+                       f"mismatch {mismatch.angle_deg_median:.3g} deg, limit {MOTION_ANGLE_LIMIT_DEG:g} deg): most "
+                       "images are paired with the wrong flange pose, or the poses' orientation convention or the "
+                       "camera's intrinsics are wrong")
+    bad = disagreeing_images(mismatch)
+    checks["images_disagreeing"] = {"value": int(len(bad)), "limit": 0, "unit": "images", "passed": not len(bad),
+                                    "images": [str(image_names[i]) for i in bad]}
+    if len(bad) and math.isfinite(mismatch.angle_deg_median) and mismatch.angle_deg_median <= MOTION_ANGLE_LIMIT_DEG:
+        reasons.append(f"{len(bad)} image(s) disagree with the others' motions (median angle mismatch above "
+                       f"{IMAGE_ANGLE_LIMIT_DEG:g} deg): {_names(bad, pose_labels, image_names)}: likely swapped or "
+                       "mislabelled pose rows, an image duplicated over another, or a pose taken at another moment")
+    per = np.asarray(per_image_backprojection_px if per_image_backprojection_px is not None else [], dtype=float)
+    if per.size and np.isfinite(per).any():
+        off_limit = max(IMAGE_RMS_FACTOR * limit, 3.0 * float(np.nanmedian(per)))
+        off = np.flatnonzero(np.isfinite(per) & (per > off_limit))
+        off = np.setdiff1d(off, bad)
+        checks["images_off_the_chain"] = {"value": int(len(off)), "limit": 0, "unit": "images", "passed": not len(off),
+                                          "images": [str(image_names[i]) for i in off]}
+        if len(off) and len(off) <= len(per) // 2:
+            worst = ", ".join(f"{image_names[i]} {per[i]:.3g} px" for i in off[np.argsort(-per[off])][:8])
+            reasons.append(f"{len(off)} image(s) back-project far worse than the others through their flange poses "
+                           f"({worst}; limit max({off_limit:.3g} px, 3 x the median image)): likely a wrong pose row "
+                           "for these images (a typo, a pose taken at another moment, a swapped row)")
+    dp, dr = linear_difference
+    ok_p = _check(checks, "linear_start_position", dp, LINEAR_POSITION_LIMIT_MM, "mm")
+    ok_r = _check(checks, "linear_start_rotation", dr, LINEAR_ROTATION_LIMIT_DEG, "deg")
+    if not (ok_p and ok_r):
+        reasons.append(f"the refined camera pose is {dp:.4g} mm / {dr:.3g} deg from the linear solution it started "
+                       f"from (limits {LINEAR_POSITION_LIMIT_MM:g} mm, {LINEAR_ROTATION_LIMIT_DEG:g} deg): the "
+                       "data admit no consistent linear solution")
+    return Verdict(tuple(reasons), checks)
+
+
+class Hypothesis:
+    """One alternative reading of the data and how well it fits: ``cause`` (a sentence), the
+    median angle mismatch [deg] and, when evaluated, the back-projection RMS [px] of its linear
+    solution (NaN when not evaluated or unsolvable)."""
+
+    def __init__(self, cause: str, angle_deg: float, rms_px: float = float("nan")):
+        self.cause, self.angle_deg, self.rms_px = cause, float(angle_deg), float(rms_px)
+
+    def fits(self, rms_limit_px: float, reference_rms_px: float = float("inf")) -> bool:
+        """Its motions agree and (when evaluated) its linear solution back-projects within
+        ``HYPOTHESIS_RMS_FACTOR`` x ``rms_limit_px`` (a linear solution is not refined: the clean
+        ROS-Industrial 10x10 set's is 10.4 px) and below a quarter of ``reference_rms_px``, the
+        linear solution's RMS on the data as given."""
+        if not (math.isfinite(self.angle_deg) and self.angle_deg <= MOTION_ANGLE_LIMIT_DEG):
+            return False
+        if not math.isfinite(self.rms_px):
+            return True
+        return self.rms_px <= HYPOTHESIS_RMS_FACTOR * rms_limit_px and not self.rms_px > 0.25 * reference_rms_px
+
+
+def cause_reasons(hypotheses, rms_limit_px: float, reference_rms_px: float = float("inf")) -> list:
+    """Reasons naming the hypotheses that fit the data (``likely cause: ...``), best first."""
+    fitting = [h for h in hypotheses if h.fits(rms_limit_px, reference_rms_px)]
+    fitting.sort(key=lambda h: (h.rms_px if math.isfinite(h.rms_px) else 0.0, h.angle_deg))
+    return [f"likely cause: {h.cause} (the data then fit: motion angle mismatch {h.angle_deg:.3g} deg"
+            + (f", linear solution's back-projection RMS {h.rms_px:.3g} px" if math.isfinite(h.rms_px) else "") + ")"
+            for h in fitting]
