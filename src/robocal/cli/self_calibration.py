@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _item_progress, _user_error
+from ._common import EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, _item_progress, _user_error
 from .camera import BOARD_HELP
 
 
@@ -32,14 +32,22 @@ from .camera import BOARD_HELP
               help="A further robot parameter to estimate (repeatable, e.g. a2).")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics too.")
 @click.option("--joint-noise-deg", type=float, default=None,
-              help="1-sigma of a joint reading [deg]: per-image joint corrections (errors in variables).")
+              help="1-sigma of a joint reading [deg]: per-image joint corrections (errors in variables). Default: "
+                   "exact readings when the residuals fit the corner noise, else estimated (reported in the JSON).")
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Folder for robot.toml, self_calibration.json, report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
+@click.option("--force", is_flag=True,
+              help="Write robot.toml even when the result FAILS the sanity gates or did not converge (same exit code).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, board_on, camera_file, tolerance, match,
-                   link_parameters, refine_intrinsics, joint_noise_deg, out_dir, overwrite, as_json):
-    """Calibrate ROBOT's joint offsets from images of a board taken by its own camera."""
+                   link_parameters, refine_intrinsics, joint_noise_deg, out_dir, overwrite, force, as_json):
+    """Calibrate ROBOT's joint offsets from images of a board taken by its own camera.
+
+    Sanity gates (docs/reliability.md): residuals against what the corner noise and
+    --joint-noise-deg explain, joint offsets a mastering error can have; a failure names a camera
+    clock offset or permuted frame times when the motions show one. A failed result exits 3, a
+    solve that did not converge exits 4; neither writes robot.toml unless --force."""
     from ..handeye import HandEyeError
     from ..workflows.self_calibration import self_calibrate as run
 
@@ -49,11 +57,12 @@ def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, bo
                 tolerance=tolerance, match=match,
                 link_parameters=link_parameters, refine_intrinsics=refine_intrinsics,
                 joint_noise_deg=joint_noise_deg, out_dir=out_dir,
-                overwrite=overwrite, progress=_item_progress)
+                overwrite=overwrite, progress=_item_progress, force=force)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(s, indent=2))
+        _exit_status(s)
         return
     click.echo(f"self-calibration of {s['robot']}: {s['n_images_used']} of {s['n_images']} images, reprojection RMS "
                f"{s['reprojection_rms_px']:.3f} px ({'converged' if s['converged'] else 'NOT converged'})")
@@ -68,3 +77,18 @@ def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, bo
             click.echo(f"  skipped {r['name']}: {r['skip_reason']}")
     if s.get("outputs"):
         click.echo("wrote " + ", ".join(s["outputs"].values()))
+    _exit_status(s)
+
+
+def _exit_status(s: dict) -> None:
+    """Exit 3 (failed gates, reasons on stderr) or 4 (not converged, one ``Warning:`` line)."""
+    if s.get("status", "ok") != "ok":
+        click.echo("FAILED: the self-calibration did not pass the sanity gates (exit code 3"
+                   + ("" if "robot.toml" in (s.get("outputs") or {}) else ", no robot.toml written") + "):", err=True)
+        for reason in s.get("reasons", []):
+            click.echo(f"  - {reason}", err=True)
+        raise SystemExit(EXIT_FAILED_RESULT)
+    if not s.get("converged", True):
+        click.echo(f"Warning: the solver did not converge ({s.get('message', '')}); no robot.toml written unless "
+                   "--force: try more images spread over the joint ranges or a camera file (--camera)", err=True)
+        raise SystemExit(EXIT_NOT_CONVERGED)

@@ -31,7 +31,8 @@ from .consistency import MotionMismatch
 
 __all__ = ["HANDEYE_NOISE_FACTOR", "HANDEYE_RMS_FLOOR_PX", "MOTION_ANGLE_LIMIT_DEG", "IMAGE_ANGLE_LIMIT_DEG",
            "LINEAR_POSITION_LIMIT_MM", "LINEAR_ROTATION_LIMIT_DEG", "HYPOTHESIS_RMS_FACTOR", "IMAGE_RMS_FACTOR", "handeye_verdict", "disagreeing_images",
-           "Hypothesis", "cause_reasons"]
+           "Hypothesis", "cause_reasons", "self_calibration_verdict", "SELF_CALIBRATION_VARIANCE_LIMIT",
+           "JOINT_OFFSET_LIMIT_DEG", "JOINT_NOISE_LIMIT_DEG"]
 
 #: Back-projection RMS above this multiple of the per-image PnP RMS (the corner noise as this camera
 #: model sees it) fails, unless below ``HANDEYE_RMS_FLOOR_PX``.
@@ -156,3 +157,46 @@ def cause_reasons(hypotheses, rms_limit_px: float, reference_rms_px: float = flo
     return [f"likely cause: {h.cause} (the data then fit: motion angle mismatch {h.angle_deg:.3g} deg"
             + (f", linear solution's back-projection RMS {h.rms_px:.3g} px" if math.isfinite(h.rms_px) else "") + ")"
             for h in fitting]
+
+
+#: Self-calibration: residuals above this multiple of what the corner noise (and the declared joint
+#: noise) explain fail: the offsets' sigmas are then optimistic and the offsets biased (0.05 deg
+#: reading noise taken as exact: variance factor 2.4, offsets 17 sigma off; tests/test_self_calibration_pipeline.py).
+SELF_CALIBRATION_VARIANCE_LIMIT = 1.5
+#: An estimated joint-reading noise above this [deg] is no encoder's: the pairing or the model is wrong.
+JOINT_NOISE_LIMIT_DEG = 0.5
+#: A joint zero offset beyond this [deg] is no mastering error (a wrong pairing of images and joints).
+JOINT_OFFSET_LIMIT_DEG = 10.0
+
+
+def self_calibration_verdict(*, variance_factor: float, pixel_sigma_px: float, rms_px: float, joint_noise_deg,
+                             offsets_deg: dict, joint_noise_estimated: bool = False) -> Verdict:
+    """The gates of a camera self-calibration.
+
+    variance_factor: sqrt(weighted residual sum / redundancy) of the solve (1 when the residuals
+    scatter as the corner noise ``pixel_sigma_px`` [px] and ``joint_noise_deg`` [deg] say);
+    rms_px: the reprojection RMS [px]; offsets_deg: {name: joint offset [deg]} of the revolute
+    joints; joint_noise_estimated: the noise was estimated (it must then stay within
+    ``JOINT_NOISE_LIMIT_DEG``). (Convergence is judged apart: exit code 4, not 3.)
+    """
+    checks: dict = {}
+    reasons = []
+    if not _check(checks, "residuals_vs_noise", variance_factor, SELF_CALIBRATION_VARIANCE_LIMIT, "x"):
+        declared = ("the joint readings taken as exact" if not joint_noise_deg else
+                    f"a joint-reading noise of {joint_noise_deg:g} deg" + (" (estimated)" if joint_noise_estimated
+                                                                         else ""))
+        reasons.append(f"the residuals (RMS {rms_px:.4g} px) are {variance_factor:.3g} x what the corner noise "
+                       f"({pixel_sigma_px:.3g} px) and {declared} explain (limit {SELF_CALIBRATION_VARIANCE_LIMIT:g} x): "
+                       "the offsets are biased and their sigmas optimistic; likely noisier joint readings than "
+                       "declared (pass --joint-noise-deg), images paired with the wrong joint readings (a clock "
+                       "offset, permuted frame times) or a wrong camera")
+    if joint_noise_estimated and not _check(checks, "estimated_joint_noise", joint_noise_deg or 0.0,
+                                            JOINT_NOISE_LIMIT_DEG, "deg"):
+        reasons.append(f"the residuals need a joint-reading noise of {joint_noise_deg:g} deg or more to be explained "
+                       f"(limit {JOINT_NOISE_LIMIT_DEG:g} deg): no encoder reads that badly; likely images paired "
+                       "with the wrong joint readings (a clock offset, permuted frame times) or a wrong camera")
+    worst = max(offsets_deg.items(), key=lambda kv: abs(kv[1]), default=(None, 0.0))
+    if not _check(checks, "joint_offset", abs(worst[1]), JOINT_OFFSET_LIMIT_DEG, "deg"):
+        reasons.append(f"joint offset {worst[0]} = {worst[1]:+.3g} deg (limit {JOINT_OFFSET_LIMIT_DEG:g} deg): no "
+                       "mastering error; likely images paired with the wrong joint readings or the wrong robot")
+    return Verdict(tuple(reasons), checks)
