@@ -39,7 +39,7 @@ def ik_train(robot, samples, seed, out, generations, population, no_tune, joint_
         raise click.ClickException("--population must be at least 4 and --generations at least 0")
     if out is None:
         rp = Path(str(robot_path(robot)))
-        out = default_network_path(rp) if Path(robot).suffix == ".toml" or Path(robot).exists() \
+        out = default_network_path(rp) if Path(robot).suffix.lower() in (".toml", ".urdf") or Path(robot).exists() \
             else Path(f"{model.name}.iknet.npz")
     out = Path(out)
     if out.exists() and not overwrite:

@@ -67,7 +67,7 @@ def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "
         pairing = pair_by_time(points, log, tolerance=tolerance_s, offset=offset_s, robot=model)
     notes = list(pairing.notes)
     meas = _joints_named_as_robot(pairing.measurements, model, notes)
-    meas.metadata["robot"] = robot if Path(robot).suffix == ".toml" else model.name
+    meas.metadata["robot"] = robot if Path(robot).suffix.lower() in (".toml", ".urdf") else model.name
     return {"measurements": meas, "pairing": pairing, "notes": notes}
 
 
