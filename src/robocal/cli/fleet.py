@@ -165,14 +165,28 @@ study = click.Group("study", help="Embarrassingly parallel studies as chunked Da
 fleet.add_command(study)
 
 
-def _write_json(data, out_file):
+def _write_json(data, out_file, overwrite: bool = False):
     import json
 
     from ..io.atomic import atomic_write_text
 
     if out_file:
-        atomic_write_text(out_file, json.dumps(data, indent=2) + "\n", overwrite=True)
+        atomic_write_text(out_file, json.dumps(data, indent=2) + "\n", overwrite=overwrite)
         click.echo(f"wrote {out_file}")
+
+
+_OVERWRITE = click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
+
+
+def _check_json_out(out_file, inputs, overwrite: bool) -> None:
+    """Before a long study: the --json file is no input and, without --overwrite, does not exist."""
+    from ..io.output_paths import check_outputs
+
+    if out_file:
+        try:
+            check_outputs(out_file, inputs, overwrite=overwrite)
+        except FileExistsError as exc:
+            raise click.ClickException(str(exc)) from None
 
 
 def _chunk_line(c):
@@ -210,15 +224,17 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
               help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
 @click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
+@_OVERWRITE
 @_SCHEDULER
 @_WORKERS
-def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, scheduler, workers):
+def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, overwrite, scheduler, workers):
     """Monte-Carlo accuracy of calibrating ROBOT from the pose plan POSES (a joint program, e.g. from
     `robocal plan-poses`): simulated robots measured at those poses, calibrated, checked against
     their truth."""
     from ..io.programs.joint_table import read_joint_program
     from ..workflows.fleet_study import monte_carlo_plan
 
+    _check_json_out(out_file, {"POSES": poses, "ROBOT": robot}, overwrite)
     try:
         q = read_joint_program(poses, _robot_model(robot)).joints
     except (ValueError, OSError) as exc:
@@ -235,7 +251,7 @@ def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, ou
         click.echo(f"  {len(r['unconverged_samples'])} sample(s) stopped at the solver's iteration limit (kept): "
                    f"{r['unconverged_samples'][:10]}")
     _chunk_line(r["chunking"])
-    _write_json(r, out_file)
+    _write_json(r, out_file, overwrite)
 
 
 def _median(v):
@@ -259,13 +275,15 @@ def _robot_model(robot):
 @click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z")
 @click.option("--seed", default=0, show_default=True)
 @click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
+@_OVERWRITE
 @_SCHEDULER
 @_WORKERS
-def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, scheduler, workers):
+def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, overwrite, scheduler, workers):
     """Plan COUNT poses of ROBOT from each of SETS candidate sets; report the best seed
     (`robocal plan-poses --seed <best>` writes that plan)."""
     from ..workflows.fleet_study import pose_set_selection
 
+    _check_json_out(out_file, {"ROBOT": robot}, overwrite)
     r = _study("sets", scheduler, workers, pose_set_selection, robot, sets=sets, count=count, candidates=candidates,
                sigma_mm=sigma_mm, tool=tool, seed=seed)
     s, best = r["spread_mm"], r["best"]
@@ -274,21 +292,23 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
     click.echo(f"best: seed {best['seed']} ({best['holdout_rms_mm']:.4f} mm): robocal plan-poses {robot} --count {count} "
                f"--candidates {candidates} --seed {best['seed']} --out poses.csv")
     _chunk_line(r["chunking"])
-    _write_json(r, out_file)
+    _write_json(r, out_file, overwrite)
 
 
 @study.command("thermal")
 @click.argument("runs", nargs=-1, required=True, type=click.Path(file_okay=False))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep per robot.")
 @click.option("--json", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
+@_OVERWRITE
 @_SCHEDULER
 @_WORKERS
-def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
+def thermal_cmd(runs, n_keep, out_file, overwrite, scheduler, workers):
     """Thermal parameter screening (`robocal thermal screen`) of each robot's run folder RUNS
     (the robot id is the folder name), one task per robot. Exit code 3 when some robots failed, 1
     when all did."""
     from ..workflows.fleet_study import thermal_screening
 
+    _check_json_out(out_file, {}, overwrite)
     r = _study("robots", scheduler, workers, thermal_screening, [(Path(d).name, d) for d in runs], n_keep=n_keep)
     for row in r["robots"]:
         if row["status"] == "ok":
@@ -296,5 +316,5 @@ def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
             click.echo(f"{row['id']}: {', '.join(row['selected'])}  lambda screened {lam.get('screened', float('nan')):.1f} %")
         else:
             click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
-    _write_json(r, out_file)
+    _write_json(r, out_file, overwrite)
     _exit_on_failures([row for row in r["robots"] if row["status"] != "ok"], len(r["robots"]))

@@ -42,8 +42,12 @@ def ik_train(robot, samples, seed, out, generations, population, no_tune, joint_
         out = default_network_path(rp) if Path(robot).suffix.lower() in (".toml", ".urdf") or Path(robot).exists() \
             else Path(f"{model.name}.iknet.npz")
     out = Path(out)
-    if out.exists() and not overwrite:
-        raise click.ClickException(f"{out}: file exists; pass --overwrite to replace it")
+    from ..io.output_paths import check_outputs
+
+    try:
+        check_outputs(out, {"the robot file": robot}, overwrite=overwrite)
+    except FileExistsError as exc:
+        raise click.ClickException(str(exc)) from None
 
     def progress(stage, text):
         click.echo(f"[{stage}] {text}", err=True)

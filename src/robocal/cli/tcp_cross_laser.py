@@ -167,9 +167,10 @@ def _echo_result(res, out, settings, sensor, convention) -> None:
               help="Write the first recalibration's barrier events (robocal-barrier-events/1) here.")
 @click.option("--sensor-out", type=click.Path(dir_okay=False), default=None,
               help="Write the simulated sensor calibration (JSON, as `robocal tcp sensor-calibrate --json`) here.")
+@click.option("--overwrite", is_flag=True, help="Replace existing --events-out / --sensor-out files.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repeatability_mm, io_rate_hz, tool_radius_mm,
-                 robot, events_out, sensor_out, as_json):
+                 robot, events_out, sensor_out, overwrite, as_json):
     """Simulated tool-recalibration study: random collisions, cross-laser recalibration, truth comparison.
 
     A UR10-class cell (by default: repeatability 0.1 mm, I/O 1 kHz, tool radius 3 mm, beta = 88
@@ -180,8 +181,14 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     from ..tcp.cross_laser import CrossLaserError
     from ..workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
 
+    from ..io.output_paths import check_outputs
+
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
+    if events_out and sensor_out and Path(events_out).resolve() == Path(sensor_out).resolve():
+        raise click.ClickException(f"--events-out and --sensor-out are the same file {events_out}")
     try:
+        check_outputs([events_out, sensor_out], {"--robot": None if robot.lower() == "none" else robot},
+                      overwrite=overwrite)
         res = tcp_repeatability_study(collisions=collisions, seed=seed, beta_deg=beta_deg, tilt_deg=tilt_deg,
                                       repeatability_mm=repeatability_mm, io_rate_hz=io_rate_hz,
                                       tool_radius_mm=tool_radius_mm, robot=None if robot.lower() == "none" else robot,

@@ -67,12 +67,12 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     Returns ``{rows, changes, file, report, n_corrected, n_targets}``; ``rows`` one dict per
     target (:data:`robocal.io.correction_report.REPORT_COLUMNS`).
     """
+    from ..io.output_paths import check_outputs
+
     out_file = Path(out_file)
     report = report_path_for(out_file)
-    if not overwrite:
-        for p in (out_file, report):
-            if p.exists():
-                raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
+    check_outputs([out_file, report], {"the robot file": model_file, "the program": program_file,
+                                       "--nominal": nominal}, overwrite=overwrite)
     calibrated = load_robot(model_file)
     nominal_model = load_robot(nominal if nominal is not None else calibrated.name)
     from .calibrate import deflection_of

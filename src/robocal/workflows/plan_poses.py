@@ -38,6 +38,9 @@ def plan_poses(robot, out_file, *, count: int, candidates: int = 1000, workspace
     frame [mm]; sigma_mm: instrument noise per coordinate. Returns the plan
     (:func:`~robocal.calib.plan.plan_campaign`) plus ``q`` (count, n), ``n_candidates``, ``file``.
     """
+    from ..io.output_paths import check_outputs
+
+    check_outputs(out_file, {"the robot file": robot}, overwrite=overwrite)
     model = load_robot(robot)
     qk = candidate_poses(model, count, candidates, seed, workspace=workspace, tracker_at=tracker_at, tool=tool,
                          margin=margin)

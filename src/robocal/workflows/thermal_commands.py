@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.output_paths import check_outputs
 from ..io.programs.joint_table import JointProgram, read_joint_program, write_joint_program
 from ..io.thermal_files import read_sensor_json, read_sphere_file, read_truth_json, write_sensor_json, write_setup_json
 from ..robots import load_robot
@@ -201,7 +202,8 @@ def calibrate_sensor(robot, sphere_file, *, method: str = "lsq", sigma_mm=None, 
     model = load_robot(robot)
     _check_sigma(sigma_mm)
     if out_file:
-        _check_new([out_file], overwrite)
+        check_outputs(out_file, {"the sphere file": sphere_file, "--truth": truth_file, "the robot file": robot},
+                      overwrite=overwrite)
     meas = select_poses(read_sphere_file(sphere_file, model), poses, sphere_file)
     q, P = meas.joints, meas.points[:, 0]
     truth = _read_truth(truth_file)
@@ -419,7 +421,10 @@ def compensate_program_files(robot, *, sensor_file, sphere_file, params, program
     t_start = time.perf_counter()
     model = load_robot(robot)
     _check_sigma(sigma_mm)
-    _check_new([out_file], overwrite)
+    check_outputs(out_file, {"--program": program_file, "--sensor": sensor_file, "the sphere file": sphere_file,
+                             "--cold": cold_file, "the robot file": robot,
+                             "--history": history if history and "://" not in str(history) else None},
+                  overwrite=overwrite)
     sensor = read_sensor_json(sensor_file, model)
     meas, P_c = _sphere_now(model, sphere_file, poses, cold_file, note)
     q_s, P_w = meas.joints, meas.points[:, 0]
