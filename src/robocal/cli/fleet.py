@@ -217,9 +217,11 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
 @study.command("monte-carlo")
 @click.argument("robot")
 @click.argument("poses", type=click.Path(dir_okay=False))
-@click.option("--samples", default=200, show_default=True, help="Virtual robots (each its own true parameters).")
+@click.option("--samples", default=200, show_default=True, type=click.IntRange(1, 100_000),
+              help="Virtual robots (each its own true parameters; at most 100,000).")
 @click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
-@click.option("--check-poses", default=200, show_default=True, help="Random poses where each result is checked.")
+@click.option("--check-poses", default=200, show_default=True, type=click.IntRange(1, 100_000),
+              help="Random poses where each result is checked (at most 100,000).")
 @click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
               help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
@@ -268,9 +270,11 @@ def _robot_model(robot):
 
 @study.command("pose-sets")
 @click.argument("robot")
-@click.option("--sets", default=100, show_default=True, help="Candidate sets (seeds SEED .. SEED+SETS-1).")
-@click.option("--count", default=40, show_default=True, help="Poses per plan.")
-@click.option("--candidates", default=800, show_default=True, help="Random candidate poses per set.")
+@click.option("--sets", default=100, show_default=True, type=click.IntRange(1, 100_000),
+              help="Candidate sets (seeds SEED .. SEED+SETS-1; at most 100,000).")
+@click.option("--count", default=40, show_default=True, type=click.IntRange(1, 10_000), help="Poses per plan (at most 10,000).")
+@click.option("--candidates", default=800, show_default=True, type=click.IntRange(1, 200_000),
+              help="Random candidate poses per set (at most 200,000).")
 @click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
 @click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z")
 @click.option("--seed", default=0, show_default=True)

@@ -11,7 +11,8 @@ from ._common import _robot
 
 @click.command("ik-train")
 @click.argument("robot")
-@click.option("--samples", default=20000, show_default=True, help="FK samples on the branch (80% train, 20% validation).")
+@click.option("--samples", default=20000, show_default=True, type=click.IntRange(500, 1_000_000),
+              help="FK samples on the branch (80% train, 20% validation; 500 to 1,000,000).")
 @click.option("--seed", default=0, show_default=True, help="Seed of the sampling, the centres and the genetic algorithm.")
 @click.option("--out", "out", default=None, type=click.Path(dir_okay=False),
               help="Network file (.npz). Default: next to a robot file (<robot>.iknet.npz), or "

@@ -11,8 +11,9 @@ from ._common import _user_error
 
 @click.command("plan-poses")
 @click.argument("robot")
-@click.option("--count", required=True, type=int, help="Number of poses to plan.")
-@click.option("--candidates", default=1000, show_default=True, help="Random candidate poses within the joint limits.")
+@click.option("--count", required=True, type=click.IntRange(1, 10_000), help="Number of poses to plan (at most 10,000).")
+@click.option("--candidates", default=1000, show_default=True, type=click.IntRange(1, 200_000),
+              help="Random candidate poses within the joint limits (at most 200,000).")
 @click.option("--workspace", default=None, metavar="BOX",
               help="Flange box in the robot base frame: xmin,xmax,ymin,ymax,zmin,zmax [mm].")
 @click.option("--tracker-at", default=None, metavar="X,Y,Z",
