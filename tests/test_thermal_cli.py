@@ -343,3 +343,15 @@ def test_compensate_refuses_a_moved_sensor(cell, tmp_path):
     assert not (tmp_path / "corrected.csv").exists()
     r = run(*args, "--force")
     assert r.exit_code == 3 and (tmp_path / "corrected.csv").exists()
+
+
+def test_a_damaged_history_database_is_named_before_the_program_is_written(cell, tmp_path):
+    """Issue 29: with a corrupt --history database the corrected program was written first."""
+    d = cell["dir"]
+    db = tmp_path / "history.sqlite"
+    db.write_bytes(b"SQLite format 3\x00" + bytes(range(256)) * 8)
+    r = run("compensate", ROBOT, "--sensor", cell["sensor"], "--sphere", d / "run2" / "sphere.csv",
+            "--poses", "c020-*", "--cold", d / "run2" / "sphere_cold.csv", "--params", "a2,d4",
+            "--program", d / "program.csv", "--out", tmp_path / "o.csv", "--history", db)
+    one_line_error(r, "history.sqlite", "nothing written")
+    assert not (tmp_path / "o.csv").exists()

@@ -20,7 +20,8 @@ from ._common import _user_error
               help="Tracker position in the robot base frame [mm]: poses out of range or not facing it are left out.")
 @click.option("--tool", nargs=3, type=float, default=(0.0, 0.0, 100.0), show_default=True, metavar="X Y Z",
               help="Reflector in the flange frame [mm].")
-@click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
+@click.option("--noise", "sigma_mm", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
+              help="Instrument noise per coordinate [mm], positive.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the candidate poses.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="Joint program to write (robocal-program/1, degrees).")
@@ -34,9 +35,13 @@ def plan_poses_cmd(robot, count, candidates, workspace, tracker_at, tool, sigma_
         box = parse_box(workspace) if workspace else None
         at = None
         if tracker_at:
-            at = [float(v) for v in tracker_at.split(",")]
-            if len(at) != 3:
-                raise ValueError(f"--tracker-at: expected x,y,z [mm], got {tracker_at!r}")
+            try:
+                at = [float(v) for v in tracker_at.split(",")]
+            except ValueError:
+                at = []
+            if len(at) != 3 or not all(math.isfinite(v) for v in at):
+                raise ValueError(f"--tracker-at: expected three numbers x,y,z [mm] separated by commas, got "
+                                 f"{tracker_at!r}")
         p = plan_poses(robot, out_file, count=count, candidates=candidates, workspace=box, tracker_at=at, tool=tool,
                        sigma_mm=sigma_mm, seed=seed, overwrite=overwrite)
     except (ValueError, KeyError, OSError) as exc:

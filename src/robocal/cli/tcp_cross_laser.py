@@ -156,8 +156,11 @@ def _echo_result(res, out, settings, sensor, convention) -> None:
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of every random draw.")
 @click.option("--no-beta-correction", is_flag=True,
               help="Only the variants without the beta correction (default: with and without, side by side).")
-@click.option("--beta", "beta_deg", default=88.0, show_default=True, type=float, help="Angle between the beams [deg].")
-@click.option("--tilt", "tilt_deg", default=2.0, show_default=True, type=float, help="Sensor tilt vs the base [deg].")
+@click.option("--beta", "beta_deg", default=88.0, show_default=True, type=click.FloatRange(84.0, 96.0),
+              help="Angle between the beams [deg]; 84 to 96 (the simulated cell's sensor-calibration moves are "
+                   "laid out for nearly crossed beams).")
+@click.option("--tilt", "tilt_deg", default=2.0, show_default=True, type=click.FloatRange(-10.0, 10.0),
+              help="Sensor tilt vs the base [deg]; -10 to 10 (beyond, the simulated pin misses the beams).")
 @click.option("--repeatability", "repeatability_mm", default=0.1, show_default=True, type=float,
               help="Robot repeatability (ISO 9283) [mm].")
 @click.option("--io-rate", "io_rate_hz", default=1000.0, show_default=True, type=float, help="Controller I/O rate [Hz].")
@@ -195,6 +198,9 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
                                       variants=variants, events_path=events_out, sensor_path=sensor_out)
     except (CrossLaserError, ValueError, OSError) as exc:
         raise click.ClickException(str(exc)) from None
+    except RuntimeError as exc:  # the simulated cell cannot carry out a move with these settings
+        raise click.ClickException(f"the simulated cell cannot run with --beta {beta_deg:g} --tilt {tilt_deg:g} "
+                                   f"--tool-radius {tool_radius_mm:g}: {exc}") from None
     if as_json:
         click.echo(json.dumps(res, indent=2))
     else:

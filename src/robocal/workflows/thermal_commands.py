@@ -365,6 +365,18 @@ def _record_cycle(store, rid, model, meta, q_s, P_w, drift, comp, program, progr
     return c.id
 
 
+def _check_history(history) -> None:
+    """``ValueError`` naming the history database when it cannot be opened (nothing written yet)."""
+    from ..store import HistoryError, HistoryStore, default_history_target
+
+    db = history or default_history_target()
+    try:
+        with HistoryStore.open(db):
+            pass
+    except (HistoryError, ValueError, OSError) as exc:
+        raise ValueError(f"--history {db}: {exc}; nothing written") from None
+
+
 def _record_history(history, robot_id, model, meta, out_file, *args):
     """(database, cycle id) after :func:`_record_cycle` in ``history`` ("": the default target);
     ``ValueError`` naming ``out_file`` (already written) when that fails."""
@@ -435,6 +447,8 @@ def compensate_program_files(robot, *, sensor_file, sphere_file, params, program
     elapsed = time.perf_counter() - t_start
     verdict = drift_verdict(drift.names, drift.units, drift.delta, drift.rms_after_mm, sigma_mm)
     write = verdict.ok or force
+    if write and history is not None:
+        _check_history(history)  # a damaged database is named before the program is written
     if write:
         _write_corrected(out_file, program_file, program, comp, drift, model, overwrite)
     meta = {"sensor": sensor_file, "sphere": sphere_file, "cold": cold_file, "program": program_file, "out": out_file,
