@@ -23,19 +23,59 @@ fleet = click.Group(
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
-_SCHEDULER = click.option("--scheduler", default=None, metavar="ADDRESS",
-                          help="An existing Dask cluster's scheduler (tcp://host:8786); default: a local cluster.")
+def _security_option(name, metavar, help_text):
+    def store(ctx, _param, value):
+        ctx.meta.setdefault("robocal_tls", {})[name] = value
+        return value
+    return click.option(f"--{name.replace('_', '-')}" if name != "security_file" else "--security", metavar=metavar,
+                        default=None, type=click.Path(dir_okay=False), expose_value=False, callback=store,
+                        help=help_text)
+
+
+def _SCHEDULER(f):
+    """--scheduler and its TLS options (stored in the context, read by :func:`_client`)."""
+    for opt in reversed([
+        click.option("--scheduler", default=None, metavar="ADDRESS",
+                     help="An existing Dask cluster's scheduler (tcp://host:8786, or tls://host:8786 with the TLS "
+                          "options); default: a local cluster. The scheduler and its workers must be trusted "
+                          "(docs/fleet.md, 'Trust boundary')."),
+        _security_option("tls_ca_file", "PEM", "TLS: the cluster's certificate authority (with --scheduler tls://...)."),
+        _security_option("tls_cert", "PEM", "TLS: this client's certificate."),
+        _security_option("tls_key", "PEM", "TLS: this client's private key (unless the certificate file holds it)."),
+        _security_option("security_file", "FILE", "TLS settings as a TOML file: [tls] ca_file, cert, key."),
+    ]):
+        f = opt(f)
+    return f
 _WORKERS = click.option("--workers", type=int, default=None, metavar="N",
                         help="Worker processes of the local cluster (default: one per CPU).")
 
 
 def _client(scheduler, workers):
-    from ..workflows.fleet_cluster import FleetClusterError, fleet_client
+    from ..workflows.fleet_cluster import FleetClusterError, fleet_client, tls_security
 
+    tls = click.get_current_context().meta.get("robocal_tls", {})
     try:
-        return fleet_client(scheduler, workers)
+        security = tls_security(ca_file=tls.get("tls_ca_file"), cert=tls.get("tls_cert"), key=tls.get("tls_key"),
+                                security_file=tls.get("security_file"))
+        return fleet_client(scheduler, workers, security=security)
     except FleetClusterError as exc:
         raise click.ClickException(str(exc)) from None
+
+
+def _db_for_workers(target, scheduler):
+    """The history URL without its password (which goes to the local workers through the environment;
+    a remote cluster's workers must have it from their own environment or a file)."""
+    from ..store import PASSWORD_ENV, strip_credentials, url_password
+
+    secret = url_password(target) if target else None
+    if secret is None:
+        return target
+    if scheduler is not None:
+        raise click.ClickException("--db: the URL carries a password, which would travel to the workers of --scheduler "
+                                   "in clear task payloads: give the URL without it and set ROBOCAL_DB_PASSWORD (or "
+                                   "ROBOCAL_DB_PASSWORD_FILE, a file readable on every worker) where the workers run")
+    os.environ[PASSWORD_ENV] = secret  # inherited by the local cluster's worker processes, started next
+    return strip_credentials(target)
 
 
 def _history_target(db, no_history, out_dir):
@@ -72,7 +112,7 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
     from ..workflows.fleet import run_fleet_calibration
     from ..workflows.fleet_cluster import FleetClusterError
 
-    target = _history_target(db, no_history, out_dir)
+    target = _db_for_workers(_history_target(db, no_history, out_dir), scheduler)
     bar = None
     try:
         with _client(scheduler, workers) as client:

@@ -10,12 +10,15 @@ Both raise :class:`~robocal.errors.OutputExistsError` naming the file, one line 
 
 from __future__ import annotations
 
+import hashlib
 import os
+import re
 from pathlib import Path
 
 from ..errors import OutputExistsError
 
-__all__ = ["OutputIsInputError", "same_file", "check_outputs", "check_not_inputs"]
+__all__ = ["OutputIsInputError", "same_file", "check_outputs", "check_not_inputs", "safe_file_stem", "path_under",
+           "PathEscapeError"]
 
 
 class OutputIsInputError(OutputExistsError):
@@ -65,3 +68,30 @@ def check_outputs(outputs, inputs=None, *, overwrite: bool = False) -> None:
     for _, out in _pairs(outputs):
         if Path(out).exists():
             raise OutputExistsError(f"{out}: output file exists; pass --overwrite to replace it")
+
+
+class PathEscapeError(OutputExistsError):
+    """A path built from data (a robot id, a label) would leave its output folder."""
+
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9._-]")
+
+
+def safe_file_stem(text: str) -> str:
+    """A file-name stem for ``text`` (a robot id from a database, a label): letters, digits, ``. _ -``
+    only; any other character becomes ``_`` and a short hash of the original keeps two ids apart
+    (``line1/cell3`` -> ``line1_cell3-1a2b3c4d``). Never empty, never starting with a dot."""
+    text = str(text)
+    stem = _UNSAFE.sub("_", text).lstrip(".") or "_"
+    if stem != text:
+        stem = f"{stem[:80]}-{hashlib.sha256(text.encode('utf-8', 'surrogatepass')).hexdigest()[:8]}"
+    return stem
+
+
+def path_under(folder, name: str) -> Path:
+    """``folder / name``, checked to stay inside ``folder`` after resolving (``PathEscapeError``)."""
+    base = Path(folder).resolve()
+    p = (base / name).resolve()
+    if p != base and base not in p.parents:
+        raise PathEscapeError(f"{name!r}: would be written outside {folder}; refused")
+    return p

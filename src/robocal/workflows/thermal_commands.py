@@ -374,7 +374,9 @@ def _check_history(history) -> None:
         with HistoryStore.open(db):
             pass
     except (HistoryError, ValueError, OSError) as exc:
-        raise ValueError(f"--history {db}: {exc}; nothing written") from None
+        from ..store import redact_url
+
+        raise ValueError(f"--history {redact_url(db)}: {exc}; nothing written") from None
 
 
 def _record_history(history, robot_id, model, meta, out_file, *args):
