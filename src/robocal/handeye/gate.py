@@ -32,7 +32,7 @@ from .consistency import MotionMismatch
 __all__ = ["HANDEYE_NOISE_FACTOR", "HANDEYE_RMS_FLOOR_PX", "MOTION_ANGLE_LIMIT_DEG", "IMAGE_ANGLE_LIMIT_DEG",
            "LINEAR_POSITION_LIMIT_MM", "LINEAR_ROTATION_LIMIT_DEG", "HYPOTHESIS_RMS_FACTOR", "IMAGE_RMS_FACTOR", "handeye_verdict", "disagreeing_images",
            "Hypothesis", "cause_reasons", "self_calibration_verdict", "SELF_CALIBRATION_VARIANCE_LIMIT",
-           "JOINT_OFFSET_LIMIT_DEG", "JOINT_NOISE_LIMIT_DEG"]
+           "JOINT_OFFSET_LIMIT_DEG", "JOINT_NOISE_LIMIT_DEG", "CAMERA_RMS_LIMIT_PX", "camera_verdict"]
 
 #: Back-projection RMS above this multiple of the per-image PnP RMS (the corner noise as this camera
 #: model sees it) fails, unless below ``HANDEYE_RMS_FLOOR_PX``.
@@ -199,4 +199,23 @@ def self_calibration_verdict(*, variance_factor: float, pixel_sigma_px: float, r
     if not _check(checks, "joint_offset", abs(worst[1]), JOINT_OFFSET_LIMIT_DEG, "deg"):
         reasons.append(f"joint offset {worst[0]} = {worst[1]:+.3g} deg (limit {JOINT_OFFSET_LIMIT_DEG:g} deg): no "
                        "mastering error; likely images paired with the wrong joint readings or the wrong robot")
+    return Verdict(tuple(reasons), checks)
+
+
+#: Camera calibration: a reprojection RMS [px] above this fails (ROS-Industrial ChArUco set: 0.50 px;
+#: rendered images: 0.06 px; half the images of a set stretched 1.3 x sideways, as from another
+#: camera or a resampling: 3.1 px).
+CAMERA_RMS_LIMIT_PX = 2.0
+
+
+def camera_verdict(rms_px: float) -> Verdict:
+    """The basic gate of a camera calibration: its reprojection RMS [px] against ``CAMERA_RMS_LIMIT_PX``
+    (distortion-specific gates belong to the camera model's own checks)."""
+    checks: dict = {}
+    reasons = []
+    if not _check(checks, "reprojection_rms", rms_px, CAMERA_RMS_LIMIT_PX, "px"):
+        reasons.append(f"reprojection RMS {rms_px:.4g} px (limit {CAMERA_RMS_LIMIT_PX:g} px): one camera model does not "
+                       "explain these images; likely images of another camera or resampled images in the set, a "
+                       "lens model too simple for the lens (--model, --distortion), or a board spec that does not "
+                       "match the printed board")
     return Verdict(tuple(reasons), checks)
