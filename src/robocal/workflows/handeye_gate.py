@@ -33,7 +33,7 @@ from ..handeye.gate import (
 from ..transforms import invert_transforms, rotation_angle
 from .camera_common import backprojection
 
-__all__ = ["chain_T_camera_target", "handeye_gate", "ALTERNATIVE_CONVENTIONS"]
+__all__ = ["chain_T_camera_target", "handeye_gate", "pairing_causes", "ALTERNATIVE_CONVENTIONS"]
 
 #: Conventions tried when the flange poses' motions disagree with the camera's (6-value pose files).
 ALTERNATIVE_CONVENTIONS = ("kuka_abc", "fanuc_wpr", "kawasaki_oat", "zxz", "xyz_intrinsic", "rotvec")
@@ -192,3 +192,35 @@ def handeye_gate(*, camera, result, T_base_flange, used, image_points, target_po
             causes = ["likely cause: wrong intrinsics, a wrong robot model or lengths, or flange poses taken at "
                       "another moment than the images"]
     return Verdict(verdict.reasons + tuple(causes), verdict.checks)
+
+
+def pairing_causes(*, camera, T_base_flange, used, image_points, target_points, setup: str, names, labels,
+                   poses_file=None, camera_given: bool = False, image_size=None, min_points: int = 6) -> list:
+    """The likely causes when no solution exists (the refinement diverged): the same hypotheses as
+    :func:`handeye_gate`, judged on per-image PnP poses and linear solutions only."""
+    from ..handeye import solve_pnp
+
+    F_all = np.asarray(T_base_flange, dtype=float)
+    idx = np.flatnonzero(used)
+    F, uv, X = F_all[idx], np.asarray(image_points, dtype=float)[idx], np.asarray(target_points, dtype=float)
+    C = solve_pnp(camera, X, uv, min_points=min_points)[0]
+    good = np.all(np.isfinite(C), axis=(1, 2))
+    pnp_rms = _rms(backprojection(camera, np.where(good[:, None, None], C, np.eye(4)), X, uv)[1][good])
+    limit = max(HANDEYE_RMS_FLOOR_PX, HANDEYE_NOISE_FACTOR * pnp_rms) if math.isfinite(pnp_rms) else \
+        HANDEYE_RMS_FLOOR_PX
+    hyps = _shifts(camera, setup, F_all, idx, C, X, uv, names, labels)
+    other = "eye_to_hand" if setup == "eye_in_hand" else "eye_in_hand"
+    hyps.append(_hypothesis(f"the flange poses are inverted (T_flange_base exported instead of T_base_flange), or "
+                            f"the set-up is {other} (--{other.replace('_', '-')}), not {setup}",
+                            camera, other, F, C, X, uv))
+    hyps += _leave_one_out(camera, setup, F, C, X, uv, [names[i] for i in idx])
+    if poses_file is not None:
+        hyps += _conventions(camera, setup, poses_file, [labels[i] for i in idx], C, X, uv)
+    if camera_given and image_size is not None:
+        hyps += _intrinsics(camera, setup, F, X, uv, image_size, min_points)
+    causes = cause_reasons(hyps, limit, _linear_rms(camera, setup, F, C, X, uv))
+    angle = motion_mismatch(F, C, setup).angle_deg_median
+    if not causes and math.isfinite(angle) and angle > MOTION_ANGLE_LIMIT_DEG:
+        causes = [f"likely cause: the flange poses are in another order than the images (shuffled) or belong to "
+                  f"another run (flange and camera motions disagree by {angle:.3g} deg in the median)"]
+    return causes

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calib.outputs import json_ready
+from ..handeye import HandEyeError
 from ..io.boards import parse_board
 from ..io.camera_files import read_camera
 from ..io.image_poses import pair_images_with_labels, pair_images_with_poses
@@ -47,7 +48,7 @@ from .camera_common import (
     pose_dict,
     ros_transform_yaml,
 )
-from .handeye_gate import chain_T_camera_target, handeye_gate
+from .handeye_gate import chain_T_camera_target, handeye_gate, pairing_causes
 from .outputs import check_outputs_free, staged_outputs
 
 __all__ = ["solve_handeye", "HANDEYE_OUTPUTS", "chain_T_camera_target"]
@@ -146,8 +147,16 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     if q is not None:
         extra.update(joints=q[used], robot=model, joint_offsets=bool(joint_offsets))
     idx_used = np.flatnonzero(used)
-    result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method, refine_intrinsics=refine_intrinsics,
-                             min_points=b.min_points, loss=loss, **extra)
+    try:
+        result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method,
+                                 refine_intrinsics=refine_intrinsics, min_points=b.min_points, loss=loss, **extra)
+    except np.linalg.LinAlgError as exc:  # diverged on data that describe no single camera: say why
+        causes = pairing_causes(camera=camera, T_base_flange=F, used=used, image_points=detected.image_points,
+                                target_points=X, setup=setup, names=detected.names, labels=labels,
+                                poses_file=poses if cal_data is None and joints is None else None,
+                                camera_given=camera_given, image_size=detected.image_size, min_points=b.min_points)
+        raise HandEyeError(f"the hand-eye refinement diverged ({exc}): the flange poses and the images do not "
+                           "describe one camera on one robot" + ("; " + "; ".join(causes) if causes else "")) from None
     outliers = {int(idx_used[k]): r for k, r in (getattr(result, "outliers", None) or {}).items()}
     solver_skips = {int(idx_used[k]): r for k, r in (getattr(result, "skipped", None) or {}).items()}
     N = len(used)
