@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calib.outputs import json_ready
+from ..handeye import HandEyeError
 from ..handeye.gate import self_calibration_verdict
 from ..io.boards import parse_board
 from ..io.camera_files import read_camera
@@ -194,10 +195,13 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
     checks, reasons_gate = dict(verdict.checks), list(verdict.reasons)
     if not verdict.ok:
         used_now = [i for i in idx if reasons[i] is None]
-        extra, more = clock_reasons(model=model, t_img=t_img, t_log=t_log, q_log=q_log, idx=used_now,
-                                    image_points=uv, target_points=X, camera=camera, carriers=[on[i] for i in used_now],
-                                    camera_end_effector=camera_end_effector, tolerance=tolerance, match=match,
-                                    min_points=b.min_points)
+        try:  # the diagnosis never hides the verdict
+            extra, more = clock_reasons(model=model, t_img=t_img, t_log=t_log, q_log=q_log, idx=used_now,
+                                        image_points=uv, target_points=X, camera=camera,
+                                        carriers=[on[i] for i in used_now], camera_end_effector=camera_end_effector,
+                                        tolerance=tolerance, match=match, min_points=b.min_points)
+        except (ValueError, HandEyeError, KeyError) as exc:
+            extra, more = [], {"pairing_diagnosis": {"passed": None, "error": str(exc)}}
         reasons_gate += extra
         checks.update(more)
     summary["status"] = "ok" if verdict.ok else "failed"
