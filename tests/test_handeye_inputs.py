@@ -227,8 +227,9 @@ def test_joints_and_robot_file_route_recovers_the_joint_offsets(tmp_path):
 
 
 def test_robust_loss_names_an_image_whose_pose_is_wrong(simulated, tmp_path):
-    """One flange pose 30 mm off: the plain fit is pulled off by more than 10 mm, --loss huber
-    rejects that image by name and stays within 1 mm of the truth."""
+    """One flange pose 30 mm off: the plain fit is pulled off by more than 10 mm and fails the sanity
+    gate naming that image (issue 29, exit 3); --loss huber rejects that image by name and stays
+    within 1 mm of the truth."""
     out, _ = simulated
     truth = json.loads((out / "truth.json").read_text())
     poses = read_flange_poses_csv(out / "flange_poses.csv")
@@ -240,8 +241,10 @@ def test_robust_loss_names_an_image_whose_pose_is_wrong(simulated, tmp_path):
         r = CliRunner().invoke(main, ["handeye", "solve", "--poses", str(tmp_path / "bad.csv"), "--images",
                                       str(out / "images"), "--board", truth["board"], "--eye-to-hand", "--camera",
                                       str(out / "camera.json"), "--loss", loss, "--json"])
-        assert r.exit_code == 0, r.output
-        s = json.loads(r.output[r.output.index("{"):])
+        assert r.exit_code == (3 if loss == "linear" else 0), r.output
+        s = json.loads(r.output[r.output.index("{"):r.output.rindex("}") + 1])
+        if loss == "linear":
+            assert s["status"] == "failed" and "img_01.png" in " ".join(s["reasons"])
         errors[loss] = np.linalg.norm(np.array(s["camera_pose"]["position_mm"]) - truth["camera_pose"]["position_mm"])
         outliers = [row["name"] for row in s["images"] if row["outlier"]]
         assert outliers == ([] if loss == "linear" else ["img_01.png"])

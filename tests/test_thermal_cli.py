@@ -372,3 +372,15 @@ def test_compensate_exits_5_when_a_corrected_point_is_not_reached(cell, tmp_path
             d / "program.csv", "--out", tmp_path / "c.csv")
     assert r.exit_code == 5, r.output
     assert "not converged" in r.output and "not reached:" in r.output
+
+
+def test_a_damaged_history_database_is_named_before_the_program_is_written(cell, tmp_path):
+    """Issue 29: with a corrupt --history database the corrected program was written first."""
+    d = cell["dir"]
+    db = tmp_path / "history.sqlite"
+    db.write_bytes(b"SQLite format 3\x00" + bytes(range(256)) * 8)
+    r = run("compensate", ROBOT, "--sensor", cell["sensor"], "--sphere", d / "run2" / "sphere.csv",
+            "--poses", "c020-*", "--cold", d / "run2" / "sphere_cold.csv", "--params", "a2,d4",
+            "--program", d / "program.csv", "--out", tmp_path / "o.csv", "--db", db)
+    one_line_error(r, "history.sqlite", "nothing written")
+    assert not (tmp_path / "o.csv").exists()

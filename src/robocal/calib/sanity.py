@@ -26,7 +26,8 @@ __all__ = [
     "Verdict", "NOISE_FACTOR", "RESIDUAL_LIMIT_MM", "NOMINAL_MISFIT_MM", "HOLDOUT_WORSE_FACTOR",
     "LENGTH_CHANGE_MM", "LENGTH_CHANGE_FRACTION", "ANGLE_CHANGE_DEG", "TOOL_LENGTH_LIMIT_MM",
     "residual_reasons", "holdout_reasons", "nominal_misfit_reasons", "parameter_reasons",
-    "calibration_verdict", "touchup_verdict", "sensor_verdict", "BEAM_ANGLE_TOLERANCE_DEG", "BEAM_GAP_LIMIT_MM",
+    "calibration_verdict", "touchup_verdict", "sensor_verdict", "tool_length_reasons", "leave_one_out_reasons",
+    "seven_point_reasons", "seven_point_verdict", "barriers_verdict", "LOO_MIN_MM", "LOO_FACTOR", "SEVEN_POINT_ORTHOGONALITY_DEG", "TOOL_AXIS_BACK_DEG", "BEAM_ANGLE_TOLERANCE_DEG", "BEAM_GAP_LIMIT_MM",
     "NEGATIVE_COMPLIANCE_SIGMAS", "elastic_reasons",
 ]
 
@@ -47,6 +48,13 @@ LENGTH_CHANGE_FRACTION = 0.05
 ANGLE_CHANGE_DEG = 5.0
 #: A touch-up TCP farther than this from the flange [mm] is no tool a robot carries.
 TOOL_LENGTH_LIMIT_MM = 2000.0
+#: Touch-up leave-one-out: a pose missing the point the others define by more than
+#: max(LOO_MIN_MM, LOO_FACTOR x the RMS of the others' fit) fails.
+LOO_MIN_MM = 1.0
+LOO_FACTOR = 5.0
+#: 7-point: the X and Z moves within this of 90 deg [deg]; the tool Z axis within this of the TCP vector [deg].
+SEVEN_POINT_ORTHOGONALITY_DEG = 15.0
+TOOL_AXIS_BACK_DEG = 120.0
 #: A cross-laser sensor's beams cross within this of 90 deg [deg] and pass closer than this [mm].
 #: thermal drift of an arm: a length delta beyond this [mm] or an angle delta beyond
 #: ``DRIFT_ANGLE_DEG`` is not heat (the thesis's arm drifts 0.1-0.5 mm at the TCP over 3 h)
@@ -170,17 +178,92 @@ def calibration_verdict(*, robot: str, rms_before_mm: float, rms_after_mm: float
     return Verdict(tuple(reasons), checks)
 
 
-def touchup_verdict(rms_mm: float, tcp_mm, sigma_mm: float | None = None, what: str = "touch-up") -> Verdict:
+def tool_length_reasons(length_mm: float, checks: dict, what: str) -> list:
+    """A tool (or point on the flange) farther than ``TOOL_LENGTH_LIMIT_MM`` from the flange."""
+    if _check(checks, "tool_length", length_mm, TOOL_LENGTH_LIMIT_MM, "mm"):
+        return []
+    return [f"{what}: {length_mm:.4g} mm from the flange (limit {TOOL_LENGTH_LIMIT_MM:g} mm): no tool a robot "
+            "carries; likely lengths in another unit than declared (millimetres declared as metres?)"]
+
+
+def leave_one_out_reasons(loo, labels, checks: dict) -> list:
+    """Touch-up poses whose leave-one-out miss exceeds max(``LOO_MIN_MM``, ``LOO_FACTOR`` x the
+    RMS of the fit over the others): named as poses that touched another point. loo: ``(miss (N,),
+    rms_others (N,))`` [mm] of :func:`robocal.tcp.touchup.leave_one_out_residuals`."""
+    miss, rms_others = (np.asarray(v, dtype=float) for v in loo)
+    if not np.isfinite(miss).any():
+        return []
+    limits = np.maximum(LOO_MIN_MM, LOO_FACTOR * rms_others)
+    ratio = miss / limits
+    worst = int(np.nanargmax(ratio))
+    if _check(checks, "leave_one_out", float(ratio[worst]), 1.0, "fraction of the limit"):
+        return []
+    bad = [i for i in np.argsort(-ratio) if ratio[i] > 1.0]
+    names = ", ".join(f"{labels[i] if labels is not None and len(labels) > i else i} misses by {miss[i]:.3g} mm "
+                      f"(the others fit to {rms_others[i]:.3g} mm RMS)" for i in bad[:5])
+    return [f"{len(bad)} touch-up pose(s) miss the point the others define (limit max({LOO_MIN_MM:g} mm, "
+            f"{LOO_FACTOR:g} x the others' RMS); leave-one-out: {names}: likely a pose that touched another spot, or "
+            "a typo; retake it"]
+
+
+def seven_point_reasons(orthogonality_error_deg: float, T_flange_tool, checks: dict) -> list:
+    """The 7-point method's moves: X (P5 -> P6) and Z (P6 -> P7) about 90 deg apart (within
+    ``SEVEN_POINT_ORTHOGONALITY_DEG``), and the tool Z axis not pointing back at the flange (more
+    than ``TOOL_AXIS_BACK_DEG`` from the TCP vector, for a TCP beyond 20 mm)."""
+    reasons = []
+    if not _check(checks, "seven_point_orthogonality", abs(orthogonality_error_deg), SEVEN_POINT_ORTHOGONALITY_DEG,
+                  "deg"):
+        reasons.append(f"the X move (P5 -> P6) and the Z move (P6 -> P7) are {90 + orthogonality_error_deg:.3g} deg "
+                       f"apart, not 90 (limit {SEVEN_POINT_ORTHOGONALITY_DEG:g} deg): likely P6 and P7 swapped, or a "
+                       "move not along the tool's axes")
+    T = np.asarray(T_flange_tool, dtype=float)
+    t = T[:3, 3]
+    if np.linalg.norm(t) > 20.0:
+        angle = math.degrees(math.acos(float(np.clip(T[:3, 2] @ t / np.linalg.norm(t), -1.0, 1.0))))
+        if not _check(checks, "tool_axis_direction", angle, TOOL_AXIS_BACK_DEG, "deg"):
+            reasons.append(f"the tool Z axis is {angle:.3g} deg from the TCP vector (limit {TOOL_AXIS_BACK_DEG:g} "
+                           "deg): it points back at the flange; likely P6 and P7 swapped or the Z move reversed")
+    return reasons
+
+
+def touchup_verdict(rms_mm: float, tcp_mm, sigma_mm: float | None = None, what: str = "touch-up",
+                    loo_mm=None, labels=None) -> Verdict:
     """The gates of a point on the flange fitted from poses (a touch-up TCP, the sphere centre
     ``P_e`` of a thermal system calibration): the residual RMS [mm] (:func:`residual_reasons`) and
     the point's distance from the flange ``|tcp_mm|`` against ``TOOL_LENGTH_LIMIT_MM``. (Metres
-    read as mm give a tool of a few mm and tiny residuals; the readers' unit checker catches that.)"""
+    read as mm give a tool of a few mm and tiny residuals; the readers' unit checker catches that.)
+    loo_mm: ``(miss, rms_others)`` of :func:`robocal.tcp.touchup.leave_one_out_residuals`, judged by
+    :func:`leave_one_out_reasons` (labels name the poses)."""
     checks: dict = {}
     reasons = residual_reasons(rms_mm, sigma_mm, checks, what=f"{what} residual")
+    if loo_mm is not None:
+        reasons += leave_one_out_reasons(loo_mm, labels, checks)
     length = math.sqrt(sum(float(v) ** 2 for v in tcp_mm))
     if not _check(checks, "tool_length", length, TOOL_LENGTH_LIMIT_MM, "mm"):
         reasons.append(f"{what}: the fitted point is {length:.4g} mm from the flange (limit {TOOL_LENGTH_LIMIT_MM:g} "
                        "mm): likely lengths in another unit than declared or poses that do not touch one point")
+    return Verdict(tuple(reasons), checks)
+
+
+def seven_point_verdict(orthogonality_error_deg: float, T_flange_tool, touch: Verdict | None = None) -> Verdict:
+    """The gates of a 7-point tool frame: the touch-up's verdict (when the TCP came from touch-up
+    poses), :func:`seven_point_reasons` and the tool length."""
+    checks: dict = dict(touch.checks) if touch is not None else {}
+    reasons = list(touch.reasons) if touch is not None else []
+    reasons += seven_point_reasons(orthogonality_error_deg, T_flange_tool, checks)
+    if "tool_length" not in checks:
+        reasons += tool_length_reasons(float(np.linalg.norm(np.asarray(T_flange_tool)[:3, 3])), checks, "the TCP")
+    return Verdict(tuple(reasons), checks)
+
+
+def barriers_verdict(tcp_mm=None, length_mm: float | None = None) -> Verdict:
+    """The gates of a parallel-barrier tool: its length D and TCP against ``TOOL_LENGTH_LIMIT_MM``."""
+    checks: dict = {}
+    reasons = []
+    if length_mm is not None:
+        reasons += tool_length_reasons(abs(float(length_mm)), checks, "the tool length D")
+    elif tcp_mm is not None:
+        reasons += tool_length_reasons(float(np.linalg.norm(tcp_mm)), checks, "the TCP")
     return Verdict(tuple(reasons), checks)
 
 

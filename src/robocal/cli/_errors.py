@@ -8,7 +8,10 @@ read-only output folder, a full disk, a corrupted history database).
 
 from __future__ import annotations
 
+import errno
+import os
 import sqlite3
+import sys
 import warnings
 
 import click
@@ -16,12 +19,28 @@ import click
 from ..errors import RobocalError, RobocalWarning
 from ..workflows.outputs import describe_os_error
 
-__all__ = ["GuardedGroup", "one_line_error"]
+__all__ = ["GuardedGroup", "one_line_error", "EXTRAS", "missing_extra"]
+
+#: The optional dependency a module comes from: ``pip install 'robocal[<extra>]'`` (pyproject.toml).
+EXTRAS = {"cv2": "camera", "yaml": "yaml", "sqlalchemy": "db", "psycopg": "postgresql", "psycopg2": "postgresql",
+          "dask": "fleet", "distributed": "fleet", "deap": "ik-net", "pinocchio": "bench"}
+
+
+def missing_extra(exc: ImportError) -> str | None:
+    """The line for a missing optional dependency, naming the extra to install (None: not one of them)."""
+    name = (getattr(exc, "name", None) or "").split(".")[0]
+    extra = EXTRAS.get(name)
+    if extra is None:
+        return None
+    return (f"this needs the optional dependency {name!r}, which is not installed: "
+            f"pip install 'robocal[{extra}]'")
 
 
 def one_line_error(exc: BaseException) -> click.ClickException:
     """The ``click.ClickException`` (one line) for an exception a command did not handle."""
-    if isinstance(exc, (FileNotFoundError, FileExistsError, IsADirectoryError, NotADirectoryError)):
+    if isinstance(exc, ImportError) and missing_extra(exc):
+        text = missing_extra(exc)
+    elif isinstance(exc, (FileNotFoundError, FileExistsError, IsADirectoryError, NotADirectoryError)):
         text = f"{exc.filename}: {exc.strerror}" if exc.filename and exc.strerror else str(exc)
     elif isinstance(exc, OSError):
         text = describe_os_error(exc) if exc.errno else str(exc)
@@ -68,4 +87,26 @@ class GuardedGroup(click.Group):
         except (click.ClickException, click.exceptions.Exit, click.Abort, SystemExit, KeyboardInterrupt):
             raise
         except Exception as exc:  # noqa: BLE001 - the guard's purpose
+            if _broken_pipe(exc):
+                _quiet_exit()
             raise one_line_error(exc) from None
+
+
+def _broken_pipe(exc: BaseException) -> bool:
+    """The reader of our output went away (``robocal ... | head``)."""
+    while exc is not None:
+        if isinstance(exc, BrokenPipeError) or (isinstance(exc, OSError) and exc.errno == errno.EPIPE):
+            return True
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
+def _quiet_exit() -> None:
+    """Exit 0 without a word when stdout is a closed pipe: nothing more can be shown, and Python's
+    own flush at exit must not complain either (stdout goes to /dev/null)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
+    raise SystemExit(0)

@@ -20,8 +20,10 @@ def closed_chain():
 @json_option
 @click.argument("robot")
 @click.option("--plates", default=2, show_default=True, help="Plate positions (1-4).")
-@click.option("--targets", default=5, show_default=True, help="Targets per plate (a row).")
-@click.option("--configurations", default=8, show_default=True, help="Configurations per target.")
+@click.option("--targets", default=5, show_default=True, type=click.IntRange(1, 1000),
+              help="Targets per plate (a row; at most 1000).")
+@click.option("--configurations", default=8, show_default=True, type=click.IntRange(1, 1000),
+              help="Configurations per target (at most 1000).")
 @click.option("--spacing", "spacing_mm", default=50.0, show_default=True, help="Distance between targets [mm].")
 @click.option("--distance-tolerance", "tolerance_mm", default=0.1, show_default=True, metavar="MM",
               help="Detection tolerance: the spot lies within this of the mark [mm].")

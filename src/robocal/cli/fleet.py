@@ -25,19 +25,59 @@ fleet = click.Group(
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
-_SCHEDULER = click.option("--scheduler", default=None, metavar="ADDRESS",
-                          help="An existing Dask cluster's scheduler (tcp://host:8786); default: a local cluster.")
+def _security_option(name, metavar, help_text):
+    def store(ctx, _param, value):
+        ctx.meta.setdefault("robocal_tls", {})[name] = value
+        return value
+    return click.option(f"--{name.replace('_', '-')}" if name != "security_file" else "--security", metavar=metavar,
+                        default=None, type=click.Path(dir_okay=False), expose_value=False, callback=store,
+                        help=help_text)
+
+
+def _SCHEDULER(f):
+    """--scheduler and its TLS options (stored in the context, read by :func:`_client`)."""
+    for opt in reversed([
+        click.option("--scheduler", default=None, metavar="ADDRESS",
+                     help="An existing Dask cluster's scheduler (tcp://host:8786, or tls://host:8786 with the TLS "
+                          "options); default: a local cluster. The scheduler and its workers must be trusted "
+                          "(docs/fleet.md, 'Trust boundary')."),
+        _security_option("tls_ca_file", "PEM", "TLS: the cluster's certificate authority (with --scheduler tls://...)."),
+        _security_option("tls_cert", "PEM", "TLS: this client's certificate."),
+        _security_option("tls_key", "PEM", "TLS: this client's private key (unless the certificate file holds it)."),
+        _security_option("security_file", "FILE", "TLS settings as a TOML file: [tls] ca_file, cert, key."),
+    ]):
+        f = opt(f)
+    return f
 _WORKERS = click.option("--workers", type=int, default=None, metavar="N",
                         help="Worker processes of the local cluster (default: one per CPU).")
 
 
 def _client(scheduler, workers):
-    from ..workflows.fleet_cluster import FleetClusterError, fleet_client
+    from ..workflows.fleet_cluster import FleetClusterError, fleet_client, tls_security
 
+    tls = click.get_current_context().meta.get("robocal_tls", {})
     try:
-        return fleet_client(scheduler, workers)
+        security = tls_security(ca_file=tls.get("tls_ca_file"), cert=tls.get("tls_cert"), key=tls.get("tls_key"),
+                                security_file=tls.get("security_file"))
+        return fleet_client(scheduler, workers, security=security)
     except FleetClusterError as exc:
         raise click.ClickException(str(exc)) from None
+
+
+def _db_for_workers(target, scheduler):
+    """The history URL without its password (which goes to the local workers through the environment;
+    a remote cluster's workers must have it from their own environment or a file)."""
+    from ..store import PASSWORD_ENV, strip_credentials, url_password
+
+    secret = url_password(target) if target else None
+    if secret is None:
+        return target
+    if scheduler is not None:
+        raise click.ClickException("--db: the URL carries a password, which would travel to the workers of --scheduler "
+                                   "in clear task payloads: give the URL without it and set ROBOCAL_DB_PASSWORD (or "
+                                   "ROBOCAL_DB_PASSWORD_FILE, a file readable on every worker) where the workers run")
+    os.environ[PASSWORD_ENV] = secret  # inherited by the local cluster's worker processes, started next
+    return strip_credentials(target)
 
 
 def _history_target(db, no_history, out_dir):
@@ -77,7 +117,7 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
     from ..workflows.fleet import run_fleet_calibration
     from ..workflows.fleet_cluster import FleetClusterError
 
-    target = _history_target(db, no_history, out_dir)
+    target = _db_for_workers(_history_target(db, no_history, out_dir), scheduler)
     bar = None
     try:
         with _client(scheduler, workers) as client:
@@ -194,14 +234,28 @@ study = click.Group("study", help="Embarrassingly parallel studies as chunked Da
 fleet.add_command(study)
 
 
-def _write_json(data, out_file):
+def _write_json(data, out_file, overwrite: bool = False):
     import json
 
     from ..io.atomic import atomic_write_text
 
     if out_file:
-        atomic_write_text(out_file, json.dumps(data, indent=2) + "\n", overwrite=True)
+        atomic_write_text(out_file, json.dumps(data, indent=2) + "\n", overwrite=overwrite)
         click.echo(f"wrote {out_file}")
+
+
+_OVERWRITE = click.option("--overwrite", is_flag=True, help="Replace an existing --json file.")
+
+
+def _check_json_out(out_file, inputs, overwrite: bool) -> None:
+    """Before a long study: the --json file is no input and, without --overwrite, does not exist."""
+    from ..io.output_paths import check_outputs
+
+    if out_file:
+        try:
+            check_outputs(out_file, inputs, overwrite=overwrite)
+        except FileExistsError as exc:
+            raise click.ClickException(str(exc)) from None
 
 
 def _chunk_line(c):
@@ -235,22 +289,27 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
 @json_option
 @click.argument("robot")
 @click.argument("poses", type=click.Path(dir_okay=False))
-@click.option("--samples", default=200, show_default=True, help="Virtual robots (each its own true parameters).")
-@click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
-@click.option("--check-poses", default=200, show_default=True, help="Random poses where each result is checked.")
+@click.option("--samples", default=200, show_default=True, type=click.IntRange(1, 100_000),
+              help="Virtual robots (each its own true parameters; at most 100,000).")
+@click.option("--noise", "noise_mm", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
+              help="Tracker noise per coordinate [mm], positive.")
+@click.option("--check-poses", default=200, show_default=True, type=click.IntRange(1, 100_000),
+              help="Random poses where each result is checked (at most 100,000).")
 @click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
 @click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
+@_OVERWRITE
 @_SCHEDULER
 @_WORKERS
-def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, scheduler, workers):
+def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, out_file, overwrite, scheduler, workers):
     """Monte-Carlo accuracy of calibrating ROBOT from the pose plan POSES (a joint program, e.g. from
     `robocal plan-poses`): simulated robots measured at those poses, calibrated, checked against
     their truth."""
     from ..io.programs.joint_table import read_joint_program
     from ..workflows.fleet_study import monte_carlo_plan
 
+    _check_json_out(out_file, {"POSES": poses, "ROBOT": robot}, overwrite)
     try:
         q = read_joint_program(poses, _robot_model(robot)).joints
     except (ValueError, OSError) as exc:
@@ -267,7 +326,7 @@ def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, ou
         click.echo(f"  {len(r['unconverged_samples'])} sample(s) stopped at the solver's iteration limit (kept): "
                    f"{r['unconverged_samples'][:10]}")
     _chunk_line(r["chunking"])
-    _write_json(r, out_file)
+    _write_json(r, out_file, overwrite)
     set_json_result(r)
 
 
@@ -286,21 +345,26 @@ def _robot_model(robot):
 @study.command("pose-sets")
 @json_option
 @click.argument("robot")
-@click.option("--sets", default=100, show_default=True, help="Candidate sets (seeds SEED .. SEED+SETS-1).")
-@click.option("--count", default=40, show_default=True, help="Poses per plan.")
-@click.option("--candidates", default=800, show_default=True, help="Random candidate poses per set.")
-@click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
+@click.option("--sets", default=100, show_default=True, type=click.IntRange(1, 100_000),
+              help="Candidate sets (seeds SEED .. SEED+SETS-1; at most 100,000).")
+@click.option("--count", default=40, show_default=True, type=click.IntRange(1, 10_000), help="Poses per plan (at most 10,000).")
+@click.option("--candidates", default=800, show_default=True, type=click.IntRange(1, 200_000),
+              help="Random candidate poses per set (at most 200,000).")
+@click.option("--noise", "sigma_mm", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
+              help="Instrument noise per coordinate [mm], positive.")
 @click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")
 @click.option("--seed", default=0, show_default=True)
 @click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
+@_OVERWRITE
 @_SCHEDULER
 @_WORKERS
-def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, scheduler, workers):
+def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, overwrite, scheduler, workers):
     """Plan COUNT poses of ROBOT from each of SETS candidate sets; report the best seed
     (`robocal plan-poses --seed <best>` writes that plan)."""
     from ..workflows.fleet_study import pose_set_selection
 
+    _check_json_out(out_file, {"ROBOT": robot}, overwrite)
     r = _study("sets", scheduler, workers, pose_set_selection, robot, sets=sets, count=count, candidates=candidates,
                sigma_mm=sigma_mm, tool=tool, seed=seed)
     s, best = r["spread_mm"], r["best"]
@@ -318,7 +382,7 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
         click.echo(f"{n_within} of {sets} sets within one campaign's spread of the best (+{100 * best['relative_spread']:.0f} %); "
                    "the best is better than the median beyond noise")
     _chunk_line(r["chunking"])
-    _write_json(r, out_file)
+    _write_json(r, out_file, overwrite)
     set_json_result(r)
 
 
@@ -327,14 +391,16 @@ def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file
 @click.argument("runs", nargs=-1, required=True, type=click.Path(file_okay=False))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep per robot.")
 @click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write the results to this JSON file.")
+@_OVERWRITE
 @_SCHEDULER
 @_WORKERS
-def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
+def thermal_cmd(runs, n_keep, out_file, overwrite, scheduler, workers):
     """Thermal parameter screening (`robocal thermal screen`) of each robot's run folder RUNS
     (the robot id is the folder name), one task per robot. Exit code 3 when some robots failed, 1
     when all did."""
     from ..workflows.fleet_study import thermal_screening
 
+    _check_json_out(out_file, {}, overwrite)
     r = _study("robots", scheduler, workers, thermal_screening, [(Path(d).name, d) for d in runs], n_keep=n_keep)
     for row in r["robots"]:
         if row["status"] == "ok":
@@ -342,6 +408,6 @@ def thermal_cmd(runs, n_keep, out_file, scheduler, workers):
             click.echo(f"{row['id']}: {', '.join(row['selected'])}  lambda screened {lam.get('screened', float('nan')):.1f} %")
         else:
             click.echo(f"FAILED {row['id']}: {row['reason']}", err=True)
-    _write_json(r, out_file)
+    _write_json(r, out_file, overwrite)
     set_json_result(r)
     _exit_on_failures([row for row in r["robots"] if row["status"] != "ok"], len(r["robots"]))

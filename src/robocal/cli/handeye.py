@@ -6,7 +6,7 @@ import json
 
 import click
 
-from ._common import _item_progress, _user_error, allow_unconverged_option, finish_convergence
+from ._common import EXIT_FAILED_RESULT, _item_progress, _user_error, allow_unconverged_option, finish_convergence
 from .camera import BOARD_HELP, echo_findings
 
 
@@ -45,14 +45,21 @@ def handeye():
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
+@click.option("--force", is_flag=True,
+              help="Write handeye.yaml even when the result FAILS the sanity gates (exit code 3 all the same).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @allow_unconverged_option
 def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
-              refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, as_json,
-              allow_unconverged):
+              refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, force,
+              as_json, allow_unconverged):
     """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
-    cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC. Exit code 4 (and no handeye.yaml)
-    when a fit did not converge, unless --allow-unconverged."""
+    cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC.
+
+    Sanity gates (docs/reliability.md): back-projection RMS against the corner noise, the screw
+    invariants of every image pair (images paired with the wrong pose are named), agreement with the
+    linear start. A failed result prints the reasons and likely causes, exits with code 3 and writes
+    no handeye.yaml unless --force. Exit code 4 (and no handeye.yaml) when a fit did not converge,
+    unless --allow-unconverged."""
     from ..workflows.convergence import Convergence
 
     from ..handeye import HandEyeError
@@ -69,11 +76,13 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
                           homography_threshold=homography_threshold, joints=joints_file, robot=robot,
                           joint_offsets=joint_offsets, loss=loss, out_dir=out_dir,
-                          overwrite=overwrite, progress=_item_progress, allow_unconverged=allow_unconverged)
+                          overwrite=overwrite, progress=_item_progress, force=force,
+                          allow_unconverged=allow_unconverged)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     if as_json:
         click.echo(json.dumps(s, indent=2))
+        _exit_on_failed_gate(s)
         finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)
         return
     cp = s["camera_pose"]
@@ -84,15 +93,32 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
     click.echo(f"  rotation vector {_v(cp['rotation_vector_deg'], 4)} deg  (1-sigma {_v(sig_r, 4)})")
     click.echo("linear solutions (start of the refinement):")
     for m, d in s["linear"].items():
-        click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {d['difference_position_mm']:.2f} mm / "
-                   f"{d['difference_rotation_deg']:.3f} deg from the refined, RMS {d['reprojection_rms_px']:.2f} px")
+        click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {_n(d['difference_position_mm'])} mm / "
+                   f"{_n(d['difference_rotation_deg'], 3)} deg from the refined, RMS {_n(d['reprojection_rms_px'])} px")
     for r in s["images"]:
         if r.get("outlier"):
             click.echo(f"  outlier {r['name']}: {r['outlier']}")
     for name, value in (s.get("joint_offsets_deg") or {}).items():
         click.echo(f"  joint offset {name}: {value:+.4f} deg")
     echo_findings(s, out_dir)
+    _exit_on_failed_gate(s)
     finish_convergence(Convergence.from_dict(s["convergence"]), allow_unconverged)
+
+
+def _exit_on_failed_gate(s: dict) -> None:
+    """``FAILED:`` with the reasons on stderr and exit code 3 when the sanity gates failed."""
+    if s.get("status", "ok") == "ok":
+        return
+    click.echo("FAILED: the hand-eye result did not pass the sanity gates (exit code 3"
+               + (", no handeye.yaml written" if not (s.get("outputs") or {}).get("handeye.yaml") else "") + "):",
+               err=True)
+    for reason in s.get("reasons", []):
+        click.echo(f"  - {reason}", err=True)
+    raise SystemExit(EXIT_FAILED_RESULT)
+
+
+def _n(value, digits=2) -> str:
+    return "nan" if value is None else f"{value:.{digits}f}"
 
 
 def _v(values, digits=2) -> str:

@@ -85,15 +85,16 @@ def _series_json(s) -> dict:
 @click.option("--since", default=None, metavar="TIME", help="Only cycles started at or after TIME (ISO 8601; UTC if no zone).")
 @click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False), metavar="FILE.png",
               help="Write a drift plot (parameter deltas and metrics over time).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing --plot file.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def history_cmd(robot, db, params, kinds, since, plot_path, as_json):
+def history_cmd(robot, db, params, kinds, since, plot_path, overwrite, as_json):
     """Print (and plot) ROBOT's calibration and maintenance history and its parameter drift."""
     names = None
     if params is not None:
         names = [p.strip() for p in params.split(",") if p.strip()]
         if not names:
             raise click.ClickException("--params: give one or more parameter names separated by commas")
-    _check_plot_path(plot_path)
+    _check_plot_path(plot_path, {"--db": db}, overwrite)
     try:
         view = _read_history(db or default_history_target(), robot, names, list(kinds) or None, _since(since))
     except (HistoryError, HistoryInputError) as exc:
@@ -112,9 +113,15 @@ def history_cmd(robot, db, params, kinds, since, plot_path, as_json):
         click.echo(f"plot: {plot_path}")
 
 
-def _check_plot_path(plot_path) -> None:
+def _check_plot_path(plot_path, inputs=None, overwrite: bool = False) -> None:
+    from ..io.output_paths import check_outputs
+
     if plot_path is None:
         return
+    try:
+        check_outputs(plot_path, inputs, overwrite=overwrite)
+    except FileExistsError as exc:
+        raise click.ClickException(f"--plot {exc}") from None
     pp = Path(plot_path)
     if pp.suffix.lower() not in (".png", ".svg", ".pdf"):
         raise click.ClickException(f"--plot {plot_path}: give a .png, .svg or .pdf file name")

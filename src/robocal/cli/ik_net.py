@@ -13,7 +13,8 @@ from ._json import json_option, set_json_result
 @click.command("ik-train")
 @json_option
 @click.argument("robot")
-@click.option("--samples", default=20000, show_default=True, help="FK samples on the branch (80% train, 20% validation).")
+@click.option("--samples", default=20000, show_default=True, type=click.IntRange(500, 1_000_000),
+              help="FK samples on the branch (80% train, 20% validation; 500 to 1,000,000).")
 @click.option("--seed", default=0, show_default=True, help="Seed of the sampling, the centres and the genetic algorithm.")
 @click.option("--out", "out", default=None, type=click.Path(dir_okay=False),
               help="Network file (.npz). Default: next to a robot file (<robot>.iknet.npz), or "
@@ -41,11 +42,15 @@ def ik_train(robot, samples, seed, out, generations, population, no_tune, joint_
         raise click.ClickException("--population must be at least 4 and --generations at least 0")
     if out is None:
         rp = Path(str(robot_path(robot)))
-        out = default_network_path(rp) if Path(robot).suffix == ".toml" or Path(robot).exists() \
+        out = default_network_path(rp) if Path(robot).suffix.lower() in (".toml", ".urdf") or Path(robot).exists() \
             else Path(f"{model.name}.iknet.npz")
     out = Path(out)
-    if out.exists() and not overwrite:
-        raise click.ClickException(f"{out}: file exists; pass --overwrite to replace it")
+    from ..io.output_paths import check_outputs
+
+    try:
+        check_outputs(out, {"the robot file": robot}, overwrite=overwrite)
+    except FileExistsError as exc:
+        raise click.ClickException(str(exc)) from None
 
     def progress(stage, text):
         click.echo(f"[{stage}] {text}", err=True)

@@ -81,7 +81,8 @@ def main():
 @click.option("--out", "out_dir", default="robocal-demo", show_default=True, type=click.Path(file_okay=False),
               help="Folder for the results (created if needed; existing results need --overwrite).")
 @click.option("--seed", default=7, show_default=True, help="Seed of the simulated robot and poses.")
-@click.option("--poses", default=500, show_default=True, help="Number of workspace poses for the accuracy maps.")
+@click.option("--poses", default=500, show_default=True, type=click.IntRange(10, 100_000),
+              help="Number of workspace poses for the accuracy maps (10 to 100,000).")
 @click.option("--overwrite", is_flag=True, help="Replace the files of an earlier demo in the folder.")
 def demo(out_dir, seed, poses, overwrite):
     """The accuracy-maintenance cycle on a simulated robot: the problem, geometric calibration,

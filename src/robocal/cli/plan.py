@@ -14,10 +14,10 @@ from ._json import json_option, set_json_result
 @click.command("plan-poses")
 @json_option
 @click.argument("robot")
-@click.option("--count", required=True, type=int, help="Number of poses to plan.")
-@click.option("--candidates", default=1000, show_default=True,
+@click.option("--count", required=True, type=click.IntRange(1, 10_000), help="Number of poses to plan (at most 10,000).")
+@click.option("--candidates", default=1000, show_default=True, type=click.IntRange(1, 200_000),
               help="Feasible candidate poses to choose from (random poses within the joint limits are drawn until "
-                   "this many are feasible in the cell).")
+                   "this many are feasible in the cell; at most 200,000).")
 @click.option("--workspace", default=None, metavar="BOX",
               help="Flange box in the robot base frame: xmin,xmax,ymin,ymax,zmin,zmax [mm].")
 @click.option("--tracker-at", default=None, metavar="X,Y,Z",
@@ -28,7 +28,8 @@ from ._json import json_option, set_json_result
 @click.option("--cell", "cell_file", default=None, type=click.Path(dir_okay=False, exists=True),
               help="Cell file (robocal-cell/1, docs/cells.md; lengths in its length_unit); default: the robot on the "
                    "floor, the floor an obstacle.")
-@click.option("--noise", "sigma_mm", default=0.02, show_default=True, help="Instrument noise per coordinate [mm].")
+@click.option("--noise", "sigma_mm", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
+              help="Instrument noise per coordinate [mm], positive.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the candidate poses.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="Joint program file to write (robocal-program/1, degrees).")
@@ -47,9 +48,13 @@ def plan_poses_cmd(robot, count, candidates, workspace, tracker_at, tool, cell_f
         box = parse_box(workspace) if workspace else None
         at = None
         if tracker_at:
-            at = [float(v) for v in tracker_at.split(",")]
-            if len(at) != 3:
-                raise ValueError(f"--tracker-at: expected x,y,z [mm], got {tracker_at!r}")
+            try:
+                at = [float(v) for v in tracker_at.split(",")]
+            except ValueError:
+                at = []
+            if len(at) != 3 or not all(math.isfinite(v) for v in at):
+                raise ValueError(f"--tracker-at: expected three numbers x,y,z [mm] separated by commas, got "
+                                 f"{tracker_at!r}")
         p = plan_poses(robot, out_file, count=count, candidates=candidates, workspace=box, tracker_at=at, tool=tool,
                        sigma_mm=sigma_mm, seed=seed, overwrite=overwrite, cell=cell_file,
                        language=language)

@@ -16,7 +16,8 @@ def simulate():
 @simulate.command("tracker")
 @json_option
 @click.argument("robot")
-@click.option("--poses", "n_poses", default=100, show_default=True, help="Number of random poses.")
+@click.option("--poses", "n_poses", default=100, show_default=True, type=click.IntRange(1, 1_000_000),
+              help="Number of random poses (at most 1,000,000).")
 @click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
 @click.option("--reflectors", type=click.Choice(["1", "3"]), default="1", show_default=True,
               help="Reflectors on the flange (3: the file also holds the flange orientation).")
@@ -54,7 +55,8 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
                    "circles:10x10:25.4mm:modified.")
 @click.option("--eye-in-hand/--eye-to-hand", "eye_in_hand", default=True, show_default=True,
               help="Camera on the flange (board fixed) or fixed in the cell (board on the flange).")
-@click.option("--images", "n_images", default=15, show_default=True, help="Number of images (robot poses).")
+@click.option("--images", "n_images", default=15, show_default=True, type=click.IntRange(1, 1000),
+              help="Number of images (robot poses; at most 1000).")
 @click.option("--pose-noise-mm", default=0.05, show_default=True, help="Robot pose noise per axis [mm].")
 @click.option("--pose-noise-deg", default=0.01, show_default=True, help="Robot pose noise per axis [deg].")
 @click.option("--orientation", "convention", default="kuka_abc", show_default=True,
@@ -94,7 +96,7 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
 @click.argument("robot")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for images/, joint_log.csv, frames.csv, camera.json and truth.json.")
-@click.option("--images-per-chain", "n_images", default=40, show_default=True,
+@click.option("--images-per-chain", "n_images", default=40, show_default=True, type=click.IntRange(1, 1000),
               help="Images with the full board per chain (board-holding hand, or the fixed board).")
 @click.option("--chains", default=None,
               help="Comma-separated end effectors holding a board, or 'world' (board fixed, camera on the "

@@ -15,8 +15,8 @@ from ..io.tcp_files import read_flange_poses_csv, read_parallel_barriers_file, r
 from ..tcp.parallel_barriers import parallel_barriers_tool
 from ..tcp.sensor import calibrate_sensor
 from ..tcp.tool_data import tool_data_all
-from ..tcp.touchup import DEFAULT_MIN_SPREAD_DEG, four_point_tcp, seven_point_tool_frame
-from ..calib.sanity import sensor_verdict, touchup_verdict
+from ..tcp.touchup import DEFAULT_MIN_SPREAD_DEG, four_point_tcp, leave_one_out_residuals, seven_point_tool_frame
+from ..calib.sanity import barriers_verdict, sensor_verdict, seven_point_verdict, touchup_verdict
 from ._grammar import POINT
 from ._common import EXIT_FAILED_RESULT, _report_verdict, allow_unconverged_option, finish_convergence
 
@@ -72,7 +72,8 @@ def four_point(file, min_spread, as_json, allow_unconverged):
         res = four_point_tcp(poses.T_base_flange, min_spread_deg=min_spread, labels=poses.labels)
     except ValueError as exc:
         raise _fail(exc) from None
-    verdict = touchup_verdict(res.rms_mm, res.tcp_mm)
+    verdict = touchup_verdict(res.rms_mm, res.tcp_mm, loo_mm=leave_one_out_residuals(poses.T_base_flange),
+                              labels=poses.labels)
     conv = _touchup_convergence(res)
     if as_json:
         d = res.to_dict()
@@ -146,11 +147,16 @@ def seven_point(file, tcp_xyz, min_spread, as_json, allow_unconverged):
         raise _fail(exc) from None
     conv = _touchup_convergence(touch)
     data = tool_data_all(res.T_flange_tool) if conv.may_write_model(allow_unconverged) else {}
+    touch_verdict = None if touch is None else touchup_verdict(
+        touch.rms_mm, touch.tcp_mm, loo_mm=leave_one_out_residuals(T[:-3]), labels=poses.labels[:-3])
+    verdict = seven_point_verdict(res.orthogonality_error_deg, res.T_flange_tool, touch_verdict)
     if as_json:
         d = {"file": file, "convention": poses.convention, **res.to_dict(),
              "touch_up": None if touch is None else touch.to_dict(),
-             "tool_data": {k: v.to_dict() for k, v in data.items()}, "convergence": conv.as_dict()}
+             "tool_data": {k: v.to_dict() for k, v in data.items()},
+             "status": verdict.status, "reasons": list(verdict.reasons), "convergence": conv.as_dict()}
         _echo_json(d)
+        _exit_if_failed(verdict)
         finish_convergence(conv, allow_unconverged)
         return
     if touch is not None:
@@ -166,6 +172,7 @@ def seven_point(file, tcp_xyz, min_spread, as_json, allow_unconverged):
     _echo_matrix("T_flange_tool", res.T_flange_tool)
     if data:
         _print_tool_data(res.T_flange_tool)
+    _exit_if_failed(verdict)
     finish_convergence(conv, allow_unconverged)
 
 
@@ -183,11 +190,13 @@ def parallel_barriers(file, as_json):
         res = parallel_barriers_tool(**kw)
     except ValueError as exc:
         raise _fail(exc) from None
+    verdict = barriers_verdict(res.tcp_mm, res.length_mm)
     if as_json:
-        d = {"file": file, **res.to_dict()}
+        d = {"file": file, **res.to_dict(), "status": verdict.status, "reasons": list(verdict.reasons)}
         if res.tcp_mm is not None:
             d["tool_data"] = {k: v.to_dict() for k, v in tool_data_all(res.T_flange_tool).items()}
         _echo_json(d)
+        _exit_if_failed(verdict)
         return
     click.echo(f"tool axis (flange frame, unit)  {_v(res.axis, '{:.6f}')}")
     click.echo(f"a (4-6)                         {_v(res.axis_raw_mm)} mm")
@@ -200,6 +209,7 @@ def parallel_barriers(file, as_json):
         _print_tool_data(res.T_flange_tool)
     else:
         click.echo("length: not recorded (give z7 and h_up)")
+    _exit_if_failed(verdict)
 
 
 @tcp.command("calibrate-sensor")

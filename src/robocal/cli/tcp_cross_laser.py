@@ -156,8 +156,11 @@ def _echo_result(res, out, settings, sensor, convention) -> None:
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of every random draw.")
 @click.option("--no-beta-correction", is_flag=True,
               help="Only the variants without the beta correction (default: with and without, side by side).")
-@click.option("--beta", "beta_deg", default=88.0, show_default=True, type=float, help="Angle between the beams [deg].")
-@click.option("--tilt", "tilt_deg", default=2.0, show_default=True, type=float, help="Sensor tilt vs the base [deg].")
+@click.option("--beta", "beta_deg", default=88.0, show_default=True, type=click.FloatRange(84.0, 96.0),
+              help="Angle between the beams [deg]; 84 to 96 (the simulated cell's sensor-calibration moves are "
+                   "laid out for nearly crossed beams).")
+@click.option("--tilt", "tilt_deg", default=2.0, show_default=True, type=click.FloatRange(-10.0, 10.0),
+              help="Sensor tilt vs the base [deg]; -10 to 10 (beyond, the simulated pin misses the beams).")
 @click.option("--repeatability", "repeatability_mm", default=0.1, show_default=True, type=float,
               help="Robot repeatability (ISO 9283) [mm].")
 @click.option("--io-rate", "io_rate_hz", default=1000.0, show_default=True, type=float, help="Controller I/O rate [Hz].")
@@ -167,9 +170,10 @@ def _echo_result(res, out, settings, sensor, convention) -> None:
               help="Write the first recalibration's barrier events (robocal-barrier-events/1) here.")
 @click.option("--sensor-out", type=click.Path(dir_okay=False), default=None,
               help="Write the simulated sensor calibration (JSON, as `robocal tcp calibrate-sensor --json`) here.")
+@click.option("--overwrite", is_flag=True, help="Replace existing --events-out / --sensor-out files.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repeatability_mm, io_rate_hz, tool_radius_mm,
-                 robot, events_out, sensor_out, as_json):
+                 robot, events_out, sensor_out, overwrite, as_json):
     """Simulated tool-recalibration study: random collisions, cross-laser recalibration, truth comparison.
 
     ROBOT (default ur10; 'none' skips it) is checked for reaching the motions.
@@ -182,10 +186,15 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     from ..tcp.cross_laser import CrossLaserError
     from ..workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
 
+    from ..io.output_paths import check_outputs
     from ._progress import Progress
 
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
+    if events_out and sensor_out and Path(events_out).resolve() == Path(sensor_out).resolve():
+        raise click.ClickException(f"--events-out and --sensor-out are the same file {events_out}")
     try:
+        check_outputs([events_out, sensor_out], {"--robot": None if robot.lower() == "none" else robot},
+                      overwrite=overwrite)
         with Progress("recalibrations", collisions * len(variants)) as bar:
             res = tcp_repeatability_study(collisions=collisions, seed=seed, beta_deg=beta_deg, tilt_deg=tilt_deg,
                                           repeatability_mm=repeatability_mm, io_rate_hz=io_rate_hz,
@@ -195,6 +204,9 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
                                           progress=lambda done, total: bar.update(1))
     except (CrossLaserError, ValueError, OSError) as exc:
         raise click.ClickException(str(exc)) from None
+    except RuntimeError as exc:  # the simulated cell cannot carry out a move with these settings
+        raise click.ClickException(f"the simulated cell cannot run with --beta {beta_deg:g} --tilt {tilt_deg:g} "
+                                   f"--tool-radius {tool_radius_mm:g}: {exc}") from None
     if as_json:
         click.echo(json.dumps(res, indent=2))
     else:

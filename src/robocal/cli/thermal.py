@@ -60,7 +60,8 @@ def _matrix(T, indent="  "):
 @thermal.command("simulate", short_help="Simulate the thermal cell: three heating runs as measurement files.")
 @click.option("--seed", default=2024, show_default=True, help="Seed of the cell (true robot, sensors, poses) and runs.")
 @click.option("--schedule-seed", default=7, show_default=True, help="Seed of the three production schedules.")
-@click.option("--cycles", "n_cycles", default=90, show_default=True, help="Production cycles (~3 min) per run.")
+@click.option("--cycles", "n_cycles", default=90, show_default=True, type=click.IntRange(1, 100_000),
+              help="Production cycles (~3 min) per run (at most 100,000).")
 @click.option("--sphere-poses", "n_sphere", default=20, show_default=True,
               help="Sphere poses measured per cycle (the screening set).")
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=str, file_okay=False),

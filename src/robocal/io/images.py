@@ -20,13 +20,20 @@ class ImageFileError(FileFormatError):
 
 
 def read_image_gray(path) -> np.ndarray:
-    """An 8-bit grey image (H, W) from a PNG/JPEG/BMP/TIFF file; :class:`ImageFileError` if unreadable,
-    ``FileNotFoundError`` if missing."""
+    """An 8-bit grey image (H, W) from a PNG/JPEG/BMP/TIFF file; :class:`ImageFileError` if unreadable
+    or larger than :data:`~robocal.io.image_header.MAX_IMAGE_PIXELS` (checked from the header before
+    decoding), ``FileNotFoundError`` if missing."""
     import cv2
+
+    from .image_header import MAX_IMAGE_PIXELS, image_size_from_header
 
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"{p}: no such image file")
+    size = image_size_from_header(p)  # before decoding: a small file may expand to gigabytes
+    if size is not None and size[0] * size[1] > MAX_IMAGE_PIXELS:
+        raise ImageFileError(p, f"{size[0]} x {size[1]} px is more than the {MAX_IMAGE_PIXELS / 1e6:g} megapixels "
+                                "robocal decodes (a decompression bomb or the wrong file?); scale the image down")
     img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
     if img is None:
         raise ImageFileError(p, "not an image OpenCV can read (PNG, JPEG, BMP, TIFF expected)")

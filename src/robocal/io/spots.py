@@ -38,7 +38,7 @@ from .plausibility import angle_unit_problem
 from .rows_check import joint_ranges
 from .table import check_field_counts, csv_cells, data_rows, number_columns
 
-__all__ = ["SPOTS_FORMAT", "HeldSpots", "SpotFileError", "read_spots", "write_spots"]
+__all__ = ["SPOTS_FORMAT", "HeldSpots", "SpotFileError", "canonical_order", "read_spots", "write_spots"]
 
 SPOTS_FORMAT = "robocal-spots/1"
 _ID_COLUMNS = ("id", "plate", "target")
@@ -75,6 +75,15 @@ class HeldSpots:
 
         return HeldSpots(pick(self.ids), pick(self.plate), pick(self.target), self.joints[rows], self.joint_names,
                          self.tolerance_mm, dict(self.metadata), pick(self.lines) if self.lines else ())
+
+
+def canonical_order(spots: HeldSpots) -> np.ndarray:
+    """(H,) row indices sorting held spots by plate, target, id and joint values: a calibration on
+    ``spots.subset(canonical_order(spots))`` does not depend on the file's row order (issue 29)."""
+    keys = [spots.joints[:, j] for j in range(spots.joints.shape[1] - 1, -1, -1)]
+    codes = [np.unique(np.asarray(seq, dtype=str), return_inverse=True)[1] for seq in (spots.ids, spots.target,
+                                                                                       spots.plate)]
+    return np.lexsort(keys + codes)
 
 
 def read_spots(path, robot=None) -> HeldSpots:

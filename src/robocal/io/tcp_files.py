@@ -189,7 +189,7 @@ def _check_pose_units(values, conv: str, lu: str, au, key_line: dict, fail) -> N
             fail(problem, key_line.get("angle_unit"))
 
 
-def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
+def read_flange_poses_csv(path, min_rows: int = 1, convention: str | None = None) -> FlangePoses:
     """Read a flange-pose file (``docs/tcp.md``, "Flange-pose files").
 
     ```
@@ -203,7 +203,7 @@ def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
     ``# key: value`` lines before the column row set keys; other ``#`` lines are comments. The
     orientation column names are free (their number must match the convention). Returns
     ``T_base_flange`` (N, 4, 4) [mm] with the labels. Raises :class:`TcpFileError` naming the
-    file, line and column of the first problem.
+    file, line and column of the first problem. ``convention`` overrides the file's declared one.
     """
     path = Path(path)
     lines = read_text(path, TcpFileError).splitlines()
@@ -211,6 +211,8 @@ def read_flange_poses_csv(path, min_rows: int = 1) -> FlangePoses:
     if i >= len(lines):
         fail("no column row (empty file?)")
     conv, lu, au = _pose_convention(meta, key_line, fail)
+    if convention is not None:  # another reading of the same numbers (the hand-eye gate's hypotheses)
+        conv = convention
     header = _pose_columns(lines[i], i + 1, conv, fail)
     rows = data_rows(lines, i + 1)
     check_field_counts(rows, len(header), i + 1, fail)

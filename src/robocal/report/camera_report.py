@@ -13,7 +13,7 @@ import html
 import numpy as np
 
 from ..io.atomic import atomic_write_text
-from .html import _CSS, _f, _img, _table
+from .html import _CSS, _f, _img, _status_banner, _table
 from .svg import Panel, image_overlay
 
 __all__ = ["plot_backprojection", "plot_rms_per_image", "plot_residuals", "render_camera_report",
@@ -84,6 +84,7 @@ def render_camera_report(summary: dict, *, title: str, overlays=(), rms_plot: st
     e = html.escape
     out = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{e(title)}</title><style>{_CSS}</style>"
            f"</head><body><h1>{e(title)}</h1>"]
+    out += _status_banner(summary)
     status = "ok" if summary.get("converged", True) else "bad"
     out.append(f'<p class="{status}">{e(str(summary.get("message", "")))}</p>')
     out.append(f"<p>Reprojection RMS: <b>{_f(summary.get('reprojection_rms_px'), 3)} px</b> over "

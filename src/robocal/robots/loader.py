@@ -39,7 +39,7 @@ def list_robots() -> list[str]:
 def robot_path(name_or_path) -> Path:
     """Path of a shipped robot by name, or the given file path; raises with close-name hints."""
     p = Path(str(name_or_path))
-    if p.suffix == ".toml" or p.exists():
+    if p.suffix.lower() in (".toml", ".urdf") or p.exists():
         if not p.is_file():
             raise RobotFileError(f"{p}: no such robot file")
         return p
@@ -61,7 +61,9 @@ _LOADED_MAX = 64
 
 
 def load_robot(name_or_path) -> RobotModel:
-    """Load a shipped robot by name (see :func:`list_robots`) or a robot file by path."""
+    """Load a shipped robot by name (see :func:`list_robots`) or a robot file by path: a robocal
+    robot file (``.toml``, UTF-8 with or without a BOM) or a URDF (``.urdf``, every joint on the
+    paths to its tip links; :func:`robocal.io.urdf.read_urdf`)."""
     path = robot_path(name_or_path)
     try:
         st = Path(path).stat()
@@ -79,8 +81,19 @@ def load_robot(name_or_path) -> RobotModel:
 
 
 def _load_robot_file(path) -> RobotModel:
+    if Path(path).suffix.lower() == ".urdf":  # wherever a robot file is accepted (docs/robot-files.md)
+        from ..io.urdf import UrdfError, read_urdf
+
+        try:
+            return read_urdf(path)
+        except UrdfError as exc:
+            raise RobotFileError(str(exc)) from None
+        except UnicodeDecodeError as exc:
+            raise RobotFileError(f"{path}: not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
+        except OSError as exc:
+            raise RobotFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
-        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8-sig"))  # a UTF-8 BOM is accepted
     except tomllib.TOMLDecodeError as exc:
         raise RobotFileError(f"{path}: not valid TOML: {exc}") from None
     except UnicodeDecodeError as exc:
@@ -335,6 +348,12 @@ def _controller_coupling(data, origin, links, couplings):
             if cname not in ctrl:
                 raise RobotFileError(f"{where}: coupling names controller joint {cname!r}, not in {ctrl}")
             coupling[m, ctrl.index(cname)] = float(coef)
+    idle = [c for k, c in enumerate(ctrl) if not np.any(coupling[:, k])]
+    if idle:
+        raise RobotFileError(
+            f"{origin}: 'controller_joints' lists {len(ctrl)} joints but {', '.join(map(repr, idle))} "
+            f"drive{'s' if len(idle) == 1 else ''} no joint of the file ({len(moving_names)} moving joint(s): "
+            f"{', '.join(moving_names) or 'none'}): a truncated robot file, or a joint without its [[joints]] entry")
     return ctrl, coupling
 
 

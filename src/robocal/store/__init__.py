@@ -4,6 +4,7 @@ server database by URL through SQLAlchemy). See docs/history.md."""
 import os
 
 from ._backends import HistoryBusyError, HistoryError, redact_url
+from ._credentials import PASSWORD_ENV, PASSWORD_FILE_ENV, strip_credentials, url_password, with_credentials
 from ._schema import CYCLE_STATUSES, SCHEMA_VERSION
 from ._validate import ALLOWED_UNITS, CYCLE_KINDS, HistoryInputError
 from .history import (
@@ -26,5 +27,6 @@ __all__ = [
     "ALLOWED_UNITS", "CYCLE_KINDS", "CYCLE_STATUSES", "CycleRecord", "CycleWriter", "DEFAULT_HISTORY_DB",
     "HISTORY_DB_ENV", "HistoryBusyError", "HistoryError", "HistoryInputError", "HistoryLookupError", "HistoryStore",
     "ParameterRow", "Quantity", "SCHEMA_VERSION", "Series", "StoredCycle", "UnknownRobotError",
-    "default_history_target", "redact_url",
+    "default_history_target", "redact_url", "PASSWORD_ENV", "PASSWORD_FILE_ENV", "strip_credentials", "url_password",
+    "with_credentials",
 ]

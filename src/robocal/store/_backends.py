@@ -15,9 +15,8 @@ from ..errors import RobocalError
 import sqlite3
 import time
 from pathlib import Path
-from urllib.parse import urlsplit, urlunsplit
-
 from . import _schema
+from ._credentials import redact_url, with_credentials
 
 __all__ = ["HistoryError", "HistoryBusyError", "open_backend", "redact_url"]
 
@@ -30,21 +29,6 @@ class HistoryError(RobocalError, RuntimeError):
 
 class HistoryBusyError(HistoryError):
     """Another writer held the database longer than the timeout."""
-
-
-def redact_url(url: str) -> str:
-    """The URL with any password replaced by ``***`` (for messages and reports)."""
-    try:
-        parts = urlsplit(url)
-    except ValueError:
-        return url
-    if parts.password is None:
-        return url
-    user = parts.username or ""
-    host = parts.hostname or ""
-    if parts.port is not None:
-        host += f":{parts.port}"
-    return urlunsplit((parts.scheme, f"{user}:***@{host}", parts.path, parts.query, parts.fragment))
 
 
 def _sqlite_path_from_url(url: str) -> str:
@@ -268,7 +252,7 @@ class SqlAlchemyBackend:
         sa = self.sa = _import_sqlalchemy(self.display)
         self.errors = (sa.exc.SQLAlchemyError,)
         try:
-            self.engine = sa.create_engine(url, pool_pre_ping=True)
+            self.engine = sa.create_engine(with_credentials(url), pool_pre_ping=True)
         except sa.exc.NoSuchModuleError:
             raise HistoryError(f"history database {self.display}: SQLAlchemy knows no database kind "
                                f"{url.split('://', 1)[0]!r} (e.g. postgresql+psycopg://, mysql+pymysql://)") from None

@@ -79,10 +79,11 @@ def check_robot_id(robot) -> str:
         raise HistoryInputError(f"robot id must be a string, got {type(robot).__name__} {robot!r}")
     if not robot:
         raise HistoryInputError("robot id is empty")
-    if robot != robot.strip() or not _ROBOT_ID.fullmatch(robot):
+    if robot != robot.strip() or not _ROBOT_ID.fullmatch(robot) or any(s in (".", "..") for s in robot.split("/")):
         raise HistoryInputError(
             f"robot id {robot!r} is not valid: use 1-100 characters, starting with a letter or digit, "
-            "then letters, digits, spaces or _ . : # / + - (no leading or trailing space)")
+            "then letters, digits, spaces or _ . : # / + - (no leading or trailing space, no '.' or '..' between "
+            "slashes)")
     return robot
 
 

@@ -193,6 +193,28 @@ def four_point_tcp(T_base_flange, min_spread_deg: float = DEFAULT_MIN_SPREAD_DEG
                          identifiability=fit.identifiability, fit=fit)
 
 
+def leave_one_out_residuals(T_base_flange) -> tuple:
+    """``(miss (N,), rms_others (N,))`` [mm]: each touch-up pose's miss of the reference point
+    predicted by the other N - 1, ``|R_i t_(-i) + p_i - P_(-i)|`` with ``(t, P)`` the linear
+    least-squares solution of (4-4) without pose i, and the RMS of that fit over the others (NaN
+    for fewer than 5 poses). A pose touching another point stands out here while the joint fit
+    spreads its error over every pose."""
+    T = np.asarray(T_base_flange, dtype=float)
+    n = len(T)
+    miss, rms = np.full(n, np.nan), np.full(n, np.nan)
+    if n < 5:
+        return miss, rms
+    R, p = T[:, :3, :3], T[:, :3, 3]
+    A = np.concatenate([R, np.broadcast_to(-np.eye(3), (n, 3, 3))], axis=2)  # [R_i, -I] [t; P] = -p_i
+    for i in range(n):
+        keep = np.arange(n) != i
+        x = np.linalg.lstsq(A[keep].reshape(-1, 6), -p[keep].reshape(-1), rcond=None)[0]
+        r = np.einsum("nij,j->ni", R, x[:3]) + p - x[3:]
+        miss[i] = float(np.linalg.norm(r[i]))
+        rms[i] = float(np.sqrt(np.mean(np.sum(r[keep] ** 2, axis=1))))
+    return miss, rms
+
+
 def four_point_tcp_from_poses(values, convention: str, length_unit: str = "mm", angle_unit: str = "deg",
                               min_spread_deg: float = DEFAULT_MIN_SPREAD_DEG, labels=None) -> TouchUpResult:
     """:func:`four_point_tcp` from controller pose values (N, 6) or (N, 7) in a named convention.

@@ -648,9 +648,11 @@ def run_correct(robot_file, targets_file, out_file, *, nominal=None, frame=None,
     TCP). A robot file with an ``[elastic]`` section: the joint deflection under gravity and ``payload``
     (``KG@x,y,z`` or a :class:`~robocal.calib.elastic.Payload`) is compensated (docs/elastic.md).
     """
+    from ..io.output_paths import check_outputs
+
     out_file = Path(out_file)
-    if out_file.exists() and not overwrite:
-        raise FileExistsError(f"{out_file}: output file exists; pass --overwrite to replace it")
+    check_outputs(out_file, {"the robot file": robot_file, "the targets": targets_file, "--nominal": nominal},
+                  overwrite=overwrite)
     calibrated = load_robot(robot_file)
     nominal_model = _controller_tool(load_robot(nominal if nominal is not None else calibrated.name), calibrated)
     if tuple(nominal_model.controller_joints) != tuple(calibrated.controller_joints):

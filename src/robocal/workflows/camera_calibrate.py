@@ -46,11 +46,15 @@ def camera_summary(camera, sigma: dict | None = None) -> dict:
 
 
 def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str = "brown", n_distortion: int = 5,
-                            fix=(), overwrite: bool = False, progress=None, allow_unconverged: bool = False) -> dict:
+                            fix=(), overwrite: bool = False, progress=None, allow_unconverged: bool = False,
+                            force: bool = False) -> dict:
     """Calibrate a camera from the images of ``images_dir`` (module docstring). Returns the summary
-    dict (the JSON); writes the outputs when ``out_dir`` is given (camera.json/.yaml only when the
-    fit converged, or with ``allow_unconverged``; ``convergence`` in the summary)."""
+    dict (the JSON); writes the outputs when ``out_dir`` is given. The sanity gate
+    (:func:`robocal.handeye.gate.camera_verdict`) puts ``status``/``reasons`` in the summary; a
+    failed result writes no camera.json / camera.yaml unless ``force``, a fit that did not converge
+    none unless ``allow_unconverged`` (``convergence`` in the summary)."""
     from ..handeye.camera_calibration import calibrate_camera
+    from ..handeye.gate import camera_verdict
 
     b = parse_board(board)
     if out_dir is not None:
@@ -79,19 +83,24 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
                                       "terms (--fix)").as_dict(),
         "identifiability": identifiability_lines(cal.identifiability), "images": rows,
     }
+    verdict = camera_verdict(float(cal.rms_px))
+    summary["status"], summary["reasons"], summary["sanity_checks"] = verdict.status, list(verdict.reasons), \
+        verdict.checks
     if out_dir is not None:
         projected, _ = backprojection(camera, T, X, detected.image_points)
         per_image = np.array([np.nan if r["rms_px"] is None else r["rms_px"] for r in rows])
         overlays = overlay_figures(detected, projected, per_image)
         with staged_outputs(out_dir, CAMERA_OUTPUTS, overwrite=overwrite) as stage:
-            if Convergence.from_dict(summary["convergence"]).may_write_model(allow_unconverged):
+            if (verdict.ok or force) and \
+                    Convergence.from_dict(summary["convergence"]).may_write_model(allow_unconverged):
                 write_camera_json(stage / "camera.json", camera)
-            if camera.model == "brown" and (stage / "camera.json").exists():
-                write_camera_ros_yaml(stage / "camera.yaml", camera)
+                if camera.model == "brown":
+                    write_camera_ros_yaml(stage / "camera.yaml", camera)
             (stage / "camera_calibration.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
             write_camera_report(stage / "report.html", {**summary, "_residuals_px": residuals},
                                 title=f"Camera calibration: {Path(images_dir).name}", overlays=overlays)
-        summary["outputs"] = {n: str(Path(out_dir) / n) for n in CAMERA_OUTPUTS if (Path(out_dir) / n).exists()}
+        summary["outputs"] = {n: str(Path(out_dir) / n) for n in CAMERA_OUTPUTS
+                              if (Path(out_dir) / n).exists() and (verdict.ok or force or not n.startswith("camera."))}
     return summary
 
 

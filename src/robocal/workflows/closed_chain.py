@@ -40,7 +40,7 @@ from ..calib.outputs import json_ready, problem_result_dict
 from ..calib.sanity import calibration_verdict
 from ..calib.solve import NotConvergedWarning
 from ..io.atomic import atomic_write_text
-from ..io.spots import read_spots, write_spots
+from ..io.spots import canonical_order, read_spots, write_spots
 from ..metrics import error_statistics
 from ..robots import load_robot, save_robot
 from ..sim import VirtualRobot, write_truth
@@ -211,6 +211,7 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
     check_outputs_free(out, names, overwrite)
     nominal = load_robot(robot)
     spots = read_spots(spots_file, robot=nominal)
+    spots = spots.subset(canonical_order(spots))  # the same data in any row order gives the same result
     if target_spacing_mm is not None and not (1.0 <= target_spacing_mm <= 5000.0):
         raise CalibrationInputError(f"--target-spacing {target_spacing_mm:g}: expected the distance between two "
                                     "targets in mm (1 to 5000); metres given as millimetres?")

@@ -157,14 +157,14 @@ def run_correct_program(model_file, program_file, out_file, *, nominal=None, ove
     robot file with an ``[elastic]`` section (the deflection is compensated for Cartesian targets).
     Returns ``{rows, changes, file, report, n_corrected, n_targets, n_failed, warnings, skipped}``.
     """
+    from ..io.output_paths import check_outputs
+
     out_file = Path(out_file)
     report = report_path_for(out_file)
     if joint_targets not in ("keep", "correct"):
         raise ValueError(f"joint_targets: expected 'keep' or 'correct', got {joint_targets!r}")
-    if not overwrite:
-        for p in (out_file, report):
-            if p.exists():
-                raise FileExistsError(f"{p}: output file exists; pass --overwrite to replace it")
+    check_outputs([out_file, report], {"the robot file": model_file, "the program": program_file,
+                                       "--nominal": nominal}, overwrite=overwrite)
     calibrated = load_robot(model_file)
     nominal_model = load_robot(nominal if nominal is not None else calibrated.name)
     if tuple(calibrated.controller_joints) != tuple(nominal_model.controller_joints):

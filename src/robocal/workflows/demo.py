@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.atomic import atomic_write_text
-from .outputs import check_outputs_free, ensure_writable_dir
+from .outputs import check_outputs_free, ensure_writable_dir, staged_outputs
 from ..metrics import error_statistics
 from ..robots import load_robot
 from ..sim import LaserTracker, VirtualRobot
@@ -145,7 +145,7 @@ def _record_history(store_path, robot_name, result, campaign_path):
     from ..io.measurements import read_measurements
     from ..store import HistoryStore
 
-    Path(store_path).unlink(missing_ok=True)  # a rerun (--overwrite) starts a fresh history
+    Path(store_path).unlink(missing_ok=True)  # a fresh history (the demo writes into an empty staging folder)
     thermal = result.get("thermal", {}).get("cycles") or []
     production_s = (thermal[-1]["time_s"] if thermal else 0.0) + 600.0
     now = datetime.now(timezone.utc).replace(microsecond=0)
@@ -213,8 +213,17 @@ def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses
     result = {"robot": nominal.name, "seed": seed, "n_poses": n_poses, **problem,
               "parameter_errors": virtual.parameter_errors()}
 
+    with staged_outputs(out, DEMO_OUTPUTS, overwrite=overwrite) as stage:  # all or nothing, like calibrate
+        result = _run_in(stage, out, step, total, nominal, virtual, q_work, T_nominal, err, result, seed, n_poses,
+                         history)
+    return result
+
+
+def _run_in(stage, out, step, total, nominal, virtual, q_work, T_nominal, err, result, seed, n_poses, history):
+    """Steps 2-6 of :func:`run_demo`, writing into the staging folder ``stage``; the paths in the
+    returned result name their final place in ``out``."""
     step(2, total, "geometric calibration: 100-pose laser-tracker campaign -> robocal calibrate (20 % held out)")
-    run, result["geometric_calibration"], err_after = _geometric_calibration(nominal, virtual, q_work, out, seed)
+    run, result["geometric_calibration"], err_after = _geometric_calibration(nominal, virtual, q_work, stage, seed)
 
     step(3, total, "production with heating: parameter screening, online compensation from 6 sphere poses")
     result["thermal"] = _thermal(seed)
@@ -224,17 +233,29 @@ def run_demo(out_dir, *, robot: str = "kuka_kr150_r3100", seed: int = 7, n_poses
 
     step(5, total, "recording the cycles in the history database")
     if history:
-        result["history"] = _record_history(out / "history.sqlite", nominal.name, result,
-                                            out / "tracker_campaign.csv")
+        result["history"] = _record_history(stage / "history.sqlite", nominal.name, result,
+                                            stage / "tracker_campaign.csv")
 
     step(6, total, "writing the report")
-    report, before_png, after_png = _write_report(out, nominal.name, result, run, T_nominal, err, err_after, n_poses,
-                                                  history)
+    report, before_png, after_png = _write_report(stage, nominal.name, result, run, T_nominal, err, err_after,
+                                                  n_poses, history)
     result["files"] = {"report": str(report), "accuracy_map": str(before_png),
-                       "accuracy_map_calibrated": str(after_png), "result": str(out / "demo_result.json"),
+                       "accuracy_map_calibrated": str(after_png), "result": str(stage / "demo_result.json"),
                        "calibration": result["geometric_calibration"]["files"]}
-    write_json(out / "demo_result.json", result)
+    result = _relocated(result, str(stage), str(out))
+    write_json(stage / "demo_result.json", result)
     return result
+
+
+def _relocated(value, old: str, new: str):
+    """``value`` (nested dicts, lists, strings) with every path under ``old`` moved to ``new``."""
+    if isinstance(value, dict):
+        return {k: _relocated(v, old, new) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_relocated(v, old, new) for v in value]
+    if isinstance(value, str) and value.startswith(old):
+        return new + value[len(old):]
+    return value
 
 
 def _history_plot(out, robot_name, store_path):

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -114,9 +115,15 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
         entries = [dataclasses.replace(e, options={**e.options, "allow_unconverged": True}) for e in entries]
     db_target = str(db) if db is not None else None
     if db_target is not None:  # reachable, and its tables made once, before the workers write
-        from ..store import HistoryStore
+        from ..store import PASSWORD_ENV, HistoryStore, strip_credentials, url_password
 
+        secret = url_password(db_target)
+        if client is not None and secret is not None and not _workers_are_local(client):
+            raise ValueError(_PASSWORD_IN_URL)  # tasks never carry a password
         HistoryStore.open(db_target).close()
+        if client is not None and secret is not None:
+            os.environ[PASSWORD_ENV] = secret  # in-process workers read it where they open the database
+            db_target = strip_credentials(db_target)
     size = robots_per_task(len(entries), _worker_threads(client) if client is not None else 1, per_task)
     groups = [entries[i:i + size] for i in range(0, len(entries), size)]
     keys = [f"calibrate-{g[0].id}-{g[0].index}" + (f"-to-{g[-1].id}-{g[-1].index}" if len(g) > 1 else "")
@@ -152,6 +159,19 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
     files["html"] = write_fleet_summary_html(out / "summary.html", summary, svg, "summary.svg")
     files["plot"] = out / "summary.svg"
     return {"summary": summary, "files": files}
+
+
+def _workers_are_local(client) -> bool:
+    """True when every worker of ``client`` runs in this process (a threads-only local cluster)."""
+    try:
+        return all(str(w).startswith("inproc://") for w in client.scheduler_info().get("workers", {}))
+    except Exception:  # noqa: BLE001 - any doubt: not local
+        return False
+
+
+_PASSWORD_IN_URL = ("the history database URL carries a password, which would travel to the Dask workers in the "
+                    "tasks: give the URL without it and set ROBOCAL_DB_PASSWORD (or ROBOCAL_DB_PASSWORD_FILE, a file "
+                    "readable on every worker) where the workers run")
 
 
 def _now() -> str:

@@ -12,7 +12,7 @@ from ..errors import RobocalError
 import contextlib
 import os
 
-__all__ = ["FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "default_workers"]
+__all__ = ["FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "default_workers", "tls_security"]
 
 FLEET_EXTRA_HINT = "pip install 'robocal[fleet]'"
 
@@ -39,20 +39,64 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def tls_security(*, ca_file=None, cert=None, key=None, security_file=None):
+    """A ``distributed.security.Security`` for a TLS cluster (encryption required), or None when no
+    option is given. ca_file, cert, key: PEM files (the cluster's CA, this client's certificate and
+    its private key; the key may sit in the certificate file). security_file: a TOML file with
+    ``[tls]`` ``ca_file``, ``cert``, ``key`` (paths relative to the file); options override it.
+    :class:`FleetClusterError` naming a missing file."""
+    import tomllib
+    from pathlib import Path
+
+    values = {}
+    if security_file is not None:
+        path = Path(security_file)
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+            raise FleetClusterError(f"--security {path}: cannot read it as TOML: {exc}") from None
+        tls = data.get("tls")
+        if not isinstance(tls, dict) or not {"ca_file", "cert"} <= set(tls):
+            raise FleetClusterError(f"--security {path}: needs a [tls] table with ca_file and cert (and key unless "
+                                    "the certificate file holds it)")
+        values = {k: str((path.parent / str(tls[k])).resolve()) for k in ("ca_file", "cert", "key") if k in tls}
+    for k, v in (("ca_file", ca_file), ("cert", cert), ("key", key)):
+        if v is not None:
+            values[k] = str(v)
+    if not values:
+        return None
+    if "ca_file" not in values or "cert" not in values:
+        raise FleetClusterError("TLS needs --tls-ca-file and --tls-cert (and --tls-key unless the certificate "
+                                "file holds the key), or --security FILE")
+    for k, v in values.items():
+        if not Path(v).is_file():
+            raise FleetClusterError(f"TLS {k} file {v}: no such file")
+    distributed = import_distributed()
+    return distributed.security.Security(require_encryption=True, tls_ca_file=values["ca_file"],
+                                         tls_client_cert=values["cert"], tls_client_key=values.get("key"))
+
+
 @contextlib.contextmanager
-def fleet_client(scheduler: str | None = None, workers: int | None = None, *, processes: bool = True):
+def fleet_client(scheduler: str | None = None, workers: int | None = None, *, processes: bool = True,
+                 security=None):
     """A ``distributed.Client``: on the cluster at ``scheduler`` (``tcp://host:8786``), or on a new
     local cluster of ``workers`` (default :func:`default_workers`) single-threaded worker processes
     (``processes=False``: threads in this process, for tests), closed on exit. No dashboard is
-    started for a local cluster (a shared machine may have its port taken)."""
+    started for a local cluster (a shared machine may have its port taken). security: a
+    ``distributed.security.Security`` (:func:`tls_security`) for a scheduler at ``tls://``.
+
+    A scheduler and its workers must be trusted: Dask runs pickled code and unpickles results
+    (docs/fleet.md, "Trust boundary"). Without TLS the traffic, results included, is in clear."""
     distributed = import_distributed()
     if scheduler is not None and workers is not None:
         raise FleetClusterError("give either --scheduler (an existing cluster) or --workers (a local one), not both")
     if workers is not None and workers < 1:
         raise FleetClusterError(f"--workers must be at least 1, got {workers}")
+    if security is not None and (scheduler is None or not str(scheduler).startswith("tls://")):
+        raise FleetClusterError("TLS options need --scheduler tls://host:port (the cluster's TLS address)")
     if scheduler is not None:
         try:
-            client = distributed.Client(scheduler, timeout="20s")
+            client = distributed.Client(scheduler, timeout="20s", **({"security": security} if security else {}))
         except (OSError, TimeoutError) as exc:
             raise FleetClusterError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
         with client:

@@ -157,8 +157,13 @@ def _calibrate(entry: FleetEntry, robot_dir: Path, report: bool):
 
 def calibrate_entry(entry: FleetEntry, out_dir, *, db=None, report: bool = True) -> dict:
     """Calibrate one fleet robot into ``out_dir/<id>/`` (see the module docstring); the summary row."""
+    from ..io.output_paths import PathEscapeError, path_under
+
     t0 = time.perf_counter()
-    robot_dir = Path(out_dir) / entry.id
+    try:
+        robot_dir = path_under(out_dir, entry.id)  # the id is validated by the fleet file reader; checked again
+    except PathEscapeError as exc:
+        return failed_row(entry.id, str(exc))
     try:
         digest = input_digest(entry, report)
     except OSError as exc:

@@ -137,6 +137,18 @@ def _performance(store, robot, now, ap_tol, rp_tol) -> dict:
     return out
 
 
+def _guarded_status(store, robot, kind, now, *limits) -> dict:
+    """:func:`_robot_status`, or a stale row naming why this robot cannot be read (an id written by
+    other software outside the valid set): one robot never stops the status run."""
+    from ..store import HistoryInputError
+
+    try:
+        return _robot_status(store, robot, kind, now, *limits)
+    except HistoryInputError as exc:
+        return {"robot": robot, "calibrations": 0, "last_calibration": None, "age_days": None, "stale": True,
+                "drifting": False, "drift": [], "reasons": [f"cannot be checked: {exc}"]}
+
+
 def _plot(store, row, kind, plot_dir: Path) -> str:
     from ..report.history_plot import plot_history
 
@@ -146,7 +158,9 @@ def _plot(store, row, kind, plot_dir: Path) -> str:
     metrics = {m: store.metric_history(robot, m, kind=kind) for m in store.metric_names(robot)
                if m.endswith("rms_after") or m.endswith("rms_before")}
     events = [(c.started_at, c.kind) for c in store.cycles(robot, kind=kind, status="committed")]
-    path = plot_dir / f"{robot}_drift.png"
+    from ..io.output_paths import path_under, safe_file_stem
+
+    path = path_under(plot_dir, f"{safe_file_stem(robot)}_drift.png")  # an id from the database is data
     plot_history(params, metrics, path, f"{robot}: " + "; ".join(row["reasons"][:2]), events=events)
     return str(path)
 
@@ -170,10 +184,15 @@ def fleet_status(db, *, max_age_days: float = 90.0, tolerance_mm: float = 0.1, t
         raise ValueError("now must carry a time zone (UTC)")
     now = now.astimezone(timezone.utc)
     with HistoryStore.open(db, create=False) as store:
-        rows = [_robot_status(store, r, kind, now, max_age_days, tolerance_mm, math.radians(tolerance_deg))
+        rows = [_guarded_status(store, r, kind, now, max_age_days, tolerance_mm, math.radians(tolerance_deg))
                 for r in store.robots()]
+        from ..store import HistoryInputError
+
         for row in rows:
-            perf = _performance(store, row["robot"], now, ap_tolerance_mm, rp_tolerance_mm)
+            try:
+                perf = _performance(store, row["robot"], now, ap_tolerance_mm, rp_tolerance_mm)
+            except HistoryInputError:  # an id other software wrote: _guarded_status named it already
+                continue
             row["reasons"] += perf.pop("perf_reasons")
             row.update(perf)
         if plot_dir is not None:
@@ -181,7 +200,10 @@ def fleet_status(db, *, max_age_days: float = 90.0, tolerance_mm: float = 0.1, t
             for row in rows:
                 if (row["drifting"] or row["stale"]) and row["drift"]:
                     plot_dir.mkdir(parents=True, exist_ok=True)
-                    row["plot"] = _plot(store, row, kind, plot_dir)
+                    try:
+                        row["plot"] = _plot(store, row, kind, plot_dir)
+                    except (ValueError, OSError) as exc:  # one robot's plot never stops the status run
+                        row["plot"], row["plot_error"] = None, str(exc)
         where = store.url
     flagged = [r["robot"] for r in rows
                if r["stale"] or r["drifting"] or r["performance_drifting"] or r["verification_failed"]]

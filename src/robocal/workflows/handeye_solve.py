@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calib.outputs import json_ready
+from ..handeye import HandEyeError
 from ..io.boards import parse_board
 from ..io.camera_files import read_camera
 from ..io.image_poses import pair_images_with_labels, pair_images_with_poses
@@ -35,7 +36,7 @@ from ..io.programs.joint_table import read_joint_program
 from ..io.ros_calibration import read_cal_data
 from ..report.camera_report import write_camera_report
 from ..robots import load_robot
-from ..transforms import invert_transforms, rotation_angle
+from ..transforms import rotation_angle
 from .camera_calibrate import camera_summary
 from .camera_common import (
     POSE_CONVENTION,
@@ -48,21 +49,13 @@ from .camera_common import (
     ros_transform_yaml,
 )
 from .convergence import Convergence
+from .handeye_gate import chain_T_camera_target, handeye_gate, pairing_causes
 from .outputs import check_outputs_free, staged_outputs
 
 __all__ = ["solve_handeye", "HANDEYE_OUTPUTS", "chain_T_camera_target"]
 
 HANDEYE_OUTPUTS = ["handeye.json", "handeye.yaml", "report.html"]
 SETUPS = ("eye_in_hand", "eye_to_hand")
-
-
-def chain_T_camera_target(setup: str, camera_pose, target_pose, T_base_flange) -> np.ndarray:
-    """(N, 4, 4) the target in the camera through the robot chain: eye-in-hand
-    ``X^-1 F_i^-1 Z`` (X = T_flange_camera, Z = T_base_target), eye-to-hand ``X^-1 F_i Z``
-    (X = T_base_camera, Z = T_flange_target)."""
-    F = np.asarray(T_base_flange, dtype=float)
-    links = invert_transforms(F) if setup == "eye_in_hand" else F
-    return invert_transforms(camera_pose)[None] @ links @ np.asarray(target_pose)[None]
 
 
 def _rms(residuals) -> float:
@@ -110,7 +103,7 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
                   method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
                   robot_pose_sigma="default", homography_threshold=None, joints=None, robot=None,
                   joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None,
-                  allow_unconverged: bool = False) -> dict:
+                  allow_unconverged: bool = False, force: bool = False) -> dict:
     """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
 
     robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
@@ -121,8 +114,10 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
     flange poses are the robot file's forward kinematics; ``joint_offsets`` also estimates the
     robot's joint zero offsets. loss: ``"linear"``, or ``"huber"`` / ``"cauchy"`` to reject whole
-    images that do not fit (listed per image as ``outlier``). A fit that did not converge (camera or
-    hand-eye; ``convergence`` in the JSON) writes no handeye.yaml unless ``allow_unconverged``."""
+    images that do not fit (listed per image as ``outlier``). The sanity gate
+    (:mod:`.handeye_gate`) puts ``status`` and ``reasons`` into the summary; a failed result writes
+    no ``handeye.yaml`` unless ``force``. A fit that did not converge (camera or hand-eye;
+    ``convergence`` in the JSON) writes no handeye.yaml unless ``allow_unconverged``."""
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.refine import refine_hand_eye
 
@@ -142,6 +137,7 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     uv = detected.image_points[used]
     camera_source = "given"
     fits = []
+    camera_given = camera is not None
     if camera is None:
         cal = calibrate_camera(uv, X, detected.image_size, min_points=b.min_points)
         camera, camera_source = cal.camera, "calibrated on the same images"
@@ -155,8 +151,16 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     if q is not None:
         extra.update(joints=q[used], robot=model, joint_offsets=bool(joint_offsets))
     idx_used = np.flatnonzero(used)
-    result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method, refine_intrinsics=refine_intrinsics,
-                             min_points=b.min_points, loss=loss, **extra)
+    try:
+        result = refine_hand_eye(F[used], uv, X, camera, setup=setup, method=method,
+                                 refine_intrinsics=refine_intrinsics, min_points=b.min_points, loss=loss, **extra)
+    except np.linalg.LinAlgError as exc:  # diverged on data that describe no single camera: say why
+        causes = pairing_causes(camera=camera, T_base_flange=F, used=used, image_points=detected.image_points,
+                                target_points=X, setup=setup, names=detected.names, labels=labels,
+                                poses_file=poses if cal_data is None and joints is None else None,
+                                camera_given=camera_given, image_size=detected.image_size, min_points=b.min_points)
+        raise HandEyeError(f"the hand-eye refinement diverged ({exc}): the flange poses and the images do not "
+                           "describe one camera on one robot" + ("; " + "; ".join(causes) if causes else "")) from None
     outliers = {int(idx_used[k]): r for k, r in (getattr(result, "outliers", None) or {}).items()}
     solver_skips = {int(idx_used[k]): r for k, r in (getattr(result, "skipped", None) or {}).items()}
     N = len(used)
@@ -210,6 +214,16 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         "identifiability": identifiability_lines(result.identifiability),
         "linear": linear, "images": rows,
     }
+    verdict = handeye_gate(camera=camera, result=result, T_base_flange=F, used=used,
+                           image_points=detected.image_points, target_points=X, setup=setup, method=method,
+                           names=detected.names, labels=labels,
+                           back_rms_px=_rms(np.delete(back, list(outliers), axis=0)),
+                           per_image_back_px=[float("nan") if i in outliers else _rms(back[i])
+                                              for i in np.flatnonzero(used)], exclude=tuple(outliers),
+                           poses_file=poses if cal_data is None and joints is None else None,
+                           camera_given=camera_given, image_size=detected.image_size, min_points=b.min_points)
+    summary["status"], summary["reasons"], summary["sanity_checks"] = verdict.status, list(verdict.reasons), \
+        verdict.checks
     if joint_offsets and getattr(result, "joint_offsets_rad", None) is not None:
         names = getattr(result, "joint_offset_names", ()) or [f"joint{k + 1}" for k in range(len(result.joint_offsets_rad))]
         summary["joint_offsets_deg"] = {n: float(np.degrees(v)) for n, v in zip(names, result.joint_offsets_rad)}
@@ -219,11 +233,14 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         parent, child = ("tool0", "camera") if setup == "eye_in_hand" else ("base_link", "camera")
         with staged_outputs(out_dir, HANDEYE_OUTPUTS, overwrite=overwrite) as stage:
             (stage / "handeye.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
-            if Convergence.from_dict(summary["convergence"]).may_write_model(allow_unconverged):
+            write_yaml = (verdict.ok or force) and \
+                Convergence.from_dict(summary["convergence"]).may_write_model(allow_unconverged)
+            if write_yaml:
                 (stage / "handeye.yaml").write_text(ros_transform_yaml(
                     result.camera_pose, parent, child,
                     f"robocal hand-eye ({setup}): the camera's optical frame in the robot's "
-                    f"{result.camera_pose_frame} frame\nreprojection RMS {result.rms_px:.3f} px"))
+                    f"{result.camera_pose_frame} frame\nreprojection RMS {result.rms_px:.3f} px"
+                    + ("" if verdict.ok else "\nFAILED the sanity gates; written because of --force")))
             write_camera_report(stage / "report.html", {**summary, "_residuals_px": back},
                                 title=f"Hand-eye calibration ({setup})", overlays=overlays)
         summary["outputs"] = {n: str(Path(out_dir) / n) for n in HANDEYE_OUTPUTS if (Path(out_dir) / n).exists()}

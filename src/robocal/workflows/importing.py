@@ -73,7 +73,7 @@ def read_campaign(points_file, joints_file, *, robot: str, point_format: str = "
         pairing = pair_by_time(points, log, tolerance=tolerance_s, offset=offset_s, robot=model)
     notes = list(pairing.notes)
     meas = _joints_named_as_robot(pairing.measurements, model, notes)
-    meas.metadata["robot"] = robot if Path(robot).suffix == ".toml" else model.name
+    meas.metadata["robot"] = robot if Path(robot).suffix.lower() in (".toml", ".urdf") else model.name
     return {"measurements": meas, "pairing": pairing, "notes": notes}
 
 
@@ -98,6 +98,10 @@ def import_campaign(points_file, joints_file, out_file, *, robot: str, point_for
     Returns a dict with ``measurements`` (the written :class:`Measurements`), ``pairing`` (the
     :class:`~robocal.io.importers.Pairing`), ``notes`` (list of str) and ``file`` (Path).
     """
+    from ..io.output_paths import check_outputs
+
+    check_outputs(out_file, {"the points file": points_file, "the joint log": joints_file, "--robot": robot},
+                  overwrite=overwrite)
     r = read_campaign(points_file, joints_file, robot=robot, point_format=point_format, pair=pair,
                       tolerance_s=tolerance_s, offset_s=offset_s, id_match=id_match, length_unit=length_unit,
                       angle_unit=angle_unit, name_fields=name_fields, joint_columns=joint_columns,

@@ -94,8 +94,12 @@ def _commit(stage: Path, out: Path, names, overwrite: bool) -> None:
     if not overwrite:
         check_outputs_free(out, written, overwrite)  # someone else may have written meanwhile
     for name in written:
+        if overwrite and (stage / name).is_dir() and (out / name).is_dir():
+            shutil.rmtree(out / name)  # a folder output (demo's calibration/) is replaced whole
         os.replace(stage / name, out / name)
     if overwrite:
         for name in names:
             if name not in written and (out / name).is_file():
                 (out / name).unlink()
+            elif name not in written and (out / name).is_dir():
+                shutil.rmtree(out / name)

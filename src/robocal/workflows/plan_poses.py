@@ -84,6 +84,10 @@ def plan_poses(robot, out_file, *, count: int, candidates: int = 1000, workspace
         outs = [Path(out_file)] + ([Path(out_file).with_suffix(sx) for sx in suffixes] if language else [])
         if any(o.resolve() == Path(cell).resolve() for o in outs):
             raise ValueError(f"--out {out_file}: would replace the cell file {cell} (an input of this command)")
+    from ..io.output_paths import check_outputs
+
+    check_outputs(out_file, {"the robot file": robot, "the cell file": cell if not isinstance(cell, Cell) else None},
+                  overwrite=overwrite)
     model = load_robot(robot)
     cell = plan_cell(model, cell, tracker_at, tool)
     out = plan_in_cell(model, cell, count=count, candidates=candidates, workspace=workspace, sigma_mm=sigma_mm,

@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from ..calib.outputs import json_ready
+from ..handeye import HandEyeError
+from ..handeye.gate import self_calibration_verdict
 from ..io.boards import parse_board
 from ..io.camera_files import read_camera
 from ..io.capture_times import match_capture_times
@@ -37,6 +39,7 @@ from ..robots.writer import save_robot
 from .camera_common import DetectedSet, identifiability_lines, overlay_figures
 from .convergence import Convergence
 from .outputs import check_outputs_free, staged_outputs
+from .self_calibration_gate import clock_reasons, estimate_joint_noise
 
 __all__ = ["self_calibrate", "SELF_CALIBRATION_OUTPUTS"]
 
@@ -75,7 +78,8 @@ def _detect(paths, board, progress):
 def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effector: str, board_on,
                    camera_file=None, tolerance: float = 0.05, match: str = "nearest", link_parameters=(),
                    refine_intrinsics: bool = False, joint_noise_deg: float | None = None, out_dir=None,
-                   overwrite: bool = False, progress=None, allow_unconverged: bool = False) -> dict:
+                   overwrite: bool = False, progress=None, allow_unconverged: bool = False,
+                   force: bool = False) -> dict:
     """Run the pipeline (module docstring); returns the JSON summary (``convergence``: of the camera
     and self-calibration fits; robot.toml is not written when one did not converge, unless
     ``allow_unconverged``).
@@ -84,6 +88,11 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
     file; board: board spec; camera_end_effector: the end effector carrying the camera;
     board_on: the end effector holding the board (``"world"`` for a fixed board), or a sequence of
     them (each image is assigned to the nearest); tolerance [s]; match: ``nearest`` | ``interpolate``; progress(i, n, text) per image.
+
+    Sanity gate (:func:`robocal.handeye.gate.self_calibration_verdict`, with the clock diagnosis of
+    :mod:`.self_calibration_gate`): ``status``/``reasons``/``sanity_checks`` in the summary; a
+    failed or non-converged result writes no ``robot.toml`` unless ``force``. joint_noise_deg
+    ``None`` (default): the joint-reading noise is estimated (:func:`.self_calibration_gate.estimate_joint_noise`).
     """
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.self_calibration import assign_carriers, solve_self_calibration
@@ -136,11 +145,24 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
         for k, i in enumerate(idx):
             on[i], reasons[i] = (assigned[k], None) if assigned[k] else (None, why[k])
         used = np.array([r is None for r in reasons])
+        if used.sum() < 3:
+            why = "; ".join(f"{names[i]}: {reasons[i]}" for i in idx[:3])
+            raise ValueError(f"only {int(used.sum())} of {len(idx)} images could be given to a board carrier "
+                             f"({', '.join(carriers)}) at their joint readings ({why}): likely the images are paired "
+                             f"with the wrong joint readings (a camera clock offset, permuted frame times in {frames}, "
+                             "a joint log of another run) or the wrong --board-on")
     idx = np.flatnonzero(used)
-    res = solve_self_calibration(model, q[idx], uv[idx], X, camera, [on[i] for i in idx],
-                                 camera_end_effector=camera_end_effector, link_parameters=link_parameters,
-                                 refine_intrinsics=refine_intrinsics, min_points=b.min_points,
-                                 joint_noise_deg=joint_noise_deg)
+    def solve_with(noise):
+        return solve_self_calibration(model, q[idx], uv[idx], X, camera, [on[i] for i in idx],
+                                      camera_end_effector=camera_end_effector, link_parameters=link_parameters,
+                                      refine_intrinsics=refine_intrinsics, min_points=b.min_points,
+                                      joint_noise_deg=noise)
+
+    noise_source = "given"
+    if joint_noise_deg is None:
+        joint_noise_deg, res, noise_source = estimate_joint_noise(solve_with)
+    else:
+        res = solve_with(joint_noise_deg)
     convergence = Convergence.of(fits + [("self-calibration", res)],
                                  "better joint offsets to start from, more images or fewer --link-parameter")
     res_px = np.full_like(uv, np.nan)
@@ -168,11 +190,32 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
         "boards": {c: {"matrix": T.tolist(), "frame": c} for c, T in res.boards.items()},
         "reprojection_rms_px": res.rms_px, "pixel_sigma_px": res.pixel_sigma,
         "variance_factor": res.variance_factor, "joint_noise_deg": joint_noise_deg,
+        "joint_noise_source": noise_source,
         "n_images": len(names), "n_images_used": int(used.sum() - len(res.skipped)),
         "converged": res.converged, "message": res.message, "convergence": convergence.as_dict(),
         "identifiability": identifiability_lines(res.identifiability), "images": rows,
         "units": "mm, rad (joint offsets in the robot file's parameter units: rad or mm)",
     }
+    rad = [j for j in summary["joint_offsets"] if j["unit"] == "rad" and j["sigma"] is not None]
+    verdict = self_calibration_verdict(variance_factor=res.variance_factor, pixel_sigma_px=res.pixel_sigma,
+                                       rms_px=res.rms_px, joint_noise_deg=joint_noise_deg,
+                                       joint_noise_estimated=noise_source.startswith("estimated"),
+                                       offsets_deg={j["name"]: float(np.degrees(j["value"])) for j in rad})
+    checks, reasons_gate = dict(verdict.checks), list(verdict.reasons)
+    if not verdict.ok:
+        used_now = [i for i in idx if reasons[i] is None]
+        try:  # the diagnosis never hides the verdict
+            extra, more = clock_reasons(model=model, t_img=t_img, t_log=t_log, q_log=q_log, idx=used_now,
+                                        image_points=uv, target_points=X, camera=camera,
+                                        carriers=[on[i] for i in used_now], camera_end_effector=camera_end_effector,
+                                        tolerance=tolerance, match=match, min_points=b.min_points)
+        except (ValueError, HandEyeError, KeyError) as exc:
+            extra, more = [], {"pairing_diagnosis": {"passed": None, "error": str(exc)}}
+        reasons_gate += extra
+        checks.update(more)
+    summary["status"] = "ok" if verdict.ok else "failed"
+    summary["reasons"], summary["sanity_checks"] = reasons_gate, checks
+    write_robot = (verdict.ok or force) and convergence.may_write_model(allow_unconverged)
     if out_dir is not None:
         detected = DetectedSet(paths=tuple(folder / n for n in names), names=tuple(names), image_points=uv,
                                image_size=size, skip_reasons=tuple(reasons), board=b)
@@ -181,13 +224,15 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
         from ..report.camera_report import write_camera_report
 
         with staged_outputs(out_dir, SELF_CALIBRATION_OUTPUTS, overwrite=overwrite) as stage:
-            if convergence.may_write_model(allow_unconverged):
-                save_robot(res.model, stage / "robot.toml", comment=f"self-calibrated from {len(idx)} images")
-            else:
+            if write_robot:
+                save_robot(res.model, stage / "robot.toml", comment=f"self-calibrated from {len(idx)} images"
+                           + ("" if verdict.ok and res.converged else "; FAILED its gates or did not converge, "
+                              "written because of --force / --allow-unconverged"))
+            elif not convergence.may_write_model(allow_unconverged):
                 summary["notes"] = [convergence.skipped_note("robot.toml")]
             (stage / "self_calibration.json").write_text(json.dumps(json_ready(summary), indent=1) + "\n")
             write_camera_report(stage / "report.html", {**summary, "_residuals_px": res_px},
                                 title=f"Camera self-calibration ({model.name})", overlays=overlays)
         summary["outputs"] = {n: str(Path(out_dir) / n) for n in SELF_CALIBRATION_OUTPUTS
-                              if (Path(out_dir) / n).exists()}
+                              if n != "robot.toml" or write_robot}
     return json_ready(summary)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.output_paths import check_outputs
 from ..io.programs.joint_table import JointProgram, read_joint_program, write_joint_program
 from ..io.thermal_files import read_sensor_json, read_sphere_file, read_truth_json, write_sensor_json, write_setup_json
 from ..robots import load_robot
@@ -203,7 +204,8 @@ def calibrate_sensor(robot, sphere_file, *, method: str = "lsq", sigma_mm=None, 
     model = load_robot(robot)
     _check_sigma(sigma_mm)
     if out_file:
-        _check_new([out_file], overwrite)
+        check_outputs(out_file, {"the sphere file": sphere_file, "--truth": truth_file, "the robot file": robot},
+                      overwrite=overwrite)
     meas = select_poses(read_sphere_file(sphere_file, model), poses, sphere_file)
     q, P = meas.joints, meas.points[:, 0]
     truth = _read_truth(truth_file)
@@ -369,6 +371,20 @@ def _record_cycle(store, rid, model, meta, q_s, P_w, drift, comp, program, progr
     return c.id
 
 
+def _check_history(history) -> None:
+    """``ValueError`` naming the history database when it cannot be opened (nothing written yet)."""
+    from ..store import HistoryError, HistoryStore, default_history_target
+
+    db = history or default_history_target()
+    try:
+        with HistoryStore.open(db):
+            pass
+    except (HistoryError, ValueError, OSError) as exc:
+        from ..store import redact_url
+
+        raise ValueError(f"--history {redact_url(db)}: {exc}; nothing written") from None
+
+
 def _record_history(history, robot_id, model, meta, out_file, *args):
     """(database, cycle id) after :func:`_record_cycle` in ``history`` ("": the default target);
     ``ValueError`` naming ``out_file`` (already written) when that fails."""
@@ -425,7 +441,10 @@ def compensate_program_files(robot, *, sensor_file, sphere_file, params, program
     t_start = time.perf_counter()
     model = load_robot(robot)
     _check_sigma(sigma_mm)
-    _check_new([out_file], overwrite)
+    check_outputs(out_file, {"--program": program_file, "--sensor": sensor_file, "the sphere file": sphere_file,
+                             "--cold": cold_file, "the robot file": robot,
+                             "--history": history if history and "://" not in str(history) else None},
+                  overwrite=overwrite)
     sensor = read_sensor_json(sensor_file, model)
     meas, P_c = _sphere_now(model, sphere_file, poses, cold_file, note)
     q_s, P_w = meas.joints, meas.points[:, 0]
@@ -436,6 +455,8 @@ def compensate_program_files(robot, *, sensor_file, sphere_file, params, program
     elapsed = time.perf_counter() - t_start
     verdict = drift_verdict(drift.names, drift.units, drift.delta, drift.rms_after_mm, sigma_mm)
     write = verdict.ok or force
+    if write and history is not None:
+        _check_history(history)  # a damaged database is named before the program is written
     if write:
         _write_corrected(out_file, program_file, program, comp, drift, model, overwrite)
     meta = {"sensor": sensor_file, "sphere": sphere_file, "cold": cold_file, "program": program_file, "out": out_file,
