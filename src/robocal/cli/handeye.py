@@ -36,8 +36,11 @@ def handeye():
 @click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
               help="Robust loss per image: images that do not fit (a swapped pose) are rejected and named.")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics together with the hand-eye transform.")
-@click.option("--robot-pose-sigma", type=float, nargs=2, default=None, metavar="MM DEG",
-              help="The robot's pose error per axis (errors in variables); default: refine_hand_eye's (0.05 mm, 0.01 deg).")
+@click.option("--robot-pose-sigma", default="auto", show_default=True, metavar="auto|estimate|MM,DEG",
+              help="The robot's pose error per axis [mm, deg] (errors in variables): 'auto' fits the flange poses "
+                   "as exact and with their noise estimated from the data and keeps the one that predicts "
+                   "held-out images better (a Warning: when the two disagree beyond their sigma); 'estimate' "
+                   "the estimated noise (variance components); 'MM,DEG' a fixed prior, e.g. 0.05,0.01.")
 @click.option("--exact-poses", is_flag=True, help="Take the flange poses as exact (as ROS-Industrial's calibration).")
 @click.option("--homography-threshold", type=float, default=None,
               help="Skip images whose detections one homography misses by more than this mean [px] "
@@ -56,9 +59,11 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
     if cal_data is None and ((poses is None and joints_file is None) or images is None or board is None):
         raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv (or --joints JOINTS.csv --robot ROBOT) "
                                "--images DIR --board SPEC")
-    if exact_poses and robot_pose_sigma:
-        raise click.UsageError("--exact-poses and --robot-pose-sigma exclude each other")
-    sigma = None if exact_poses else (tuple(robot_pose_sigma) if robot_pose_sigma else "default")
+    sigma = _pose_sigma(robot_pose_sigma)
+    if exact_poses:
+        if robot_pose_sigma != "auto":
+            raise click.UsageError("--exact-poses and --robot-pose-sigma exclude each other")
+        sigma = None
     try:
         s = solve_handeye(cal_data=cal_data, poses=poses, images=images, board=board, setup=setup, method=method,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
@@ -67,6 +72,8 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
                           overwrite=overwrite, progress=_item_progress)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
+    for w in s.get("warnings", []):
+        click.echo(f"Warning: {w}", err=True)
     if as_json:
         click.echo(json.dumps(s, indent=2))
         return
@@ -76,6 +83,7 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
                f"reprojection RMS {s['reprojection_rms_px']:.3f} px ({'converged' if s['converged'] else 'NOT converged'})")
     click.echo(f"camera in {cp['frame']}: position {_v(cp['position_mm'])} mm  (1-sigma {_v(sig_p, 3)})")
     click.echo(f"  rotation vector {_v(cp['rotation_vector_deg'], 4)} deg  (1-sigma {_v(sig_r, 4)})")
+    click.echo(f"flange poses: {s['robot_pose_sigma_text']}")
     click.echo("linear solutions (start of the refinement):")
     for m, d in s["linear"].items():
         click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {d['difference_position_mm']:.2f} mm / "
@@ -86,6 +94,22 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
     for name, value in (s.get("joint_offsets_deg") or {}).items():
         click.echo(f"  joint offset {name}: {value:+.4f} deg")
     echo_findings(s, out_dir)
+
+
+def _pose_sigma(text: str):
+    """``--robot-pose-sigma``: "auto" | "estimate" | (mm, deg) from "MM,DEG" (or "MM DEG")."""
+    t = text.strip().lower()
+    if t in ("auto", "estimate"):
+        return t
+    parts = t.replace(",", " ").split()
+    try:
+        values = tuple(float(v) for v in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(v > 0 for v in values):
+        raise click.BadParameter(f"expected auto, estimate or MM,DEG (two positive numbers, e.g. 0.05,0.01), "
+                                 f"got {text!r}", param_hint="--robot-pose-sigma")
+    return values
 
 
 def _v(values, digits=2) -> str:

@@ -70,6 +70,44 @@ def _rms(residuals) -> float:
     return float(np.sqrt(np.mean(np.sum(r ** 2, axis=1)))) if len(r) else float("nan")
 
 
+def _sigma_json(robot_pose_sigma, noise):
+    """How the flange poses were treated, for the JSON."""
+    if robot_pose_sigma is None:
+        return "exact flange poses"
+    if robot_pose_sigma == "default":
+        return "refine_hand_eye default"
+    if isinstance(robot_pose_sigma, str):
+        out = {"mode": robot_pose_sigma}
+        for k, v in (noise or {}).items():
+            if k != "other_camera_pose":
+                out[k] = v
+        return out
+    return {"mm": robot_pose_sigma[0], "deg": robot_pose_sigma[1]}
+
+
+def _sigma_text(robot_pose_sigma, noise) -> str:
+    """One line: how the flange poses were treated and why."""
+    if robot_pose_sigma is None:
+        return "taken as exact (--exact-poses)"
+    if robot_pose_sigma == "default":
+        return "refine_hand_eye's default prior"
+    if isinstance(robot_pose_sigma, tuple):
+        return f"corrected per image under a {robot_pose_sigma[0]:g} mm / {robot_pose_sigma[1]:g} deg prior"
+    noise = noise or {}
+    est = noise.get("estimated", noise)
+    level = ""
+    if est.get("robot_pose_sigma") is not None:
+        level = (f"noise estimated from the data {est['robot_pose_sigma'][0]:.3g} mm / {est['robot_pose_sigma'][1]:.3g}"
+                 f" deg, corners {est['pixel_sigma_px']:.3g} px")
+    if robot_pose_sigma == "estimate":
+        return "corrected per image, " + level
+    cv = noise.get("cv_rms_px", {})
+    choice = noise.get("choice")
+    how = "taken as exact" if choice == "exact" else "corrected per image"
+    return (f"{how} (auto: held-out RMS {cv.get('exact', float('nan')):.3f} px exact vs "
+            f"{cv.get('estimated', float('nan')):.3f} px with the {level})")
+
+
 def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None, robot=None):
     """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source, homography
     threshold, joints or None, robot model or None)."""
@@ -107,13 +145,15 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
 
 def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
                   method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
-                  robot_pose_sigma="default", homography_threshold=None, joints=None, robot=None,
+                  robot_pose_sigma="auto", homography_threshold=None, joints=None, robot=None,
                   joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None) -> dict:
     """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
 
     robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
     refinement, ``None`` to take the flange poses as exact (as ROS-Industrial's calibration does),
-    ``"default"`` for :func:`~robocal.handeye.refine.refine_hand_eye`'s default.
+    ``"estimate"`` (variance components) or ``"auto"`` (the exact or the estimated model, whichever
+    predicts held-out images better; :mod:`robocal.handeye.pose_noise`), ``"default"`` for
+    :func:`~robocal.handeye.refine.refine_hand_eye`'s default prior.
     homography_threshold [px]: skip images whose detections one homography cannot explain
     (default: the cal_data.yaml value, else no check). joints: a ``robocal-program/1`` joint table
     (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
@@ -146,7 +186,7 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     elif tuple(camera.image_size) != tuple(detected.image_size):
         raise ValueError(f"the camera is for {camera.image_size[0]}x{camera.image_size[1]} px images, the images are "
                          f"{detected.image_size[0]}x{detected.image_size[1]} px")
-    extra = {} if isinstance(robot_pose_sigma, str) else {"robot_pose_sigma": robot_pose_sigma}
+    extra = {} if robot_pose_sigma == "default" else {"robot_pose_sigma": robot_pose_sigma}
     if q is not None:
         extra.update(joints=q[used], robot=model, joint_offsets=bool(joint_offsets))
     idx_used = np.flatnonzero(used)
@@ -184,9 +224,9 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     summary = {
         "format": "robocal-handeye/1", "setup": setup, "source": source, "board": b.to_dict(), "method": method,
         "loss": loss,
-        "robot_pose_sigma": "exact flange poses" if robot_pose_sigma is None else (
-            "refine_hand_eye default" if isinstance(robot_pose_sigma, str) else
-            {"mm": robot_pose_sigma[0], "deg": robot_pose_sigma[1]}),
+        "robot_pose_sigma": _sigma_json(robot_pose_sigma, result.noise_estimate),
+        "robot_pose_sigma_text": _sigma_text(robot_pose_sigma, result.noise_estimate),
+        "warnings": list(getattr(result, "warnings", ()) or ()),
         "homography_threshold_px": threshold,
         "convention": POSE_CONVENTION,
         "camera_pose": pose_dict(result.camera_pose, result.camera_pose_frame, result.sigma_translation_mm,
