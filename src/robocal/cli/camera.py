@@ -22,8 +22,12 @@ def camera():
 @click.option("--board", required=True, help=BOARD_HELP)
 @click.option("--model", type=click.Choice(["brown", "division"]), default="brown", show_default=True,
               help="Distortion model: OpenCV's Brown-Conrady or HALCON's division model.")
-@click.option("--distortion", "n_distortion", type=click.Choice(["4", "5", "8"]), default="5", show_default=True,
-              help="Number of Brown-Conrady coefficients (OpenCV order k1, k2, p1, p2[, k3[, k4, k5, k6]]).")
+@click.option("--distortion", "n_distortion",
+              type=click.Choice(["auto", "4", "5", "8", "k1-k2", "k1-k3", "k1-k2-p1-p2", "k1-k3-p1-p2", "rational"]),
+              default="auto", show_default=True,
+              help="Brown-Conrady terms (OpenCV order k1, k2, p1, p2[, k3[, k4, k5, k6]], unitless): 'auto' picks "
+                   "k1-k2, k1-k2-p1-p2, k1-k3, k1-k3-p1-p2 or rational (k1-k6, p1, p2) by held-out reprojection "
+                   "(5-fold over the images); 4, 5, 8 = that many coefficients.")
 @click.option("--fix", multiple=True, help="Parameter held at its start value (repeatable): fx, cx, k3, ...")
 @click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
               help="Folder for camera.json, camera.yaml (ROS), camera_calibration.json and report.html.")
@@ -35,7 +39,7 @@ def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrit
     from ..workflows.camera_calibrate import calibrate_camera_images
 
     try:
-        s = calibrate_camera_images(images_dir, board, out_dir=out_dir, model=model, n_distortion=int(n_distortion),
+        s = calibrate_camera_images(images_dir, board, out_dir=out_dir, model=model, n_distortion=n_distortion,
                                     fix=fix, overwrite=overwrite,
                                     progress=_item_progress)
     except (ValueError, HandEyeError, OSError) as exc:
@@ -48,9 +52,24 @@ def calibrate_cmd(images_dir, board, model, n_distortion, fix, out_dir, overwrit
     cam = s["camera"]
     click.echo(f"camera calibration: {s['n_images_used']} of {s['n_images']} images, {s['n_corners']} corners, "
                f"RMS {s['reprojection_rms_px']:.3f} px ({'converged' if s['converged'] else 'NOT converged'})")
+    sel = s.get("distortion_selection")
+    if sel:
+        scores = ", ".join(f"{k} {v:.4f}" for k, v in sel["held_out_rms_px"].items())
+        click.echo(f"distortion model {s['distortion_model']} (held-out RMS over {sel['folds']} folds [px]: {scores})")
+    elif s.get("distortion_model"):
+        click.echo(f"distortion model {s['distortion_model']}")
+    if s.get("corner_set_rms_px"):
+        click.echo(f"corners: {s['corners']} (RMS [px] " + ", ".join(
+            f"{k} {v:.4f}" for k, v in s["corner_set_rms_px"].items()) + ")")
+    units = cam.get("parameter_units", {})
     for name, value in cam["parameters"].items():
         sigma = cam["sigma"].get(name)
-        click.echo(f"  {name:>5s} {value:14.6f}" + ("" if sigma is None else f"  +- {sigma:.6f}"))
+        unit = units.get(name, "")
+        unit = f" {unit}" if unit == "px" else " (unitless)"
+        flag = "  NOT DETERMINED (1-sigma > |value|)" if name in s.get("not_determined", {}) else ""
+        held = sigma is None or sigma != sigma
+        click.echo(f"  {name:>5s} {value:14.6f}" + ("" if held else f"  +- {sigma:.6f}") + unit
+                   + ("  held" if held else "") + flag)
     echo_findings(s, out_dir)
 
 
