@@ -18,7 +18,11 @@ def handeye():
 @handeye.command("solve")
 @click.argument("cal_data", required=False, type=click.Path(path_type=str))
 @click.option("--poses", default=None, type=click.Path(path_type=str),
-              help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image.")
+              help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image; "
+                   "or 4x4 matrices (16 numbers per line row-major, as RobotPosesVec.txt, or 4 lines per pose) "
+                   "paired with the images by order (natural sort), with --length-unit.")
+@click.option("--length-unit", type=click.Choice(["m", "mm"]), default=None,
+              help="Unit of the translations in a 4x4 matrix pose file [m or mm] (unless it has '# length_unit:').")
 @click.option("--joints", "joints_file", default=None, type=click.Path(path_type=str),
               help="Instead of --poses: a robocal-program/1 joint table (point names = image names), with --robot.")
 @click.option("--robot", default=None, help="With --joints: the robot (shipped name or robot file).")
@@ -49,7 +53,7 @@ def handeye():
               help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
+def solve_cmd(cal_data, poses, length_unit, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
               refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, as_json):
     """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
     cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC."""
@@ -69,7 +73,7 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
                           homography_threshold=homography_threshold, joints=joints_file, robot=robot,
                           joint_offsets=joint_offsets, loss=loss, out_dir=out_dir,
-                          overwrite=overwrite, progress=_item_progress)
+                          overwrite=overwrite, progress=_item_progress, length_unit=length_unit)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
     for w in s.get("warnings", []):

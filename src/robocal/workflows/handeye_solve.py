@@ -108,7 +108,7 @@ def _sigma_text(robot_pose_sigma, noise) -> str:
             f"{cv.get('estimated', float('nan')):.3f} px with the {level})")
 
 
-def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None, robot=None):
+def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None, robot=None, length_unit=None):
     """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source, homography
     threshold, joints or None, robot model or None)."""
     if cal_data is not None:
@@ -129,7 +129,7 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
     cam = read_camera(camera_file) if camera_file else None
     setup = setup or "eye_in_hand"
     if poses is not None:
-        pairs = pair_images_with_poses(images, poses)
+        pairs = pair_images_with_poses(images, poses, length_unit)
         return (pairs.image_paths, pairs.labels, pairs.T_base_flange, b, None, cam, setup, f"{poses} + {images}",
                 None, None, None)
     if robot is None:
@@ -146,7 +146,8 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
 def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
                   method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
                   robot_pose_sigma="auto", homography_threshold=None, joints=None, robot=None,
-                  joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None) -> dict:
+                  joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None,
+                  length_unit: str | None = None) -> dict:
     """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
 
     robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
@@ -159,14 +160,15 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
     flange poses are the robot file's forward kinematics; ``joint_offsets`` also estimates the
     robot's joint zero offsets. loss: ``"linear"``, or ``"huber"`` / ``"cauchy"`` to reject whole
-    images that do not fit (listed per image as ``outlier``)."""
+    images that do not fit (listed per image as ``outlier``). length_unit: "m" | "mm" of a 4 x 4
+    matrix pose file (:mod:`robocal.io.matrix_poses`) that does not declare it."""
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.refine import refine_hand_eye
 
     if setup is not None and setup not in SETUPS:
         raise ValueError(f"setup must be one of {', '.join(SETUPS)}, got {setup!r}")
     paths, labels, F, b, blobs, camera, setup, source, file_threshold, q, model = _inputs(
-        cal_data, poses, images, board, setup, camera_file, joints, robot)
+        cal_data, poses, images, board, setup, camera_file, joints, robot, length_unit)
     if joint_offsets and q is None:
         raise ValueError("--joint-offsets needs --joints JOINTS.csv and --robot ROBOT")
     threshold = file_threshold if homography_threshold is None else homography_threshold
