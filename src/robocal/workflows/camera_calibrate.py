@@ -51,7 +51,7 @@ COUNT_MODELS = {4: "k1-k2-p1-p2", 5: "k1-k3-p1-p2", 8: "rational"}
 
 
 def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str = "brown", n_distortion=5,
-                            fix=(), overwrite: bool = False, progress=None) -> dict:
+                            fix=(), overwrite: bool = False, progress=None, board_shape: bool = False) -> dict:
     """Calibrate a camera from the images of ``images_dir`` (module docstring). Returns the summary
     dict (the JSON); writes the outputs when ``out_dir`` is given.
 
@@ -59,7 +59,8 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
     :data:`robocal.handeye.distortion_models.DISTORTION_MODELS`, or ``"auto"``: the model with the
     lowest held-out RMS (5-fold cross-validation over the images). ChArUco corners are taken as
     OpenCV's detector gives them or refined again by ``cornerSubPix``, whichever set the model fits
-    with the lower RMS."""
+    with the lower RMS. board_shape: also estimate the board's sag along x and y [mm]
+    (``board_sag_mm`` in the summary)."""
     from dataclasses import replace
 
     from ..handeye.camera_calibration import calibrate_camera
@@ -83,10 +84,12 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
 
     def run(m, uv):
         if m == "division":
-            return calibrate_camera(uv, X, detected.image_size, model="division", fix=tuple(fix), min_points=b.min_points)
+            return calibrate_camera(uv, X, detected.image_size, model="division", fix=tuple(fix), min_points=b.min_points,
+                                    board_shape=board_shape)
         n, held = DISTORTION_MODELS[m]
         return calibrate_camera(uv, X, detected.image_size, model="brown", n_distortion=n,
-                                fix=tuple(fix) + tuple(h for h in held if h not in fix), min_points=b.min_points)
+                                fix=tuple(fix) + tuple(h for h in held if h not in fix), min_points=b.min_points,
+                                board_shape=board_shape)
 
     corners = "as detected"
     corner_rms = None
@@ -120,7 +123,8 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
                         f"value); choose a model without it (--distortion auto) or --fix {term}")
     summary = {
         "format": "robocal-camera-calibration/1", "board": b.to_dict(), "images_dir": str(images_dir),
-        "camera": camera_summary(camera, cal.sigma), "reprojection_rms_px": float(cal.rms_px),
+        "camera": camera_summary(camera, {k: v for k, v in cal.sigma.items() if not k.startswith("sag_")}),
+        "reprojection_rms_px": float(cal.rms_px),
         "n_images": len(rows), "n_images_used": sum(r["used"] for r in rows),
         "n_corners": int(np.count_nonzero(np.isfinite(residuals[..., 0]))),
         "converged": bool(cal.converged), "message": cal.message,
@@ -128,6 +132,9 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
         "distortion_model": name, "distortion_selection": selection,
         "not_determined": {k: {"value": v, "sigma": sg} for k, (v, sg) in not_determined.items()},
         "corners": corners, "corner_set_rms_px": corner_rms,
+        "board_sag_mm": None if cal.board_sag_mm is None else {
+            "x": cal.board_sag_mm[0], "y": cal.board_sag_mm[1], "sigma_x": cal.sigma.get("sag_x"),
+            "sigma_y": cal.sigma.get("sag_y")},
     }
     if out_dir is not None:
         projected, _ = backprojection(camera, T, X, detected.image_points)
