@@ -267,3 +267,19 @@ def test_robot_pose_sigma_option_values():
     s = json.loads(r.stdout[r.stdout.index("{"):])
     assert s["robot_pose_sigma"]["mode"] == "estimate"
     assert s["robot_pose_sigma"]["robot_pose_sigma"][0] > 0
+
+
+def test_refined_distortion_terms_the_images_do_not_determine_are_named():
+    """Issue 25 item 6 (camera part): `handeye solve --refine-intrinsics` on the ChArUco set refines
+    five distortion terms; k3 comes out -0.17 +- 0.19 and is named as not determined, not reported
+    as identifiable; every refined intrinsic has its 1-sigma and unit."""
+    r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / "test_set_charuco" / "cal_data.yaml"),
+                                  "--refine-intrinsics", "--exact-poses", "--json"])
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout[r.stdout.index("{"):])
+    assert "k3" in s["not_determined"]
+    assert any(line.startswith("k3: not determined") for line in s["identifiability"])
+    assert not any(line.startswith("every estimated") for line in s["identifiability"])
+    cam = s["camera"]
+    assert set(cam["sigma"]) >= {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"}
+    assert cam["parameter_units"]["fx"] == "px"

@@ -70,6 +70,22 @@ def _rms(residuals) -> float:
     return float(np.sqrt(np.mean(np.sum(r ** 2, axis=1)))) if len(r) else float("nan")
 
 
+def _intrinsics_sigma(result) -> tuple:
+    """({short name: 1-sigma} of the refined intrinsics, {term: (value, sigma)} of the distortion
+    terms whose 1-sigma exceeds their magnitude); empty when the intrinsics were held."""
+    from ..handeye.distortion_models import undetermined_terms
+
+    names = list(getattr(result, "variable_names", ()) or ())
+    cov = getattr(result, "covariance", None)
+    sigma = {}
+    for i, n in enumerate(names):
+        if n.startswith("cam.") and cov is not None and np.isfinite(cov[i, i]):
+            sigma[n.split(".", 1)[1]] = float(np.sqrt(cov[i, i]))
+    if not sigma:
+        return {}, {}
+    return sigma, undetermined_terms(camera_summary(result.camera)["parameters"], sigma)
+
+
 def _sigma_json(robot_pose_sigma, noise):
     """How the flange poses were treated, for the JSON."""
     if robot_pose_sigma is None:
@@ -223,6 +239,12 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         d["difference_rotation_deg"] = float(np.degrees(rotation_angle(cam_pose[:3, :3].T @ result.camera_pose[:3, :3])))
         d["reprojection_rms_px"] = _rms(lin_back)
         linear[m] = d
+    cam_sigma, not_determined = _intrinsics_sigma(result)
+    findings = identifiability_lines(result.identifiability)
+    if not_determined:
+        findings = [ln for ln in findings if not ln.startswith("every estimated parameter")]
+        findings += [f"{k}: not determined by these images ({v:+.4g} +- {sg:.3g}, the 1-sigma exceeds the value)"
+                     for k, (v, sg) in not_determined.items()]
     summary = {
         "format": "robocal-handeye/1", "setup": setup, "source": source, "board": b.to_dict(), "method": method,
         "loss": loss,
@@ -239,9 +261,11 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         "reprojection_rms_mm": float(getattr(result, "rms_mm", float("nan"))),
         "n_images": N, "n_images_used": sum(r["used"] for r in rows),
         "n_corners": int(np.count_nonzero(np.isfinite(back[..., 0]))),
-        "camera": {**camera_summary(result.camera), "source": camera_source, "refined": bool(refine_intrinsics)},
+        "camera": {**camera_summary(result.camera, cam_sigma), "source": camera_source,
+                   "refined": bool(refine_intrinsics)},
+        "not_determined": {k: {"value": v, "sigma": sg} for k, (v, sg) in not_determined.items()},
         "converged": bool(result.converged), "message": result.message,
-        "identifiability": identifiability_lines(result.identifiability),
+        "identifiability": findings,
         "linear": linear, "images": rows,
     }
     if joint_offsets and getattr(result, "joint_offsets_rad", None) is not None:
