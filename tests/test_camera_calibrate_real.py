@@ -65,11 +65,18 @@ def _subpix(name, img):
     return out
 
 
+_RUNS = {}
+
+
 def _robocal(name, distortion):
+    """`camera calibrate --json` on a set (each set and model run once per test session)."""
+    if (name, distortion) in _RUNS:
+        return _RUNS[name, distortion]
     r = CliRunner().invoke(main, ["camera", "calibrate", str(ROS / name / "images"), "--board", BOARDS[name],
                                   "--distortion", distortion, "--json"])
     assert r.exit_code == 0, r.output
-    return json.loads(r.stdout[r.stdout.index("{"):])
+    _RUNS[name, distortion] = json.loads(r.stdout[r.stdout.index("{"):])
+    return _RUNS[name, distortion]
 
 
 @pytest.mark.parametrize("name", list(BOARDS))
@@ -108,6 +115,8 @@ def test_default_model_by_held_out_reprojection_and_honest_terms(name):
         assert {"k3", "k4", "k5", "k6"} <= set(rational["not_determined"])
         assert any(line.startswith("k6: not determined") for line in rational["identifiability"])
         assert not any(line.startswith("every estimated") for line in rational["identifiability"])
+    if name != "test_set_charuco":
+        return
     r = CliRunner().invoke(main, ["camera", "calibrate", str(ROS / name / "images"), "--board", BOARDS[name]])
     fx_line = next(ln for ln in r.stdout.splitlines() if ln.strip().startswith("fx"))
     k1_line = next(ln for ln in r.stdout.splitlines() if ln.strip().startswith("k1"))
