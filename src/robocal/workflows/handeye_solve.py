@@ -120,6 +120,10 @@ def _sigma_text(robot_pose_sigma, noise) -> str:
     cv = noise.get("cv_rms_px", {})
     choice = noise.get("choice")
     how = "taken as exact" if choice == "exact" else "corrected per image"
+    if noise.get("reason"):
+        return f"{how} (auto: {noise['reason']})"
+    if not np.isfinite(cv.get("exact", float("nan"))):
+        return f"{how} (auto: too few images to cross-validate the noise model)"
     return (f"{how} (auto: held-out RMS {cv.get('exact', float('nan')):.3f} px exact vs "
             f"{cv.get('estimated', float('nan')):.3f} px with the {level})")
 
