@@ -87,3 +87,28 @@ def test_checkerboard_given_by_squares_is_named(tmp_path):
     r = CliRunner().invoke(main, ["camera", "calibrate", str(out / "images"), "--board", "checkerboard:10x7:25mm"])
     assert r.exit_code == 1
     assert "inner corners: 9 x 6 found / 10 x 7 expected, did you give squares?" in r.output
+
+
+def test_matrix_layouts_read_the_same_poses(tmp_path):
+    """16 and 12 numbers per line (commas, semicolons, tabs), blocks of 4 and of 3 lines, with
+    comments: the same poses in mm; a file unit that contradicts the option is refused."""
+    from robocal.transforms import so3_exp
+
+    rng = np.random.default_rng(0)
+    T = np.tile(np.eye(4), (3, 1, 1))
+    T[:, :3, :3] = so3_exp(rng.normal(0, 1, (3, 3)))
+    T[:, :3, 3] = rng.uniform(-1.0, 1.0, (3, 3))  # metres
+    layouts = {
+        "16.txt": "\n".join(",".join(f"{v:.12f}" for v in M.ravel()) for M in T),
+        "12.txt": "# flange poses\n" + "\n".join(";".join(f"{v:.12f}" for v in M[:3].ravel()) for M in T),
+        "b4.txt": "\n\n".join("\n".join("\t".join(f"{v:.12f}" for v in row) for row in M) for M in T),
+        "b3.txt": "\n".join("\n".join(" ".join(f"{v:.12f}" for v in row) for row in M[:3]) for M in T),
+    }
+    for name, text in layouts.items():
+        (tmp_path / name).write_text(text + "\n")
+        got = read_matrix_poses(tmp_path / name, "m")
+        assert np.allclose(got[:, :3, 3], T[:, :3, 3] * 1000.0, atol=1e-6), name
+        assert np.allclose(got[:, :3, :3], T[:, :3, :3], atol=1e-9), name
+    (tmp_path / "declared.txt").write_text("# length_unit: mm\n" + layouts["16.txt"] + "\n")
+    with pytest.raises(MatrixPoseError, match="declares length_unit mm, but m was given"):
+        read_matrix_poses(tmp_path / "declared.txt", "m")
