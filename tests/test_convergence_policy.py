@@ -163,7 +163,7 @@ def test_tcp_seven_point_not_converged_exits_4_and_prints_no_tool_data(tmp_path,
     f = _touch_csv(tmp_path / "touch.csv", n=5)
     lines = f.read_text().splitlines()
     last = lines[-1].split(",")
-    for k, dx in ((6, (0.0, 0.0, 0.0)), (7, (50.0, 0.0, 0.0)), (8, (50.0, 0.0, 40.0))):  # P5, P6, P7
+    for k, dx in ((6, (0.0, 0.0, 0.0)), (7, (50.0, 0.0, 0.0)), (8, (50.0, 0.0, -40.0))):  # P5, P6, P7 (the Z move along the tool, away from the flange: the tool-axis gate passes)
         row = [f"P{k}"] + [f"{float(v) + (dx[i] if i < 3 else 0.0):.9f}" for i, v in enumerate(last[1:])]
         lines.append(",".join(row))
     f.write_text("\n".join(lines) + "\n")

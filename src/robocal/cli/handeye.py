@@ -18,7 +18,11 @@ def handeye():
 @handeye.command("solve")
 @click.argument("cal_data", required=False, type=click.Path(path_type=str))
 @click.option("--poses", default=None, type=click.Path(path_type=str),
-              help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image.")
+              help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image; "
+                   "or 4x4 matrices (16 numbers per line row-major, as RobotPosesVec.txt, or 4 lines per pose) "
+                   "paired with the images by order (natural sort), with --length-unit.")
+@click.option("--length-unit", type=click.Choice(["m", "mm"]), default=None,
+              help="Unit of the translations in a 4x4 matrix pose file [m or mm] (unless it has '# length_unit:').")
 @click.option("--joints", "joints_file", default=None, type=click.Path(path_type=str),
               help="Instead of --poses: a robocal-program/1 joint table (point names = image names), with --robot.")
 @click.option("--robot", default=None, help="With --joints: the robot (shipped name or robot file).")
@@ -36,8 +40,11 @@ def handeye():
 @click.option("--loss", type=click.Choice(["linear", "huber", "cauchy"]), default="linear", show_default=True,
               help="Robust loss per image: images that do not fit (a swapped pose) are rejected and named.")
 @click.option("--refine-intrinsics", is_flag=True, help="Refine the intrinsics together with the hand-eye transform.")
-@click.option("--robot-pose-sigma", type=float, nargs=2, default=None, metavar="MM DEG",
-              help="The robot's pose error per axis (errors in variables); default: refine_hand_eye's (0.05 mm, 0.01 deg).")
+@click.option("--robot-pose-sigma", default="auto", show_default=True, metavar="auto|estimate|MM,DEG",
+              help="The robot's pose error per axis [mm, deg] (errors in variables): 'auto' fits the flange poses "
+                   "as exact and with their noise estimated from the data and keeps the one that predicts "
+                   "held-out images better (a Warning: when the two disagree beyond their sigma); 'estimate' "
+                   "the estimated noise (variance components); 'MM,DEG' a fixed prior, e.g. 0.05,0.01.")
 @click.option("--exact-poses", is_flag=True, help="Take the flange poses as exact (as ROS-Industrial's calibration).")
 @click.option("--homography-threshold", type=float, default=None,
               help="Skip images whose detections one homography misses by more than this mean [px] "
@@ -49,7 +56,7 @@ def handeye():
               help="Write handeye.yaml even when the result FAILS the sanity gates (exit code 3 all the same).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @allow_unconverged_option
-def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
+def solve_cmd(cal_data, poses, length_unit, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
               refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, force,
               as_json, allow_unconverged):
     """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
@@ -68,18 +75,22 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
     if cal_data is None and ((poses is None and joints_file is None) or images is None or board is None):
         raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv (or --joints JOINTS.csv --robot ROBOT) "
                                "--images DIR --board SPEC")
-    if exact_poses and robot_pose_sigma:
-        raise click.UsageError("--exact-poses and --robot-pose-sigma exclude each other")
-    sigma = None if exact_poses else (tuple(robot_pose_sigma) if robot_pose_sigma else "default")
+    sigma = _pose_sigma(robot_pose_sigma)
+    if exact_poses:
+        if robot_pose_sigma != "auto":
+            raise click.UsageError("--exact-poses and --robot-pose-sigma exclude each other")
+        sigma = None
     try:
         s = solve_handeye(cal_data=cal_data, poses=poses, images=images, board=board, setup=setup, method=method,
                           camera_file=camera_file, refine_intrinsics=refine_intrinsics, robot_pose_sigma=sigma,
                           homography_threshold=homography_threshold, joints=joints_file, robot=robot,
                           joint_offsets=joint_offsets, loss=loss, out_dir=out_dir,
                           overwrite=overwrite, progress=_item_progress, force=force,
-                          allow_unconverged=allow_unconverged)
+                          allow_unconverged=allow_unconverged, length_unit=length_unit)
     except (ValueError, HandEyeError, OSError) as exc:
         raise _user_error(exc) from None
+    for w in s.get("warnings", []):
+        click.echo(f"Warning: {w}", err=True)
     if as_json:
         click.echo(json.dumps(s, indent=2))
         _exit_on_failed_gate(s)
@@ -91,6 +102,7 @@ def solve_cmd(cal_data, poses, joints_file, robot, joint_offsets, images, board,
                f"reprojection RMS {s['reprojection_rms_px']:.3f} px ({'converged' if s['converged'] else 'NOT converged'})")
     click.echo(f"camera in {cp['frame']}: position {_v(cp['position_mm'])} mm  (1-sigma {_v(sig_p, 3)})")
     click.echo(f"  rotation vector {_v(cp['rotation_vector_deg'], 4)} deg  (1-sigma {_v(sig_r, 4)})")
+    click.echo(f"flange poses: {s['robot_pose_sigma_text']}")
     click.echo("linear solutions (start of the refinement):")
     for m, d in s["linear"].items():
         click.echo(f"  {m:>10s}  {_v(d['position_mm'])} mm, {_n(d['difference_position_mm'])} mm / "
@@ -119,6 +131,22 @@ def _exit_on_failed_gate(s: dict) -> None:
 
 def _n(value, digits=2) -> str:
     return "nan" if value is None else f"{value:.{digits}f}"
+
+
+def _pose_sigma(text: str):
+    """``--robot-pose-sigma``: "auto" | "estimate" | (mm, deg) from "MM,DEG" (or "MM DEG")."""
+    t = text.strip().lower()
+    if t in ("auto", "estimate"):
+        return t
+    parts = t.replace(",", " ").split()
+    try:
+        values = tuple(float(v) for v in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(v > 0 for v in values):
+        raise click.BadParameter(f"expected auto, estimate or MM,DEG (two positive numbers, e.g. 0.05,0.01), "
+                                 f"got {text!r}", param_hint="--robot-pose-sigma")
+    return values
 
 
 def _v(values, digits=2) -> str:

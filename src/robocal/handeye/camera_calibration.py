@@ -21,7 +21,8 @@ import numpy as np
 
 from ..calib import Problem, solve
 from ..calib.blocks import CameraIntrinsics, FramesBlock
-from ..calib.residuals import ReprojectionResidual
+from ..calib.residuals import BoardShapeReprojectionResidual, ReprojectionResidual
+from ..calib.residuals.board_shape import board_shape_block, sag_bases
 from ..calib.solve import NotConvergedWarning
 from ..camera import BROWN_SIZES, Camera
 from .backprojection import rms_px
@@ -41,7 +42,9 @@ class CameraCalibration:
     sigma: 1-sigma of every free intrinsic / distortion parameter by short name (``fx`` [px],
     ``k1`` [1]) from the covariance; converged; identifiability: the core's
     :class:`~robocal.calib.identifiability.IdentifiabilityReport` (``dropped`` names what the
-    images cannot determine); message: one line on the outcome; skipped: {image index: reason}.
+    images cannot determine); message: one line on the outcome; skipped: {image index: reason};
+    board_sag_mm: ``(sag_x, sag_y)`` [mm] of the board when its shape was estimated
+    (``board_shape=True``; their 1-sigma in ``sigma`` as ``sag_x``, ``sag_y``), else None.
     """
 
     camera: Camera
@@ -54,6 +57,7 @@ class CameraCalibration:
     identifiability: object
     message: str
     skipped: dict | None = None
+    board_sag_mm: tuple | None = None
 
 
 def _check_points(image_points, target_points):
@@ -132,7 +136,7 @@ def _short(name: str) -> str:
 
 def calibrate_camera(image_points, target_points, image_size, *, model: str = "brown", n_distortion: int = 5,
                      camera: Camera | None = None, fix=(), min_points: int = 6,
-                     loss: str = "linear") -> CameraCalibration:
+                     loss: str = "linear", board_shape: bool = False) -> CameraCalibration:
     """Intrinsics and distortion of one camera from N images of a known target.
 
     image_points (N, P, 2) [px], NaN where a corner was not detected; target_points (P, 3) [mm] in
@@ -141,7 +145,10 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
     :class:`~robocal.camera.Camera` (its model and coefficient count win) or None for the
     closed-form start; fix: parameter names held at their start (``"k3"``, ``"cx"`` ...); images
     with fewer than ``min_points`` detected corners are skipped (``skipped`` says why); loss:
-    ``"linear"`` or ``"huber"`` (per image, the core's robust option).
+    ``"linear"`` or ``"huber"`` (per image, the core's robust option); board_shape: also estimate
+    the board's sag along its x and y axes [mm] (a low-order surface,
+    :class:`~robocal.calib.residuals.BoardShapeReprojectionResidual`; the points stay those of a
+    flat board otherwise).
 
     Raises :class:`HandEyeError` for fewer than 3 usable images or no closed-form start.
     """
@@ -175,24 +182,40 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
     cam = cam.with_free([n not in fixed for n in cam.names])
     identity = FramesBlock("camera", np.eye(4), free=False)
     poses = FramesBlock("target", T0[good], labels=[f"image{i}" for i in np.flatnonzero(good)], group="targets")
-    res = ReprojectionResidual(cam, identity, poses, uv[good], X)
+    blocks = [cam, identity, poses]
+    if board_shape:
+        shape = board_shape_block()
+        blocks.append(shape)
+        res = BoardShapeReprojectionResidual(cam, identity, poses, uv[good], X, shape)
+    else:
+        res = ReprojectionResidual(cam, identity, poses, uv[good], X)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)
-        result = solve(Problem([cam, identity, poses], [res]), loss=loss)
+        result = solve(Problem(blocks, [res]), loss=loss)
     value = result.state[0]
     refined = Camera(*value[:4], tuple(value[4:]), camera.model, tuple(image_size))
     T = np.full((N, 4, 4), np.nan)
     T[good] = result.state[2]
-    residuals = _residuals(refined, X, uv, T)
     sigma = {_short(n): float(s) for n, s in zip(result.names, result.std) if n.startswith("cam.")}
+    sag = None
+    if board_shape:
+        sag = tuple(float(v) for v in np.ravel(result.state[3]))
+        X = X.copy()
+        X[:, 2] += sag_bases(X) @ np.asarray(sag)
+        for n, s_ in zip(result.names, result.std):
+            if n.startswith("board."):
+                sigma[n.split(".", 1)[1]] = float(s_)
+    residuals = _residuals(refined, X, uv, T)
     rms, per_image = rms_px(residuals)
     dropped = result.identifiability.dropped_names
     msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
            f"{result.iterations} iterations; {int(good.sum())} of {N} images, RMS {rms:.3f} px")
     if dropped:
         msg += f"; not identifiable from these images (held at their start): {', '.join(map(_short, dropped))}"
+    if sag is not None:
+        msg += f"; board sag {sag[0]:+.3f} mm along x, {sag[1]:+.3f} mm along y"
     return CameraCalibration(refined, T, residuals, rms, per_image, sigma, bool(result.converged),
-                             result.identifiability, msg, skipped)
+                             result.identifiability, msg, skipped, sag)
 
 
 def _residuals(camera: Camera, X, uv, T) -> np.ndarray:

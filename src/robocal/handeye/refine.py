@@ -95,6 +95,7 @@ class HandEyeRefinement:
     joint_offset_names: tuple = ()
     outliers: dict | None = None
     noise_estimate: dict | None = None
+    warnings: tuple = ()
 
 
 def joint_offset_names(model) -> list:
@@ -200,7 +201,8 @@ def _pose_sigmas(result, block_label, T):
 def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, *, setup: str = "eye_in_hand",
                     method: str = "shah", refine_intrinsics=False, joints=None, robot=None,
                     joint_offsets: bool = False, loss: str = "linear", min_points: int = 6,
-                    end_effector=None, robot_pose_sigma=(0.05, 0.01), pixel_sigma=None) -> HandEyeRefinement:
+                    end_effector=None, robot_pose_sigma=(0.05, 0.01), pixel_sigma=None,
+                    variance_rounds: int = 10) -> HandEyeRefinement:
     """The hand-eye transform refined on the reprojection error of all corners (module docstring).
 
     T_base_flange (N, 4, 4) [mm]: the controller's flange poses; image_points (N, P, 2) [px], NaN
@@ -218,8 +220,11 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     axis (its repeatability): each image gets a flange-pose correction with that Gaussian prior
     (errors in variables; ``None``: the flange poses are taken as exact; ``"estimate"``: the corner
     noise and the robot's rotation and translation noise estimated from the data by variance
-    components, reported in ``noise_estimate``); pixel_sigma [px]: the corner noise per coordinate
-    (default: from the per-image PnP residuals).
+    components, reported in ``noise_estimate``; ``"auto"``: the exact and the estimated model both
+    fitted, the one predicting held-out images better kept, systematic disagreement in ``warnings``,
+    :mod:`.pose_noise`; with ``joint_offsets`` the poses from forward kinematics are taken as exact); pixel_sigma [px]: the corner noise per coordinate
+    (default: from the per-image PnP residuals); variance_rounds: at most this many re-solves of the
+    variance-component estimate.
 
     Raises :class:`HandEyeError` naming the problem for mismatched counts, fewer than 3 usable
     images, pure translations or rotations about one axis only, or a robot model whose forward
@@ -227,6 +232,15 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     """
     if method not in LINEAR_METHODS:
         raise HandEyeError(f"unknown hand-eye method {method!r}; expected one of {', '.join(LINEAR_METHODS)}")
+    if isinstance(robot_pose_sigma, str) and robot_pose_sigma == "auto" and joint_offsets:
+        # the robot's error is modelled by its joint offsets; per-image corrections would compete with them
+        robot_pose_sigma = None
+    if isinstance(robot_pose_sigma, str) and robot_pose_sigma == "auto":
+        from .pose_noise import refine_auto
+
+        return refine_auto(refine_hand_eye, T_base_flange, image_points, target_points, camera, setup=setup,
+                           joints=joints, method=method, refine_intrinsics=refine_intrinsics, robot=robot,
+                           joint_offsets=joint_offsets, loss=loss, min_points=min_points, end_effector=end_effector)
     F_all, uv_all, X = _check_inputs(T_base_flange, image_points, target_points, setup)
     N = len(F_all)
     C_all, _, reasons = solve_pnp(camera, X, uv_all, min_points=min_points)
@@ -255,7 +269,8 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     base_blocks = list(blocks)
     estimate = isinstance(robot_pose_sigma, str)
     if estimate and robot_pose_sigma != "estimate":
-        raise HandEyeError(f"robot_pose_sigma: expected (mm, deg), None or 'estimate', got {robot_pose_sigma!r}")
+        raise HandEyeError(f"robot_pose_sigma: expected (mm, deg), None, 'estimate' or 'auto', got "
+                           f"{robot_pose_sigma!r}")
     pose_sigma = (0.05, 0.01) if estimate else robot_pose_sigma
     sigma = None
     if pose_sigma is not None:
@@ -273,7 +288,7 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
                                               **kw)
         return Problem(blocks, [residual, *extra], n_poses=len(uv)), blocks
 
-    def run(problem, sigma, state0=None):
+    def run(problem, sigma, state0=None, auto_identifiable=True):
         f_scale = None
         if loss != "linear" and sigma is not None:
             # weighted rows are ~unit: an image's norm is ~sqrt(its rows); twice that marks a bad image
@@ -281,19 +296,21 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
             f_scale = 2.0 * float(np.sqrt(np.median(np.bincount(labels[labels >= 0]))))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotConvergedWarning)
-            return solve(problem, loss=loss, f_scale=f_scale, state0=state0)
+            return solve(problem, loss=loss, f_scale=f_scale, state0=state0, auto_identifiable=auto_identifiable)
 
     problem, blocks = build(pose_sigma, sigma)
     result = run(problem, sigma)
     noise = None
     if estimate:  # variance components: pixels, robot rotation, robot translation
-        for _ in range(10):
+        # the identifiable set does not change with the weights: analysed once (the rounds stay cheap)
+        full_rank = not result.identifiability.dropped
+        for _ in range(variance_rounds):
             factors = _variance_factors(result, problem.residual_blocks[0].n_rows)
             if np.all(np.abs(factors - 1.0) < 0.05):
                 break
             sigma, pose_sigma = sigma * factors[0], (pose_sigma[0] * factors[2], pose_sigma[1] * factors[1])
             problem, blocks = build(pose_sigma, sigma)
-            result = run(problem, sigma, result.state)
+            result = run(problem, sigma, result.state, auto_identifiable=not full_rank)
         noise = {"pixel_sigma_px": float(sigma), "robot_pose_sigma": tuple(float(v) for v in pose_sigma),
                  "converged": bool(np.all(np.abs(factors - 1.0) < 0.05))}
 

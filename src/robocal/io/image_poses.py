@@ -6,6 +6,11 @@ orientation convention and units); each row's ``pose`` label names its image: th
 name without its ending (``img_03`` for ``img_03.png``) or with it. Every image needs exactly one
 pose and every pose one image; otherwise :class:`ImagePoseMismatch` says which names are unmatched
 and how many of each there are.
+
+A pose file of 4 x 4 matrices (:mod:`robocal.io.matrix_poses`: one row-major matrix per line as
+``RobotPosesVec.txt``, or one per block of lines; the length unit declared) has no labels: its
+poses pair with the images *by order*, the images sorted naturally by name (``2.png`` before
+``10.png``), and the counts must agree.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .images import list_images
+from .matrix_poses import is_matrix_pose_file, read_matrix_poses
 from .tcp_files import read_flange_poses_csv
 
 __all__ = ["ImagePoseMismatch", "ImagePoses", "pair_images_with_poses", "pair_images_with_labels"]
@@ -68,8 +74,22 @@ def pair_images_with_labels(images_dir, labels, source) -> tuple[tuple, list]:
     return tuple(p for p, _ in pairs), [by_label[k] for _, k in pairs]
 
 
-def pair_images_with_poses(images_dir, poses_file) -> ImagePoses:
-    """Pair every image of ``images_dir`` with the row of ``poses_file`` that names it."""
+def pair_images_with_poses(images_dir, poses_file, length_unit: str | None = None) -> ImagePoses:
+    """Pair every image of ``images_dir`` with the row of ``poses_file`` that names it; a file of
+    4 x 4 matrices pairs by order (module docstring; ``length_unit`` "m" | "mm" unless the file
+    declares it)."""
+    if is_matrix_pose_file(poses_file):
+        T = read_matrix_poses(poses_file, length_unit)
+        images = list_images(images_dir)
+        if len(images) != len(T):
+            raise ImagePoseMismatch(
+                f"{len(images)} images in {images_dir} but {len(T)} poses in {poses_file}: a matrix pose file pairs "
+                f"with the images by order (images sorted by name, 2 before 10), so the counts must agree")
+        return ImagePoses(image_paths=tuple(images), labels=tuple(p.stem for p in images), T_base_flange=T,
+                          convention="matrix")
+    if length_unit is not None:
+        raise ImagePoseMismatch(f"{poses_file}: --length-unit applies to matrix pose files; a flange-pose CSV "
+                                "declares its unit in its '# length_unit:' line")
     poses = read_flange_poses_csv(poses_file, min_rows=1)
     paths, idx = pair_images_with_labels(images_dir, poses.labels, poses_file)
     return ImagePoses(image_paths=paths, labels=tuple(poses.labels[i] for i in idx),

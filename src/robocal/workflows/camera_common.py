@@ -25,7 +25,8 @@ POSE_CONVENTION = ("T_<frame>_<object>: the object's pose in the named frame; po
 @dataclass(frozen=True, eq=False)
 class DetectedSet:
     """paths (N); names (N); image_points (N, P, 2) [px] NaN where not found; image_size (w, h);
-    skip_reasons (N) None for usable images; board."""
+    skip_reasons (N) None for usable images; board; refined_points (N, P, 2) [px] the
+    ``cornerSubPix``-refined alternative (ChArUco) or None."""
 
     paths: tuple
     names: tuple
@@ -33,6 +34,7 @@ class DetectedSet:
     image_size: tuple
     skip_reasons: tuple
     board: Board
+    refined_points: np.ndarray | None = None
 
     @property
     def used(self) -> np.ndarray:
@@ -60,9 +62,12 @@ def detect_set(paths, board: Board, *, blob_settings: BlobSettings | None = None
         other = next(d for d in dets if d.image_size != first.image_size)
         raise ValueError(f"images differ in size: {first.name} is {first.image_size[0]}x{first.image_size[1]} px, "
                          f"{other.name} is {other.image_size[0]}x{other.image_size[1]} px (one camera, one size)")
+    refined = None
+    if any(d.refined_points is not None for d in dets):
+        refined = np.array([d.image_points if d.refined_points is None else d.refined_points for d in dets])
     return DetectedSet(paths=tuple(paths), names=tuple(d.name for d in dets),
                        image_points=np.array([d.image_points for d in dets]), image_size=dets[0].image_size,
-                       skip_reasons=tuple(d.skip_reason for d in dets), board=board)
+                       skip_reasons=tuple(d.skip_reason for d in dets), board=board, refined_points=refined)
 
 
 def pose_dict(T: np.ndarray, frame: str, sigma_position_mm=None, sigma_rotation_deg=None) -> dict:

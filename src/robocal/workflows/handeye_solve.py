@@ -64,7 +64,65 @@ def _rms(residuals) -> float:
     return float(np.sqrt(np.mean(np.sum(r ** 2, axis=1)))) if len(r) else float("nan")
 
 
-def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None, robot=None):
+def _intrinsics_sigma(result) -> tuple:
+    """({short name: 1-sigma} of the refined intrinsics, {term: (value, sigma)} of the distortion
+    terms whose 1-sigma exceeds their magnitude); empty when the intrinsics were held."""
+    from ..handeye.distortion_models import undetermined_terms
+
+    names = list(getattr(result, "variable_names", ()) or ())
+    cov = getattr(result, "covariance", None)
+    sigma = {}
+    for i, n in enumerate(names):
+        if n.startswith("cam.") and cov is not None and np.isfinite(cov[i, i]):
+            sigma[n.split(".", 1)[1]] = float(np.sqrt(cov[i, i]))
+    if not sigma:
+        return {}, {}
+    return sigma, undetermined_terms(camera_summary(result.camera)["parameters"], sigma)
+
+
+def _sigma_json(robot_pose_sigma, noise):
+    """How the flange poses were treated, for the JSON."""
+    if robot_pose_sigma is None:
+        return "exact flange poses"
+    if robot_pose_sigma == "default":
+        return "refine_hand_eye default"
+    if isinstance(robot_pose_sigma, str):
+        out = {"mode": robot_pose_sigma}
+        for k, v in (noise or {}).items():
+            if k != "other_camera_pose":
+                out[k] = v
+        return out
+    return {"mm": robot_pose_sigma[0], "deg": robot_pose_sigma[1]}
+
+
+def _sigma_text(robot_pose_sigma, noise) -> str:
+    """One line: how the flange poses were treated and why."""
+    if robot_pose_sigma is None:
+        return "taken as exact (--exact-poses)"
+    if robot_pose_sigma == "default":
+        return "refine_hand_eye's default prior"
+    if isinstance(robot_pose_sigma, tuple):
+        return f"corrected per image under a {robot_pose_sigma[0]:g} mm / {robot_pose_sigma[1]:g} deg prior"
+    noise = noise or {}
+    est = noise.get("estimated", noise)
+    level = ""
+    if est.get("robot_pose_sigma") is not None:
+        level = (f"noise estimated from the data {est['robot_pose_sigma'][0]:.3g} mm / {est['robot_pose_sigma'][1]:.3g}"
+                 f" deg, corners {est['pixel_sigma_px']:.3g} px")
+    if robot_pose_sigma == "estimate":
+        return "corrected per image, " + level
+    cv = noise.get("cv_rms_px", {})
+    choice = noise.get("choice")
+    how = "taken as exact" if choice == "exact" else "corrected per image"
+    if noise.get("reason"):
+        return f"{how} (auto: {noise['reason']})"
+    if not np.isfinite(cv.get("exact", float("nan"))):
+        return f"{how} (auto: too few images to cross-validate the noise model)"
+    return (f"{how} (auto: held-out RMS {cv.get('exact', float('nan')):.3f} px exact vs "
+            f"{cv.get('estimated', float('nan')):.3f} px with the {level})")
+
+
+def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None, robot=None, length_unit=None):
     """(paths, labels, T_base_flange, board, blob_settings, camera or None, setup, source, homography
     threshold, joints or None, robot model or None)."""
     if cal_data is not None:
@@ -85,7 +143,7 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
     cam = read_camera(camera_file) if camera_file else None
     setup = setup or "eye_in_hand"
     if poses is not None:
-        pairs = pair_images_with_poses(images, poses)
+        pairs = pair_images_with_poses(images, poses, length_unit)
         return (pairs.image_paths, pairs.labels, pairs.T_base_flange, b, None, cam, setup, f"{poses} + {images}",
                 None, None, None)
     if robot is None:
@@ -101,14 +159,16 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
 
 def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None = None, setup: str | None = None,
                   method: str = "shah", camera_file=None, refine_intrinsics: bool = False,
-                  robot_pose_sigma="default", homography_threshold=None, joints=None, robot=None,
+                  robot_pose_sigma="auto", homography_threshold=None, joints=None, robot=None,
                   joint_offsets: bool = False, loss: str = "linear", out_dir=None, overwrite: bool = False, progress=None,
-                  allow_unconverged: bool = False, force: bool = False) -> dict:
+                  allow_unconverged: bool = False, force: bool = False, length_unit: str | None = None) -> dict:
     """Solve and (with ``out_dir``) write the outputs (module docstring). Returns the JSON dict.
 
     robot_pose_sigma: ``(mm, deg)`` the robot's pose error per axis for the errors-in-variables
     refinement, ``None`` to take the flange poses as exact (as ROS-Industrial's calibration does),
-    ``"default"`` for :func:`~robocal.handeye.refine.refine_hand_eye`'s default.
+    ``"estimate"`` (variance components) or ``"auto"`` (the exact or the estimated model, whichever
+    predicts held-out images better; :mod:`robocal.handeye.pose_noise`), ``"default"`` for
+    :func:`~robocal.handeye.refine.refine_hand_eye`'s default prior.
     homography_threshold [px]: skip images whose detections one homography cannot explain
     (default: the cal_data.yaml value, else no check). joints: a ``robocal-program/1`` joint table
     (point names = image names) and robot (shipped name or robot file) instead of ``poses``: the
@@ -117,14 +177,15 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     images that do not fit (listed per image as ``outlier``). The sanity gate
     (:mod:`.handeye_gate`) puts ``status`` and ``reasons`` into the summary; a failed result writes
     no ``handeye.yaml`` unless ``force``. A fit that did not converge (camera or hand-eye;
-    ``convergence`` in the JSON) writes no handeye.yaml unless ``allow_unconverged``."""
+    ``convergence`` in the JSON) writes no handeye.yaml unless ``allow_unconverged``. length_unit: "m" | "mm" of a 4 x 4
+    matrix pose file (:mod:`robocal.io.matrix_poses`) that does not declare it."""
     from ..handeye.camera_calibration import calibrate_camera
     from ..handeye.refine import refine_hand_eye
 
     if setup is not None and setup not in SETUPS:
         raise ValueError(f"setup must be one of {', '.join(SETUPS)}, got {setup!r}")
     paths, labels, F, b, blobs, camera, setup, source, file_threshold, q, model = _inputs(
-        cal_data, poses, images, board, setup, camera_file, joints, robot)
+        cal_data, poses, images, board, setup, camera_file, joints, robot, length_unit)
     if joint_offsets and q is None:
         raise ValueError("--joint-offsets needs --joints JOINTS.csv and --robot ROBOT")
     threshold = file_threshold if homography_threshold is None else homography_threshold
@@ -147,7 +208,7 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     elif tuple(camera.image_size) != tuple(detected.image_size):
         raise ValueError(f"the camera is for {camera.image_size[0]}x{camera.image_size[1]} px images, the images are "
                          f"{detected.image_size[0]}x{detected.image_size[1]} px")
-    extra = {} if isinstance(robot_pose_sigma, str) else {"robot_pose_sigma": robot_pose_sigma}
+    extra = {} if robot_pose_sigma == "default" else {"robot_pose_sigma": robot_pose_sigma}
     if q is not None:
         extra.update(joints=q[used], robot=model, joint_offsets=bool(joint_offsets))
     idx_used = np.flatnonzero(used)
@@ -190,12 +251,18 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         d["difference_rotation_deg"] = float(np.degrees(rotation_angle(cam_pose[:3, :3].T @ result.camera_pose[:3, :3])))
         d["reprojection_rms_px"] = _rms(lin_back)
         linear[m] = d
+    cam_sigma, not_determined = _intrinsics_sigma(result)
+    findings = identifiability_lines(result.identifiability)
+    if not_determined:
+        findings = [ln for ln in findings if not ln.startswith("every estimated parameter")]
+        findings += [f"{k}: not determined by these images ({v:+.4g} +- {sg:.3g}, the 1-sigma exceeds the value)"
+                     for k, (v, sg) in not_determined.items()]
     summary = {
         "format": "robocal-handeye/1", "setup": setup, "source": source, "board": b.to_dict(), "method": method,
         "loss": loss,
-        "robot_pose_sigma": "exact flange poses" if robot_pose_sigma is None else (
-            "refine_hand_eye default" if isinstance(robot_pose_sigma, str) else
-            {"mm": robot_pose_sigma[0], "deg": robot_pose_sigma[1]}),
+        "robot_pose_sigma": _sigma_json(robot_pose_sigma, result.noise_estimate),
+        "robot_pose_sigma_text": _sigma_text(robot_pose_sigma, result.noise_estimate),
+        "warnings": list(getattr(result, "warnings", ()) or ()),
         "homography_threshold_px": threshold,
         "convention": POSE_CONVENTION,
         "camera_pose": pose_dict(result.camera_pose, result.camera_pose_frame, result.sigma_translation_mm,
@@ -206,12 +273,14 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
         "reprojection_rms_mm": float(getattr(result, "rms_mm", float("nan"))),
         "n_images": N, "n_images_used": sum(r["used"] for r in rows),
         "n_corners": int(np.count_nonzero(np.isfinite(back[..., 0]))),
-        "camera": {**camera_summary(result.camera), "source": camera_source, "refined": bool(refine_intrinsics)},
+        "camera": {**camera_summary(result.camera, cam_sigma), "source": camera_source,
+                   "refined": bool(refine_intrinsics)},
+        "not_determined": {k: {"value": v, "sigma": sg} for k, (v, sg) in not_determined.items()},
         "converged": bool(result.converged), "message": result.message,
         "convergence": Convergence.of(fits + [("hand-eye refinement", result)],
                                       "another --method to start from, --loss huber against bad images, or more "
                                       "images with larger rotations between them").as_dict(),
-        "identifiability": identifiability_lines(result.identifiability),
+        "identifiability": findings,
         "linear": linear, "images": rows,
     }
     verdict = handeye_gate(camera=camera, result=result, T_base_flange=F, used=used,

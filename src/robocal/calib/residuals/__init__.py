@@ -22,3 +22,6 @@ __all__ += ["RaySpotResidual", "laser_chain"]
 from .spot_spacing import PointSpacingResidual  # noqa: E402
 
 __all__ += ["PointSpacingResidual"]
+from .board_shape import BoardShapeReprojectionResidual  # noqa: E402
+
+__all__ += ["BoardShapeReprojectionResidual"]
