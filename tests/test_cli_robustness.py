@@ -55,7 +55,10 @@ def _args(path, cmd, binary, out_dir, db):
             if isinstance(p.type, click.Choice):
                 args += [p.type.choices[0]]  # a valid choice: the hostile part is the files
             elif p.nargs == -1:
-                args += ["0"] * 6 if p.name in ("joints", "pose") else [binary, binary]
+                if isinstance(p.type, click.Path) and not p.type.file_okay:
+                    args += [binary.parent]  # folders expected: a folder of junk
+                else:
+                    args += ["0"] * 6 if p.name in ("joints", "pose") else [binary, binary]
             else:
                 args += [binary]
         elif p.required or p.name in ("db", "history"):

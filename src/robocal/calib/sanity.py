@@ -28,7 +28,7 @@ __all__ = [
     "residual_reasons", "holdout_reasons", "nominal_misfit_reasons", "parameter_reasons",
     "calibration_verdict", "touchup_verdict", "sensor_verdict", "tool_length_reasons", "leave_one_out_reasons",
     "seven_point_reasons", "seven_point_verdict", "barriers_verdict", "LOO_MIN_MM", "LOO_FACTOR", "SEVEN_POINT_ORTHOGONALITY_DEG", "TOOL_AXIS_BACK_DEG", "BEAM_ANGLE_TOLERANCE_DEG", "BEAM_GAP_LIMIT_MM",
-    "NEGATIVE_COMPLIANCE_SIGMAS", "elastic_reasons",
+    "NEGATIVE_COMPLIANCE_SIGMAS", "COMPLIANCE_SIGNIFICANCE_SIGMAS", "elastic_reasons",
 ]
 
 #: Residual RMS (3-D point error) above this multiple of the noise's expected RMS
@@ -301,14 +301,20 @@ def drift_verdict(names, units, delta, residual_rms_mm: float, sigma_mm: float |
     return Verdict(tuple(reasons), checks)
 
 
+#: a compliance counts as identified only when it exceeds this many standard deviations: one-sided
+#: 2 sigma, so that a rigid joint passes for an elastic one about one time in 40 (with six joints a
+#: 1 sigma rule would "identify" one of a rigid robot's compliances more often than not)
+COMPLIANCE_SIGNIFICANCE_SIGMAS = 2.0
+
+
 def elastic_reasons(rows, checks: dict | None = None) -> tuple:
     """The plausibility gate of an elastic calibration (docs/elastic.md, docs/reliability.md).
 
     rows: dicts ``name``, ``value``, ``std`` (None when not identifiable), ``unit``, ``identifiable``
     of every compliance (``compliance.*``, ``lateral.*``: mrad/kNm or mm/kN) and mass parameter
     (``gravity.*``: kg, kg m) of the fit. A quantity whose standard deviation is at least its
-    magnitude, or a compliance below zero, is **not identified** (the data cannot tell it from zero,
-    or it has no physical meaning); a compliance below ``-NEGATIVE_COMPLIANCE_SIGMAS`` sigma, or a
+    magnitude, a compliance below zero or below ``COMPLIANCE_SIGNIFICANCE_SIGMAS`` (2) sigma, is
+    **not identified** (the data cannot tell it from zero, or it has no physical meaning); a compliance below ``-NEGATIVE_COMPLIANCE_SIGMAS`` sigma, or a
     fit in which no compliance is identified (a rigid robot: nothing to model), fails.
 
     Returns ``(reasons, not_identified)``: failure sentences, and ``[{name, value, std, unit, why}]``.
@@ -327,6 +333,9 @@ def elastic_reasons(rows, checks: dict | None = None) -> tuple:
             why = f"negative ({v:.4g} +- {sd:.2g} {r['unit']}): a joint cannot deflect against its load"
         elif is_compliance and v < 0:
             why = f"negative but within {NEGATIVE_COMPLIANCE_SIGMAS:g} sigma of zero ({v:.4g} +- {sd:.2g} {r['unit']})"
+        elif is_compliance and v < COMPLIANCE_SIGNIFICANCE_SIGMAS * sd:
+            why = (f"{v:.4g} +- {sd:.2g} {r['unit']}: within {COMPLIANCE_SIGNIFICANCE_SIGMAS:g} sigma of zero "
+                   "(a rigid joint would show this one time in ~40)")
         elif sd >= abs(v):
             why = f"sigma {sd:.3g} >= |value| {abs(v):.3g} {r['unit']}: not distinguishable from zero"
         if why is None:

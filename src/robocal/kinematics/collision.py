@@ -117,7 +117,8 @@ def link_segments(model, q, *, tool_mm=None, min_length_mm: float = 1.0) -> Link
 
     For the DH kinds each link contributes the piece along the previous joint axis (``d``) and the
     common normal (``a``): exactly the DH chain; for other kinds the segment between consecutive
-    frame origins. ``tool_mm`` (k, 3) [mm] in the last link's frame continues the polyline from its
+    frame origins, which belongs to the parent body (the next frame sits on the next joint's axis,
+    fixed in the parent). ``tool_mm`` (k, 3) [mm] in the last link's frame continues the polyline from its
     origin through the tool's points (body of the last link). Segments shorter than
     ``min_length_mm`` are dropped. Returns :class:`LinkSegments`.
     """
@@ -136,8 +137,18 @@ def link_segments(model, q, *, tool_mm=None, min_length_mm: float = 1.0) -> Link
             points.append(mid)
             bodies.append(k)  # the piece along joint k+1's axis moves with the previous body
             tool.append(False)
+        if link.convention == "mdh":
+            # Craig's form: the common normal a_(k) along the previous x, then d along the new z
+            a = link.params.get("a", 0.0)
+            points.append(prev[:, :3, 3] + a * prev[:, :3, 0])
+            bodies.append(k)
+            tool.append(False)
         points.append(frames[:, k + 1, :3, 3])
-        bodies.append(k + 1)
+        # DH: the common normal a_(k+1) lies along x_(k+1) and moves with body k+1. Other kinds
+        # (MDH, URDF, frames): frame k+1 sits on joint k+1's axis, placed in body k (the parent),
+        # so the segment to it is body k's -- a column standing on the base (MDH d1) is the base's
+        body_of_segment = k + 1 if link.convention in ("dh", "dh_beta") else k
+        bodies.append(body_of_segment)
         tool.append(False)
     if tool_mm is not None:
         last = frames[:, -1]

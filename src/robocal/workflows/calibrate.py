@@ -370,6 +370,11 @@ def _coverage(nominal, meas, train, hold, problem, result, free_names) -> dict:
     from ..calib.cell import default_cell, sample_feasible
     from ..calib.coverage import REFERENCE_POSES, coverage_verdict, joint_coverage
 
+    q_hold = meas.joints[hold] if len(hold) else None
+    if not free_names:  # frames only (geometry held): the joints' coverage does not bear on the frames
+        from ..calib.sanity import Verdict
+
+        return {"verdict": Verdict((), {}), "table": joint_coverage(nominal, meas.joints[train], q_hold)}
     targets = np.asarray(result.state.targets, dtype=float)
     ref = None
     if nominal.is_serial and len(train):
