@@ -80,6 +80,13 @@ def test_demo_runs_the_maintenance_cycle(tmp_path):
     # the bent tool is found again to a fraction of a millimetre, in under 15 s of robot time
     tool = res["tool_recalibration"]
     assert tool["tcp_error_mm"] < 0.2 and tool["cycle_time_s"] < 15.0
+    # issue 32: the demo ends with the ISO 9283 test run by the true robot, nominal vs corrected
+    # program: the calibration brings pose and path accuracy down, repeatability stays the robot's
+    iso = {row["characteristic"]: row for row in res["iso9283"]["comparison"]}
+    assert iso["AP_mm"]["after"] < 0.25 * iso["AP_mm"]["before"]
+    assert iso["AT_mm_line"]["after"] < 0.5 * iso["AT_mm_line"]["before"]
+    assert iso["RP_mm"]["after"] == pytest.approx(iso["RP_mm"]["before"], rel=0.5)
+    assert (tmp_path / "d" / "iso9283" / "evaluation" / "report.html").is_file()
     # every cycle is in the history database
     from robocal.store import HistoryStore
 

@@ -133,6 +133,16 @@ def demo(out_dir, seed, poses, overwrite):
     click.echo(f"4. A collision bent the tool by {t['collision']['tilt_deg']:.2f} deg: cross-laser recalibration in "
                f"{t['cycle_time_s']:.1f} s, TCP error {t['tcp_error_mm']:.3f} mm, axis error {t['axis_error_deg']:.3f} deg")
     click.echo("")
+    iso = r.get("iso9283")
+    if iso:
+        click.echo(f"5. ISO 9283 test (cube {iso['cube_edge_mm']:.0f} mm, {iso['cycles']} pose cycles, "
+                   f"{iso['path_cycles']} path cycles) run by the real robot, nominal vs calibrated program:")
+        click.echo(f"{'characteristic':<18}{'before':>10}{'after':>10}   [mm | deg]")
+        for row in iso["comparison"]:
+            if row["characteristic"] in ("AP_mm", "RP_mm", "vAP_mm", "AD_mm", "RD_mm", "AT_mm_line", "RT_mm_line",
+                                         "AT_mm_circle", "AP_a_deg", "AP_c_deg"):
+                click.echo(f"{row['characteristic']:<18}{row['before']:>10.3f}{row['after']:>10.3f}")
+        click.echo("")
     click.echo(f"wrote {r['files']['report']}, {r['files']['result']}" + (f", history {r['history']}" if r.get("history") else ""))
     set_json_result(r)
 

@@ -39,13 +39,13 @@ class IsoEffects:
         self.seconds_per_move = float(seconds_per_move)
 
 
-def _tool_poses(true_model, q, T_flange_tool):
-    T = np.linalg.inv(true_model.T_world_base) @ true_model.fk(q)
+def _tool_poses(true_model, q, T_flange_tool, in_world: bool = False):
+    T = true_model.fk(q) if in_world else np.linalg.inv(true_model.T_world_base) @ true_model.fk(q)
     return T if T_flange_tool is None else T @ T_flange_tool
 
 
 def simulate_iso_run(true_model, protocol: dict, *, seed, effects: IsoEffects | None = None,
-                     mpe: InstrumentMPE, instrument_at_mm, sample_rate_hz: float = 250.0):
+                     mpe: InstrumentMPE, instrument_at_mm, sample_rate_hz: float = 250.0, in_world: bool = False):
     """Run the plan on the true robot.
 
     Parameters
@@ -60,6 +60,10 @@ def simulate_iso_run(true_model, protocol: dict, *, seed, effects: IsoEffects | 
         The tracker's MPE; its random error per coordinate is ``MPE(d)/4``.
     instrument_at_mm : array_like, shape (3,)
         Tracker position in the base frame [mm].
+    in_world : bool
+        Report the attained poses in ``true_model``'s world frame instead of its base frame: the
+        frame the plant registers its instrument to (e.g. the calibrated base frame, with the true
+        robot's base placed in it).
 
     Returns
     -------
@@ -109,7 +113,7 @@ def simulate_iso_run(true_model, protocol: dict, *, seed, effects: IsoEffects | 
             q_cmd = np.asarray(protocol["poses"][m["pose"]]["joints_rad"], float)
             q = arrive(q_cmd, q_prev)
             t += fx.seconds_per_move
-            record(m["id"], _tool_poses(true_model, q, tool))
+            record(m["id"], _tool_poses(true_model, q, tool, in_world))
             q_prev = q_cmd
         elif test in ("line", "circle"):
             path = protocol["paths"][test]
@@ -122,7 +126,7 @@ def simulate_iso_run(true_model, protocol: dict, *, seed, effects: IsoEffects | 
             cum = np.concatenate([[0.0], np.cumsum(seg)]) / max(seg.sum(), 1e-12)
             q_dense = np.stack([np.interp(s, cum, qp[:, j]) for j in range(n)], axis=1)
             q_dense = q_dense + rng.normal(0.0, fx.joint_noise, n)              # this cycle's repeatability
-            T = _tool_poses(true_model, q_dense, tool)
+            T = _tool_poses(true_model, q_dense, tool, in_world)
             P = T[:, :3, 3].copy()
             if test == "circle" and fx.path_radial_error_mm:
                 c = np.asarray(path["centre_mm"], float)

@@ -108,7 +108,8 @@ def build_iso_plan(model, *, T_flange_tool=None, cycles: int = 30, path_cycles: 
     if found is None:
         raise InputError(f"{model.name}: the ISO test's poses are not reachable on one arm configuration "
                          f"(cube {L:.0f} mm at {np.round(c, 1).tolist()} mm)")
-    q_all = found[0]
+    q_all = _continuous(found[0], model, the_cell.limits(model), first_path=5 + len(approach),
+                        path_lengths=(len(path_line), len(path_circle)))
     q_pose = {name: q_all[i] for i, name in enumerate(POSE_NAMES)}
     q_app = {k: q_all[5 + i] for i, k in enumerate(approach)}
     k0 = 5 + len(approach)
@@ -152,6 +153,35 @@ def build_iso_plan(model, *, T_flange_tool=None, cycles: int = 30, path_cycles: 
         "drift_interval_min": float(drift_interval_min),
         "measurements": measurements,
     }
+
+
+def _continuous(q, model, limits, *, first_path: int, path_lengths) -> np.ndarray:
+    """Joint targets without whole-turn jumps: every pose and approach point the 2 pi equivalent
+    nearest P1's joints, every path point the one nearest the previous path point (a closed-form
+    solution wraps a wrist joint at +-180 deg; interpolated, that jump would swing the tool round).
+
+    Raises
+    ------
+    robocal.errors.InputError
+        When a path cannot be driven without a jump of more than 20 deg between neighbouring points
+        (a joint limit in the way).
+    """
+    from ..calib.cell import nearest_equivalent
+    from ..errors import InputError
+
+    revolute = ~np.asarray(model.prismatic_joints, dtype=bool)
+    q = nearest_equivalent(q, q[0], limits, revolute)
+    start = first_path
+    for n in path_lengths:
+        for i in range(start + 1, start + n):
+            q[i] = nearest_equivalent(q[i:i + 1], q[i - 1], limits, revolute)[0]
+        jump = np.degrees(np.abs(np.diff(q[start:start + n][:, revolute], axis=0))).max()
+        if jump > 20.0:
+            raise InputError(f"{model.name}: an ISO test path needs a joint to jump {jump:.0f} deg between neighbouring "
+                             "points (a joint limit in the way); give a smaller --min-height or a cell with other "
+                             "joint ranges")
+        start += n
+    return q
 
 
 def _program_rows(protocol: dict) -> tuple[list, list]:

@@ -34,12 +34,17 @@ def true_model_for(nominal, *, seed: int | None = None, truth_file=None):
     return true.replace(T_world_base=np.eye(4))
 
 
-def corrected_plan(protocol: dict, calibrated) -> dict:
+def corrected_plan(protocol: dict, calibrated, T_flange_tool=None) -> dict:
     """The plan with every joint target replaced by the calibrated model's inverse kinematics of
-    the commanded pose (seeded at the nominal joints: the same arm configuration)."""
+    the commanded pose (seeded at the nominal joints: the same arm configuration).
+
+    T_flange_tool: (4, 4) the tool as the calibration identified it (e.g. the reflector's point);
+    default the plan's tool."""
     from ..errors import NotConvergedError
 
     tool = None if protocol.get("tool") is None else np.asarray(protocol["tool"], float)
+    if T_flange_tool is not None:
+        tool = np.asarray(T_flange_tool, float)
     inv_tool = np.eye(4) if tool is None else np.linalg.inv(tool)
 
     def fix(points, R, q_nominal):
