@@ -263,8 +263,12 @@ def test_robot_pose_sigma_option_values():
     r = CliRunner().invoke(main, [*args, "--robot-pose-sigma", "estimate", "--exact-poses"])
     assert r.exit_code == 2 and "exclude each other" in r.output
     r = CliRunner().invoke(main, [*args, "--robot-pose-sigma", "estimate", "--json"])
-    assert r.exit_code == 0, r.output
+    # asked for explicitly on this set, the estimated pose noise back-projects through the reported
+    # poses at 7.3 px, beyond the gate (10 x the per-image PnP RMS): exit 3 with that reason -- the
+    # default (auto) keeps the exact-pose fit here for the same reason (held-out 3.4 vs 7.9 px)
+    assert r.exit_code == 3, r.output
     s = json.loads(r.stdout[r.stdout.index("{"):])
+    assert not s["sanity_checks"]["reprojection_vs_corner_noise"]["passed"]
     assert s["robot_pose_sigma"]["mode"] == "estimate"
     assert s["robot_pose_sigma"]["robot_pose_sigma"][0] > 0
 

@@ -49,7 +49,7 @@ class CalibrationOptions:
         angles [deg]; default no prior.
     train_ids, holdout_ids : tuple of str, default ()
         A given protocol: the pose ids to calibrate on and to validate on (instead of the split).
-    max_iterations : int, default 50
+    max_iterations : int, default 1000
         Iteration limit of the solver.
     drop_duplicates : bool, default False
         Drop repeated poses when reading a file (otherwise they are an error).
@@ -79,7 +79,7 @@ class CalibrationOptions:
     prior_sigma: tuple | None = None
     train_ids: tuple = ()
     holdout_ids: tuple = ()
-    max_iterations: int = 50
+    max_iterations: int = 1000
     drop_duplicates: bool = False
     particles: int = 20
     generations: int = 2000

@@ -192,7 +192,7 @@ def run_calibration(robot, data, out_dir, *, free=None, free_all: bool = False, 
 def compute_calibration(nominal, meas, *, robot_label, data_label, free=None, free_all: bool = False, fix=(),
                         holdout: float = 0.2, seed: int = 0, loss: str = "linear", sigma_mm: float | None = None,
                         tool=None, method: str = "lm", rotation_weight: float | None = None, prior=None,
-                        train_ids=(), holdout_ids=(), use_orientation: bool = True, max_iterations: int = 50,
+                        train_ids=(), holdout_ids=(), use_orientation: bool = True, max_iterations: int = 1000,
                         particles: int = 20, generations: int = 2000, swarm_progress=None,
                         elastic: str | None = None, payload=None, progress=None, total: int = 6,
                         frames_only: bool = False) -> dict:
