@@ -2,7 +2,7 @@
 pipeline (``calibrate_camera_images``: detection, corner set, calibration) against OpenCV end to end
 on the same image files, on
 
-* rendered images with known truth (:class:`robocal.sim.camera_render.BoardRenderer`: the
+* rendered images with known truth (:class:`robocal.sim.cameras.camera_render.BoardRenderer`: the
   simulator's 1280 x 1024 camera, fx = fy = 1600 px, k1 -0.12, k2 0.09, p1 4e-4, p2 -3e-4; blur,
   lighting, sensor noise; 15 views per seed): the error of every parameter against the truth, not
   only the RMS;
@@ -33,10 +33,10 @@ from robocal.io.boards import board_image, parse_board  # noqa: E402
 from robocal.io.datasets import datasets_root  # noqa: E402
 from robocal.io.detection import _blob_detector  # noqa: E402
 from robocal.io.ros_calibration import read_cal_data  # noqa: E402
-from robocal.sim.camera_cell import simulate_hand_eye_poses  # noqa: E402
-from robocal.sim.camera_render import BoardRenderer  # noqa: E402
-from robocal.workflows.camera_calibrate import calibrate_camera_images  # noqa: E402
-from robocal.workflows.camera_simulate import _texel_mm  # noqa: E402
+from robocal.sim.cameras.camera_cell import simulate_hand_eye_poses  # noqa: E402
+from robocal.sim.cameras.camera_render import BoardRenderer  # noqa: E402
+from robocal.workflows.cameras.camera_calibrate import calibrate_camera_images  # noqa: E402
+from robocal.workflows.cameras.camera_simulate import _texel_mm  # noqa: E402
 
 CRIT = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
 NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2")

@@ -10,7 +10,7 @@ ABB IRB140 robots, each with its own hidden true parameters):
 
 * **serial loop**: ``run_calibration(model, csv, out, report=False)`` for every robot, one after
   the other in this process (what a user would script without robocal fleet);
-* **fleet on a local cluster**: :func:`robocal.workflows.fleet.run_fleet_calibration` with a
+* **fleet on a local cluster**: :func:`robocal.workflows.fleet.calibrate.run_fleet_calibration` with a
   ``distributed.LocalCluster`` of ``--workers`` single-threaded worker processes (the default of
   ``robocal fleet calibrate``), no reports, no history (as the loop), into a fresh folder each
   repeat; the cluster is started once beforehand (its start-up is printed separately);
@@ -52,7 +52,7 @@ MODELS = ("ur10", "kuka_kr150_r3100", "abb_irb140")
 
 
 def make_fleet(d: Path, n_robots: int, n_poses: int) -> Path:
-    from robocal.workflows.simulate import simulate_tracker
+    from robocal.workflows.calibration.simulate import simulate_tracker
 
     lines = ["[options]", "holdout = 0.2", "seed = 0", ""]
     for i in range(n_robots):
@@ -66,7 +66,7 @@ def make_fleet(d: Path, n_robots: int, n_poses: int) -> Path:
 
 def serial_loop(fleet_file: Path, out: Path, limit: int | None = None) -> float:
     from robocal.io.fleet_file import read_fleet
-    from robocal.workflows.calibrate import run_calibration
+    from robocal.workflows.calibration.calibrate import run_calibration
 
     t0 = time.perf_counter()
     for e in read_fleet(fleet_file).entries[:limit]:
@@ -76,7 +76,7 @@ def serial_loop(fleet_file: Path, out: Path, limit: int | None = None) -> float:
 
 def fleet_run(client, fleet_file: Path, out: Path, per_task=None):
     """Wall time, summed in-task time and this (client + scheduler) process's CPU time of one run."""
-    from robocal.workflows.fleet import run_fleet_calibration
+    from robocal.workflows.fleet.calibrate.calibrate import run_fleet_calibration
 
     t0, c0 = time.perf_counter(), time.process_time()
     r = run_fleet_calibration(fleet_file, out, client=client, report=False, per_task=per_task)
@@ -90,7 +90,7 @@ def _share(fleet_file, out, k, workers, barrier, spans):
     """One plain process of the ceiling row: warm up, wait for the others, then the loop over its share."""
     serial_loop(fleet_file, Path(out) / f"warm{k}", limit=len(MODELS))
     from robocal.io.fleet_file import read_fleet
-    from robocal.workflows.calibrate import run_calibration
+    from robocal.workflows.calibration.calibrate import run_calibration
 
     entries = read_fleet(fleet_file).entries[k::workers]
     barrier.wait(timeout=600)
@@ -139,7 +139,7 @@ def main():
     ap.add_argument("--robots-per-task", type=int, default=None,
                     help="robots per Dask task (default: robocal fleet calibrate's automatic choice)")
     args = ap.parse_args()
-    from robocal.workflows.fleet_cluster import default_workers, fleet_client
+    from robocal.workflows.fleet.calibrate.cluster import default_workers, fleet_client
 
     workers = args.workers or default_workers()
     for line in machine_info([f"fleet       {args.robots} robots x {args.poses} poses, {workers} workers, "
@@ -154,7 +154,7 @@ def main():
         t0 = time.perf_counter()
         # the cluster robocal fleet calibrate starts (single-threaded workers, no worker profiler)
         with fleet_client(workers=workers) as client:
-            client.run(lambda: __import__("robocal.workflows.calibrate"))
+            client.run(lambda: __import__("robocal.workflows.calibration.calibrate"))
             start = time.perf_counter() - t0
             fleet_run(client, fleet_file, tmp / "fleet-warm", args.robots_per_task)  # kernels from cache
             serial, fleet, busy, plain, client_cpu = [], [], [], [], []
@@ -186,7 +186,7 @@ def main():
     print(f"per-task overhead: empty task {1e3 * empty * workers:.2f} ms of a worker; in the fleet run "
           f"{1e3 * per_task_overhead:.1f} ms per robot (wall x workers - time inside the tasks) = "
           f"{100 * per_task_overhead / (per_task_overhead + b / n):.1f} % of a task")
-    from robocal.workflows.fleet import robots_per_task
+    from robocal.workflows.fleet.calibrate.calibrate import robots_per_task
 
     size = robots_per_task(n, workers, args.robots_per_task)
     cc = statistics.median(client_cpu)

@@ -1,7 +1,7 @@
 """Hand-eye refinement speed (issue 14): 30 images x 88 corners, median of several runs, side by
 side with OpenCV's linear methods on the same data in the same run.
 
-Data: :func:`robocal.sim.handeye_points.simulate_hand_eye` (seed 0, eye-in-hand, 30 images of an
+Data: :func:`robocal.sim.cameras.handeye_points.simulate_hand_eye` (seed 0, eye-in-hand, 30 images of an
 11 x 8 board, 0.3 px corner noise, 0.05 mm / 0.01 deg robot pose noise). Rows (one process, one
 BLAS thread):
 
@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 
 from robocal.handeye import refine_hand_eye, solve_pnp  # noqa: E402
 from robocal.handeye.refine import rotation_error_deg  # noqa: E402
-from robocal.sim.handeye_points import simulate_hand_eye  # noqa: E402
+from robocal.sim.cameras.handeye_points import simulate_hand_eye  # noqa: E402
 from robocal.transforms import invert_transforms  # noqa: E402
 
 try:

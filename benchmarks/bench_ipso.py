@@ -1,7 +1,7 @@
 """IPSO speed: 2000 generations x 20 particles x 32 poses, 24 parameters (the IPSO paper's run,
 220 s in MATLAB), median of 5 runs; target <= 1 s and >= 10x faster than pyswarms.
 
-Objective: (7) on the ER10L-C10 simulation (``robocal.workflows.ipso_study.er10l_experiment``,
+Objective: (7) on the ER10L-C10 simulation (``robocal.workflows.calibration.ipso_study.er10l_experiment``,
 seed 0, degree-scale joint noise), 24 identifiable MDH parameters, box ±0.01 rad / ±0.5 mm.
 Rows (all in one process, one thread):
 
@@ -33,7 +33,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from robocal.calib.swarm import SwarmObjective, constriction_factor, objective_at, run_pso, search_box  # noqa: E402
-from robocal.workflows.ipso_study import er10l_experiment  # noqa: E402
+from robocal.workflows.calibration.ipso_study import er10l_experiment  # noqa: E402
 
 try:
     from _machine import machine_info  # noqa: E402

@@ -1,8 +1,8 @@
 """Camera self-calibration pipeline speed (issue 15): 80 images (40 per arm), detection + solve.
 
 Data: the DLR Justin tree (head camera, a 7x4 checkerboard in each hand, offsets on head and arms
-up to 3 deg), 80 images rendered by :class:`robocal.sim.camera_render.BoardRenderer` at 640x480,
-a 20 Hz joint log and a frames file on another clock (:mod:`robocal.sim.self_calibration_views`). Rows (one
+up to 3 deg), 80 images rendered by :class:`robocal.sim.cameras.camera_render.BoardRenderer` at 640x480,
+a 20 Hz joint log and a frames file on another clock (:mod:`robocal.sim.cameras.self_calibration_views`). Rows (one
 process, one BLAS thread, median of ``--runs``):
 
 * the whole pipeline ``workflows.self_calibration.self_calibrate`` (read files, match time stamps,
@@ -43,11 +43,11 @@ from robocal.io.joint_log_files import write_frames, write_joint_log  # noqa: E4
 from robocal.io.detection import detect_board  # noqa: E402
 from robocal.io.images import read_image_gray, write_png  # noqa: E402
 from robocal.robots import load_robot  # noqa: E402
-from robocal.sim.self_calibration import capture_schedule  # noqa: E402
-from robocal.sim.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations  # noqa: E402
-from robocal.sim.camera_render import BoardRenderer  # noqa: E402
+from robocal.sim.cameras.self_calibration import capture_schedule  # noqa: E402
+from robocal.sim.cameras.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations  # noqa: E402
+from robocal.sim.cameras.camera_render import BoardRenderer  # noqa: E402
 from robocal.transforms import so3_exp, transforms_from  # noqa: E402
-from robocal.workflows.self_calibration import self_calibrate  # noqa: E402
+from robocal.workflows.cameras.self_calibration import self_calibrate  # noqa: E402
 
 BOARD = "checkerboard:7x4:25mm"
 CAM = Camera(800.0, 800.0, 319.5, 239.5, (-0.1, 0.05, 0.0, 0.0, 0.0), "brown", (640, 480))
@@ -133,7 +133,7 @@ def main():
 
 
 def main_nao(runs):
-    from robocal.sim.self_calibration import simulate_self_calibration
+    from robocal.sim.cameras.self_calibration import simulate_self_calibration
 
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)

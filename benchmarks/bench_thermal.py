@@ -14,7 +14,7 @@ Times, on one thread, with the simulated thesis-like cell (KR150 R3100, DH + bet
   Target <= 2 s.
 * **online cycle**: :func:`robocal.thermal.online_cycle` -- identify the 8 screened deltas from 6
   sphere poses and correct a 50-point taught program by iterative IK. Target <= 5 ms median.
-* **the experiment** (``--experiment N``): :func:`robocal.workflows.thermal_seeds.run_thermal_seeds`
+* **the experiment** (``--experiment N``): :func:`robocal.workflows.thermal.seeds.run_thermal_seeds`
   on the realistic preset, N seeds of 90 cycles, once (wall clock per seed, with ``--resamples``
   bootstrap resamples of the screening run), and its table. This is where the multi-seed
   figures of docs/thermal.md come from; the unit tests run a 20-cycle version.
@@ -38,9 +38,9 @@ import timeit  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from robocal.sim.thermal import ThermalCell, standard_schedules  # noqa: E402
+from robocal.sim.thermal.simulator.simulator import ThermalCell, standard_schedules  # noqa: E402
 from robocal.thermal.screening import screen_parameters, select_online_poses  # noqa: E402
-from robocal.workflows.thermal import screening_problem  # noqa: E402
+from robocal.workflows.thermal.runs.runs import screening_problem  # noqa: E402
 
 
 def _time(fn, repeat: int, target_s: float = 0.2):
@@ -111,7 +111,7 @@ def main(argv=None):
 
 def _experiment(n: int, resamples: int, preset: str) -> None:
     """Table 5-2 over ``n`` seeds, timed once (it is minutes, not milliseconds)."""
-    from robocal.workflows.thermal_seeds import format_seeds_table, run_thermal_seeds
+    from robocal.workflows.thermal.runs.seeds import format_seeds_table, run_thermal_seeds
 
     t0 = time.perf_counter()
     res = run_thermal_seeds(preset=preset, seeds=n, resamples=resamples)

@@ -9,7 +9,7 @@
   through ``cv2.projectPoints``, the flange poses taken as reported;
 * robocal with ``--exact-poses`` and with the former default prior (0.05 mm / 0.01 deg).
 
-Data: :func:`robocal.sim.handeye_points.simulate_hand_eye` (eye-in-hand, 15 images of an 11 x 8
+Data: :func:`robocal.sim.cameras.handeye_points.simulate_hand_eye` (eye-in-hand, 15 images of an 11 x 8
 board, the simulator's Brown lens known to every method, 0.3 px corner noise) with the robot's
 pose noise per axis at levels that differ from the former default's assumption, and one
 *systematic* robot error (the reported translations scaled by 1.0005, i.e. 0.5 mm per metre, plus
@@ -34,7 +34,7 @@ from scipy.optimize import least_squares  # noqa: E402
 
 from robocal.handeye import refine_hand_eye  # noqa: E402
 from robocal.handeye.refine import rotation_error_deg  # noqa: E402
-from robocal.sim.handeye_points import simulate_hand_eye  # noqa: E402
+from robocal.sim.cameras.handeye_points import simulate_hand_eye  # noqa: E402
 from robocal.transforms import invert_transforms  # noqa: E402
 
 HAND_EYE = {"TSAI": cv2.CALIB_HAND_EYE_TSAI, "PARK": cv2.CALIB_HAND_EYE_PARK, "HORAUD": cv2.CALIB_HAND_EYE_HORAUD,

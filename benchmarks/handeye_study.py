@@ -1,7 +1,7 @@
 """The HALCON paper's study in simulation (issue 14 item 6; METHODS.md section 3, "Hand-eye"):
 accuracy of the hand-eye transform against the number of images and the camera model.
 
-Set-up (:func:`robocal.sim.handeye_points.simulate_hand_eye`): eye-in-hand, 1280 x 1024 camera,
+Set-up (:func:`robocal.sim.cameras.handeye_points.simulate_hand_eye`): eye-in-hand, 1280 x 1024 camera,
 f = 1400 px, the true lens a full Brown-Conrady one (k1 -0.25, k2 0.12, p1 0.0012, p2 -0.0008,
 k3 -0.03), an 11 x 8 board of 20 mm squares seen from 450-750 mm with tilts up to 35 deg,
 0.3 px corner noise, 0.05 mm / 0.01 deg robot pose noise. For each number of images and each
@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 
 from robocal.handeye import HandEyeError, calibrate_camera, refine_hand_eye  # noqa: E402
 from robocal.handeye.refine import rotation_error_deg  # noqa: E402
-from robocal.sim.handeye_points import CAMERA_MODELS, simulate_hand_eye  # noqa: E402
+from robocal.sim.cameras.handeye_points import CAMERA_MODELS, simulate_hand_eye  # noqa: E402
 
 IMAGES = (3, 4, 5, 6, 8, 10, 15, 20, 30)
 MODELS = {"none": ("brown", 5, ("k1", "k2", "p1", "p2", "k3")), "radial": ("brown", 5, ("p1", "p2", "k3")),

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robocal.sim.self_calibration_views import camera_board_poses
+from robocal.sim.cameras.self_calibration_views import camera_board_poses
 from robocal.transforms import so3_exp, transforms_from
 
 STEP = 1e-6

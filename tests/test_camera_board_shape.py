@@ -16,10 +16,10 @@ from click.testing import CliRunner
 from robocal.calib.residuals.board_shape import sag_bases
 from robocal.cli.main import main
 from robocal.io.boards import board_image, parse_board
-from robocal.sim.camera_cell import simulate_hand_eye_poses
-from robocal.sim.camera_render import BoardRenderer
-from robocal.sim.self_calibration import board_surface
-from robocal.workflows.camera_simulate import _texel_mm
+from robocal.sim.cameras.camera_cell import simulate_hand_eye_poses
+from robocal.sim.cameras.camera_render import BoardRenderer
+from robocal.sim.cameras.self_calibration import board_surface
+from robocal.workflows.cameras.camera_simulate import _texel_mm
 
 SPEC = "checkerboard:9x6:25mm"
 BOW_MM = 1.0

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from robocal.handeye import HandEyeError, calibrate_camera, initial_intrinsics
-from robocal.sim.handeye_points import CAMERA_MODELS, simulate_hand_eye
+from robocal.sim.cameras.handeye_points import CAMERA_MODELS, simulate_hand_eye
 
 cv2 = pytest.importorskip("cv2")
 

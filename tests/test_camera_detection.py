@@ -13,9 +13,9 @@ import pytest
 
 from robocal.io.boards import BoardSpecError, board_image, parse_board
 from robocal.io.detection import detect_board
-from robocal.sim.camera_cell import default_camera, simulate_hand_eye_poses
-from robocal.sim.camera_render import BoardRenderer
-from robocal.workflows.camera_simulate import _texel_mm
+from robocal.sim.cameras.camera_cell import default_camera, simulate_hand_eye_poses
+from robocal.sim.cameras.camera_render import BoardRenderer
+from robocal.workflows.cameras.camera_simulate import _texel_mm
 
 BOARDS = ["checkerboard:9x6:30mm", "charuco:9x7:30mm:22mm:DICT_5X5_100", "circles:10x10:25.4mm:modified"]
 

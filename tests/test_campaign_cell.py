@@ -14,7 +14,7 @@ from robocal.cli import main
 from robocal.io.programs import read_joint_program, read_program
 from robocal.robots import load_robot
 from robocal.sim import LaserTracker, VirtualRobot
-from robocal.workflows.plan_poses import plan_cell, plan_in_cell
+from robocal.workflows.calibration.plan_poses import plan_cell, plan_in_cell
 
 ROBOTS = ("ur10", "kuka_kr150_r3100", "abb_irb140")
 

@@ -154,7 +154,7 @@ def test_old_option_name_works_with_a_warning():
 
 
 def test_old_three_number_form_works_with_a_warning(tmp_path):
-    from robocal.workflows.simulate import simulate_tracker
+    from robocal.workflows.calibration.simulate import simulate_tracker
 
     sim = simulate_tracker("ur10", tmp_path / "c.csv", n_poses=30, noise_mm=0.02, seed=1)
     r, _, err = _invoke("calibrate", "ur10", sim["measurements"], "--out", tmp_path / "o", "--no-report",

@@ -17,8 +17,8 @@ from robocal.cli.main import main
 from robocal.io.spots import HeldSpots, SpotFileError, read_spots, write_spots
 from robocal.robots import load_robot
 from robocal.transforms import transform_points
-from robocal.workflows.closed_chain import make_cell, run_closed_chain_calibration
-from robocal.workflows.closed_chain_study import run_seed
+from robocal.workflows.calibration.closed_chain import make_cell, run_closed_chain_calibration
+from robocal.workflows.calibration.closed_chain_study import run_seed
 
 
 def run(*args):

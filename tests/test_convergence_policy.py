@@ -19,7 +19,7 @@ from robocal.cli import main
 from robocal.robots import load_robot
 from robocal.sim import VirtualRobot
 from robocal.workflows.convergence import Convergence
-from robocal.workflows.simulate import simulate_tracker
+from robocal.workflows.calibration.simulate import simulate_tracker
 
 
 def run(*args):

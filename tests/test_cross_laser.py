@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from robocal.io.barrier_events import read_events_csv, write_events_csv
-from robocal.sim.light_barrier import (CrossLaserSensor, CylinderTool, LightBarrier, LightBarrierCell,
+from robocal.sim.tool.light_barrier import (CrossLaserSensor, CylinderTool, LightBarrier, LightBarrierCell,
                                        barrier_blocked)
 from robocal.tcp.cross_laser import (CrossLaserSettings, angles_from_durations, axis_vector_thesis, center_distances,
                                      circle_center, euler_psi_theta, evaluate_circle, evaluate_recording,
@@ -41,7 +41,7 @@ def _axis_err_deg(a, b):
 
 @pytest.fixture(scope="module")
 def study():
-    from robocal.workflows.tcp import tcp_repeatability_study
+    from robocal.workflows.tool.recalibration import tcp_repeatability_study
 
     return tcp_repeatability_study(collisions=10, seed=0)
 

@@ -106,7 +106,7 @@ def test_a_payload_without_mass_is_refused():
                                elastic=ElasticModel(masses=MASSES, payload=Payload(bad, (0, 0, 100))))
     with pytest.raises(ProblemError, match="metres and millimetres"):
         Payload(10.0, (0.0, 0.0, 20000.0)).checked()
-    from robocal.workflows.calibrate_elastic import parse_payload
+    from robocal.workflows.calibration.calibrate_elastic import parse_payload
 
     for text, why in (("@0,0,100", "the mass is missing"), ("0@0,0,100", "mass > 0"), ("abc@1,2,3", "not a number"),
                       ("5@1,2", "three numbers")):
@@ -336,7 +336,7 @@ def test_the_elastic_gate_refuses_a_rigid_robot_and_names_what_is_not_identified
     from click.testing import CliRunner
 
     from robocal.cli import main
-    from robocal.workflows.simulate import simulate_tracker
+    from robocal.workflows.calibration.simulate import simulate_tracker
 
     simulate_tracker("kuka_kr150_r3100", tmp_path / "m.csv", n_poses=100, noise_mm=0.02, seed=1)
     args = ["calibrate", "kuka_kr150_r3100", str(tmp_path / "m.csv"), "--elastic", "joint", "--no-report"]

@@ -21,7 +21,7 @@ from robocal.io.measurements import Measurements, write_measurements
 from robocal.kinematics.ik import ik_numeric
 from robocal.robots import load_robot
 from robocal.transforms import so3_exp, so3_log
-from robocal.workflows.calibrate import _non_convergence_first
+from robocal.workflows.calibration.calibrate import _non_convergence_first
 
 ROBOT = "kuka_kr150_r3100"
 TOOL_ROTVEC = [2.9, 0.3, 0.2]  # ~170 deg

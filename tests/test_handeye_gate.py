@@ -16,7 +16,7 @@ from robocal.cli.main import main
 from robocal.handeye.consistency import motion_mismatch
 from robocal.io.datasets import datasets_root
 from robocal.io.tcp_files import read_flange_poses_csv, write_flange_poses_csv
-from robocal.sim.camera_cell import simulate_hand_eye_poses
+from robocal.sim.cameras.camera_cell import simulate_hand_eye_poses
 from robocal.transforms import invert_transforms
 
 ROS = datasets_root() / "ros_industrial_handeye" / "raw"

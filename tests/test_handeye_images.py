@@ -15,10 +15,10 @@ from robocal.handeye import refine_hand_eye
 from robocal.handeye.camera_calibration import calibrate_camera
 from robocal.io.boards import board_image, parse_board
 from robocal.io.detection import detect_board
-from robocal.sim.camera_cell import simulate_hand_eye_poses
-from robocal.sim.camera_render import BoardRenderer
+from robocal.sim.cameras.camera_cell import simulate_hand_eye_poses
+from robocal.sim.cameras.camera_render import BoardRenderer
 from robocal.transforms import invert_transforms, rotation_angle
-from robocal.workflows.camera_simulate import _texel_mm
+from robocal.workflows.cameras.camera_simulate import _texel_mm
 
 BOARD = "charuco:9x7:30mm:22mm:DICT_5X5_100"
 SEED = 5

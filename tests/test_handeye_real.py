@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-import robocal.workflows.handeye_solve as handeye_solve
+import robocal.workflows.cameras.handeye_solve as handeye_solve
 from robocal.cli.main import main
 from robocal.handeye import refine_hand_eye
 from robocal.handeye.camera_calibration import calibrate_camera

@@ -9,7 +9,7 @@ import pytest
 
 from robocal.handeye import HandEyeError, refine_hand_eye, solve_pnp
 from robocal.handeye.refine import rotation_error_deg
-from robocal.sim.handeye_points import board_points, look_at, noisy_poses, simulate_hand_eye
+from robocal.sim.cameras.handeye_points import board_points, look_at, noisy_poses, simulate_hand_eye
 from robocal.transforms import invert_transforms, so3_exp
 
 cv2 = pytest.importorskip("cv2")
@@ -165,7 +165,7 @@ def test_joint_offsets_are_recovered_and_the_unidentifiable_ones_named():
     normal = -(F_true @ T_ft)[:, :3, 2].mean(0)
     T_bc = look_at(centre + 700.0 * normal / np.linalg.norm(normal), centre)
     T_ct = invert_transforms(T_bc)[None] @ F_true @ T_ft
-    from robocal.sim.handeye_points import CAMERA_MODELS
+    from robocal.sim.cameras.handeye_points import CAMERA_MODELS
 
     camera = CAMERA_MODELS["brown"]
     P = np.einsum("nij,pj->npi", T_ct[:, :3, :3], X) + T_ct[:, None, :3, 3]
@@ -218,7 +218,7 @@ def test_a_robust_loss_rejects_images_whose_poses_were_swapped():
 
 def test_joint_offsets_eye_in_hand():
     from robocal.robots import load_robot
-    from robocal.sim.handeye_points import CAMERA_MODELS
+    from robocal.sim.cameras.handeye_points import CAMERA_MODELS
 
     robot = load_robot("abb_irb140")
     rng = np.random.default_rng(8)

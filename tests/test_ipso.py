@@ -7,7 +7,7 @@ from scipy.stats import qmc
 
 from robocal.calib.swarm import (SwarmInputError, SwarmObjective, constriction_factor, halton_swarm, objective_at,
                                  run_pso, solve_swarm)
-from robocal.workflows.ipso_study import er10l_experiment, pose_errors, run_method
+from robocal.workflows.calibration.ipso_study import er10l_experiment, pose_errors, run_method
 
 
 def test_constriction_factor_is_clercs():
@@ -149,7 +149,7 @@ def _objective_at_steps(prob, cols, X):
 def test_swarm_objective_with_points_and_searched_targets(search_base):
     """Tracker problem (PointResidual): the compiled sum (base fixed, targets searched) and the
     numpy path (base searched) both equal objective (7) from Problem.evaluate."""
-    from robocal.workflows.ipso_study import tracker_experiment
+    from robocal.workflows.calibration.ipso_study import tracker_experiment
 
     prob = tracker_experiment(0, n_train=30).problem
     names = [n for n, b in zip(prob.names, prob.column_blocks) if search_base or b != "base"]
@@ -200,7 +200,7 @@ def test_study_reports_tracker_orientation_against_truth_and_per_seed_rows():
     import csv
     import io
 
-    from robocal.workflows.ipso_study import compare, per_seed_csv, tracker_experiment
+    from robocal.workflows.calibration.ipso_study import compare, per_seed_csv, tracker_experiment
 
     table = compare(tracker_experiment, [0, 1], methods=("lm",))
     assert 0.0 < table["lm"]["holdout_deg"] < 0.1

@@ -71,7 +71,7 @@ def any_db(request, tmp_path):
 
 def test_iso_figures_and_verifications_round_trip(any_db):
     """The new tables on SQLite and on a PostgreSQL server: written by the workflow helpers, read back."""
-    from robocal.workflows.iso9283_history import record_iso_run, record_verification
+    from robocal.workflows.performance.iso9283_history import record_iso_run, record_verification
 
     run = {"pose": {"P1": {"AP_mm": 0.8, "AP_x_mm": 0.1, "AP_y_mm": -0.2, "AP_z_mm": 0.77, "RP_mm": 0.06,
                            "AP_a_deg": -0.01, "RP_a_deg": 0.004},

@@ -95,7 +95,7 @@ def test_the_report_names_the_parallel_pair(campaign):
 
 
 def test_free_beta3_and_free_all_on_a_file_without_beta_lines(tmp_path):
-    from robocal.workflows.calibrate import select_free
+    from robocal.workflows.calibration.calibrate import select_free
 
     model = load_robot(_robot_file(tmp_path / "r.toml", with_beta=False))
     assert select_free(model, ["beta3"]) == ["beta3"]

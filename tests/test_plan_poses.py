@@ -12,7 +12,7 @@ from robocal.cli import main
 from robocal.io.programs import read_joint_program
 from robocal.robots import load_robot
 from robocal.sim import VirtualRobot
-from robocal.workflows.plan_poses import plan_poses
+from robocal.workflows.calibration.plan_poses import plan_poses
 
 ROBOT = "ur10"
 TOOL = (30.0, -20.0, 100.0)

@@ -12,7 +12,7 @@ import numpy as np
 from robocal.calib import CalibrationProblem, Target, solve
 from robocal.robots import load_robot
 from robocal.sim import VirtualRobot
-from robocal.workflows.plan_poses import plan_cell, plan_in_cell
+from robocal.workflows.calibration.plan_poses import plan_cell, plan_in_cell
 
 TOOL = (0.0, 0.0, 100.0)
 

@@ -49,7 +49,7 @@ def test_options_are_frozen_with_defaults():
 
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
-    from robocal.workflows.simulate import simulate_tracker
+    from robocal.workflows.calibration.simulate import simulate_tracker
 
     d = tmp_path_factory.mktemp("campaign")
     sim = simulate_tracker("ur10", d / "ur10.csv", n_poses=80, noise_mm=0.02, seed=5)

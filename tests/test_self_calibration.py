@@ -14,7 +14,7 @@ from robocal.handeye.self_calibration import solve_self_calibration
 from robocal.io.boards import parse_board
 from robocal.io.capture_times import match_capture_times
 from robocal.robots import load_robot
-from robocal.sim.self_calibration_views import simulate_corner_views
+from robocal.sim.cameras.self_calibration_views import simulate_corner_views
 from robocal.transforms import so3_exp, transforms_from
 
 NOISE_PX = 0.3
@@ -119,7 +119,7 @@ def test_unmodelled_link_lengths_and_a_bent_board_bias_the_justin_offsets_to_fir
     from _first_order import corner_views, self_calibration_offset_bias
 
     from robocal.sim.robot import parameter_kinds
-    from robocal.sim.self_calibration import board_surface
+    from robocal.sim.cameras.self_calibration import board_surface
 
     m = load_robot("dlr_justin19")
     rng = np.random.default_rng(16)

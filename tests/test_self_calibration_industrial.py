@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from robocal.robots import load_robot
-from robocal.sim.self_calibration_study import compare_with_tracker
+from robocal.sim.cameras.self_calibration_study import compare_with_tracker
 
 
 @pytest.fixture(scope="module")

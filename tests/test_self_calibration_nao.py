@@ -1,7 +1,7 @@
 """Issue 15 acceptance on the NAO H25 (head camera ``camera_top``, a board in each hand): 40 images
 per arm, joint offsets up to +-3 deg on head and both arms, 0.3 px corner noise; every identifiable
 joint offset within 3 reported sigma, reprojection RMS within 10 % of the noise, and both arms
-together at least as accurate as each arm alone. Corners from :mod:`robocal.sim.self_calibration_views`
+together at least as accurate as each arm alone. Corners from :mod:`robocal.sim.cameras.self_calibration_views`
 (projection + noise; the rendered path is covered by test_self_calibration_pipeline.py)."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from robocal.handeye.refine import joint_offset_names
 from robocal.handeye.self_calibration import solve_self_calibration
 from robocal.io.boards import parse_board
 from robocal.robots import load_robot
-from robocal.sim.self_calibration_views import simulate_corner_views
+from robocal.sim.cameras.self_calibration_views import simulate_corner_views
 from robocal.transforms import so3_exp, transforms_from
 
 NOISE_PX = 0.3
@@ -89,7 +89,7 @@ def test_both_arms_together_at_least_as_accurate_as_each_arm_alone(nao):
 
 @pytest.fixture(scope="module")
 def simulated_run():
-    from robocal.sim.self_calibration import simulate_self_calibration
+    from robocal.sim.cameras.self_calibration import simulate_self_calibration
 
     return simulate_self_calibration("nao_h25", n_images_per_chain=N_PER_ARM, pixel_noise=NOISE_PX,
                                      joint_noise_deg=0.0, seed=3)
@@ -132,7 +132,7 @@ def test_joint_reading_noise_needs_the_per_image_joint_corrections():
     with the sigmas scaled by the variance factor 5.1); with them (errors in variables, prior
     0.05 deg) max |error / sigma| 2.1 and errors up to 0.046 deg."""
     from robocal.io.capture_times import match_capture_times
-    from robocal.sim.self_calibration import simulate_self_calibration
+    from robocal.sim.cameras.self_calibration import simulate_self_calibration
 
     run = simulate_self_calibration("nao_h25", n_images_per_chain=N_PER_ARM, pixel_noise=NOISE_PX,
                                     joint_noise_deg=0.05, partial_fraction=0.0, seed=3)
@@ -172,7 +172,7 @@ def test_link_length_errors_and_a_bent_board_bias_the_offsets_as_first_order_the
     from _first_order import corner_views, self_calibration_offset_bias
 
     from robocal.sim.robot import parameter_kinds
-    from robocal.sim.self_calibration import simulate_self_calibration
+    from robocal.sim.cameras.self_calibration import simulate_self_calibration
 
     run = simulate_self_calibration("nao_h25", n_images_per_chain=N_PER_ARM, pixel_noise=NOISE_PX, joint_noise_deg=0.0,
                                     length_sigma_mm=0.2, board_bow_mm=0.4, partial_fraction=0.0, seed=5)

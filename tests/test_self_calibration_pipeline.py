@@ -17,10 +17,10 @@ from robocal.io.camera_files import write_camera_json
 from robocal.io.joint_log_files import write_frames, write_joint_log
 from robocal.io.images import write_png
 from robocal.robots import load_robot
-from robocal.sim.self_calibration import capture_schedule
-from robocal.sim.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations
+from robocal.sim.cameras.self_calibration import capture_schedule
+from robocal.sim.cameras.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations
 from robocal.camera import Camera
-from robocal.sim.camera_render import BoardRenderer
+from robocal.sim.cameras.camera_render import BoardRenderer
 from robocal.transforms import so3_exp, transforms_from
 
 CAM = Camera(800.0, 800.0, 319.5, 239.5, (-0.1, 0.05, 0.0, 0.0, 0.0), "brown", (640, 480))

@@ -14,8 +14,8 @@ from robocal.io.header import FileFormatError
 from robocal.io.images import list_images
 from robocal.io.joint_log_files import read_frames, read_joint_log_file, write_frames, write_joint_log
 from robocal.robots import load_robot
-from robocal.sim.self_calibration import simulate_self_calibration
-from robocal.sim.self_calibration_views import nao_head_pitch_limits
+from robocal.sim.cameras.self_calibration import simulate_self_calibration
+from robocal.sim.cameras.self_calibration_views import nao_head_pitch_limits
 from robocal.transforms import compose, invert_transforms
 
 
@@ -179,7 +179,7 @@ def test_checkerboard_orientation_under_any_lighting(nao_run):
     followed the gradient: about a quarter of the NAO views came back turned by 180 degrees)."""
     from robocal.io.boards import board_image
     from robocal.io.detection import detect_board
-    from robocal.sim.camera_render import BoardRenderer, RenderSettings
+    from robocal.sim.cameras.camera_render import BoardRenderer, RenderSettings
 
     r = nao_run
     texture, affine = board_image(r.board, 0.1)

@@ -8,16 +8,16 @@ import numpy as np
 import pytest
 
 from robocal.robots import load_robot
-from robocal.sim.barrier_effects import BarrierEffects, MeasuringArm, RobotAccuracy
-from robocal.sim.barrier_geometry import BeamDirt, barrier_blocked
-from robocal.sim.light_barrier import (
+from robocal.sim.tool.barrier_effects import BarrierEffects, MeasuringArm, RobotAccuracy
+from robocal.sim.tool.barrier_geometry import BeamDirt, barrier_blocked
+from robocal.sim.tool.light_barrier import (
     CrossLaserSensor,
     CylinderTool,
     LightBarrier,
     LightBarrierCell,
     simulate_sensor_calibration_points,
 )
-from robocal.sim.parallel_barrier_cell import (
+from robocal.sim.tool.parallel_barrier_cell import (
     ParallelBarrierRig,
     measure_beam_heights,
     record_parallel_barriers,
@@ -179,7 +179,7 @@ def test_parallel_barriers_through_the_simulator():
 def cells():
     """Realistic preset, 20 cells x 3 repeats of the same bent tool (~10 s; the docs' table uses
     10 repeats: ``robocal tcp accuracy``)."""
-    from robocal.workflows.tcp_accuracy import tcp_accuracy_study
+    from robocal.workflows.tool.accuracy import tcp_accuracy_study
 
     return tcp_accuracy_study(preset="realistic", seeds=20, first_seed=1, repeats=3)
 
@@ -216,7 +216,7 @@ def test_tool_frame_repeatability_and_accuracy_over_20_cells(cells):
 
 
 def test_ideal_cell_is_an_order_of_magnitude_better():
-    from robocal.workflows.tcp_accuracy import tcp_accuracy_study
+    from robocal.workflows.tool.accuracy import tcp_accuracy_study
 
     ideal = tcp_accuracy_study(preset="ideal", seeds=4, first_seed=1, repeats=3, methods=("cross_laser",))
     s = ideal["summary"]["cross_laser"]
@@ -230,7 +230,7 @@ def test_cli_accuracy_prints_the_librarys_study():
     from click.testing import CliRunner
 
     from robocal.cli.main import main
-    from robocal.workflows.tcp_accuracy import tcp_accuracy_study
+    from robocal.workflows.tool.accuracy import tcp_accuracy_study
 
     r = CliRunner().invoke(main, ["tcp", "accuracy", "--seeds", "1", "--seed", "3", "--repeats", "2",
                                   "--method", "cross_laser", "--json"])

@@ -123,7 +123,7 @@ def test_system_calibration_accuracy_at_0_02_mm_noise(kuka):
 def test_system_calibration_on_a_robot_that_differs_from_its_model(kuka):
     """The system calibration takes the robot model as exact; a calibrated robot is not. The true
     robot here keeps 0.1 mm / 0.01 deg per parameter (the absolute error left after a calibration,
-    as the realistic barrier cell, robocal.sim.barrier_effects), which the 9-unknown model lacks.
+    as the realistic barrier cell, robocal.sim.tool.barrier_effects), which the 9-unknown model lacks.
 
     The tolerance it allows, from the hidden truth to first order: with ``e`` the sphere centres of
     the true robot minus the model's (noise-free) and ``J`` the Jacobian of the centres with respect

@@ -180,7 +180,7 @@ class CalibrationResult:
 
     def _write(self, folder, **kwargs) -> dict:
         """:meth:`save` returning everything ``robocal calibrate`` prints (notes, verdict, files)."""
-        from ..workflows.calibrate import write_calibration
+        from ..workflows.calibration.calibrate import write_calibration
 
         return write_calibration(self._computed, folder, **kwargs)
 
@@ -225,7 +225,7 @@ def calibrate(robot, measurements, *, options: CalibrationOptions | None = None,
     """
     from ..io.measurements import Measurements
     from ..kinematics import RobotModel
-    from ..workflows.calibrate import compute_calibration
+    from ..workflows.calibration.calibrate import compute_calibration
     from .loading import load_robot
 
     o = options if options is not None else CalibrationOptions()

@@ -90,7 +90,7 @@ def calibrate(robot, data, out_dir, free, free_all, frames_only, fix, holdout, s
     """
     from .. import CalibrationOptions, calibrate as calibrate_in_memory, load_robot
     from .._api.calibration import _read
-    from ..workflows.calibrate import check_calibration_outputs
+    from ..workflows.calibration.calibrate import check_calibration_outputs
     from ..workflows.outputs import ensure_writable_dir
 
     def step(i, n, text):
@@ -199,7 +199,7 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload, t
     if tool is not None or base is not None or config_dat is not None:
         raise click.ClickException("--tool, --base and --config-dat are for robot programs; a targets CSV file "
                                    "gives its frame in '# frame:'")
-    from ..workflows.calibrate import run_correct
+    from ..workflows.calibration.calibrate import run_correct
     try:
         r = run_correct(robot_file, targets, out_file, nominal=nominal, frame=frame, overwrite=overwrite,
                         payload=payload)
@@ -219,7 +219,7 @@ def correct(robot_file, targets, out_file, nominal, frame, overwrite, payload, t
 
 
 def _correct_program(robot_file, program, out_file, nominal, frame, overwrite, payload=None, options=None):
-    from ..workflows.correct_program import UNKNOWN_TOLERANCE, run_correct_program
+    from ..workflows.calibration.correct_program import UNKNOWN_TOLERANCE, run_correct_program
 
     if frame is not None:
         raise click.ClickException("--frame is for targets CSV files; program targets are in the robot base frame")

@@ -95,7 +95,7 @@ def read_export(robot, data, opts: dict):
         return None
     if not opts["joints_file"]:
         raise ValueError(f"--format {fmt} needs --joints (the controller joint log to pair the points with)")
-    from ..workflows.importing import read_campaign
+    from ..workflows.calibration.importing import read_campaign
 
     r = read_campaign(data, opts["joints_file"], robot=robot, point_format=fmt, pair=opts["pair"],
                       tolerance_s=opts["tolerance_s"], length_unit=opts["length_unit"], angle_unit=opts["angle_unit"],

@@ -48,7 +48,7 @@ def calibrate_cmd(images_dir, board, model, n_distortion, board_shape, fix, out_
     from ..workflows.convergence import Convergence
 
     from ..handeye import HandEyeError
-    from ..workflows.camera_calibrate import calibrate_camera_images
+    from ..workflows.cameras.camera_calibrate import calibrate_camera_images
 
     try:
         s = calibrate_camera_images(images_dir, board, out_dir=out_dir, model=model, n_distortion=n_distortion,

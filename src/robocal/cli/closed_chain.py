@@ -36,7 +36,7 @@ def closed_chain():
 def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_mm, resolution_deg, seed, out_file,
                  overwrite):
     """Simulate holding a laser spot on plate targets with ROBOT (hidden true parameters)."""
-    from ..workflows.closed_chain import simulate_closed_chain
+    from ..workflows.calibration.closed_chain import simulate_closed_chain
 
     try:
         r = simulate_closed_chain(robot, out_file, plates=plates, targets=targets, configurations=configurations,
@@ -77,7 +77,7 @@ def simulate_cmd(robot, plates, targets, configurations, spacing_mm, tolerance_m
 def calibrate_cmd(robot, spots, out_dir, target_spacing_mm, spacing_sigma_mm, sigma_mm, free, free_all, fix, holdout,
                   seed, max_iterations, allow_unconverged, no_report, force, overwrite):
     """Calibrate ROBOT from SPOTS, a held-spot file (robocal-spots/1). Exit codes as `robocal calibrate`."""
-    from ..workflows.closed_chain import run_closed_chain_calibration
+    from ..workflows.calibration.closed_chain import run_closed_chain_calibration
 
     try:
         r = run_closed_chain_calibration(robot, spots, out_dir, target_spacing_mm=target_spacing_mm,

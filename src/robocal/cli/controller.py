@@ -94,7 +94,7 @@ def import_ur_cmd(args, robot_opt, out_file, n_check, seed, overwrite, force, as
     """Read a UR controller's factory calibration (calibration.conf, its [mounting] deltas) on the
     nominal ROBOT and write the controller's exact kinematics as a well-conditioned MDH + beta
     robot file. ROBOT and CALIBRATION_CONF may come in either order."""
-    from ..workflows.controller import controller_comment, import_ur, refuse_same_path, save_model
+    from ..workflows.controller.models import controller_comment, import_ur, refuse_same_path, save_model
 
     robot, conf = _split_robot_conf(args, robot_opt)
     refuse_same_path(out_file, conf, robot)
@@ -150,8 +150,8 @@ def import_ur_cmd(args, robot_opt, out_file, n_check, seed, overwrite, force, as
 def import_ur_kinematics_cmd(robot, yaml_file, out_file, overwrite, force, as_json):
     """Read ur_description's kinematics YAML (as written by ur_calibration or `robocal controller
     export ur`) for the arm type ROBOT into a well-conditioned MDH + beta robot file."""
-    from ..workflows.controller import model_from_kinematics_yaml, origins_fk, random_joints, refuse_same_path, save_model
-    from ..workflows.controller import _pose_errors
+    from ..workflows.controller.models import model_from_kinematics_yaml, origins_fk, random_joints, refuse_same_path, save_model
+    from ..workflows.controller.models import _pose_errors
 
     refuse_same_path(out_file, yaml_file, robot)
     if Path(out_file).exists() and not overwrite:
@@ -191,7 +191,7 @@ def import_ur_kinematics_cmd(robot, yaml_file, out_file, overwrite, force, as_js
 def export_ur_cmd(model_file, out_file, hash_value, overwrite, force, as_json):
     """Write MODEL (a 6-joint robot file ending at the flange) as the kinematics parameter file that
     ur_robot_driver / ur_description load, checked against the model's FK (1e-9 mm) before it is written."""
-    from ..workflows.controller import export_ur
+    from ..workflows.controller.models import export_ur
 
     r = export_ur(model_file, out_file, hash_value=hash_value, overwrite=overwrite, force=force)
     a, v = r["agreement"], r["verdict"]
@@ -218,7 +218,7 @@ def export_ur_cmd(model_file, out_file, hash_value, overwrite, force, as_json):
 def export_urdf_cmd(model_file, out_file, overwrite, force, as_json):
     """Write MODEL as URDF (calibrated joint origins), checked against the model's FK (1e-6 mm) before
     it is written."""
-    from ..workflows.controller import export_urdf
+    from ..workflows.controller.models import export_urdf
 
     r = export_urdf(model_file, out_file, overwrite=overwrite, force=force)
     a, v = r["agreement"], r["verdict"]
@@ -240,7 +240,7 @@ def export_urdf_cmd(model_file, out_file, overwrite, force, as_json):
 @click.option("--json", "as_json", **_JSON)
 def export_table_cmd(model_file, out_file, overwrite, as_json):
     """Write MODEL's kinematic parameters as a controller-neutral DH / MDH table with units."""
-    from ..workflows.controller import export_table
+    from ..workflows.controller.models import export_table
 
     r = export_table(model_file, out_file, overwrite=overwrite)
     if as_json:

@@ -38,7 +38,7 @@ def probe_program_cmd(robot, language, count, seed, host, port, out_file, overwr
     from ..io.atomic import atomic_write_text
     from ..io.controller_pairs import CONTROLLERS
     from ..io.programs.probe import probe_program_text
-    from ..workflows.controller import load_nominal, random_joints
+    from ..workflows.controller.models import load_nominal, random_joints
 
     if count < 10:
         raise click.ClickException(f"--count must be at least 10 (50+ recommended), got {count}")
@@ -74,7 +74,7 @@ def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_fi
     the robocal-pair lines it would print (for trying `controller probe` without a robot)."""
     from ..io.atomic import atomic_write_text
     from ..sim.controller import probe_pairs_text
-    from ..workflows.controller import load_nominal, random_joints, refuse_same_path
+    from ..workflows.controller.models import load_nominal, random_joints, refuse_same_path
 
     refuse_same_path(out_file, robot)
     model = load_nominal(robot)
@@ -112,8 +112,8 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, flange, out_fi
     """Fit ROBOT's kinematics to PAIRS (joints, pose the controller computed for them): does the
     controller run the nominal model, which parameters does its compensation change and by how much,
     and what remains (about zero for a rigid model)."""
-    from ..workflows.controller import refuse_same_path, save_model
-    from ..workflows.controller_probe import probe_fit
+    from ..workflows.controller.models import refuse_same_path, save_model
+    from ..workflows.controller.probe import probe_fit
     from .controller import _gate_exit
 
     if out_file is not None:
@@ -184,8 +184,8 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, plot_file, o
     import numpy as np
 
     from ..io.atomic import atomic_write_text
-    from ..workflows.controller import refuse_same_path
-    from ..workflows.controller_probe import model_diff
+    from ..workflows.controller.models import refuse_same_path
+    from ..workflows.controller.probe import model_diff
 
     tcp = None
     if tool:

@@ -1,6 +1,6 @@
 """``robocal fleet ...``: many robots at once on Dask (docs/fleet.md).
 
-Thin: parse, open the Dask client (:mod:`robocal.workflows.fleet_cluster`), call the workflow,
+Thin: parse, open the Dask client (:mod:`robocal.workflows.fleet.cluster`), call the workflow,
 print. dask is imported only when a fleet command runs.
 """
 
@@ -53,7 +53,7 @@ _WORKERS = click.option("--workers", type=int, default=None, metavar="N",
 
 
 def _client(scheduler, workers):
-    from ..workflows.fleet_cluster import FleetClusterError, fleet_client, tls_security
+    from ..workflows.fleet.cluster import FleetClusterError, fleet_client, tls_security
 
     tls = click.get_current_context().meta.get("robocal_tls", {})
     try:
@@ -114,8 +114,8 @@ def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_re
     robots failed (the last line counts them), 1 when all did; 4 when none failed but some fits did
     not converge (their robot files are not written) unless --allow-unconverged.
     """
-    from ..workflows.fleet import run_fleet_calibration
-    from ..workflows.fleet_cluster import FleetClusterError
+    from ..workflows.fleet.calibrate import run_fleet_calibration
+    from ..workflows.fleet.cluster import FleetClusterError
 
     target = _db_for_workers(_history_target(db, no_history, out_dir), scheduler)
     bar = None
@@ -197,7 +197,7 @@ def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no
     import json
 
     from ..store import HistoryError
-    from ..workflows.fleet_status import fleet_status
+    from ..workflows.fleet.status import fleet_status
 
     try:
         r = fleet_status(db, max_age_days=max_age_days, tolerance_mm=tolerance_mm, tolerance_deg=tolerance_deg,
@@ -272,7 +272,7 @@ def _progress_bar(label):
 
 
 def _study(label, scheduler, workers, fn, *args, **kwargs):
-    from ..workflows.fleet_cluster import FleetClusterError
+    from ..workflows.fleet.cluster import FleetClusterError
 
     try:
         with _client(scheduler, workers) as client, _progress_bar(label) as bar:
@@ -307,7 +307,7 @@ def monte_carlo_cmd(robot, poses, samples, noise_mm, check_poses, tool, seed, ou
     `robocal plan-poses`): simulated robots measured at those poses, calibrated, checked against
     their truth."""
     from ..io.programs.joint_table import read_joint_program
-    from ..workflows.fleet_study import monte_carlo_plan
+    from ..workflows.fleet.study import monte_carlo_plan
 
     _check_json_out(out_file, {"POSES": poses, "ROBOT": robot}, overwrite)
     try:
@@ -362,7 +362,7 @@ def _robot_model(robot):
 def pose_sets_cmd(robot, sets, count, candidates, sigma_mm, tool, seed, out_file, overwrite, scheduler, workers):
     """Plan COUNT poses of ROBOT from each of SETS candidate sets; report the best seed
     (`robocal plan-poses --seed <best>` writes that plan)."""
-    from ..workflows.fleet_study import pose_set_selection
+    from ..workflows.fleet.study import pose_set_selection
 
     _check_json_out(out_file, {"ROBOT": robot}, overwrite)
     r = _study("sets", scheduler, workers, pose_set_selection, robot, sets=sets, count=count, candidates=candidates,
@@ -398,7 +398,7 @@ def thermal_cmd(runs, n_keep, out_file, overwrite, scheduler, workers):
     """Thermal parameter screening (`robocal thermal screen`) of each robot's run folder RUNS
     (the robot id is the folder name), one task per robot. Exit code 3 when some robots failed, 1
     when all did."""
-    from ..workflows.fleet_study import thermal_screening
+    from ..workflows.fleet.study import thermal_screening
 
     _check_json_out(out_file, {}, overwrite)
     r = _study("robots", scheduler, workers, thermal_screening, [(Path(d).name, d) for d in runs], n_keep=n_keep)

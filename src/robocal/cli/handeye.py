@@ -70,7 +70,7 @@ def solve_cmd(cal_data, poses, length_unit, joints_file, robot, joint_offsets, i
     from ..workflows.convergence import Convergence
 
     from ..handeye import HandEyeError
-    from ..workflows.handeye_solve import solve_handeye
+    from ..workflows.cameras.handeye_solve import solve_handeye
 
     if cal_data is None and ((poses is None and joints_file is None) or images is None or board is None):
         raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv (or --joints JOINTS.csv --robot ROBOT) "

@@ -32,7 +32,7 @@ def import_cmd(points_file, joints_file, robot, point_format, pair, tolerance_s,
                orientation_unit):
     """Pair the tracker points of POINTS_FILE with a joint log of ROBOT (name or robot file) and write robocal's measurement file
     (docs/importers.md); `robocal calibrate ROBOT OUT` then reads it."""
-    from ..workflows.importing import import_campaign
+    from ..workflows.calibration.importing import import_campaign
 
     try:
         r = import_campaign(points_file, joints_file, out_file, robot=robot, point_format=point_format, pair=pair,

@@ -112,7 +112,7 @@ def iso9283():
 def plan_cmd(robot, out_dir, tool, cycles, path_cycles, drift_hours, load, speed_percent, min_height_mm, language,
              cell_file, as_json, overwrite):
     """The ISO 9283 test of ROBOT: the largest cube in its working range, P1-P5, the sequences."""
-    from ..workflows.iso9283_plan import build_iso_plan, write_iso_plan
+    from ..workflows.performance.iso9283_plan import build_iso_plan, write_iso_plan
 
     model = _robot(robot)
     T_tool = _frame6(tool, "--tool") if tool else None
@@ -173,9 +173,9 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
     With --db and --robot-id the figures are recorded in the history database (the AFTER run's
     when two are given: the robot as it will work, with the corrected program)."""
     from ..io.iso9283_files import read_iso_measurements
-    from ..workflows.iso9283_evaluate import compare_runs, evaluate_iso_run, iso_table_lines
-    from ..workflows.iso9283_report import write_iso_outputs
-    from ..workflows.iso9283_plan import read_iso_plan
+    from ..workflows.performance.iso9283_evaluate import compare_runs, evaluate_iso_run, iso_table_lines
+    from ..workflows.performance.iso9283_report import write_iso_outputs
+    from ..workflows.performance.iso9283_plan import read_iso_plan
 
     if (mpe is None) != (instrument_at is None):
         raise click.ClickException("--mpe and --instrument-at go together (the MPE depends on the distance)")
@@ -194,7 +194,7 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
             result["comparison"] = compare_runs(runs[0], runs[1])
         files = write_iso_outputs(out_dir, result, overwrite=overwrite)
         if db is not None:
-            from ..workflows.iso9283_history import record_iso_run
+            from ..workflows.performance.iso9283_history import record_iso_run
 
             result["history"] = {"database": db, "robot_id": robot_id, "cycle_id": record_iso_run(
                 db, robot_id, runs[-1], time=when, temperature_c=temperature_c,
@@ -245,8 +245,8 @@ def simulate_iso9283_cmd(robot, plan, out_file, seed, truth_file, calibrated, mp
     import numpy as np
 
     from ..sim.iso9283 import IsoEffects
-    from ..workflows.iso9283_plan import read_iso_plan
-    from ..workflows.iso9283_simulate import simulate_iso9283
+    from ..workflows.performance.iso9283_plan import read_iso_plan
+    from ..workflows.performance.iso9283_simulate import simulate_iso9283
 
     for name, v in (("--joint-noise", joint_noise_deg), ("--backlash", backlash_deg), ("--drift", drift_deg)):
         if not (v >= 0 and math.isfinite(v)):

@@ -42,7 +42,7 @@ def plan_poses_cmd(robot, count, candidates, workspace, tracker_at, tool, cell_f
                    language, overwrite):
     """Plan COUNT measurement poses of ROBOT (D-optimal), print the predicted parameter sigma and
     held-out accuracy, and write the poses as a joint program."""
-    from ..workflows.plan_poses import parse_box, plan_poses
+    from ..workflows.calibration.plan_poses import parse_box, plan_poses
 
     try:
         box = parse_box(workspace) if workspace else None

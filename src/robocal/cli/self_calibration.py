@@ -53,7 +53,7 @@ def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, bo
     writes no robot.toml unless --force."""
 
     from ..handeye import HandEyeError
-    from ..workflows.self_calibration import self_calibrate as run
+    from ..workflows.cameras.self_calibration import self_calibrate as run
 
     try:
         s = run(robot, images=images, joints=joints_file, frames=frames_file, board=board, camera_end_effector=camera_ee,

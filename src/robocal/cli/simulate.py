@@ -31,7 +31,7 @@ def simulate():
                    "the floor, the floor an obstacle, the tracker as instrument.")
 def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, seed, out_file, overwrite, cell_file):
     """Simulate a laser-tracker campaign of ROBOT with hidden true parameters."""
-    from ..workflows.simulate import simulate_tracker
+    from ..workflows.calibration.simulate import simulate_tracker
 
     if n_poses < 1:
         raise click.ClickException(f"--poses must be at least 1, got {n_poses}")
@@ -73,7 +73,7 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
     """Render a hand-eye cell: PNG images of a board (1280x1024, lens distortion, blur, lighting,
     noise), the flange poses as a CSV in a named convention, the camera and the hidden truth. With
     ROBOT (shipped name or robot file) also joints.csv: that robot's joints at every image."""
-    from ..workflows.camera_simulate import simulate_camera
+    from ..workflows.cameras.camera_simulate import simulate_camera
 
     if n_images < 1:
         raise click.ClickException(f"--images must be at least 1, got {n_images}")
@@ -125,7 +125,7 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
     """Simulate a camera self-calibration run of ROBOT: its own camera photographs a board held in a
     hand (nao_h25) or fixed in the world (a 6R arm, camera on the flange); rendered PNG images, a
     time-stamped joint log, the frames' capture times, the camera and the hidden truth."""
-    from ..workflows.self_calibration_simulate import simulate_self_calibration_files
+    from ..workflows.cameras.self_calibration_simulate import simulate_self_calibration_files
 
     if n_images < 1:
         raise click.ClickException(f"--images-per-chain must be at least 1, got {n_images}")

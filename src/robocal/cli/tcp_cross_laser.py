@@ -184,7 +184,7 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     thesis_step3_no_beta.
     """
     from ..tcp.cross_laser import CrossLaserError
-    from ..workflows.tcp import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
+    from ..workflows.tool.recalibration import DEFAULT_VARIANTS, format_study_table, tcp_repeatability_study
 
     from ..io.output_paths import check_outputs
     from ._progress import Progress
@@ -237,7 +237,7 @@ def accuracy_cmd(preset, n_seeds, first_seed, repeats, methods, budget, as_json)
     distance from the true TCP, arm check = what a measuring arm registered to the robot base
     reads (the thesis's 0.48 mm is of that kind). Median and quartiles over the cells.
     """
-    from ..workflows.tcp_accuracy import METHODS, format_accuracy_table, tcp_accuracy_study, tcp_error_budget
+    from ..workflows.tool.accuracy import METHODS, format_accuracy_table, tcp_accuracy_study, tcp_error_budget
 
     from ._common import _step_printer, _user_error
 

@@ -1,7 +1,7 @@
 """``robocal thermal ...``: thermal drift compensation commands (thesis ch. 3 and 5.1; docs/thermal.md).
 
 Registered in ``robocal.cli`` with ``main.add_command(thermal)``. Thin: parse, call
-:mod:`robocal.workflows.thermal_commands`, print. Files are described in
+:mod:`robocal.workflows.thermal.commands`, print. Files are described in
 docs/thermal.md ("Command line"); inside, lengths are mm and angles rad, printed angles are
 labelled. Every user error ends in one line ``Error: ...`` and a non-zero exit code; progress
 lines go to stderr.
@@ -82,7 +82,7 @@ def simulate_cmd(seed, schedule_seed, n_cycles, n_sphere, preset, out_dir, overw
       setup.json (robot-held sensor on the flange), truth.json (the cell and the true drifts);
     OUT/program.csv: a taught program (the 34 monitored poses, robocal-program/1).
     """
-    from ..workflows.thermal_commands import simulate_thermal_cell
+    from ..workflows.thermal.commands import simulate_thermal_cell
 
     res = _call(simulate_thermal_cell, out_dir, seed=seed, schedule_seed=schedule_seed, n_cycles=n_cycles,
                 n_sphere=n_sphere, preset=preset, overwrite=overwrite, progress=_progress)
@@ -158,7 +158,7 @@ def calibrate_sensor_cmd(robot, sphere_file, method, sigma_mm, poses, truth_file
     """
     from ..calib.sanity import Verdict
     from ..workflows.convergence import Convergence
-    from ..workflows.thermal_commands import calibrate_sensor
+    from ..workflows.thermal.commands import calibrate_sensor
     from .tcp import _exit_if_failed
 
     res = _call(calibrate_sensor, robot, sphere_file, method=method, sigma_mm=sigma_mm, poses=poses,
@@ -240,7 +240,7 @@ def screen_cmd(run_dir, n_keep, threshold_mm, statistic, n_online, params, senso
     lambda before / traditional / screened on this run. With --params the given set is evaluated
     instead (table 5-2 on an evaluation run).
     """
-    from ..workflows.thermal_commands import screen_run
+    from ..workflows.thermal.commands import screen_run
 
     res = _call(screen_run, run_dir, n_keep=n_keep, threshold_mm=threshold_mm, statistic=statistic, n_online=n_online,
                 params=_names(params), sensor_file=sensor_file, setup_file=setup_file, robot=robot,
@@ -329,7 +329,7 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
     ROBOT: robot name or robot file (the cold model the program was taught on).
     """
     from ..calib.sanity import Verdict
-    from ..workflows.thermal_commands import compensate_program_files
+    from ..workflows.thermal.commands import compensate_program_files
     from .tcp import _exit_if_failed
 
     res = _call(compensate_program_files, robot, sensor_file=sensor_file, sphere_file=sphere_file, poses=poses,
@@ -355,7 +355,7 @@ def compensate_cmd(robot, sensor_file, sphere_file, poses, cold_file, params, pr
 
 def _echo_drift(res) -> None:
     """The identified deltas of ``compensate`` (angles in deg)."""
-    from ..workflows.thermal_commands import format_delta
+    from ..workflows.thermal.commands import format_delta
 
     params = res["parameters"]
     click.echo(f"drift identification: {len(params)} parameter(s) from {res['n_poses']} sphere poses "

@@ -1,5 +1,5 @@
 """``robocal thermal experiment``: table 5-2 over many seeds (thin over
-:func:`robocal.workflows.thermal_seeds.run_thermal_seeds`; registered by :mod:`robocal.cli.thermal`)."""
+:func:`robocal.workflows.thermal.seeds.run_thermal_seeds`; registered by :mod:`robocal.cli.thermal`)."""
 
 from __future__ import annotations
 
@@ -56,7 +56,7 @@ def experiment_cmd(preset, n_seeds, first_seed, n_cycles, resamples, as_json):
     < 0.1 mm) and the strict one (every cycle < 0.1 mm), and how often each parameter is screened.
     About 2 s per seed at 90 cycles.
     """
-    from ..workflows.thermal_seeds import format_seeds_table, run_thermal_seeds
+    from ..workflows.thermal.seeds import format_seeds_table, run_thermal_seeds
 
     try:
         res = run_thermal_seeds(preset=preset, seeds=n_seeds, first_seed=first_seed, n_cycles=n_cycles,

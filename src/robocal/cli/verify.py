@@ -35,7 +35,7 @@ def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool
 
     Exit 0: ok; 3: recalibrate; 6: mechanical fault suspected (a joint named)."""
     from ..errors import RobocalError
-    from ..workflows.verify import run_verify
+    from ..workflows.performance.verify import run_verify
     from .iso9283 import _xyz
 
     check_history_options(db, robot_id, when)
@@ -47,7 +47,7 @@ def verify(model, measurements, noise_mm, false_alarm_rate, register_frame, tool
         if when is not None:
             r["time"] = when
         if db is not None:
-            from ..workflows.iso9283_history import record_verification
+            from ..workflows.performance.iso9283_history import record_verification
 
             r["history"] = {"database": db, "robot_id": robot_id,
                             "cycle_id": record_verification(db, robot_id, r)}

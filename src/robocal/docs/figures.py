@@ -87,7 +87,7 @@ def _nao_simulated() -> dict:
 
     from ..handeye.self_calibration import assign_carriers, solve_self_calibration
     from ..io.capture_times import match_capture_times
-    from ..sim.self_calibration import simulate_self_calibration
+    from ..sim.cameras.self_calibration import simulate_self_calibration
 
     run = simulate_self_calibration("nao_h25", n_images_per_chain=40, pixel_noise=0.3, joint_noise_deg=0.0, seed=3)
     q, _, _ = match_capture_times(run.frame_times, run.log_times, run.log_joints, tolerance=0.06)

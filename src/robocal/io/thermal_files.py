@@ -37,7 +37,7 @@ __all__ = [
 
 SENSOR_FORMAT = "robocal-thermal-sensor/1"
 SETUP_FORMAT = "robocal-thermal-setup/1"
-#: Files of a run directory (``robocal.sim.thermal.write_run``) the screening reads, plus the set-up.
+#: Files of a run directory (``robocal.sim.thermal.simulator.write_run``) the screening reads, plus the set-up.
 RUN_FILES = ("sphere_cold.csv", "sphere.csv", "monitor_cold.csv", "monitor.csv", "cycles.csv", "setup.json")
 #: Joints of a current sphere pose and its cold reference must agree to this (0.0006 deg).
 COLD_MATCH_TOL_RAD = 1e-5

@@ -2,7 +2,7 @@
 and after calibration per robot, outliers flagged (``robocal fleet calibrate``).
 
 Nothing here computes: the rows (and their ``outlier`` flags) come from
-:mod:`robocal.workflows.fleet`.
+:mod:`robocal.workflows.fleet.calibrate`.
 """
 
 from __future__ import annotations

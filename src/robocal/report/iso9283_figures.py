@@ -7,7 +7,7 @@
 * the path deviation: per evaluation plane, the distance of the crossings' barycentre from the
   commanded path (AT's terms) and l̄ + 3·S (RT's terms), for the line and the circle.
 
-Input is one evaluated run (:func:`robocal.workflows.iso9283_evaluate.evaluate_iso_run`); nothing
+Input is one evaluated run (:func:`robocal.workflows.performance.iso9283_evaluate.evaluate_iso_run`); nothing
 is computed here beyond placing marks.
 """
 

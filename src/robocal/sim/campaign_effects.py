@@ -3,7 +3,7 @@
 A simulator identical to the model makes "the identified parameters are within 3 reported
 sigma" true by construction. :class:`CampaignEffects` adds what a real campaign meets and a
 DH (+ beta) model with joint offsets cannot follow, with a preset each (the pattern of
-:class:`~robocal.sim.barrier_effects.BarrierEffects` and the thermal presets):
+:class:`~robocal.sim.tool.barrier_effects.BarrierEffects` and the thermal presets):
 
 * ``ideal`` -- none: the simulator is the model (plus the tracker's noise).
 * ``realistic`` -- every field justified in :meth:`CampaignEffects.realistic`.

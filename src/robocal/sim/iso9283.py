@@ -53,7 +53,7 @@ def simulate_iso_run(true_model, protocol: dict, *, seed, effects: IsoEffects | 
     true_model : RobotModel
         The simulated robot's true kinematics (its base frame is the test's frame).
     protocol : dict
-        A plan from :func:`robocal.workflows.iso9283_plan.build_iso_plan`.
+        A plan from :func:`robocal.workflows.performance.iso9283_plan.build_iso_plan`.
     seed : int or numpy.random.Generator
     effects : IsoEffects, optional
     mpe : InstrumentMPE

@@ -59,7 +59,7 @@ def _problem(nominal, virtual, rng, n_poses, n_repeats):
 
 
 def _geometric_calibration(nominal, virtual, q_work, out, seed):
-    from .calibrate import run_calibration
+    from .calibration.calibrate import run_calibration
 
     tracker = LaserTracker.placed(seed + 1, reflectors=np.atleast_2d(REFLECTOR_MM), sigma_mm=0.02)
     meas_path, truth_path = out / "tracker_campaign.csv", out / "tracker_campaign.truth.json"
@@ -97,10 +97,10 @@ def _iso_before_after(stage, nominal, virtual, run, seed) -> dict:
     from ..io.iso9283_files import read_iso_measurements, write_iso_measurements
     from ..performance.adequacy import parse_mpe
     from ..sim.iso9283 import simulate_iso_run
-    from .iso9283_evaluate import compare_runs, evaluate_iso_run
-    from .iso9283_plan import build_iso_plan, write_iso_plan
-    from .iso9283_report import write_iso_outputs
-    from .iso9283_simulate import corrected_plan
+    from .performance.iso9283_evaluate import compare_runs, evaluate_iso_run
+    from .performance.iso9283_plan import build_iso_plan, write_iso_plan
+    from .performance.iso9283_report import write_iso_outputs
+    from .performance.iso9283_simulate import corrected_plan
 
     T_tool = np.eye(4)
     T_tool[:3, 3] = REFLECTOR_MM
@@ -134,7 +134,7 @@ def _iso_before_after(stage, nominal, virtual, run, seed) -> dict:
 
 def _thermal(seed):
     """Production with heating: screening on run 1, online compensation on runs 2 and 3."""
-    from .thermal import run_thermal_experiment
+    from .thermal.runs import run_thermal_experiment
 
     exp = run_thermal_experiment(seed=seed, preset="realistic")  # the figures a user will see (issue 11)
     names = list(exp["screened"])
@@ -161,7 +161,7 @@ def _thermal(seed):
 
 
 def _tool_recalibration(seed):
-    from .tcp import tcp_repeatability_study
+    from .tool.recalibration import tcp_repeatability_study
 
     study = tcp_repeatability_study(collisions=1, seed=seed, robot=None, variants={"beta_corrected": {}})
     run = study["variants"]["beta_corrected"]["runs"][0]

@@ -7,7 +7,7 @@ period into four arcs, from which the circle centre follows. Two circles ``dz`` 
 tool axis, a third circle after re-aligning the axis with ``Z_s`` centres it, and vertical moves
 through the beams give the TCP. The result is the 5-D tool frame in the flange frame.
 
-Frames and signs (all verified against the simulator :mod:`robocal.sim.light_barrier` in
+Frames and signs (all verified against the simulator :mod:`robocal.sim.tool.light_barrier` in
 ``tests/test_cross_laser.py``):
 
 - Sensor frame S = the orthogonal frame ``T_base_sensor`` of the calibration (X_s along the X

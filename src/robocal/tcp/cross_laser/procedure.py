@@ -183,7 +183,7 @@ def recalibrate_tool(source, sensor, T_flange_tool_nominal, settings: CrossLaser
     """Run the full cross-laser recalibration online (thesis 4.2.2 steps 1-4).
 
     source: an event source with ``run(motion) -> MotionRecord`` (the simulator
-    :class:`robocal.sim.light_barrier.LightBarrierCell`, or a robot driver). sensor: the sensor
+    :class:`robocal.sim.tool.light_barrier.LightBarrierCell`, or a robot driver). sensor: the sensor
     calibration (``SensorCalibration``, dict or :class:`SensorFrame`). T_flange_tool_nominal:
     the current tool estimate (4x4, flange frame; its z axis is the tool axis, its origin the tip).
     start_pose: flange pose (4x4, base) before the procedure (default: above the first circle);

@@ -1,0 +1,1 @@
+"""Camera simulators: rendered boards, hand-eye points, self-calibration runs and studies."""

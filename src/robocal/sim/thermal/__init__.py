@@ -1,0 +1,1 @@
+"""The thermal simulator: heat, deformation, measurement, schedules, realistic effects, run files."""

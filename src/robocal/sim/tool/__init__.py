@@ -1,0 +1,1 @@
+"""Light-barrier simulators: beam geometry, effects, the parallel-barrier cell."""

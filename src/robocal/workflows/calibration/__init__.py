@@ -1,0 +1,1 @@
+"""Calibration workflows: calibrate (rigid, elastic, swarm), closed chain, correction, plans, import, studies."""

@@ -1,0 +1,1 @@
+"""Camera workflows: camera calibration, hand-eye, self-calibration, their simulations."""

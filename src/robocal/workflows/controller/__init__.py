@@ -1,0 +1,1 @@
+"""Controller models in and out: UR factory calibration, exports, probing, model diff."""

@@ -1,0 +1,1 @@
+"""Fleets on Dask: calibrate many robots, studies as tasks, fleet status."""

@@ -1,0 +1,163 @@
+"""The Dask side of ``robocal fleet``: a client on a local cluster (default) or on a user's cluster
+by address, and running a list of tasks on it with progress.
+
+dask.distributed is the ``fleet`` extra and imported only here, when a fleet command runs (never by
+``robocal --help``). Tasks are plain module-level functions of small, picklable arguments (paths,
+options): what travels to a worker is the task description, not the data.
+"""
+
+from __future__ import annotations
+from ...errors import RobocalError
+
+import contextlib
+import os
+
+__all__ = ["FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "default_workers", "tls_security"]
+
+FLEET_EXTRA_HINT = "pip install 'robocal[fleet]'"
+
+
+class FleetClusterError(RobocalError, RuntimeError):
+    """The Dask cluster cannot be used (not installed, not reachable)."""
+
+
+def import_distributed():
+    """``dask.distributed``, or a clear error naming the extra."""
+    try:
+        import distributed
+    except ImportError as exc:
+        raise FleetClusterError(f"robocal fleet needs dask.distributed (the 'fleet' extra: {FLEET_EXTRA_HINT}): "
+                                f"{exc}") from None
+    return distributed
+
+
+def default_workers() -> int:
+    """Worker processes of the default local cluster: one per CPU this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def tls_security(*, ca_file=None, cert=None, key=None, security_file=None):
+    """A ``distributed.security.Security`` for a TLS cluster (encryption required), or None when no
+    option is given. ca_file, cert, key: PEM files (the cluster's CA, this client's certificate and
+    its private key; the key may sit in the certificate file). security_file: a TOML file with
+    ``[tls]`` ``ca_file``, ``cert``, ``key`` (paths relative to the file); options override it.
+    :class:`FleetClusterError` naming a missing file."""
+    import tomllib
+    from pathlib import Path
+
+    values = {}
+    if security_file is not None:
+        path = Path(security_file)
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+            raise FleetClusterError(f"--security {path}: cannot read it as TOML: {exc}") from None
+        tls = data.get("tls")
+        if not isinstance(tls, dict) or not {"ca_file", "cert"} <= set(tls):
+            raise FleetClusterError(f"--security {path}: needs a [tls] table with ca_file and cert (and key unless "
+                                    "the certificate file holds it)")
+        values = {k: str((path.parent / str(tls[k])).resolve()) for k in ("ca_file", "cert", "key") if k in tls}
+    for k, v in (("ca_file", ca_file), ("cert", cert), ("key", key)):
+        if v is not None:
+            values[k] = str(v)
+    if not values:
+        return None
+    if "ca_file" not in values or "cert" not in values:
+        raise FleetClusterError("TLS needs --tls-ca-file and --tls-cert (and --tls-key unless the certificate "
+                                "file holds the key), or --security FILE")
+    for k, v in values.items():
+        if not Path(v).is_file():
+            raise FleetClusterError(f"TLS {k} file {v}: no such file")
+    distributed = import_distributed()
+    return distributed.security.Security(require_encryption=True, tls_ca_file=values["ca_file"],
+                                         tls_client_cert=values["cert"], tls_client_key=values.get("key"))
+
+
+@contextlib.contextmanager
+def fleet_client(scheduler: str | None = None, workers: int | None = None, *, processes: bool = True,
+                 security=None):
+    """A ``distributed.Client``: on the cluster at ``scheduler`` (``tcp://host:8786``), or on a new
+    local cluster of ``workers`` (default :func:`default_workers`) single-threaded worker processes
+    (``processes=False``: threads in this process, for tests), closed on exit. No dashboard is
+    started for a local cluster (a shared machine may have its port taken). security: a
+    ``distributed.security.Security`` (:func:`tls_security`) for a scheduler at ``tls://``.
+
+    A scheduler and its workers must be trusted: Dask runs pickled code and unpickles results
+    (docs/fleet.md, "Trust boundary"). Without TLS the traffic, results included, is in clear."""
+    distributed = import_distributed()
+    if scheduler is not None and workers is not None:
+        raise FleetClusterError("give either --scheduler (an existing cluster) or --workers (a local one), not both")
+    if workers is not None and workers < 1:
+        raise FleetClusterError(f"--workers must be at least 1, got {workers}")
+    if security is not None and (scheduler is None or not str(scheduler).startswith("tls://")):
+        raise FleetClusterError("TLS options need --scheduler tls://host:port (the cluster's TLS address)")
+    if scheduler is not None:
+        try:
+            client = distributed.Client(scheduler, timeout="20s", **({"security": security} if security else {}))
+        except (OSError, TimeoutError) as exc:
+            raise FleetClusterError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        with client:
+            yield client
+        return
+    n = workers or default_workers()
+    import dask
+
+    # The worker's statistical profiler samples every task's stack every 10 ms under the GIL: on
+    # calibrations of ~40 ms it cost ~10-15 % of the fleet's throughput (benchmarks/bench_fleet.py).
+    # The nannies ship this setting to the worker processes.
+    no_profiler = {"distributed.worker.profile.enabled": False}
+    with dask.config.set(no_profiler), distributed.LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
+            silence_logs=40) as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+def run_tasks(client, fn, items, *, keys=None, progress=None, on_error=None, **kwargs) -> list:
+    """``[fn(item, **kwargs) for item in items]`` as one Dask task per item (``client`` None: a plain
+    loop in this process), in the order of ``items``.
+
+    progress(done, total, result): called as each task finishes (completion order). on_error(item,
+    exc): the result for a task whose worker died or whose function raised (default: re-raise).
+    """
+    items = list(items)
+    total = len(items)
+    results = [None] * total
+    step = progress or (lambda done, n, result: None)
+
+    def failed(i, exc):
+        if on_error is None:
+            raise exc
+        return on_error(items[i], exc)
+
+    if client is None:
+        for i, item in enumerate(items):
+            try:
+                results[i] = fn(item, **kwargs)
+            except Exception as exc:  # one failing item never stops the others
+                results[i] = failed(i, exc)
+            step(i + 1, total, results[i])
+        return results
+    distributed = import_distributed()
+    futures = client.map(fn, items, key=keys, pure=False, **kwargs)
+    where = {f.key: i for i, f in enumerate(futures)}
+    done = 0
+    # with_results: the client's event loop fetches each result as it arrives, so this thread does
+    # not make one blocking round trip per robot (fut.result() cost ~5 ms of latency a robot and
+    # kept the client process busy on a machine whose cores the workers need)
+    for fut, result in distributed.as_completed(futures, with_results=True, raise_errors=False):
+        i = where[fut.key]
+        if fut.status in ("error", "cancelled") or isinstance(result, BaseException):
+            # an erred future gives (type, exception, traceback); a cancelled one the exception
+            exc = result[1] if isinstance(result, tuple) and len(result) == 3 else result
+            if not isinstance(exc, BaseException):
+                exc = RuntimeError(f"task {fut.key} ended as {fut.status}")
+            results[i] = failed(i, exc)  # a worker lost (KilledWorker) or a task that raised
+        else:
+            results[i] = result
+        done += 1
+        step(done, total, results[i])
+    del futures
+    return results

@@ -1,0 +1,1 @@
+"""Thermal workflows: simulated runs, screening and compensation commands, their inputs."""

@@ -1,0 +1,1 @@
+"""Tool-frame workflows: cross-laser recalibration after collisions, tool accuracy."""
