@@ -76,7 +76,7 @@ def serial_loop(fleet_file: Path, out: Path, limit: int | None = None) -> float:
 
 def fleet_run(client, fleet_file: Path, out: Path, per_task=None):
     """Wall time, summed in-task time and this (client + scheduler) process's CPU time of one run."""
-    from robocal.workflows.fleet.calibrate.calibrate import run_fleet_calibration
+    from robocal.workflows.fleet.calibrate import run_fleet_calibration
 
     t0, c0 = time.perf_counter(), time.process_time()
     r = run_fleet_calibration(fleet_file, out, client=client, report=False, per_task=per_task)
@@ -139,7 +139,7 @@ def main():
     ap.add_argument("--robots-per-task", type=int, default=None,
                     help="robots per Dask task (default: robocal fleet calibrate's automatic choice)")
     args = ap.parse_args()
-    from robocal.workflows.fleet.calibrate.cluster import default_workers, fleet_client
+    from robocal.workflows.fleet.cluster import default_workers, fleet_client
 
     workers = args.workers or default_workers()
     for line in machine_info([f"fleet       {args.robots} robots x {args.poses} poses, {workers} workers, "
@@ -186,7 +186,7 @@ def main():
     print(f"per-task overhead: empty task {1e3 * empty * workers:.2f} ms of a worker; in the fleet run "
           f"{1e3 * per_task_overhead:.1f} ms per robot (wall x workers - time inside the tasks) = "
           f"{100 * per_task_overhead / (per_task_overhead + b / n):.1f} % of a task")
-    from robocal.workflows.fleet.calibrate.calibrate import robots_per_task
+    from robocal.workflows.fleet.calibrate import robots_per_task
 
     size = robots_per_task(n, workers, args.robots_per_task)
     cc = statistics.median(client_cpu)

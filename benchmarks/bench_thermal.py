@@ -38,9 +38,9 @@ import timeit  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from robocal.sim.thermal.simulator.simulator import ThermalCell, standard_schedules  # noqa: E402
+from robocal.sim.thermal.simulator import ThermalCell, standard_schedules  # noqa: E402
 from robocal.thermal.screening import screen_parameters, select_online_poses  # noqa: E402
-from robocal.workflows.thermal.runs.runs import screening_problem  # noqa: E402
+from robocal.workflows.thermal.runs import screening_problem  # noqa: E402
 
 
 def _time(fn, repeat: int, target_s: float = 0.2):
@@ -111,7 +111,7 @@ def main(argv=None):
 
 def _experiment(n: int, resamples: int, preset: str) -> None:
     """Table 5-2 over ``n`` seeds, timed once (it is minutes, not milliseconds)."""
-    from robocal.workflows.thermal.runs.seeds import format_seeds_table, run_thermal_seeds
+    from robocal.workflows.thermal.seeds import format_seeds_table, run_thermal_seeds
 
     t0 = time.perf_counter()
     res = run_thermal_seeds(preset=preset, seeds=n, resamples=resamples)

@@ -20,7 +20,7 @@ from robocal.cli.main import main
 from robocal.io.ur_controller import parse_calibration_conf, read_kinematics_yaml, ur_driver_hash
 from robocal.kinematics.remodel import EXTENDED_PRECISION, dh_table_fk
 from robocal.robots import load_robot
-from robocal.workflows.controller.models.models import UR_PI_2, _dh_mm, _pose_errors, import_ur, random_joints, ur_controller_dh
+from robocal.workflows.controller.models import UR_PI_2, _dh_mm, _pose_errors, import_ur, random_joints, ur_controller_dh
 
 DATA = Path(__file__).parent / "data" / "controller"
 REAL = [("ur10_driver_test.conf", "ur10"), ("ur10e_driver_test_a.conf", "ur10e"), ("ur10e_driver_test_b.conf", "ur10e")]
@@ -189,7 +189,7 @@ def _true_controller():
 @pytest.mark.parametrize("controller", ["ur", "abb", "kuka", "doosan"])
 def test_probe_recovers_a_calibrated_controller_within_its_output_rounding(tmp_path, controller):
     from robocal.sim.controller import probe_pairs_text
-    from robocal.workflows.controller.models.probe import model_diff
+    from robocal.workflows.controller.probe import model_diff
 
     true = _true_controller()
     pairs = tmp_path / "pairs.txt"
@@ -302,7 +302,7 @@ def test_probe_other_arms_with_sign_flips_and_coupling(tmp_path, robot, controll
     # KUKA's joint signs and FANUC's J2/J3 coupling stay in the probed model; a hidden model 0.3 mm /
     # 0.02 deg (1 sigma per parameter) off nominal is recovered within the output rounding
     from robocal.sim.controller import probe_pairs_text
-    from robocal.workflows.controller.models.probe import model_diff, probe_start_model
+    from robocal.workflows.controller.probe import model_diff, probe_start_model
 
     start = probe_start_model(load_robot(robot))
     rng = np.random.default_rng(4)
@@ -324,7 +324,7 @@ def test_ur_description_default_yaml_reads_as_the_nominal_arm(tmp_path, robot):
     # The published default kinematics (alphas 1.570796327, z of 1e-11 m from ur_calibration's
     # arithmetic) read as URDF origins about z, ending at tool0 = the DH flange: robocal's nominal arm
     # to the 1.570796327-vs-pi/2 difference (2e-10 rad over ~1.3 m, < 1e-6 mm).
-    from robocal.workflows.controller.models.models import model_from_kinematics_yaml
+    from robocal.workflows.controller.models import model_from_kinematics_yaml
 
     f = DATA / f"ur_description_{robot}_default_kinematics.yaml"
     r = model_from_kinematics_yaml(f, robot)
@@ -336,7 +336,7 @@ def test_ur_description_default_yaml_reads_as_the_nominal_arm(tmp_path, robot):
     # and robocal's export of the nominal arm gives the same chain as the published file
     y = tmp_path / "k.yaml"
     assert run("controller", "export", "ur", robot, "--out", y).exit_code == 0
-    from robocal.workflows.controller.models.models import _origin_from_yaml, origins_fk
+    from robocal.workflows.controller.models import _origin_from_yaml, origins_fk
 
     ours = [_origin_from_yaml(xyz, rpy) for xyz, rpy in read_kinematics_yaml(y)[0]]
     dp, _ = _pose_errors(origins_fk(r["origins"], q), origins_fk(ours, q))
@@ -348,7 +348,7 @@ def test_intrinsic_angles_read_as_urdf_rpy_would_move_the_flange():
     # UR10 test arm, their intrinsic X-Y'-Z'' angles read as URDF rpy: up to 0.043 mm / 0.0036 deg.
     from robocal.kinematics.links import frame_from_xyz_rpy
     from robocal.transforms import euler_from_matrix
-    from robocal.workflows.controller.models.models import origins_fk, ur_joint_origins
+    from robocal.workflows.controller.models import origins_fk, ur_joint_origins
 
     m = import_ur(DATA / "ur10_driver_test.conf", "ur10", n_check=2)["model"]
     O = ur_joint_origins(m)
@@ -363,7 +363,7 @@ def test_probe_frees_a_flange_frame_that_differs_by_a_constant(tmp_path):
     # 0.3 mm / 0.02 deg perturbed chain: --flange auto sees the constant and fits it
     from robocal.kinematics.links import frame_from_xyz_rpy
     from robocal.sim.controller import probe_pairs_text
-    from robocal.workflows.controller.models.probe import model_diff, probe_start_model
+    from robocal.workflows.controller.probe import model_diff, probe_start_model
     from robocal.kinematics.model import EndEffector
 
     start = probe_start_model(load_robot("kuka_kr150_r3100"))
@@ -385,7 +385,7 @@ def test_probe_frees_a_flange_frame_that_differs_by_a_constant(tmp_path):
 
 def test_ur_nominal_tables_reproduce_ur_description_hashes():
     # every UR type's table: the hash ur_description publishes in config/<type>/default_kinematics.yaml
-    from robocal.workflows.controller.models.models import load_nominal
+    from robocal.workflows.controller.models import load_nominal
 
     published = {"ur3": "calib_9122066269688285636", "ur5": "calib_209549117540498681",
                  "ur10": "calib_17227329492635474227", "ur3e": "calib_16756443741236045476",

@@ -26,8 +26,8 @@ distributed = pytest.importorskip("distributed", reason="dask.distributed not in
 from robocal.cli import main  # noqa: E402
 from robocal.io.fleet_file import read_fleet  # noqa: E402
 from robocal.store import HistoryStore  # noqa: E402
-from robocal.workflows.fleet.calibrate.calibrate import flag_outliers, run_fleet_calibration  # noqa: E402
-from robocal.workflows.fleet.calibrate.cluster import run_tasks  # noqa: E402
+from robocal.workflows.fleet.calibrate import flag_outliers, run_fleet_calibration  # noqa: E402
+from robocal.workflows.fleet.cluster import run_tasks  # noqa: E402
 from robocal.workflows.calibration.simulate import simulate_tracker  # noqa: E402
 
 MODELS = ["ur10", "kuka_kr150_r3100", "ur10", "abb_irb140", "ur10", "kuka_kr150_r3100"]
@@ -272,7 +272,7 @@ def _status_history(db, now):
 def test_fleet_status_flags_stale_and_drifting_robots(tmp_path, history_db):
     from datetime import datetime, timezone
 
-    from robocal.workflows.fleet.calibrate.status import drift_trend, fleet_status
+    from robocal.workflows.fleet.status import drift_trend, fleet_status
 
     now = datetime(2026, 6, 1, 12, tzinfo=timezone.utc)
     _status_history(history_db, now)
@@ -303,7 +303,7 @@ def test_fleet_status_flags_stale_and_drifting_robots(tmp_path, history_db):
 # -- robocal fleet study -------------------------------------------------------------------------
 
 def test_chunk_size_keeps_task_overhead_under_five_percent():
-    from robocal.workflows.fleet.calibrate.chunks import chunk_size, chunks, overhead_share
+    from robocal.workflows.fleet.chunks import chunk_size, chunks, overhead_share
 
     # 5 ms per task, 1 ms per item: k >= 5 * 0.95 / (0.05 * 1) = 95 items, share 5 / (5 + 95) = 5 %
     assert chunk_size(10_000, 1e-3, 5e-3, 2) == 95
@@ -314,7 +314,7 @@ def test_chunk_size_keeps_task_overhead_under_five_percent():
 
 
 def test_monte_carlo_plan_on_dask_equals_the_serial_loop_and_the_first_order_prediction(client):
-    from robocal.workflows.fleet.calibrate.study import monte_carlo_plan
+    from robocal.workflows.fleet.study import monte_carlo_plan
     from robocal.workflows.calibration.plan_poses import candidate_poses
     from robocal.calib.plan import plan_campaign
     from robocal.robots import load_robot
@@ -338,7 +338,7 @@ def test_monte_carlo_plan_on_dask_equals_the_serial_loop_and_the_first_order_pre
 
 
 def test_pose_set_selection_is_reproducible_by_plan_poses(client, tmp_path):
-    from robocal.workflows.fleet.calibrate.study import pose_set_selection
+    from robocal.workflows.fleet.study import pose_set_selection
     from robocal.workflows.calibration.plan_poses import plan_poses
 
     kw = dict(sets=5, count=15, candidates=120, seed=10)
@@ -359,7 +359,7 @@ def test_workspace_accuracy_spread_matches_monte_carlo():
     against the spread of e^T A e over draws e ~ N(0, C)."""
     from robocal.calib.plan import predicted_workspace_accuracy
     from robocal.robots import load_robot
-    from robocal.workflows.fleet.calibrate.study import workspace_poses
+    from robocal.workflows.fleet.study import workspace_poses
     from robocal.workflows.calibration.plan_poses import plan_cell, plan_in_cell
 
     model = load_robot("ur10")
@@ -378,8 +378,8 @@ def test_workspace_accuracy_spread_matches_monte_carlo():
 
 
 def test_thermal_screening_per_robot_on_dask_equals_thermal_screen(client, tmp_path):
-    from robocal.workflows.fleet.calibrate.study import thermal_screening
-    from robocal.workflows.thermal.runs.commands import screen_run, simulate_thermal_cell
+    from robocal.workflows.fleet.study import thermal_screening
+    from robocal.workflows.thermal.commands import screen_run, simulate_thermal_cell
 
     simulate_thermal_cell(tmp_path / "cell", n_cycles=8)
     (tmp_path / "empty").mkdir()

@@ -59,7 +59,7 @@ def test_a_password_in_the_url_never_goes_to_a_remote_cluster(tmp_path):
 
 
 def test_the_library_refuses_a_password_bound_for_workers(tmp_path):
-    from robocal.workflows.fleet.calibrate.calibrate import run_fleet_calibration
+    from robocal.workflows.fleet.calibrate import run_fleet_calibration
 
     (tmp_path / "fleet.toml").write_text('[[robot]]\nid = "a"\nmodel = "ur10"\nmeasurements = "m.csv"\n')
     with pytest.raises(ValueError, match="ROBOCAL_DB_PASSWORD") as info:
@@ -68,7 +68,7 @@ def test_the_library_refuses_a_password_bound_for_workers(tmp_path):
 
 
 def test_tls_settings_for_the_scheduler(tmp_path):
-    from robocal.workflows.fleet.calibrate.cluster import FleetClusterError, fleet_client, tls_security
+    from robocal.workflows.fleet.cluster import FleetClusterError, fleet_client, tls_security
 
     assert tls_security() is None
     for name in ("ca.pem", "client.pem", "client.key"):
@@ -90,7 +90,7 @@ def test_tls_settings_for_the_scheduler(tmp_path):
 def test_ids_from_the_data_never_leave_the_plot_folder(tmp_path):
     """A history whose robot names were written by other software: '../escaped' and 'line1/cell3'.
     The status run completes, every plot lands inside --plots."""
-    from robocal.workflows.fleet.calibrate.status import fleet_status
+    from robocal.workflows.fleet.status import fleet_status
 
     db = tmp_path / "h.sqlite"
     now = datetime(2026, 6, 1, tzinfo=timezone.utc)

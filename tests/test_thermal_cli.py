@@ -75,7 +75,7 @@ def _library_problem(run_dir, sensor):
     """The screening problem of a run directory built by the library, for comparison."""
     from robocal.thermal.screening import ScreeningProblem
     from robocal.io.thermal_files import read_sensor_json
-    from robocal.workflows.thermal.runs.inputs import load_run_dir
+    from robocal.workflows.thermal.inputs import load_run_dir
 
     run = load_run_dir(run_dir)
     s = read_sensor_json(sensor, run["model"])
@@ -298,7 +298,7 @@ def test_errors_existing_output_without_overwrite(cell, tmp_path):
 
 
 def test_experiment_json_is_the_librarys_multi_seed_table():
-    from robocal.workflows.thermal.runs.seeds import run_thermal_seeds
+    from robocal.workflows.thermal.seeds import run_thermal_seeds
 
     r = as_json(ok("experiment", "--seeds", 2, "--seed", 5, "--cycles", 10, "--json"))
     lib = run_thermal_seeds(preset="realistic", seeds=2, first_seed=5, n_cycles=10)

@@ -10,16 +10,16 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from robocal.robots import load_robot
-from robocal.sim.thermal.simulator.simulator import ProductionSchedule, ThermalCell, standard_schedules
-from robocal.sim.thermal.simulator.deformation import (
+from robocal.sim.thermal.simulator import ProductionSchedule, ThermalCell, standard_schedules
+from robocal.sim.thermal.deformation import (
     apply_link_twists,
     gravity_torques,
     link_geometry,
     link_twists,
 )
-from robocal.sim.thermal.simulator.effects import HallTemperature, HeatResponse, LinkDeformation, thermal_effects
-from robocal.sim.thermal.simulator.measurement import add_outliers, approach_sides, backlash_offsets, distance_noise
-from robocal.sim.thermal.simulator.response import hall_temperature, motor_temperatures
+from robocal.sim.thermal.effects import HallTemperature, HeatResponse, LinkDeformation, thermal_effects
+from robocal.sim.thermal.measurement import add_outliers, approach_sides, backlash_offsets, distance_noise
+from robocal.sim.thermal.response import hall_temperature, motor_temperatures
 from robocal.transforms import so3_exp
 
 
@@ -205,7 +205,7 @@ def _transfer(cell, temps, which):
     """``(share of the drift at the monitored points outside the 24-parameter span there, share
     left there by the best parameter fit on the sphere poses, rms drift there [mm])`` for the
     bending or the warm sag alone at motor temperatures ``temps``."""
-    from robocal.sim.thermal.simulator.deformation import sag_offsets
+    from robocal.sim.thermal.deformation import sag_offsets
 
     m, X, geom, dfm = cell.robot.true_model, cell.robot.true_model.params.values, cell.realism.geometry, LinkDeformation()
     fs = cell.T_flange_sensor
@@ -269,7 +269,7 @@ def test_outliers_rate_and_size():
 def test_backlash_flips_the_approach_side():
     rng = np.random.default_rng(6)
     sides = approach_sides(5000, 6, rng)
-    from robocal.sim.thermal.simulator.effects import JointErrors
+    from robocal.sim.thermal.effects import JointErrors
 
     je = JointErrors()
     off = backlash_offsets(sides, je, rng)

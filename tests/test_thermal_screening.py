@@ -10,7 +10,7 @@ import pytest
 
 from robocal.io.thermal_files import read_run
 from robocal.robots import load_robot
-from robocal.sim.thermal.simulator.simulator import (
+from robocal.sim.thermal.simulator import (
     ProductionSchedule,
     ThermalCell,
     standard_schedules,
@@ -27,7 +27,7 @@ from robocal.thermal.screening import (
     stationarity_test,
     traditional_parameters,
 )
-from robocal.workflows.thermal.runs.runs import format_thermal_report, format_thermal_table, run_thermal_experiment, \
+from robocal.workflows.thermal.runs import format_thermal_report, format_thermal_table, run_thermal_experiment, \
     screening_problem
 
 
@@ -55,7 +55,7 @@ THESIS_SELECTED = {"d4", "d6", "a1", "a2", "a3", "a4", "beta2"}
 def seeds():
     """Table 5-2 on the realistic preset in the thesis's setting (90 cycles per run) over 6 seeds
     (12 evaluation runs; ~15 s, the 20-seed table is ``robocal thermal experiment``, docs/thermal.md)."""
-    from robocal.workflows.thermal.runs.seeds import run_thermal_seeds
+    from robocal.workflows.thermal.seeds import run_thermal_seeds
 
     return run_thermal_seeds(preset="realistic", seeds=6, first_seed=1, n_cycles=90)
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robocal.sim.thermal.simulator.simulator import ThermalCell, standard_schedules
+from robocal.sim.thermal.simulator import ThermalCell, standard_schedules
 
 FIELDS = ("sphere", "monitor", "delta_true", "tcp_drift_mm", "sphere_cold", "monitor_cold")
 
