@@ -63,6 +63,11 @@ TARGET_MS = 2.0  # robocal solve, 100 poses, 26 variables, one thread
 #: the fixed costs the issue lists (problem assembly, identifiability QR, covariance, result).
 SOLVE_ALONE_TARGET_MS = 1.0
 LM_ALONE_ROW = "robocal LM iterations alone (start r, J given)"
+#: The fair peer (issue 25 item 5, issue 34 item 5): scipy's MINPACK LM fed robocal's analytic Jacobian.
+FAIR_ROW = "scipy least_squares, analytic J (robocal's)"
+FIXED_ROW = "robocal solve(problem, auto_identifiable=False)"
+#: Issue 34 item 5: robocal's LM at least 3x the fair peer.
+FAIR_TARGET = 3.0
 
 
 def _lm_alone(prob):
@@ -184,6 +189,86 @@ def scipy_on_problem(problem: CalibrationProblem, method: str):
         return problem.retract(s0, res.x), f.calls
 
     return run
+
+
+def _left_jacobian(w: np.ndarray) -> np.ndarray:
+    """SO(3) left Jacobian (3, 3) at rotation vector ``w``: exp(w + dw) = exp(Jl(w) dw) exp(w)."""
+    th = float(np.linalg.norm(w))
+    K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    if th < 1e-8:
+        return np.eye(3) + 0.5 * K
+    return np.eye(3) + (1.0 - math.cos(th)) / th ** 2 * K + (th - math.sin(th)) / th ** 3 * (K @ K)
+
+
+def scipy_analytic(problem: CalibrationProblem, method: str, x_scale=1.0):
+    """``least_squares`` fed robocal's own analytic Jacobian (the fair peer configuration, issue 25
+    item 5): variables = a step x from the initial state applied by ``problem.retract``; the Jacobian
+    of ``evaluate`` is taken with respect to a local step at ``retract(s0, x)``, so the columns of a
+    frame block (left perturbation, rotation vector w and shift v) are chained to x exactly:
+    d/dw = (J_w + J_v [v]x) Jl(w), d/dv = J_v. ``fun`` evaluates residuals and Jacobian together and
+    ``jac`` returns the Jacobian of the same x (scipy calls them in that order), so every point is
+    evaluated once, as in robocal's own loop. ``x_scale`` 1 (scipy's default) is the best
+    configuration here: with ``x_scale="jac"`` MINPACK takes ~3x the iterations (11-14 instead of 4)."""
+    from robocal.calib.blocks.manifolds import FramesBlock
+
+    s0 = problem.initial_state()
+    frames = [(c0, c1) for _i, blk, c0, c1, loc in problem._retract_plan
+              if isinstance(blk, FramesBlock) and loc is None and c1 - c0 == 6]
+    memo = {}
+
+    def fun(x):
+        st = problem.retract(s0, x)
+        r, J, _ = problem.evaluate(st)
+        memo["x"], memo["J"] = x.copy(), J
+        return r
+
+    def jac(x):
+        if "x" not in memo or not np.array_equal(memo["x"], x):
+            fun(x)
+        J = -memo["J"]  # evaluate's J is that of the prediction; r = measured - predicted
+        for c0, _c1 in frames:
+            w, v = x[c0:c0 + 3], x[c0 + 3:c0 + 6]
+            Jl = _left_jacobian(w)
+            vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+            J[:, c0:c0 + 3] = (J[:, c0:c0 + 3] + J[:, c0 + 3:c0 + 6] @ vx) @ Jl
+        return J
+
+    def run():
+        f = Counted(fun)
+        res = least_squares(f, np.zeros(problem.n_variables), jac=jac, method=method, x_scale=x_scale)
+        return problem.retract(s0, res.x), f"{f.calls}/{res.njev}"
+
+    return run
+
+
+def check_chained_jacobian(problem: CalibrationProblem, seed: int) -> float:
+    """Largest relative difference between the chained analytic Jacobian of ``scipy_analytic`` and
+    central differences at a random x (a check that the peer gets a correct Jacobian)."""
+    from robocal.calib.blocks.manifolds import FramesBlock
+
+    s0 = problem.initial_state()
+    rng = np.random.default_rng(seed)
+    x = 1e-3 * rng.standard_normal(problem.n_variables)
+    for _i, blk, c0, c1, _loc in problem._retract_plan:
+        if isinstance(blk, FramesBlock):
+            x[c0 + 3:c1] *= 1e3  # mm-sized shifts, mrad-sized rotations
+    frames = [(c0, c1) for _i, blk, c0, c1, loc in problem._retract_plan
+              if isinstance(blk, FramesBlock) and loc is None and c1 - c0 == 6]
+    r, J, _ = problem.evaluate(problem.retract(s0, x))
+    J = -J  # the prediction's Jacobian; r = measured - predicted
+    for c0, _c1 in frames:
+        w, v = x[c0:c0 + 3], x[c0 + 3:c0 + 6]
+        vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+        J[:, c0:c0 + 3] = (J[:, c0:c0 + 3] + J[:, c0 + 3:c0 + 6] @ vx) @ _left_jacobian(w)
+    Jn = np.empty_like(J)
+    for j in range(len(x)):
+        h = 1e-6 * max(1.0, abs(x[j]))
+        xp, xm = x.copy(), x.copy()
+        xp[j] += h
+        xm[j] -= h
+        Jn[:, j] = (problem.evaluate(problem.retract(s0, xp), jacobian=False)[0]
+                    - problem.evaluate(problem.retract(s0, xm), jacobian=False)[0]) / (2 * h)
+    return float(np.abs(J - Jn).max() / np.abs(Jn).max())
 
 
 def scipy_on_fk(problem: CalibrationProblem, method: str):
@@ -570,6 +655,9 @@ def main(argv=None) -> int:
     ap.add_argument("--peers-path", default=os.environ.get("ROBOCAL_BENCH_PEERS"),
                     help="directory put first on sys.path for pybotics (env ROBOCAL_BENCH_PEERS)")
     ap.add_argument("--no-peers", action="store_true", help="skip pybotics and figaroh")
+    ap.add_argument("--fair-only", action="store_true",
+                    help="only robocal and scipy fed robocal's analytic Jacobian (no finite differences, no peers; "
+                         "for large --poses)")
     ap.add_argument("--profile", action="store_true", help="print robocal's profile split even if it meets its target")
     ap.add_argument("--old-core", metavar="REV", default=None,
                     help="also time the calibration core (calib/problem.py, solve.py, ...) of git revision REV "
@@ -586,6 +674,7 @@ def main(argv=None) -> int:
     print("robocal calibration benchmark")
     for line in machine_info():
         print("  " + line)
+    args.no_peers = args.no_peers or args.fair_only
     pyb = None if args.no_peers else load_pybotics()
     pyb_ver = "skipped (--no-peers)" if args.no_peers else (peer_version("pybotics") if pyb else "not available (see below)")
     print(f"  pybotics    {pyb_ver}")
@@ -640,11 +729,16 @@ def main(argv=None) -> int:
     rows.append((f"robocal solve, all {len(full.free_params)} params free (auto picks {len(ident.identifiable)})",
                  lambda: solve(full), None, "fast"))
     rows.append((LM_ALONE_ROW, _lm_alone(prob), lambda r: r.state, "fast"))
-    for m in ("lm", "trf"):
+    rows.append((f"{FAIR_ROW} lm", scipy_analytic(prob, "lm"), lambda r: r[0], "fast"))
+    rows.append(("scipy least_squares trf, analytic J (robocal's)", scipy_analytic(prob, "trf"), lambda r: r[0], "fast"))
+    rows.append(("scipy least_squares lm, analytic J, x_scale='jac'", scipy_analytic(prob, "lm", "jac"),
+                 lambda r: r[0], "fast"))
+    for m in ("lm", "trf") if not args.fair_only else ():
         rows.append((f"scipy least_squares {m}, 2-point, problem.evaluate", scipy_on_problem(prob, m),
                      lambda r: r[0], "fast"))
-    rows.append(("scipy least_squares lm, 2-point, with_params().fk()", scipy_on_fk(prob, "lm"),
-                 lambda r: r[0], "fast"))
+    if not args.fair_only:
+        rows.append(("scipy least_squares lm, 2-point, with_params().fk()", scipy_on_fk(prob, "lm"),
+                     lambda r: r[0], "fast"))
     notes = []
     if pyb is not None:
         try:
@@ -714,6 +808,20 @@ def main(argv=None) -> int:
             times[name].append((time.perf_counter() - t0) / n * 1e3)
 
     ref_ms = float(np.median(times[rows[0][0]]))
+    fair = f"{FAIR_ROW} lm"
+    print()
+    print(f"fair peer first (issue 34 item 5): scipy least_squares(method='lm') fed robocal's analytic Jacobian, "
+          f"same problem, same start, {args.poses} poses (chained Jacobian vs central differences: max rel. diff "
+          f"{check_chained_jacobian(prob, args.seed):.1e})")
+    paired = [p / q for p, q in zip(times[fair], times[FIXED_ROW])]
+    for lab, row in (("robocal solve(problem, auto_identifiable=False)", FIXED_ROW), ("robocal solve(problem)", rows[0][0]),
+                     ("robocal LM iterations alone", LM_ALONE_ROW)):
+        ratio = float(np.median(times[fair])) / float(np.median(times[row]))
+        mark = f"{'ok  ' if ratio >= FAIR_TARGET else 'MISS'} >= {FAIR_TARGET:g}x" if row == FIXED_ROW else ""
+        print(f"  {lab:50s}{float(np.median(times[row])):9.3f} ms   scipy lm {float(np.median(times[fair])):9.3f} ms"
+              f"   scipy / robocal x{ratio:.2f}   {mark}")
+    print(f"  paired (per repeat, scipy lm / robocal fixed set): median x{float(np.median(paired)):.2f}, "
+          f"range x{min(paired):.2f}-x{max(paired):.2f}")
     print()
     hdr = (f"{'':58s}{'median':>10s}{'best':>10s}  unit{'ratio':>15s}{'iter/ev':>9s}{'RMS mm':>9s}"
            f"{'max|dx| mm':>12s}{'max|dx| urad':>13s}{'max|dx|/sd':>11s}   target")

@@ -67,13 +67,24 @@ def _measure(rows, repeat: int, cold: bool, work: Path) -> dict:
     return times
 
 
-def _print(title: str, times: dict) -> None:
+#: Issue 34 item 2 targets: (warm?, label) -> ("x numpy" limit, seconds limit)
+TARGETS = {(False, "robocal fk ur10 (one pose)"): (3.0, None),
+           (True, "robocal calibrate 100 poses --no-report"): (None, 2.0)}
+
+
+def _print(title: str, times: dict, cold: bool = False) -> None:
     base = statistics.median(next(iter(times.values())))
     print(f"\n{title}")
-    print(f"{'command':<46}{'median s':>10}{'best s':>9}{'x numpy':>9}   runs")
+    print(f"{'command':<46}{'median s':>10}{'best s':>9}{'x numpy':>9}   runs   target")
     for label, ts in times.items():
         med = statistics.median(ts)
-        print(f"{label:<46}{med:10.3f}{min(ts):9.3f}{med / base:9.1f}   {len(ts)}")
+        x_max, s_max = TARGETS.get((cold, label), (None, None))
+        mark = ""
+        if x_max is not None:
+            mark = f"{'ok  ' if med / base <= x_max else 'MISS'} <= {x_max:g}x import numpy"
+        elif s_max is not None:
+            mark = f"{'ok  ' if med <= s_max else 'MISS'} <= {s_max:g} s"
+        print(f"{label:<46}{med:10.3f}{min(ts):9.3f}{med / base:9.1f}   {len(ts):4d}   {mark}")
 
 
 def main() -> None:
@@ -96,7 +107,7 @@ def main() -> None:
         if args.cold_repeat:
             cold_rows = [r for r in rows if r[2] or r[0].startswith("python")]
             _print(f"cold (fresh numba cache every run), {args.cold_repeat} runs per row, interleaved",
-                   _measure(cold_rows, args.cold_repeat, True, work))
+                   _measure(cold_rows, args.cold_repeat, True, work), cold=True)
         print(f"load avg at end {os.getloadavg()[0]:.2f}")
 
 

@@ -12,7 +12,10 @@ Rows (all in one process, one thread):
   inertia form, the same update) on the same objective computed per particle through the
   problem's own residuals (``objective_at``: one ``Problem.evaluate`` per particle, as one would
   hand a library objective without robocal's batched path);
-* pyswarms on robocal's batched objective (isolates the swarm loop).
+* pyswarms on robocal's batched objective: the fair peer (same objective, only the swarm loop
+  differs); its ratio is printed first.
+
+Rows are timed interleaved (one run of each in turn).
 
 If pyswarms is missing, a plain numpy swarm of the same algorithm with a per-particle loop
 replaces the pyswarms rows. Run: ``python benchmarks/bench_ipso.py [--runs 5] [--generations 2000]``.
@@ -83,13 +86,7 @@ def pyswarms_run(fun, lo, up, particles, generations, seed):
     return float(cost)
 
 
-def timed(runs, fn):
-    times, value = [], None
-    for r in range(runs):
-        t0 = time.perf_counter()
-        value = fn(r)
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), value
+FAIR = "pyswarms GlobalBestPSO on robocal's batched objective"
 
 
 def main(argv=None):
@@ -97,6 +94,7 @@ def main(argv=None):
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--generations", type=int, default=2000)
     ap.add_argument("--particles", type=int, default=20)
+    ap.add_argument("--fair-only", action="store_true", help="skip the per-particle pyswarms row (~15 s a run)")
     a = ap.parse_args(argv)
     if machine_info is not None:
         print("\n".join(machine_info()))
@@ -108,22 +106,38 @@ def main(argv=None):
     print(f"problem: {len(prob.names)} parameters, {prob.n_poses} poses; {G} generations x {P} particles; "
           f"median of {a.runs} runs")
     rows = [("robocal run_pso + batched SwarmObjective",
-             timed(a.runs, lambda r: run_pso(obj, lo, up, particles=P, generations=G, seed=r).best_f))]
+             lambda r: run_pso(obj, lo, up, particles=P, generations=G, seed=r).best_f)]
     slow = per_particle(prob)
     try:
         import pyswarms  # noqa: F401
 
-        rows.append(("pyswarms GlobalBestPSO, objective per particle (Problem.evaluate)",
-                     timed(a.runs, lambda r: pyswarms_run(slow, lo, up, P, G, r))))
-        rows.append(("pyswarms GlobalBestPSO on robocal's batched objective",
-                     timed(a.runs, lambda r: pyswarms_run(obj, lo, up, P, G, r))))
+        rows.append((FAIR, lambda r: pyswarms_run(obj, lo, up, P, G, r)))
+        if not a.fair_only:
+            rows.append(("pyswarms GlobalBestPSO, objective per particle (Problem.evaluate)",
+                         lambda r: pyswarms_run(slow, lo, up, P, G, r)))
     except ImportError:
         rows.append(("plain numpy swarm, objective per particle (pyswarms not installed)",
-                     timed(a.runs, lambda r: plain_numpy_pso(slow, lo, up, P, G, r))))
-    base = rows[0][1][0]
-    print("\n| implementation | median [s] | best f [mm^2] | time / robocal |\n|---|---|---|---|")
-    for name, (t, f) in rows:
-        print(f"| {name} | {t:.3f} | {f:.4g} | {t / base:.1f} |")
+                     lambda r: plain_numpy_pso(slow, lo, up, P, G, r)))
+    # interleaved: one run of each row in turn, so a change of the machine's load hits every row alike
+    times = {name: [] for name, _ in rows}
+    best = {}
+    for r in range(a.runs):
+        for name, fn in rows:
+            t0 = time.perf_counter()
+            best[name] = fn(r)
+            times[name].append(time.perf_counter() - t0)
+    base = statistics.median(times[rows[0][0]])
+    if FAIR in times:
+        paired = [p / q for p, q in zip(times[FAIR], times[rows[0][0]])]
+        t_fair = statistics.median(times[FAIR])
+        print(f"\nfair peer first: pyswarms on robocal's batched objective {t_fair:.3f} s, robocal {base:.3f} s: "
+              f"pyswarms / robocal x{t_fair / base:.2f} (paired per run: median x{statistics.median(paired):.2f}, "
+              f"range x{min(paired):.2f}-x{max(paired):.2f}); "
+              f"{'robocal ahead' if t_fair / base > 1.05 else 'no lead' if t_fair / base >= 0.95 else 'pyswarms ahead'}")
+    print("\n| implementation | median [s] | best [s] | best f [mm^2] | time / robocal |\n|---|---|---|---|---|")
+    for name, _ in rows:
+        t = statistics.median(times[name])
+        print(f"| {name} | {t:.3f} | {min(times[name]):.3f} | {best[name]:.4g} | {t / base:.2f} |")
 
 
 if __name__ == "__main__":

@@ -111,8 +111,33 @@ def test_calibration_reaches_the_noise_floor_on_held_out_poses(campaign):
     # the per-pose figure draws one bar per calibration pose and set (before and after)
     per_pose = html.split('aria-label="error per pose">')[1].split("</div>")[0].split("<svg xmlns")[1]
     bar_groups = re.findall(r'<g fill="[^"]*" fill-opacity="[^"]*">(.*?)</g>', per_pose)
-    n_train = len(set(res["residuals"]["per_point"]["pose"]))
+    rows = (campaign["out"] / "residuals.csv").read_text().splitlines()
+    assert rows[0] == "set,pose_id,target,error_before_mm,error_after_mm"
+    n_train = len({r.split(",")[1] for r in rows[1:] if r.startswith("calibration,")})
     assert [g.count("<rect ") for g in bar_groups] == [n_train, n_train]
+
+
+def test_per_pose_arrays_are_in_csv_side_files(campaign):
+    """result.json holds summaries and names the side files; the per-point errors and the accuracy
+    map are in residuals.csv / accuracy_map.csv, one row per point / pose, and agree with the summaries."""
+    res, out = campaign["result"], campaign["out"]
+    assert "per_point" not in res["residuals"] and "per_point" not in res["validation"]
+    ref = res["residuals"]["per_point_file"]
+    assert ref["file"] == "residuals.csv" and ref["set"] == "calibration"
+    rows = [r.split(",") for r in (out / "residuals.csv").read_text().splitlines()[1:]]
+    cal = [r for r in rows if r[0] == "calibration"]
+    hold = [r for r in rows if r[0] == "holdout"]
+    assert len(cal) == ref["n"] and len(hold) == res["validation"]["per_point_file"]["n"]
+    after = np.array([float(r[4]) for r in cal])
+    # 6 significant digits in the file: the RMS agrees with result.json to ~1e-6 relative
+    assert np.sqrt(np.mean(after**2)) == pytest.approx(res["residuals"]["after"]["rms"], rel=1e-5)
+    amap = res["accuracy_map"]
+    assert amap["file"] == "accuracy_map.csv" and "predicted_std_mm" not in amap
+    arows = (out / "accuracy_map.csv").read_text().splitlines()
+    assert arows[0] == "pose_id,flange_x_mm,flange_y_mm,flange_z_mm,predicted_std_mm"
+    assert len(arows) - 1 == amap["n_poses"] == res["metadata"]["n_poses_file"]
+    std = np.array([float(r.split(",")[4]) for r in arows[1:]])
+    assert std.max() == pytest.approx(amap["statistics"]["max"], rel=1e-5)
 
 
 def test_result_agrees_with_the_truth(campaign):

@@ -139,7 +139,10 @@ def test_given_train_and_holdout_ids_are_followed(campaign, tmp_path):
             "--holdout-ids", f"@{ids}")
     assert r.exit_code == 0, r.output
     res = json.loads((tmp_path / "c" / "result.json").read_text())
-    assert res["validation"]["pose_ids"] == [str(i) for i in range(51, 61)]
+    held = [row.split(",")[1] for row in (tmp_path / "c" / "residuals.csv").read_text().splitlines()[1:]
+            if row.startswith("holdout,")]
+    assert list(dict.fromkeys(held)) == [str(i) for i in range(51, 61)]
+    assert res["validation"]["n_poses"] == 10
     assert res["metadata"]["n_poses_calibration"] == 40 and res["metadata"]["split"] == "given pose ids"
     assert "10 pose(s) of the file in neither list" in r.output
     bad = run("calibrate", ROBOT, campaign["path"], "--out", tmp_path / "d", "--holdout-ids", "7,P99")

@@ -151,6 +151,7 @@ class DampedGaussNewton:
             G = Ja.T @ Ja
             g_max = float(G.diagonal().max())
             s_max = math.sqrt(g_max)
+            Ja = None  # a scaled copy of J (M, n): not kept while the line search evaluates trial Jacobians
         g_inf = float(np.abs(g).max()) if g.size else 0.0
         if g_inf <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
             return self._stop("gradient is zero")

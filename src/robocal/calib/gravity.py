@@ -124,8 +124,9 @@ class GravityTorques:
 
     def lateral_moments(self, theta) -> np.ndarray:
         """Bending moments (N, n_model, 2) [N m] about ``lateral_axes`` for body parameters (B, 4)."""
-        return np.einsum("njabv,bv->nja", self.lateral_basis, np.asarray(theta, dtype=float).reshape(-1, 4)) + \
-            self.lateral_payload
+        L = self.lateral_basis  # (N, n_model, 2, B, 4): one matrix-vector product
+        th = np.asarray(theta, dtype=float).reshape(-1)
+        return (L.reshape(-1, th.size) @ th).reshape(L.shape[:3]) + self.lateral_payload
 
     @staticmethod
     def _carries(model, body_links) -> np.ndarray:
@@ -160,4 +161,5 @@ class GravityTorques:
 
     def torques(self, theta) -> np.ndarray:
         """tau (N, n_model) [N m | N] for lumped body parameters ``theta`` (B, 4) = (m [kg], h [kg m])."""
-        return np.einsum("njbv,bv->nj", self.basis, np.asarray(theta, dtype=float).reshape(-1, 4)) + self.payload
+        th = np.asarray(theta, dtype=float).reshape(-1)  # one matrix-vector product over (N, n_model, B * 4)
+        return (self.basis.reshape(-1, th.size) @ th).reshape(self.basis.shape[:2]) + self.payload

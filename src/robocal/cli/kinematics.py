@@ -78,7 +78,9 @@ def fk(robot, joints, deg, convention, end_effector, frame, tool, as_json):
         model = _with_tool(model, tool)
     q = _joints_from_cli(model, joints, deg)
     try:
-        T = model.fk(q, end_effector)
+        # one configuration: numpy products, no compiled kernels to load (importing numba alone takes
+        # ~0.5 s, ~100x this FK); the kernels agree with it to ~1e-12 mm (tests/test_kinematics*)
+        T = model.fk_reference(q, end_effector)
     except (KeyError, IndexError) as exc:
         raise click.ClickException(str(exc).strip('"')) from None
     if frame == "base":

@@ -208,4 +208,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
+    from .._blas_threads import single_thread_blas
+
+    single_thread_blas()  # numpy is not imported yet here (robocal/_blas_threads.py)
     sys.exit(main())

@@ -204,13 +204,15 @@ def fk_fused(q, ints, floats, want_links):
 
 
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
-def fk_fused_into(q, ints, floats, e, out, start, stop):
+def fk_fused_into(q, ints, floats, e, out, links, start, stop):
     """Poses of end effector ``e`` for the configurations ``q[start:stop]``, into ``out[start:stop]``.
 
-    q (N, n_ctrl) controller joints [rad | mm]; out (N, 4, 4) [mm], written in place. The same
-    arithmetic as :func:`fk_fused` in cache-sized blocks of 512 poses (joint values, then their
-    sines and cosines as one vectorized loop, then the chain pose by pose); releases the GIL so
-    that threads can share a batch (disjoint ranges).
+    q (N, n_ctrl) controller joints [rad | mm]; out (N, 4, 4) [mm], written in place; links
+    (N, n_m, 4, 4) [mm]: the moving links' frames written too, or (0, n_m, 4, 4) for none (one
+    compiled kernel serves ``fk`` and ``link_frames``). The same arithmetic as :func:`fk_fused` in
+    cache-sized blocks of 512 poses (joint values, then their sines and cosines as one vectorized
+    loop, then the chain pose by pose); releases the GIL so that threads can share a batch
+    (disjoint ranges).
     """
     n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
     G = np.empty((n_m, 3, 4))
@@ -221,6 +223,7 @@ def fk_fused_into(q, ints, floats, e, out, start, stop):
     c = np.empty((B, n_m))
     anchor = ee_anchor[e]
     Ee = E[e]
+    want_links = links.shape[0] > 0
     for first in range(start, stop, B):
         last = min(first + B, stop)
         nb = last - first
@@ -235,6 +238,9 @@ def fk_fused_into(q, ints, floats, e, out, start, stop):
         for n in range(nb):
             _chain(n_m, qm[n], c[n], s[n], K, mparent, mtype, G, tmp)
             _write_pose(G, anchor, Ee, out[first + n], tmp)
+            if want_links:
+                for m in range(n_m):
+                    _write_pose(G, m, post[m], links[first + n, m], tmp)
 
 
 @njit(cache=_CACHE, fastmath={"contract"})

@@ -308,6 +308,7 @@ class RobotModel:
         self._fused = pack_fused(K, mparent, mtype, *self._cpl, anchor_ee, E_ee, post_m)
         self._fused_ints, self._fused_floats = self._fused
         self._one_q = (self.n_joints,)  # shape of one configuration (the single-pose fast path of fk)
+        self._no_links = np.empty((0, n_m, 4, 4))  # fk_fused_into's "no link frames" argument
 
     def _end_effector_ancestors(self) -> np.ndarray:
         """(n_ee, n_links) bool: the links each end effector depends on, for Jacobian masking."""
@@ -372,7 +373,7 @@ class RobotModel:
               or not out.flags.c_contiguous or not out.flags.writeable):
             raise ValueError(f"{self.name}: out must be a writeable C-contiguous float64 array of shape {shape}")
         run_ranges(_kernels.fk_fused_into, len(q2), q2, self._fused_ints, self._fused_floats, e,
-                   out.reshape(len(q2), 4, 4))
+                   out.reshape(len(q2), 4, 4), self._no_links)
         return out
 
     def fk_all(self, q) -> np.ndarray:
@@ -387,7 +388,10 @@ class RobotModel:
     def link_frames(self, q) -> np.ndarray:
         """World poses of every moving link's frame, (N, n_model, 4, 4) [mm]."""
         q2, single = self._as_joints(q)
-        _, links = _kernels.fk_fused(q2, *self._fused, True)
+        links = np.empty((len(q2), len(self.moving), 4, 4))
+        # fk()'s kernel, writing the link frames too: one FK kernel to compile, not two
+        run_ranges(_kernels.fk_fused_into, len(q2), q2, self._fused_ints, self._fused_floats, 0,
+                   np.empty((len(q2), 4, 4)), links)
         return links[0] if single else links
 
     def fk_single(self, q, out=None) -> np.ndarray:

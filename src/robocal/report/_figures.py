@@ -46,14 +46,37 @@ def _error_sets(result) -> list:
     return sets
 
 
+#: At most this many bars per panel (a report's size must not grow with the pose count): beyond it
+#: each bar is the RMS over a group of consecutive poses; the per-pose values are in residuals.csv.
+MAX_BARS = 2000
+#: At most this many points per accuracy-map view: beyond it an evenly spaced subset of the poses.
+MAX_MAP_POINTS = 5000
+
+
+def _grouped(poses, e, limit):
+    """(labels, errors, poses per bar): groups of consecutive poses, RMS per group, when over ``limit``."""
+    n = len(poses)
+    if n <= limit:
+        return poses, e, 1
+    k = -(-n // limit)  # poses per bar
+    starts = np.arange(0, n, k)
+    counts = np.minimum(starts + k, n) - starts
+    g = {key: np.sqrt(np.add.reduceat(v**2, starts) / counts) for key, v in e.items()}
+    return [poses[i] for i in starts], g, k
+
+
 def plot_errors_per_pose(result) -> str | None:
-    """Bars of the position error [mm] per pose, before and after, one panel per pose set."""
+    """Bars of the position error [mm] per pose, before and after, one panel per pose set (more than
+    :data:`MAX_BARS` poses: one bar per group of consecutive poses, the group's RMS)."""
     panels = _error_sets(result)
     if not panels:
         return None
     out = []
     for title, per in panels:
         poses, e = _per_pose(per)
+        poses, e, k = _grouped(poses, e, MAX_BARS)
+        if k > 1:
+            title = f"{title} (RMS over groups of {k} consecutive poses; every pose in residuals.csv)"
         x = np.arange(len(poses))
         positive = np.concatenate([e["before"], e["after"]])
         positive = positive[positive > 0]
@@ -125,8 +148,13 @@ def plot_accuracy_map(amap) -> str | None:
         return None
     label = amap.get("label", "value [mm]")
     finite = v[np.isfinite(v)]
-    vmax = float(np.percentile(finite, 99)) if finite.size else 1.0
-    out = [f"<p>{html.escape(str(amap.get('title', 'accuracy over the workspace')))}</p>"]
+    vmax = float(np.percentile(finite, 99)) if finite.size else 1.0  # over every pose, not the subset
+    heading = str(amap.get("title", "accuracy over the workspace"))
+    if len(p) > MAX_MAP_POINTS:
+        keep = np.linspace(0, len(p) - 1, MAX_MAP_POINTS).round().astype(int)
+        heading += f" ({MAX_MAP_POINTS} of the {len(p)} poses, evenly spaced in file order)"
+        p, v = p[keep], v[keep]
+    out = [f"<p>{html.escape(heading)}</p>"]
     for i, j, (xl, yl), title in [(0, 1, ("x [mm]", "y [mm]"), "top view"), (0, 2, ("x [mm]", "z [mm]"), "side view")]:
         panel = Panel(495, 420, title=title, x_label=xl, y_label=yl)
         panel.points(p[:, i], p[:, j], v, vmin=0.0, vmax=vmax or 1.0, label=label)

@@ -157,7 +157,8 @@ class TargetChain:
         if in_base:
             Rb = bases[stations, :3, :3]
             pts = np.einsum("nij,nkj->nki", Rb, pts) + bases[stations, :3, 3][:, None]
-            jac = {b: np.einsum("nij,nkjf->nkif", Rb, Jb) for b, Jb in jac.items()}
+            Rb4 = Rb[:, None]  # (N, 1, 3, 3): a batched product (an einsum here cost ~1.4 ms an evaluation)
+            jac = {b: Rb4 @ Jb for b, Jb in jac.items()}
             if want_t:
                 R_ee = np.einsum("nij,nkjl->nkil", Rb, R_ee)
         return self._with_frame_and_target_jacobians(pts, jac, R_ee if want_t else None, stations, want_b)

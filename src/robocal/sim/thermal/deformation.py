@@ -72,7 +72,8 @@ def _skeleton(model: RobotModel, q) -> tuple:
     """Link frames (n, 4, 4) and skeleton points (n + 2, 3), base frame, at joints ``q`` (n_joints,)."""
     Tbw = invert_transforms(model.T_world_base)
     F = Tbw @ model.link_frames(q)
-    pts = np.concatenate([[np.zeros(3)], F[:, :3, 3], [(Tbw @ model.fk(q))[:3, 3]]])
+    # a batch of one: the batched FK kernel (the single-pose one would be compiled for these two calls)
+    pts = np.concatenate([[np.zeros(3)], F[:, :3, 3], [(Tbw @ model.fk(np.asarray(q, dtype=float)[None])[0])[:3, 3]]])
     return F, pts
 
 

@@ -5,6 +5,12 @@ calibration and a held-out set, identifies the kinematic parameters, base frame 
 points, validates on the held-out poses and writes into one folder:
 
 * ``result.json``            every number (:func:`robocal.calib.outputs.result_to_dict` + validation)
+                             except the per-pose arrays, whose files it names (its size does not grow
+                             with the pose count)
+* ``residuals.csv``          position error of every measured point before/after (calibration and
+                             held-out poses): ``set,pose_id,target,error_before_mm,error_after_mm``
+* ``accuracy_map.csv``       predicted position std at every pose of the file:
+                             ``pose_id,flange_x_mm,flange_y_mm,flange_z_mm,predicted_std_mm``
 * ``calibrated_robot.toml``  the calibrated robot (``robocal-robot/1``; its base is the robot in the
                              measurement instrument's frame)
 * ``calibrated_robot.urdf``  the same as URDF (skipped, with a note, when a joint coupling cannot be
@@ -53,7 +59,7 @@ __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses
            "compute_calibration", "write_calibration", "check_calibration_outputs", "calibrated_model", "run_correct"]
 
 OUTPUT_FILES = {"result": "result.json", "robot": "calibrated_robot.toml", "urdf": "calibrated_robot.urdf",
-                "report": "report.html"}
+                "report": "report.html", "residuals": "residuals.csv", "accuracy": "accuracy_map.csv"}
 
 
 class CalibrationInputError(InputError):
@@ -479,8 +485,10 @@ def _validate(setup, res0, result, meas, hold):
 def _accuracy_map(problem, result, meas) -> dict:
     """Predicted uncertainty over every pose of the file (the report's accuracy map)."""
     std_pts = predicted_point_std(problem, result, meas.joints)  # (N, K)
-    base_model = result.model.replace(T_world_base=np.eye(4))
-    positions = base_model.fk(meas.joints)[:, :3, 3]
+    # the flange origin in the base frame by the solver's kernel (no second kinematics kernel to compile)
+    model = result.model
+    positions = model.target_points(meas.joints, model.params.values, np.zeros((1, 3)), np.zeros(1, dtype=np.int64),
+                                    np.zeros(0, dtype=np.int64), want_jacobian=False)[0][:, 0]
     return {
         "quantity": "predicted position uncertainty (1 std, sqrt of the trace of J Cov J^T) of the targets in the "
                     "instrument frame, largest over the targets of each pose",
@@ -544,6 +552,50 @@ def _name_parallel_axes(rdict: dict, nominal) -> None:
     ident["parallel_axes"] = rows
 
 
+def _csv_number(v) -> str:
+    """A number for the side CSV files: 6 significant digits (um on mm errors); empty for NaN / null."""
+    return "" if v is None or not math.isfinite(v) else f"{v:.6g}"
+
+
+def _move_per_pose_to_csv(paths, rdict, files) -> dict:
+    """Write the per-point errors (calibration and held-out poses) to ``residuals.csv`` and the accuracy
+    map (one row per pose of the file) to ``accuracy_map.csv``, and replace those arrays in ``rdict`` by
+    the file names, so that result.json's size does not grow with the pose count. Returns a shallow copy
+    of ``rdict`` with the arrays (for the report). Adds the files to ``files``."""
+    full = dict(rdict)
+    res = rdict.get("residuals") or {}
+    val = rdict.get("validation") or {}
+    sets = [(name, d["per_point"]) for name, d in (("calibration", res), ("holdout", val)) if d.get("per_point")]
+    if sets:
+        with open(paths["residuals"], "w", encoding="utf-8", newline="\n") as fh:
+            fh.write("set,pose_id,target,error_before_mm,error_after_mm\n")
+            for name, per in sets:
+                fh.writelines(f"{name},{p},{t},{_csv_number(b)},{_csv_number(a)}\n"
+                              for p, t, b, a in zip(per["pose"], per["target"], per["before"], per["after"]))
+        files["residuals"] = paths["residuals"]
+        ref = {"file": OUTPUT_FILES["residuals"], "n": None,
+               "columns": ["set", "pose_id", "target", "error_before_mm", "error_after_mm"], "unit": "mm"}
+        for name, d, key in (("calibration", res, "residuals"), ("holdout", val, "validation")):
+            if d.get("per_point"):
+                full[key] = dict(d)
+                # the held-out pose ids are the file's "holdout" rows
+                rdict[key] = {k: v for k, v in d.items() if k not in ("per_point", "pose_ids")}
+                rdict[key]["per_point_file"] = dict(ref, set=name, n=len(d["per_point"]["pose"]))
+    amap = rdict.get("accuracy_map")
+    if amap and amap.get("pose_ids") is not None:
+        with open(paths["accuracy"], "w", encoding="utf-8", newline="\n") as fh:
+            fh.write("pose_id,flange_x_mm,flange_y_mm,flange_z_mm,predicted_std_mm\n")
+            fh.writelines(f"{p},{_csv_number(x)},{_csv_number(y)},{_csv_number(z)},{_csv_number(v)}\n"
+                          for p, (x, y, z), v in zip(amap["pose_ids"], amap["flange_position_base_mm"],
+                                                     amap["predicted_std_mm"]))
+        files["accuracy"] = paths["accuracy"]
+        rdict["accuracy_map"] = {k: v for k, v in amap.items()
+                                 if k not in ("pose_ids", "flange_position_base_mm", "predicted_std_mm")}
+        rdict["accuracy_map"]["file"] = OUTPUT_FILES["accuracy"]
+        rdict["accuracy_map"]["n_poses"] = len(amap["pose_ids"])
+    return full
+
+
 def _write_outputs(paths, rdict, calibrated, nominal, meas, data, train, validation, targets, accuracy,
                    write_robot, notes, report, *, result, torque_plots=None, failed_gates: bool = True) -> dict:
     """Write result.json, the calibrated robot ``calibrated`` (TOML, URDF; only with
@@ -574,10 +626,12 @@ def _write_outputs(paths, rdict, calibrated, nominal, meas, data, train, validat
         except UrdfError as exc:  # a stale URDF of an earlier run is removed by staged_outputs
             notes.append(f"calibrated_robot.urdf not written: {exc}")
     rdict["notes"] = notes
+    full = _move_per_pose_to_csv(paths, rdict, files)  # result.json keeps summaries and the file names
     text = json.dumps(rdict, indent=2, allow_nan=False) + "\n"
     files["result"] = atomic_write_text(paths["result"], text)
     if not report:
         return files
+    rdict = full  # the report's per-pose figures read the per-point errors
     from ...report.html import write_report
 
     amap = {"positions_mm": accuracy["flange_position_base_mm"], "values_mm": accuracy["predicted_std_mm"],

@@ -1,0 +1,83 @@
+"""Memory and output size of ``robocal calibrate`` on a big campaign (issue 34 item 4).
+
+Simulates a UR10 laser-tracker campaign of N poses (default 100 000) with ``robocal simulate
+tracker``, then runs in fresh child processes, interleaved:
+
+* the data alone: ``read_measurements`` of the file (the floor any tool that loads the data pays);
+* ``robocal calibrate`` (with and without the report), its peak resident memory (``ru_maxrss``).
+
+Prints both peaks, the memory per pose above the data (target <= 1 KiB), the wall time and the size
+of every file written (result.json must not grow with N; per-point errors go to residuals.csv).
+Run: ``python benchmarks/bench_big_campaign.py [--poses 100000] [--repeat 2]``. A script, not a test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+BIN = Path(sys.executable).parent
+CHILD_READ = ("import resource, sys\nfrom robocal.io import read_measurements\nfrom robocal.robots import load_robot\n"
+              "m = read_measurements(sys.argv[1], robot=load_robot('ur10'))\n"
+              "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n")
+CHILD_CAL = ("import resource, sys\nfrom robocal.cli.main import main\n"
+             "try:\n    main(sys.argv[1:], standalone_mode=False)\n"
+             "finally:\n    print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\n")
+
+
+def _child(code, args, env) -> tuple[float, float, str]:
+    t = time.perf_counter()
+    p = subprocess.run([sys.executable, "-c", code, *args], env=env, capture_output=True, text=True, check=True)
+    wall = time.perf_counter() - t
+    text = p.stdout if "getrusage" in code and "stderr" not in code else p.stderr
+    return int(text.strip().splitlines()[-1]) / 1024.0, wall, p.stdout
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--poses", type=int, default=100_000)
+    ap.add_argument("--repeat", type=int, default=2)
+    a = ap.parse_args()
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    with tempfile.TemporaryDirectory(prefix="robocal-big-") as tmp:
+        work = Path(tmp)
+        data = work / "m.csv"
+        subprocess.run([str(BIN / "robocal"), "simulate", "tracker", "ur10", "--poses", str(a.poses), "--out", str(data)],
+                       env=env, check=True, capture_output=True)
+        print(f"UR10, {a.poses} poses, file {data.stat().st_size / 1e6:.1f} MB; load avg {os.getloadavg()[0]:.2f} at start; "
+              f"{a.repeat} interleaved repeats, median")
+        rows = {"read the data (read_measurements)": ([], []), "robocal calibrate --no-report": ([], []),
+                "robocal calibrate (with report)": ([], [])}
+        for r in range(a.repeat):
+            rss, wall, _ = _child(CHILD_READ, [str(data)], env)
+            rows["read the data (read_measurements)"][0].append(rss)
+            rows["read the data (read_measurements)"][1].append(wall)
+            for label, extra in (("robocal calibrate --no-report", ["--no-report"]), ("robocal calibrate (with report)", [])):
+                out = work / f"out{r}{len(extra)}"
+                rss, wall, _ = _child(CHILD_CAL, ["calibrate", "ur10", str(data), "--out", str(out), *extra], env)
+                rows[label][0].append(rss)
+                rows[label][1].append(wall)
+        floor = statistics.median(rows["read the data (read_measurements)"][0])
+        print(f"{'':40s}{'peak MiB':>10s}{'wall s':>9s}{'above data':>12s}{'per pose':>11s}   target")
+        for label, (rss, wall) in rows.items():
+            m = statistics.median(rss)
+            if label.startswith("read"):
+                print(f"{label:40s}{m:10.1f}{statistics.median(wall):9.2f}")
+                continue
+            per = (m - floor) * 1024.0 / a.poses
+            print(f"{label:40s}{m:10.1f}{statistics.median(wall):9.2f}{m - floor:10.1f} M{per:9.2f} KiB   "
+                  f"{'ok  ' if per <= 1.0 else 'MISS'} <= 1 KiB per pose above the data")
+        out = work / "out00"
+        print("files written by calibrate (with report):")
+        for f in sorted(out.iterdir()):
+            print(f"  {f.name:28s}{f.stat().st_size / 1e6:10.3f} MB")
+
+
+if __name__ == "__main__":
+    main()
