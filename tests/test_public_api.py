@@ -83,8 +83,9 @@ def test_calibrate_in_memory_recovers_the_hidden_truth(campaign, result):
 
 def test_save_writes_what_the_command_writes(tmp_path, campaign, result):
     files = result.save(tmp_path / "api")
-    assert sorted(p.name for p in files.values()) == ["calibrated_robot.toml", "calibrated_robot.urdf",
-                                                      "report.html", "result.json"]
+    assert sorted(p.name for p in files.values()) == ["accuracy_map.csv", "calibrated_robot.toml",
+                                                      "calibrated_robot.urdf", "report.html", "residuals.csv",
+                                                      "result.json"]
     r = CliRunner().invoke(robocal.cli.main, ["calibrate", "ur10", str(campaign["csv"]), "--out",
                                               str(tmp_path / "cli"), "--holdout", "0.25", "--seed", "3"])
     assert r.exit_code == 0, r.output

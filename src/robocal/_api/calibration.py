@@ -152,7 +152,7 @@ class CalibrationResult:
         Parameters
         ----------
         folder : str or os.PathLike
-            Output folder (created if needed): ``result.json``, ``calibrated_robot.toml``,
+            Output folder (created if needed): ``result.json``, ``residuals.csv``, ``accuracy_map.csv``, ``calibrated_robot.toml``,
             ``calibrated_robot.urdf`` and ``report.html``.
         overwrite : bool, default False
             Replace existing output files.
