@@ -87,6 +87,10 @@ class DampedGaussNewton:
         self.n_active = int(active.sum())
         self.rejected = np.zeros(self.n_slots, dtype=bool)
         self.robust_weights = None
+        # after a line search that refused a step, trial points are evaluated without the Jacobian
+        # first (the Jacobian then only at the step taken): a refused trial then costs its residuals
+        # only. Same trials, same decisions, same numbers; only when the Jacobian is computed changes.
+        self._refused_last = False
 
     # ------------------------------------------------------------------ pieces
     def _initial_robust_weights(self, r):
@@ -198,7 +202,7 @@ class DampedGaussNewton:
     def _line_search(self, G, g, g_max, step_s):
         """A step that does not raise the cost: LM raises the damping, SVD halves the step (30 tries).
         Returns (trial state, its r, its J, scaled step) or None."""
-        for _ in range(30):
+        for attempt in range(30):
             if self.method == "lm":
                 try:
                     A = G.copy()  # G + lam * max(diag G) * I: only the diagonal changes
@@ -213,9 +217,14 @@ class DampedGaussNewton:
                 step = np.zeros(self.n)
                 step[self.active] = step_s / self.col_scale[self.active]
             trial = self.problem.retract(self.state, step)
-            r_t, J_t = self.augmented(trial)  # with the Jacobian: an accepted step needs it next
+            lazy = self._refused_last or attempt > 0
+            # with the Jacobian unless steps are being refused: an accepted step needs it next
+            r_t, J_t = self.augmented(trial, with_jac=not lazy)
             c_t = self._cost(r_t)
             if c_t < self.cost:  # a step that changes nothing is no step: the stationarity check decides
+                if lazy:
+                    r_t, J_t = self.augmented(trial)
+                self._refused_last = attempt > 0
                 return trial, r_t, J_t, step_s
             if self.method == "svd":
                 step_s = 0.5 * step_s  # backtracking
