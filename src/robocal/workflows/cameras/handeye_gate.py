@@ -169,6 +169,26 @@ def handeye_gate(*, camera, result, T_base_flange, used, image_points, target_po
     verdict.checks["corner_noise_pnp_rms_px"] = {"value": pnp_rms, "unit": "px", "passed": True}
     if verdict.ok:
         return verdict
+    causes = _likely_causes(camera, setup, F_all, idx, C, X, uv, names, labels, pnp_rms, poses_file, camera_given,
+                            image_size, min_points)
+    named = verdict.checks["images_disagreeing"]["value"] or any("back-project far worse" in r for r in verdict.reasons)
+    if not causes and not named:
+        if mismatch.angle_deg_median > MOTION_ANGLE_LIMIT_DEG:
+            causes = ["likely cause: the flange poses are in another order than the images (shuffled) or belong to "
+                      "another run (no shift of the rows, other convention or set-up fits); check how images and "
+                      "pose rows are paired"]
+        else:
+            causes = ["likely cause: wrong intrinsics, a wrong robot model or lengths, or flange poses taken at "
+                      "another moment than the images"]
+    return Verdict(verdict.reasons + tuple(causes), verdict.checks)
+
+
+def _likely_causes(camera, setup, F_all, idx, C, X, uv, names, labels, pnp_rms, poses_file, camera_given,
+                   image_size, min_points) -> list:
+    """Every hypothesis tried on the same detections (shifted rows, inverted poses or the other
+    set-up, one wrong pose, another convention, intrinsics from the images), as the reasons of
+    those that fit within the back-projection limit."""
+    F = F_all[idx]
     limit = max(HANDEYE_RMS_FLOOR_PX, HANDEYE_NOISE_FACTOR * pnp_rms) if math.isfinite(pnp_rms) else \
         HANDEYE_RMS_FLOOR_PX
     hyps = _shifts(camera, setup, F_all, idx, C, X, uv, names, labels)
@@ -181,17 +201,7 @@ def handeye_gate(*, camera, result, T_base_flange, used, image_points, target_po
         hyps += _conventions(camera, setup, poses_file, [labels[i] for i in idx], C, X, uv)
     if camera_given and image_size is not None:
         hyps += _intrinsics(camera, setup, F, X, uv, image_size, min_points)
-    causes = cause_reasons(hyps, limit, _linear_rms(camera, setup, F, C, X, uv))
-    named = verdict.checks["images_disagreeing"]["value"] or any("back-project far worse" in r for r in verdict.reasons)
-    if not causes and not named:
-        if mismatch.angle_deg_median > MOTION_ANGLE_LIMIT_DEG:
-            causes = ["likely cause: the flange poses are in another order than the images (shuffled) or belong to "
-                      "another run (no shift of the rows, other convention or set-up fits); check how images and "
-                      "pose rows are paired"]
-        else:
-            causes = ["likely cause: wrong intrinsics, a wrong robot model or lengths, or flange poses taken at "
-                      "another moment than the images"]
-    return Verdict(verdict.reasons + tuple(causes), verdict.checks)
+    return cause_reasons(hyps, limit, _linear_rms(camera, setup, F, C, X, uv))
 
 
 def pairing_causes(*, camera, T_base_flange, used, image_points, target_points, setup: str, names, labels,
@@ -206,19 +216,8 @@ def pairing_causes(*, camera, T_base_flange, used, image_points, target_points, 
     C = solve_pnp(camera, X, uv, min_points=min_points)[0]
     good = np.all(np.isfinite(C), axis=(1, 2))
     pnp_rms = _rms(backprojection(camera, np.where(good[:, None, None], C, np.eye(4)), X, uv)[1][good])
-    limit = max(HANDEYE_RMS_FLOOR_PX, HANDEYE_NOISE_FACTOR * pnp_rms) if math.isfinite(pnp_rms) else \
-        HANDEYE_RMS_FLOOR_PX
-    hyps = _shifts(camera, setup, F_all, idx, C, X, uv, names, labels)
-    other = "eye_to_hand" if setup == "eye_in_hand" else "eye_in_hand"
-    hyps.append(_hypothesis(f"the flange poses are inverted (T_flange_base exported instead of T_base_flange), or "
-                            f"the set-up is {other} (--{other.replace('_', '-')}), not {setup}",
-                            camera, other, F, C, X, uv))
-    hyps += _leave_one_out(camera, setup, F, C, X, uv, [names[i] for i in idx])
-    if poses_file is not None:
-        hyps += _conventions(camera, setup, poses_file, [labels[i] for i in idx], C, X, uv)
-    if camera_given and image_size is not None:
-        hyps += _intrinsics(camera, setup, F, X, uv, image_size, min_points)
-    causes = cause_reasons(hyps, limit, _linear_rms(camera, setup, F, C, X, uv))
+    causes = _likely_causes(camera, setup, F_all, idx, C, X, uv, names, labels, pnp_rms, poses_file, camera_given,
+                            image_size, min_points)
     angle = motion_mismatch(F, C, setup).angle_deg_median
     if not causes and math.isfinite(angle) and angle > MOTION_ANGLE_LIMIT_DEG:
         causes = [f"likely cause: the flange poses are in another order than the images (shuffled) or belong to "
