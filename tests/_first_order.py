@@ -65,3 +65,78 @@ def self_calibration_offset_bias(res, q, carriers, camera_ee: str, X, camera, e)
     cols += [corners(mount=res.camera_mount @ twist(k)) for k in range(6)]
     cols += [corners(b={**boards, c: boards[c] @ twist(k)}) for c in boards for k in range(6)]
     return dict(zip(names, first_order_bias(cols, corners(), e)))
+
+
+def campaign_effect_points(truth: dict, q, growth) -> tuple:
+    """Reflector points (N, k, 3) [mm, tracker frame] of the hidden true robot of a truth file of
+    ``robocal simulate tracker --effects ...`` at commanded joints ``q`` (N, n) [rad]: ``(model,
+    reached)``, without and with the transmission error (its definition in
+    :mod:`robocal.sim.campaign_effects`, written out here) and a relative ``growth`` (N,) of the
+    arm about the true base origin."""
+    from robocal.robots import load_robot
+
+    nominal = load_robot(truth["robot"])
+    true = nominal.with_params(**{k: float(v) for k, v in truth["true_parameters"].items()})
+    eff = truth["campaign_effects"]
+    a1, a2 = np.radians(eff["transmission_deg"])
+    ph = np.asarray(eff["transmission_phases_rad"])
+    q = np.atleast_2d(q)
+    q_real = q + a1 * np.sin(q + ph[0]) + a2 * np.sin(2 * q + ph[1])
+    T_tb = np.asarray(truth["T_tracker_base"])
+    refl = np.asarray(truth["reflectors_mm"])
+    T_bw = np.linalg.inv(true.T_world_base)
+
+    def points(qq, g):
+        T = T_bw @ true.fk(qq)  # base frame
+        p = np.einsum("nij,kj->nki", T[:, :3, :3], refl) + T[:, None, :3, 3]
+        p = p * (1.0 + np.asarray(g, dtype=float))[:, None, None]
+        return p @ T_tb[:3, :3].T + T_tb[:3, 3]
+
+    return points(q, np.zeros(len(q))), points(q_real, growth)
+
+
+def tracker_campaign_bias(truth: dict, free, q_train, q_at) -> np.ndarray:
+    """First-order miss (M, 3) [mm, tracker frame] of the first reflector at joints ``q_at`` (M, n)
+    [rad] after a point calibration (positions of every reflector, unweighted) on ``q_train``
+    (N, n) [rad], the campaign's effects from the truth file: the fit's variables (the ``free``
+    parameters, a base twist, every reflector offset) are biased by ``delta = J^+ e_train`` and the
+    true robot, which carries the effects at ``q_at`` (the arm grown as at the last pose), lands at
+    ``e_at - J_at delta`` from where the calibrated model says. Jacobians by finite differences of
+    the true geometry (:data:`STEP`). ``free``: the parameters the calibration estimated (not the
+    ones it reported as not identified: their columns make ``J`` singular up to finite-difference
+    noise, and ``J^+`` would then follow that noise)."""
+    from robocal.robots import load_robot
+
+    nominal = load_robot(truth["robot"])
+    true = nominal.with_params(**{k: float(v) for k, v in truth["true_parameters"].items()})
+    T_tb = np.asarray(truth["T_tracker_base"])
+    refl = np.asarray(truth["reflectors_mm"], dtype=float)
+    T_bw = np.linalg.inv(true.T_world_base)
+    vals = true.params.values
+
+    def predict(q, values=vals, T=T_tb, r=refl):
+        Tq = T @ T_bw @ true.with_params(values).fk(np.atleast_2d(q))
+        return (np.einsum("nij,kj->nki", Tq[:, :3, :3], r) + Tq[:, None, :3, 3]).ravel()
+
+    def columns(q):
+        cols = []
+        for n in free:
+            v = vals.copy()
+            v[true.params.index(n)] += STEP
+            cols.append(predict(q, values=v))
+        cols += [predict(q, T=T_tb @ twist(k)) for k in range(6)]
+        for i in range(refl.size):
+            r = refl.copy().ravel()
+            r[i] += STEP
+            cols.append(predict(q, r=r.reshape(refl.shape)))
+        return np.array(cols)
+
+    g = float(truth["campaign_effects"]["growth_ppm"]) * 1e-6
+    scale = 1.0 + float(truth["campaign_effects"]["tracker_scale_ppm"]) * 1e-6
+    model, reached = campaign_effect_points(truth, q_train, np.linspace(0.0, g, len(q_train)))
+    J = (columns(q_train) - predict(q_train)).T / STEP
+    delta = np.linalg.lstsq(J, (reached * scale - model).ravel(), rcond=None)[0]
+    model_at, reached_at = campaign_effect_points(truth, q_at, np.full(len(np.atleast_2d(q_at)), g))
+    J_at = (columns(q_at) - predict(q_at)).T / STEP
+    miss = (reached_at - model_at).ravel() - J_at @ delta
+    return miss.reshape(len(np.atleast_2d(q_at)), len(refl), 3)[:, 0]
