@@ -34,9 +34,11 @@ def true_tool():
     return T
 
 
-def simulate(n=60, seed=11, truth=False):
+def simulate(n=60, seed=11, truth=False, effects=False):
     """Joints and measured probe poses (N, 4, 4) in the tracker frame (and, with ``truth``, the
-    virtual robot and the tracker's frame T_inst)."""
+    virtual robot and the tracker's frame T_inst). ``effects``: the ``realistic`` campaign effects
+    (tests/_first_order.py ``poses_with_effects``, phases from ``seed + 1000``); with ``truth`` the
+    noise-free measured poses are returned last."""
     nominal = load_robot("ur10")
     rng = np.random.default_rng(seed)
     virtual = VirtualRobot.perturbed(nominal, rng, joint_noise_deg=0.0)
@@ -49,9 +51,18 @@ def simulate(n=60, seed=11, truth=False):
     T_inst = np.eye(4)
     T_inst[:3, :3] = so3_exp([0.02, -0.05, 2.4])
     T_inst[:3, 3] = [2800.0, 900.0, -350.0]
-    T = T_inst @ virtual.true_poses(q) @ true_tool()
+    if effects:
+        from _first_order import poses_with_effects
+
+        phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
+        T = poses_with_effects(virtual.true_model, q, T_inst, true_tool(), phases)[1]
+    else:
+        T = T_inst @ virtual.true_poses(q) @ true_tool()
+    T_free = T.copy()
     T[:, :3, 3] += rng.normal(0, SIGMA_MM, (n, 3))
     T[:, :3, :3] = so3_exp(rng.normal(0, SIGMA_MM / W, (n, 3))) @ T[:, :3, :3]
+    if effects and truth:
+        return q, T, virtual, T_inst, rng, T_free
     return (q, T, virtual, T_inst, rng) if truth else (q, T)
 
 
@@ -113,6 +124,43 @@ def test_six_d_calibration_recovers_the_probe_rotation_within_3_sigma(campaign):
     std = np.array(tf["std_rotvec_rad"])
     assert np.all(std > 0) and np.all(std < 1e-3), std
     assert np.all(np.abs(err) < 3 * std), (err, std)
+
+
+def test_exports_with_effects_the_model_lacks_give_the_probe_rotation_within_3_sigma_of_its_bias(tmp_path):
+    """The same exports with the ``realistic`` campaign effects (reducer transmission error, 20 ppm
+    growth during the campaign, 5 ppm tracker scale; docs/testing.md), imported and calibrated
+    with the noise given (``--sigma``: sigma not scaled by the misfit). The probe frame's bias is
+    derived to first order from the hidden truth (tests/_first_order.py ``six_d_fit_bias``).
+    Asserted: rotation within 3 sigma and origin within 4 sigma of truth + bias; the residual RMS
+    within 10 % of the first-order misfit plus the noise and above twice the noise (the effects
+    are visible). Measured: rotation |z| 1.8 / 0.8 / 2.6 after the bias (1.8 / 0.9 / 2.3 plain),
+    origin |z| <= 0.6; residual RMS 0.0768 mm against 0.0787 predicted (ratio 0.98) and 0.035 mm
+    of noise."""
+    from _first_order import six_d_fit_bias
+
+    q, T, virtual, T_inst, _, T_free = simulate(truth=True, effects=True)
+    times = [T0 + timedelta(seconds=4.0 * k) for k in range(len(q))]
+    leica, rtde = write_leica(tmp_path / "tmac.csv", T, times), write_rtde(tmp_path / "rtde.csv", q)
+    r = run("import", leica, "--joints", rtde, "--robot", "ur10", "--orientation", "rpy", "--out", tmp_path / "m.csv")
+    assert r.exit_code == 0, r.output
+    r = run("calibrate", "ur10", tmp_path / "m.csv", "--out", tmp_path / "cal", "--sigma", SIGMA_MM, "--holdout", 0,
+            "--no-report")
+    assert r.exit_code == 0, r.output
+    res = json.loads((tmp_path / "cal" / "result.json").read_text())
+    estimated = [p["name"] for p in res["model_parameters"] if p["estimated"]]
+    bias = six_d_fit_bias(virtual.true_model, estimated, q, T_inst, true_tool(), T_free, W)
+    tf = res["tool_frame"]
+    T_fit = np.array(tf["T_flange_measured"])
+    err = so3_log(T_fit[:3, :3] @ true_tool()[:3, :3].T)
+    std, std_xyz = np.array(tf["std_rotvec_rad"]), np.array(tf["std_xyz_mm"])
+    origin_err = T_fit[:3, 3] - true_tool()[:3, 3]
+    n_var = len(estimated) + 12  # the noise part keeps the fraction 1 - variables / residuals of its square
+    rms_pred = np.hypot(bias["residual_rms_mm"], SIGMA_MM * np.sqrt(3 * (1 - n_var / (6 * len(q)))))
+    rms = res["residuals"]["after"]["rms"]
+    assert np.all(np.abs(err - bias["tool_rotvec"]) < 3 * std), (err, bias["tool_rotvec"], std)
+    assert np.all(np.abs(origin_err - bias["tool_xyz"]) < 4 * std_xyz), (origin_err, bias["tool_xyz"], std_xyz)
+    assert 0.9 < rms / rms_pred < 1.1, (rms, rms_pred)
+    assert rms > 2 * SIGMA_MM * np.sqrt(3), rms
 
 
 def test_orientation_errors_printed_and_in_result_json(campaign):
