@@ -119,13 +119,18 @@ def _run(args):
     return r
 
 
-def _campaign(tmp_path, robot, seed):
+def _campaign(tmp_path, robot, seed, effects="ideal"):
     """Simulated tracker campaign (3 reflectors) and calibration; returns (truth, calibrated
-    robot file, identified r1 [mm], true r1 [mm])."""
+    robot file, identified r1 [mm], true r1 [mm]). ``effects="realistic"``: the campaign has the
+    effects the model lacks, and the calibration fits the reflector positions of every pose
+    (``--no-orientation --holdout 0``: the fit whose first-order bias :func:`_realistic_miss` derives;
+    ``--noise 0.02``, the tracker's: the reported sigma is the noise part, not scaled by the misfit)."""
     meas = tmp_path / "cell.csv"
-    r = _run(["simulate", "tracker", robot, "--poses", 40, "--reflectors", 3, "--seed", seed, "--out", meas])
+    r = _run(["simulate", "tracker", robot, "--poses", 40, "--reflectors", 3, "--seed", seed, "--out", meas,
+              "--effects", effects])
     assert r.exit_code == 0, r.output
-    r = _run(["calibrate", robot, meas, "--out", tmp_path / "cal", "--no-report"])
+    fit = [] if effects == "ideal" else ["--no-orientation", "--holdout", 0, "--noise", 0.02]
+    r = _run(["calibrate", robot, meas, "--out", tmp_path / "cal", "--no-report", *fit])
     assert r.exit_code == 0, r.output
     truth = tmp_path / "cell.truth.json"
     result = json.loads((tmp_path / "cal" / "result.json").read_text())
@@ -148,8 +153,29 @@ def _report(path):
         return {row["target"]: row for row in csv.DictReader(line for line in f if not line.startswith("#"))}
 
 
-def _judge(tmp_path, src, truth, cal, r1_true, options, execute_options=()):
-    """Correct ``src`` and judge it at the true robot; returns the before/after errors [mm]."""
+def _realistic_miss(truth, cal, q_exec):
+    """First-order landing miss (M, 3) [mm] of the true robot with the campaign's effects at the
+    executed joints ``q_exec`` (M, n) [rad] (tests/_first_order.py: the bias ``J^+ e`` of the
+    calibration from the effects in its training poses, then ``e - J delta`` at the targets)."""
+    from _first_order import tracker_campaign_bias
+
+    from robocal.io.measurements import read_measurements
+
+    t = json.loads(truth.read_text())
+    result = json.loads((cal.parent / "result.json").read_text())
+    q_train = read_measurements(truth.parent / t["simulation"]["measurements_file"]).joints
+    estimated = [p["name"] for p in result["model_parameters"] if p["estimated"]]  # the identified ones
+    return tracker_campaign_bias(t, estimated, q_train, q_exec)
+
+
+def _judge(tmp_path, src, truth, cal, r1_true, options, execute_options=(), effects="ideal"):
+    """Correct ``src`` and judge it at the true robot; returns the before/after errors [mm].
+
+    ``effects="realistic"``: the true robot carries effects the model lacks, so "within 3 sigma
+    and 0.15 mm" no longer holds by construction; instead each landing error must equal the
+    first-order miss ``|e - J delta|`` derived from the hidden truth (:func:`_realistic_miss`)
+    within 3 sigma of the corrected target's prediction (the noise part), and the effects must be
+    visible (some target beyond 3 sigma: a correction that ignored them would pass the old test)."""
     out = src.with_name("corrected" + src.suffix)
     r = _run(["correct", cal, src, "--out", out, *options])
     assert r.exit_code == 0, r.output
@@ -160,7 +186,7 @@ def _judge(tmp_path, src, truth, cal, r1_true, options, execute_options=()):
     after = _execute(truth, out, cal, extra, intended=src)
     report = _report(out.with_name(out.name + ".report.csv"))
     old, new = read_program(src), read_program(out)
-    errors = {}
+    errors, sigmas, q_exec = {}, {}, {}
     for t in old.targets:
         n = new.target(t.name)
         assert n.config == t.config, t.name  # configuration data unchanged
@@ -173,11 +199,19 @@ def _judge(tmp_path, src, truth, cal, r1_true, options, execute_options=()):
         sigma = float(report[t.name]["sigma_mm"])
         assert report[t.name]["status"] == "corrected"
         assert e1 < e0, (t.name, e0, e1)
-        assert e1 <= 3 * sigma, (t.name, e1, sigma)
-        assert e1 <= 0.15, (t.name, e1)
+        if effects == "ideal":
+            assert e1 <= 3 * sigma, (t.name, e1, sigma)
+            assert e1 <= 0.15, (t.name, e1)
         assert max(abs(a - b) for a, b in zip(after[t.name]["joints_deg"], before[t.name]["joints_deg"])) < 2.0
-        errors[t.name] = (e0, e1)
+        errors[t.name], sigmas[t.name], q_exec[t.name] = (e0, e1), sigma, np.radians(after[t.name]["joints_deg"])
     assert len(errors) >= 3
+    if effects != "ideal":
+        names = list(errors)
+        miss = np.linalg.norm(_realistic_miss(truth, cal, np.array([q_exec[n] for n in names])), axis=1)
+        e1 = np.array([errors[n][1] for n in names])
+        sig = np.array([sigmas[n] for n in names])
+        assert np.all(np.abs(e1 - miss) <= 3 * sig), (names, e1, miss, sig)
+        assert np.any(e1 > 3 * sig), (e1, sig)  # the effects are far above the noise: the old claim fails
     return errors
 
 
@@ -226,6 +260,21 @@ def test_a_tool_the_calibration_never_saw_gets_a_warning_and_its_uncertainty(kr1
         assert float(report[name]["unknown_mm"]) > 0.1
         assert after[name]["error_mm"] <= 3 * float(report[name]["sigma_mm"]), (name, after[name], report[name])
         assert after[name]["error_mm"] < before[name]["error_mm"]
+
+
+def test_krl_program_at_a_true_kr150_with_effects_the_model_lacks(tmp_path):
+    """The KRL case on ``robocal simulate tracker --effects realistic`` (reducer transmission
+    error, 20 ppm growth during the campaign, 5 ppm tracker scale; docs/testing.md): the true
+    robot that runs the program has the same transmission error and is as warm as at the
+    campaign's end. The landing errors match the first-order miss from the hidden truth within
+    3 sigma; the ideal test's "within 3 sigma" is false here. Measured (seed 1): landing errors
+    0.015 / 0.143 / 0.178 / 0.123 mm, first-order miss 0.020 / 0.139 / 0.191 / 0.135 mm, sigma
+    0.012-0.016 mm (before correction: > 1 mm)."""
+    d = tmp_path / "campaign"
+    d.mkdir()
+    truth, cal, r1, r1_true = _campaign(d, "kuka_kr150_r3100", 1, effects="realistic")
+    src, cdat = _krl_files(tmp_path, [*r1, 0, 0, 0])
+    _judge(tmp_path, src, truth, cal, r1_true, ["--config-dat", cdat], ["--config-dat", cdat], effects="realistic")
 
 
 def test_offline_joint_targets_are_corrected_only_when_asked_and_within_the_bound(kr150, tmp_path):
@@ -311,8 +360,14 @@ def test_fanuc_program_at_the_true_r2000ic(tmp_path):
     assert r.exit_code == 1 and "Error:" in r.output and "UTOOL 1" in r.output
 
 
-def test_urscript_program_at_the_true_ur10(tmp_path):
-    truth, cal, r1, r1_true = _campaign(tmp_path, "ur10", 3)
+@pytest.mark.parametrize("effects", ["ideal", "realistic"])
+def test_urscript_program_at_the_true_ur10(tmp_path, effects):
+    """``realistic``: as the KRL case with effects (the landing errors against the first-order
+    miss). Measured (seed 3): landing 0.174 / 0.176 / 0.170 / 0.010 mm, first-order miss
+    0.206 / 0.208 / 0.190 / 0.007 mm, sigma 0.011-0.021 mm."""
+    d = tmp_path / "campaign"
+    d.mkdir()
+    truth, cal, r1, r1_true = _campaign(d, "ur10", 3, effects=effects)
     home = [-30, -100, 100, -90, -90, 0]
     moves = [("j", home), ("l", [-30, -104, 112, -98, -90, 10]), ("l", [-20, -90, 100, -100, -90, 20]),
              ("j", [-20, -90, 100, -100, 60, 20]), ("l", [-15, -95, 100, -95, 70, 10]),   # wrist flipped
@@ -320,7 +375,7 @@ def test_urscript_program_at_the_true_ur10(tmp_path):
              ("j", home)]
     src = tmp_path / "cell.script"
     src.write_text(ur_program("ur10", moves, [*r1, 0, 0, 0]))
-    _judge(tmp_path, src, truth, cal, r1_true, [])
+    _judge(tmp_path, src, truth, cal, r1_true, [], effects=effects)
 
 
 def test_target_orientations_are_checked_against_their_taught_joints(kr150, tmp_path):

@@ -244,3 +244,51 @@ def test_campaign_effects_are_what_their_definitions_say(kuka):
     assert np.std(noisy["points"] - noisy["model"]) == pytest.approx(0.02, rel=0.1)
     with pytest.raises(ValueError, match="unknown campaign preset"):
         CampaignEffects.preset("hall")
+
+
+def test_simulate_tracker_effects_reach_the_truth_file_and_the_virtual_controller(tmp_path):
+    """``robocal simulate tracker --effects realistic``: the same poses as ``ideal`` (same seed),
+    points moved by the effects (more than the noise, less than their bound), the effects and
+    their phases in the truth file; ``robocal simulate execute`` on that truth file moves the
+    true robot to ``q + a1 sin(q + phi1) + a2 sin(2q + phi2)`` and grows the arm by ``growth_ppm``
+    about the base origin (the definitions, written out here); ``ideal`` has no effects entry."""
+    from click.testing import CliRunner
+
+    from robocal.cli import main
+
+    def sim(effects):
+        out = tmp_path / f"{effects}.csv"
+        r = CliRunner().invoke(main, ["simulate", "tracker", "ur10", "--poses", "12", "--seed", "4", "--noise", "0",
+                                      "--out", str(out), "--effects", effects])
+        assert r.exit_code == 0, r.output
+        return read_measurements(out), json.loads((tmp_path / f"{effects}.truth.json").read_text())
+
+    (m_i, t_i), (m_r, t_r) = sim("ideal"), sim("realistic")
+    assert "campaign_effects" not in t_i and t_r["simulation"]["effects"] == "realistic"
+    np.testing.assert_allclose(m_r.joints, m_i.joints, atol=0)
+    moved = np.linalg.norm(m_r.points - m_i.points, axis=-1)
+    reach = np.linalg.norm(m_i.points - np.asarray(t_i["T_tracker_base"])[:3, 3], axis=-1)
+    # bound: 0.008 deg of joint error over ~4 lever arms of the reach, 25 ppm of the tracker distance
+    assert moved.max() > 0.01 and np.all(moved < np.radians(0.008) * 4 * reach + 25e-6 * 6000), moved
+    eff = t_r["campaign_effects"]
+    phases = np.asarray(eff["transmission_phases_rad"])
+    assert phases.shape == (2, 6) and eff["growth_ppm"] == 20.0 and eff["tracker_scale_ppm"] == 5.0
+
+    q = np.radians([20.0, -80.0, 70.0, -60.0, -90.0, 30.0])
+    prog = tmp_path / "p.script"
+    prog.write_text("def p():\n  movej([" + ", ".join(f"{v:.9f}" for v in q) + "])\nend\n")
+    rows = {}
+    for name in ("ideal", "realistic"):
+        r = CliRunner().invoke(main, ["simulate", "execute", str(tmp_path / f"{name}.truth.json"), str(prog), "--json"])
+        assert r.exit_code == 0, r.output
+        rows[name] = json.loads(r.output)["targets"][0]
+    nominal = load_robot("ur10")
+    true = nominal.with_params(**{k: float(v) for k, v in t_r["true_parameters"].items()})
+    a1, a2 = np.radians(eff["transmission_deg"])
+    q_real = q + a1 * np.sin(q + phases[0]) + a2 * np.sin(2 * q + phases[1])
+    p_ideal = (np.linalg.inv(true.T_world_base) @ true.fk(q))[:3, 3]
+    p_real = (np.linalg.inv(true.T_world_base) @ true.fk(q_real))[:3, 3] * (1 + 20e-6)
+    np.testing.assert_allclose(rows["ideal"]["tcp_base_mm"], p_ideal, atol=1e-3)  # JSON rounds to 1e-4 mm
+    np.testing.assert_allclose(rows["realistic"]["tcp_base_mm"], p_real, atol=1e-3)
+    assert np.linalg.norm(p_real - p_ideal) > 0.01
+    assert rows["realistic"]["error_mm"] == pytest.approx(0.0, abs=1e-9)  # a joint target means where it goes

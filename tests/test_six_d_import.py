@@ -34,9 +34,11 @@ def true_tool():
     return T
 
 
-def simulate(n=60, seed=11, truth=False):
+def simulate(n=60, seed=11, truth=False, effects=False):
     """Joints and measured probe poses (N, 4, 4) in the tracker frame (and, with ``truth``, the
-    virtual robot and the tracker's frame T_inst)."""
+    virtual robot and the tracker's frame T_inst). ``effects``: the ``realistic`` campaign effects
+    (tests/_first_order.py ``poses_with_effects``, phases from ``seed + 1000``); with ``truth`` the
+    noise-free measured poses are returned last."""
     nominal = load_robot("ur10")
     rng = np.random.default_rng(seed)
     virtual = VirtualRobot.perturbed(nominal, rng, joint_noise_deg=0.0)
@@ -49,9 +51,18 @@ def simulate(n=60, seed=11, truth=False):
     T_inst = np.eye(4)
     T_inst[:3, :3] = so3_exp([0.02, -0.05, 2.4])
     T_inst[:3, 3] = [2800.0, 900.0, -350.0]
-    T = T_inst @ virtual.true_poses(q) @ true_tool()
+    if effects:
+        from _first_order import poses_with_effects
+
+        phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
+        T = poses_with_effects(virtual.true_model, q, T_inst, true_tool(), phases)[1]
+    else:
+        T = T_inst @ virtual.true_poses(q) @ true_tool()
+    T_free = T.copy()
     T[:, :3, 3] += rng.normal(0, SIGMA_MM, (n, 3))
     T[:, :3, :3] = so3_exp(rng.normal(0, SIGMA_MM / W, (n, 3))) @ T[:, :3, :3]
+    if effects and truth:
+        return q, T, virtual, T_inst, rng, T_free
     return (q, T, virtual, T_inst, rng) if truth else (q, T)
 
 
@@ -113,6 +124,51 @@ def test_six_d_calibration_recovers_the_probe_rotation_within_3_sigma(campaign):
     std = np.array(tf["std_rotvec_rad"])
     assert np.all(std > 0) and np.all(std < 1e-3), std
     assert np.all(np.abs(err) < 3 * std), (err, std)
+
+
+@pytest.fixture(scope="module")
+def realistic(tmp_path_factory):
+    """The exports of :func:`campaign` with the ``realistic`` campaign effects (reducer
+    transmission error, 20 ppm growth during the campaign, 5 ppm tracker scale; docs/testing.md),
+    imported and calibrated with the noise given (``--sigma``: sigma not scaled by the misfit),
+    every pose trained (``--holdout 0``), and the first-order bias of that fit derived from the
+    hidden truth (tests/_first_order.py ``six_d_fit_bias``)."""
+    from _first_order import six_d_fit_bias
+
+    d = tmp_path_factory.mktemp("sixd_realistic")
+    q, T, virtual, T_inst, _, T_free = simulate(truth=True, effects=True)
+    times = [T0 + timedelta(seconds=4.0 * k) for k in range(len(q))]
+    leica, rtde = write_leica(d / "tmac.csv", T, times), write_rtde(d / "rtde.csv", q)
+    r = run("import", leica, "--joints", rtde, "--robot", "ur10", "--orientation", "rpy", "--out", d / "m.csv")
+    assert r.exit_code == 0, r.output
+    r = run("calibrate", "ur10", d / "m.csv", "--out", d / "cal", "--sigma", SIGMA_MM, "--holdout", 0, "--no-report")
+    assert r.exit_code == 0, r.output
+    res = json.loads((d / "cal" / "result.json").read_text())
+    estimated = [p["name"] for p in res["model_parameters"] if p["estimated"]]
+    fit = (virtual.true_model, estimated, q, T_inst, true_tool(), T_free, W)
+    return {"dir": d, "q": q, "virtual": virtual, "T_inst": T_inst, "result": res, "estimated": estimated,
+            "fit": fit, "bias": six_d_fit_bias(*fit)}
+
+
+def test_exports_with_effects_the_model_lacks_give_the_probe_rotation_within_3_sigma_of_its_bias(realistic):
+    """On :func:`realistic`: rotation within 3 sigma and origin within 4 sigma of truth + bias;
+    the residual RMS within 10 % of the first-order misfit plus the noise and above twice the
+    noise (the effects are visible). Measured: rotation |z| 1.8 / 0.8 / 2.6 after the bias
+    (1.8 / 0.9 / 2.3 plain), origin |z| <= 0.6; residual RMS 0.0768 mm against 0.0787 predicted
+    (ratio 0.98) and 0.035 mm of noise."""
+    res, bias, q = realistic["result"], realistic["bias"], realistic["q"]
+    tf = res["tool_frame"]
+    T_fit = np.array(tf["T_flange_measured"])
+    err = so3_log(T_fit[:3, :3] @ true_tool()[:3, :3].T)
+    std, std_xyz = np.array(tf["std_rotvec_rad"]), np.array(tf["std_xyz_mm"])
+    origin_err = T_fit[:3, 3] - true_tool()[:3, 3]
+    n_var = len(realistic["estimated"]) + 12  # the noise part keeps the fraction 1 - variables / residuals
+    rms_pred = np.hypot(bias["residual_rms_mm"], SIGMA_MM * np.sqrt(3 * (1 - n_var / (6 * len(q)))))
+    rms = res["residuals"]["after"]["rms"]
+    assert np.all(np.abs(err - bias["tool_rotvec"]) < 3 * std), (err, bias["tool_rotvec"], std)
+    assert np.all(np.abs(origin_err - bias["tool_xyz"]) < 4 * std_xyz), (origin_err, bias["tool_xyz"], std_xyz)
+    assert 0.9 < rms / rms_pred < 1.1, (rms, rms_pred)
+    assert rms > 2 * SIGMA_MM * np.sqrt(3), rms
 
 
 def test_orientation_errors_printed_and_in_result_json(campaign):
@@ -187,13 +243,12 @@ def test_calibrate_format_takes_the_id_pairing_options(campaign, tmp_path):
     assert r.exit_code == 0, r.output
 
 
-def test_correct_with_the_calibrated_tool_lands_the_true_probe_on_the_targets(campaign, tmp_path):
-    """At the robot: tool-pose targets in the tracker frame, corrected with calibrated_robot.toml
-    (its [tool] = the identified probe frame), executed by the hidden true robot with the true
-    probe."""
+def _correct_targets(cal_dir, virtual, T_inst, tmp_path):
+    """Tool-pose targets in the tracker frame (8 poses of the true robot, seed 99), corrected with
+    ``cal_dir``'s calibrated_robot.toml; returns (targets (8, 4, 4) [mm], corrected joints (8, 6)
+    [rad])."""
     from robocal.transforms import quaternion_from_matrix
 
-    virtual, T_inst = campaign["virtual"], campaign["T_inst"]
     q_t = virtual.random_configurations(8, np.random.default_rng(99), margin=0.2)
     targets = T_inst @ virtual.true_poses(q_t) @ true_tool()
     quat = quaternion_from_matrix(targets[:, :3, :3])
@@ -202,18 +257,49 @@ def test_correct_with_the_calibrated_tool_lands_the_true_probe_on_the_targets(ca
     rows += [",".join([f"T{k}"] + [repr(float(v)) for v in (*targets[k, :3, 3], *quat[k], *np.degrees(q_t[k]))])
              for k in range(len(q_t))]
     (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
-    r = run("correct", campaign["dir"] / "cal" / "calibrated_robot.toml", tmp_path / "t.csv", "--out",
-            tmp_path / "c.csv")
+    r = run("correct", cal_dir / "calibrated_robot.toml", tmp_path / "t.csv", "--out", tmp_path / "c.csv")
     assert r.exit_code == 0, r.output
     lines = [x for x in (tmp_path / "c.csv").read_text().splitlines() if not x.startswith("#")]
     cols = lines[0].split(",")
     q_c = np.radians([[float(row.split(",")[cols.index(j)]) for j in ("J1", "J2", "J3", "J4", "J5", "J6")]
                       for row in lines[1:]])
+    return targets, q_c
+
+
+def test_correct_with_the_calibrated_tool_lands_the_true_probe_on_the_targets(campaign, tmp_path):
+    """At the robot: tool-pose targets in the tracker frame, corrected with calibrated_robot.toml
+    (its [tool] = the identified probe frame), executed by the hidden true robot with the true
+    probe."""
+    virtual, T_inst = campaign["virtual"], campaign["T_inst"]
+    targets, q_c = _correct_targets(campaign["dir"] / "cal", virtual, T_inst, tmp_path)
     reached = T_inst @ virtual.true_poses(q_c) @ true_tool()
     pos_err = np.linalg.norm(reached[:, :3, 3] - targets[:, :3, 3], axis=1)
     rot_err = np.degrees(np.linalg.norm(so3_log(reached[:, :3, :3] @ np.swapaxes(targets[:, :3, :3], 1, 2)),
                                         axis=1))
     assert pos_err.max() < 0.15 and rot_err.max() < 0.05, (pos_err, rot_err)
+
+
+def test_correct_on_effects_the_model_lacks_lands_where_first_order_theory_says(realistic, tmp_path):
+    """At the robot on :func:`realistic`: the true robot executing the corrected joints has the
+    campaign's transmission error and is grown as at its end (tests/_first_order.py
+    ``poses_with_effects(after_campaign=True)``). Each landing error must equal the first-order
+    miss ``|e_at - J_at delta|`` (``six_d_fit_bias`` with ``q_at``) within 3 sigma of the
+    corrected target's prediction (the noise's part, from the same Jacobians: ``sigma_at_mm``), and
+    some target must miss by more than 3 sigma (the ideal test's "< 0.15 mm" is then not what is
+    checked: the effects are). Measured: landing 0.024-0.162 mm, predicted 0.022-0.160 mm, largest
+    difference 0.011 mm against sigma 0.012-0.016 mm."""
+    from _first_order import poses_with_effects, six_d_fit_bias
+
+    virtual, T_inst = realistic["virtual"], realistic["T_inst"]
+    targets, q_c = _correct_targets(realistic["dir"] / "cal", virtual, T_inst, tmp_path)
+    phases = np.random.default_rng(11 + 1000).uniform(0.0, 2 * np.pi, (2, 6))  # as simulate(seed=11)
+    reached = poses_with_effects(virtual.true_model, q_c, T_inst, true_tool(), phases, after_campaign=True)[1]
+    first = six_d_fit_bias(*realistic["fit"], q_at=q_c, T_at=reached, noise_mm=SIGMA_MM)
+    sigma = first["sigma_at_mm"]
+    pos_err = np.linalg.norm(reached[:, :3, 3] - targets[:, :3, 3], axis=1)
+    pred = np.linalg.norm(first["miss_at"][:, :3], axis=1)
+    assert np.all(np.abs(pos_err - pred) < 3 * sigma), (pos_err, pred, sigma)
+    assert pos_err.max() > 3 * sigma.max()  # the effects are visible at the robot
 
 
 def test_export_options_with_robocal_s_own_file_are_refused(campaign, tmp_path):

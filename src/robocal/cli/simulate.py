@@ -29,7 +29,13 @@ def simulate():
 @click.option("--cell", "cell_file", default=None, type=click.Path(dir_okay=False, exists=True),
               help="Cell file (robocal-cell/1, docs/cells.md; lengths in its length_unit); default: the robot on "
                    "the floor, the floor an obstacle, the tracker as instrument.")
-def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, seed, out_file, overwrite, cell_file):
+@click.option("--effects", type=click.Choice(["ideal", "realistic"]), default="ideal", show_default=True,
+              help="Effects the geometric model lacks. ideal: the true robot is a geometric model (figures "
+                   "documented so far). realistic: reducer transmission error 0.005/0.003 deg once/twice per "
+                   "revolution, arm growth 20 ppm over the campaign, tracker scale error 5 ppm (docs/testing.md); "
+                   "recorded in the truth file and applied by `robocal simulate execute`.")
+def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, seed, out_file, overwrite, cell_file,
+                         effects):
     """Simulate a laser-tracker campaign of ROBOT with hidden true parameters."""
     from ..workflows.calibration.simulate import simulate_tracker
 
@@ -37,10 +43,12 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
         raise click.ClickException(f"--poses must be at least 1, got {n_poses}")
     try:
         r = simulate_tracker(robot, out_file, n_poses=n_poses, noise_mm=noise_mm, reflectors=int(reflectors),
-                             joint_noise_deg=joint_noise_deg, seed=seed, overwrite=overwrite, cell=cell_file)
+                             joint_noise_deg=joint_noise_deg, seed=seed, overwrite=overwrite, cell=cell_file,
+                             effects=effects)
     except (ValueError, KeyError, OSError) as exc:
         raise _user_error(exc) from None
-    click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm)")
+    click.echo(f"simulated {r['n_poses']} poses of {r['robot']} (seed {seed}, tracker noise {noise_mm} mm, "
+               f"effects {effects})")
     click.echo(f"wrote {r['measurements']} and {r['truth']}")
     set_json_result(r)
 

@@ -60,10 +60,12 @@ def execute_cmd(robot, program, intended, tool, base, config_dat, cell_base, tru
     configuration (KUKA S/T, ABB confdata, FANUC CONFIG; UR: nearest the current joints in program
     order) with the program's tool and frames; the true robot then moves to those joints. Errors
     [mm, deg] are against the targets of --intended (default PROGRAM). Exit 5 when a target is
-    not reached.
+    not reached. When the truth file says the campaign had effects (`simulate tracker --effects
+    realistic`), the true robot has them too: its joints carry the same transmission error and the
+    arm is grown as at the campaign's last pose.
     """
     from ..io.programs import read_program
-    from ..sim.virtual_controller import VirtualController, true_robot_of
+    from ..sim.virtual_controller import VirtualController, true_effects_of, true_robot_of
 
     tool_v, base_v = frame_option(tool, "tool"), frame_option(base, "base")
     try:
@@ -78,7 +80,7 @@ def execute_cmd(robot, program, intended, tool, base, config_dat, cell_base, tru
         meant = read_program(intended) if intended else prog
         cdat = None if config_dat is None else open(config_dat, encoding="latin-1").read()
         vc = VirtualController(nominal, true, T_world_base_true=T_world_base_true if T_cell is not None else None,
-                               T_world_cellbase=T_cell, true_tool=T_true_tool)
+                               T_world_cellbase=T_cell, true_tool=T_true_tool, true_effects=true_effects_of(robot))
         ex = vc.execute(prog, tool=tool_v, base=base_v, config_dat=cdat)
         err = vc.landing_errors(ex, meant, tool=tool_v, base=base_v, config_dat=cdat)
     except (ValueError, KeyError, OSError) as exc:

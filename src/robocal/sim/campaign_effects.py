@@ -38,7 +38,7 @@ from ..transforms import invert_transforms, transform_points
 from .robot import VirtualRobot, as_rng
 from .tracker import LaserTracker
 
-__all__ = ["CampaignEffects", "CAMPAIGN_PRESETS", "measure_with_effects"]
+__all__ = ["CampaignEffects", "CAMPAIGN_PRESETS", "measure_with_effects", "grown"]
 
 CAMPAIGN_PRESETS = ("ideal", "realistic")
 
@@ -87,36 +87,76 @@ class CampaignEffects:
             return getattr(cls, name)()
         raise ValueError(f"unknown campaign preset {name!r}; choose from {', '.join(CAMPAIGN_PRESETS)}")
 
-    def joint_positions(self, robot: VirtualRobot, q, rng_seed) -> np.ndarray:
-        """Joints (N, n_ctrl) the arm really reaches at commanded ``q`` (N, n_ctrl) [rad | mm]:
-        the transmission error on every revolute joint, phases drawn from ``rng_seed``."""
+    def is_ideal(self) -> bool:
+        """True when every effect is zero (the simulator is the model)."""
+        return not any(self.transmission_deg) and not self.growth_ppm and not self.tracker_scale_ppm
+
+    @staticmethod
+    def transmission_phases(n_joints: int, rng_seed) -> np.ndarray:
+        """Phases (2, n_joints) [rad] of the once / twice per revolution errors, uniform in [0, 2 pi)."""
+        return as_rng(rng_seed).uniform(0.0, 2.0 * math.pi, size=(2, int(n_joints)))
+
+    def transmission_error(self, q, phases, prismatic) -> np.ndarray:
+        """Joint error (N, n_ctrl) [rad] at ``q`` (N, n_ctrl) with ``phases`` (2, n_ctrl) [rad];
+        0 on the ``prismatic`` (n_ctrl,) joints."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        rng = as_rng(rng_seed)
-        phase = rng.uniform(0.0, 2.0 * math.pi, size=(2, q.shape[1]))
+        phases = np.asarray(phases, dtype=float)
         a1, a2 = (math.radians(float(a)) for a in self.transmission_deg)
-        err = a1 * np.sin(q + phase[0]) + a2 * np.sin(2.0 * q + phase[1])
-        return q + np.where(robot.prismatic, 0.0, err)
+        err = a1 * np.sin(q + phases[0]) + a2 * np.sin(2.0 * q + phases[1])
+        return np.where(np.asarray(prismatic, dtype=bool), 0.0, err)
+
+    def joint_positions(self, robot: VirtualRobot, q, rng_seed=None, *, phases=None) -> np.ndarray:
+        """Joints (N, n_ctrl) the arm really reaches at commanded ``q`` (N, n_ctrl) [rad | mm]:
+        the transmission error on every revolute joint, phases (2, n_ctrl) [rad] as given or
+        drawn from ``rng_seed``."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        if phases is None:
+            phases = self.transmission_phases(q.shape[1], rng_seed)
+        return q + self.transmission_error(q, phases, robot.prismatic)
+
+    def as_truth(self, phases) -> dict:
+        """The effects and their drawn phases as written to a truth file (``campaign_effects``)."""
+        return {"preset": self.name, "transmission_deg": [float(a) for a in self.transmission_deg],
+                "transmission_phases_rad": np.asarray(phases, dtype=float).tolist(),
+                "growth_ppm": float(self.growth_ppm), "tracker_scale_ppm": float(self.tracker_scale_ppm),
+                "growth": "linear in measuring order, 0 at the first pose, growth_ppm at the last; about the "
+                          "true base origin",
+                "after_campaign": "robocal simulate execute: transmission error with these phases, growth "
+                                  "growth_ppm (the arm as warm as at the last pose); the tracker scale is in "
+                                  "the measurements only"}
+
+    @classmethod
+    def from_truth(cls, entry: dict) -> tuple:
+        """``(effects, phases (2, n_ctrl) [rad])`` from a truth file's ``campaign_effects`` entry."""
+        eff = cls(transmission_deg=tuple(float(a) for a in entry["transmission_deg"]),
+                  growth_ppm=float(entry["growth_ppm"]), tracker_scale_ppm=float(entry["tracker_scale_ppm"]),
+                  name=str(entry.get("preset", "custom")))
+        return eff, np.asarray(entry["transmission_phases_rad"], dtype=float)
 
     def growth(self, n: int) -> np.ndarray:
         """Relative growth (n,) of the arm at each of ``n`` poses in measuring order (0 at the first)."""
         return self.growth_ppm * 1e-6 * np.linspace(0.0, 1.0, int(n)) if n > 1 else np.zeros(int(n))
 
 
-def measure_with_effects(robot: VirtualRobot, tracker: LaserTracker, q, effects, rng_seed) -> dict:
+def measure_with_effects(robot: VirtualRobot, tracker: LaserTracker, q, effects, rng_seed, *, phases=None) -> dict:
     """Measure a campaign of poses ``q`` (N, n_ctrl), in this order, with ``effects``.
 
     The robot's encoder noise is not added (the transmission error is the joint error here);
     tracker noise ``tracker.sigma_at`` per coordinate. ``rng_seed`` seeds the phases and the noise.
 
+    phases: (2, n_ctrl) [rad] of the transmission error; default: drawn first from ``rng_seed``.
+
     Returns ``{"points": measured (N, k, 3), "reached": where the reflectors really were
-    (N, k, 3), "model": the effect-free points of the true geometric robot (N, k, 3)}``, all in
-    the tracker frame [mm].
+    (N, k, 3), "model": the effect-free points of the true geometric robot (N, k, 3), "phases":
+    (2, n_ctrl) [rad]}``, points in the tracker frame [mm].
     """
     effects = CampaignEffects.preset(effects)
     rng = as_rng(rng_seed)
     q = np.atleast_2d(np.asarray(q, dtype=float))
     model = tracker.true_points(robot, q)
-    q_real = effects.joint_positions(robot, q, rng)
+    if phases is None:
+        phases = effects.transmission_phases(q.shape[1], rng)
+    q_real = effects.joint_positions(robot, q, phases=phases)
     # the base frame in the tracker frame: the growth scales points about the base origin
     T_tracker_base = tracker.T_tracker_world @ robot.true_model.T_world_base
     p_base = transform_points(invert_transforms(T_tracker_base)[None, None], tracker.true_points(robot, q_real))
@@ -124,4 +164,15 @@ def measure_with_effects(robot: VirtualRobot, tracker: LaserTracker, q, effects,
     reached = transform_points(T_tracker_base[None, None], p_base)
     seen = reached * (1.0 + effects.tracker_scale_ppm * 1e-6)
     points = seen + rng.standard_normal(seen.shape) * tracker.sigma_at(seen)[..., None]
-    return {"points": points, "reached": reached, "model": model}
+    return {"points": points, "reached": reached, "model": model, "phases": np.asarray(phases)}
+
+
+def grown(T_world_x, T_world_base, growth) -> np.ndarray:
+    """Poses ``T_world_x`` (..., 4, 4) [mm] of an arm grown uniformly by the relative ``growth``
+    (scalar or (...,)): positions scaled about the base origin, orientations unchanged."""
+    T = np.array(T_world_x, dtype=float)
+    T_wb = np.asarray(T_world_base, dtype=float)
+    p_base = np.einsum("ij,...j->...i", np.linalg.inv(T_wb)[:3, :3], T[..., :3, 3]) + np.linalg.inv(T_wb)[:3, 3]
+    p_base = p_base * (1.0 + np.asarray(growth, dtype=float))[..., None]
+    T[..., :3, 3] = np.einsum("ij,...j->...i", T_wb[:3, :3], p_base) + T_wb[:3, 3]
+    return T

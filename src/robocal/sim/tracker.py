@@ -140,7 +140,7 @@ class LaserTracker:
         return self.sigma_mm + self.ppm * 1e-6 * np.linalg.norm(points, axis=-1)
 
     def measure(self, robot: VirtualRobot, q, rng, *, end_effector=None, orientation: bool | None = None,
-                pose_ids=None) -> Measurements:
+                pose_ids=None, effects=None, phases=None) -> Measurements:
         """Measure the reflectors with the robot commanded to ``q`` (N, n_ctrl) [rad | mm].
 
         The robot moves with encoder noise (:meth:`VirtualRobot.reach`, limits checked), the
@@ -148,6 +148,10 @@ class LaserTracker:
         reflectors and ``orientation`` (default: True when k >= 3) the result also carries the
         measured flange orientation in the tracker frame (``rotations``), fitted to the noisy
         reflector points as tracker software does.
+        effects / phases: a :class:`~robocal.sim.campaign_effects.CampaignEffects` and its
+        transmission phases (2, n_ctrl) [rad] (:func:`~robocal.sim.campaign_effects.measure_with_effects`:
+        encoder noise, then the effects, then tracker noise; the poses are grown in the order of
+        ``q``); None or an ideal one: the robot moves as its true model says.
         Returns :class:`~robocal.io.Measurements` in the tracker frame, ``joints`` = commanded.
         """
         rng = as_rng(rng)
@@ -157,9 +161,17 @@ class LaserTracker:
             orientation = k >= 3
         if orientation and k < 3:
             raise ValueError(f"orientation needs at least 3 reflectors, this tracker has {k}")
-        T = self.T_tracker_world @ robot.reach(q, rng, end_effector)
-        pts = transform_points(T[:, None], self.reflectors[None])
-        pts = pts + rng.standard_normal(pts.shape) * self.sigma_at(pts)[..., None]
+        if effects is None or effects.is_ideal():
+            T = self.T_tracker_world @ robot.reach(q, rng, end_effector)
+            pts = transform_points(T[:, None], self.reflectors[None])
+            pts = pts + rng.standard_normal(pts.shape) * self.sigma_at(pts)[..., None]
+        else:
+            from .campaign_effects import measure_with_effects
+
+            if end_effector is not None:
+                raise ValueError("campaign effects: only the default end effector is simulated")
+            robot.check_limits(q)
+            pts = measure_with_effects(robot, self, robot.encoder_noise(q, rng), effects, rng, phases=phases)["points"]
         rotations = fit_rotations(self.reflectors, pts) if orientation else None
         nominal = robot.nominal
         metadata = {
@@ -235,7 +247,8 @@ class LaserTracker:
 
     def campaign(self, robot: VirtualRobot, n_poses: int, seed, *, margin: float = 0.05, end_effector=None,
                  orientation: bool | None = None, measurements_path=None, truth_path=None,
-                 overwrite: bool = False, length_unit: str = "mm", angle_unit: str = "deg", cell="default"):
+                 overwrite: bool = False, length_unit: str = "mm", angle_unit: str = "deg", cell="default",
+                 effects=None):
         """Simulate a measurement campaign: poses the robot can take in its cell, measured by this tracker.
 
         seed: integer seed (or Generator) for the poses, encoder noise and tracker noise.
@@ -245,6 +258,9 @@ class LaserTracker:
         measurements_path / truth_path: when given, the measurements are written as a
             ``robocal-measurements/1`` CSV file and the truth as JSON (atomic writes; an existing
             file raises ``FileExistsError`` unless ``overwrite``).
+        effects: a :class:`~robocal.sim.campaign_effects.CampaignEffects` (None / ideal: none); its
+            drawn transmission phases go to the truth as ``campaign_effects``
+            (:meth:`~robocal.sim.campaign_effects.CampaignEffects.as_truth`).
         Returns ``(measurements, truth)``; ``truth`` is :meth:`truth` plus ``seed`` and ``n_poses``.
         """
         if not overwrite:  # refuse before writing anything, so no half campaign is left behind
@@ -257,8 +273,14 @@ class LaserTracker:
         else:
             q = self.feasible_poses(robot, n_poses, rng,
                                     self.cell_for(robot, None if isinstance(cell, str) else cell), margin=margin)
-        meas = self.measure(robot, q, rng, end_effector=end_effector, orientation=orientation)
+        phases = None
+        if effects is not None and not effects.is_ideal():
+            phases = effects.transmission_phases(np.atleast_2d(q).shape[1], rng)
+        meas = self.measure(robot, q, rng, end_effector=end_effector, orientation=orientation, effects=effects,
+                            phases=phases)
         truth = self.truth(robot)
+        if phases is not None:
+            truth["campaign_effects"] = effects.as_truth(phases)
         truth["seed"] = seed if isinstance(seed, (int, np.integer)) else None
         truth["n_poses"] = int(n_poses)
         if measurements_path is not None:

@@ -31,7 +31,7 @@ from ..kinematics.arm_configuration import arm_signature
 from ..kinematics.ik_analytic import is_analytic
 from ..robots import load_robot
 
-__all__ = ["ExecutedTarget", "VirtualController", "true_robot_of"]
+__all__ = ["ExecutedTarget", "VirtualController", "true_robot_of", "true_effects_of"]
 
 
 @dataclass
@@ -83,6 +83,21 @@ def true_robot_of(robot):
     return nominal, nominal, np.eye(4)
 
 
+def true_effects_of(robot):
+    """``(effects, phases)`` of a truth file written by ``robocal simulate tracker --effects
+    realistic`` (its ``campaign_effects``: a :class:`~robocal.sim.campaign_effects.CampaignEffects`
+    and the transmission phases (2, n_ctrl) [rad]), or None (ideal campaign, or a robot name/file)."""
+    p = Path(str(robot))
+    if p.suffix.lower() != ".json" or not p.is_file():
+        return None
+    entry = json.loads(p.read_text()).get("campaign_effects")
+    if not entry:
+        return None
+    from .campaign_effects import CampaignEffects
+
+    return CampaignEffects.from_truth(entry)
+
+
 class VirtualController:
     """Executes programs as a nominal-model controller, on a robot that follows ``true_model``.
 
@@ -92,10 +107,14 @@ class VirtualController:
     *meant* (e.g. a calibrated robot file's ``[base]``, when the cell's frames were measured in it).
     Landing errors are taken in the cell frame; both default to the identity (the program means the
     true robot's own base frame). true_tool: (4, 4) the tool really on the flange [mm] (default:
-    exactly the tool the program declares).
+    exactly the tool the program declares). true_effects: ``(CampaignEffects, phases (2, n_ctrl)
+    [rad])`` of the campaign (:func:`true_effects_of`): the true joints turn by the transmission
+    error and the arm has grown by ``growth_ppm`` (as warm as at the campaign's last pose; the
+    tracker scale error is in the measurements only); None: the true model alone.
     """
 
-    def __init__(self, nominal, true_model, *, T_world_base_true=None, T_world_cellbase=None, true_tool=None):
+    def __init__(self, nominal, true_model, *, T_world_base_true=None, T_world_cellbase=None, true_tool=None,
+                 true_effects=None):
         if tuple(nominal.controller_joints) != tuple(true_model.controller_joints):
             raise ValueError("nominal and true models have different controller joints")
         self.nominal = nominal
@@ -103,6 +122,20 @@ class VirtualController:
         self.T_world_base_true = np.eye(4) if T_world_base_true is None else np.asarray(T_world_base_true, float)
         self.T_world_cellbase = np.eye(4) if T_world_cellbase is None else np.asarray(T_world_cellbase, float)
         self.true_tool = None if true_tool is None else np.asarray(true_tool, dtype=float)
+        self.true_effects = true_effects
+
+    def true_fk(self, tool, q) -> np.ndarray:
+        """Where the true robot takes ``tool`` (4, 4) [mm] at commanded joints ``q`` (n,) [rad]:
+        (4, 4) in its world frame [mm], with the campaign's effects when it had any."""
+        if self.true_effects is None:
+            return with_tool(self.true_model, tool).fk(q)
+        from .campaign_effects import grown
+
+        effects, phases = self.true_effects
+        q = np.asarray(q, dtype=float)
+        q_real = q + effects.transmission_error(q, phases, self.true_model.prismatic_joints).reshape(q.shape)
+        T = with_tool(self.true_model, tool).fk(q_real)
+        return grown(T, self.true_model.T_world_base, effects.growth_ppm * 1e-6)
 
     def _order(self, program):
         targets = {t.name.casefold(): t for t in program.targets}
@@ -157,7 +190,7 @@ class VirtualController:
         if q is None:
             return out
         tool = T_tool if self.true_tool is None or t.kind == "joint" else self.true_tool
-        out.T_base_tcp_true = with_tool(self.true_model, tool).fk(q)
+        out.T_base_tcp_true = self.true_fk(tool, q)
         out.T_base_tcp_commanded = with_tool(self.nominal, T_tool).fk(q)
         if analytic:
             out.signature = tuple(bool(x) for x in arm_signature(self.nominal, q)[0])
@@ -180,7 +213,7 @@ class VirtualController:
                 T_tool, T_frame, _ = frames[t.name]
                 T_meant = T_frame @ t.T_frame_tcp
             else:
-                T_meant = with_tool(self.true_model, np.eye(4)).fk(np.asarray(t.joints, dtype=float))
+                T_meant = self.true_fk(np.eye(4), np.asarray(t.joints, dtype=float))
                 T_meant = self.T_world_base_true @ T_meant
             if t.kind == "cartesian":
                 T_meant = self.T_world_cellbase @ T_meant

@@ -17,6 +17,7 @@ from ...calib.cell import Cell
 from ...io.cell_file import read_cell
 from ...robots import load_robot
 from ...sim import LaserTracker, VirtualRobot, write_truth
+from ...sim.campaign_effects import CampaignEffects
 
 __all__ = ["truth_path_for", "check_simulation_outputs", "simulate_tracker"]
 
@@ -45,7 +46,7 @@ def check_simulation_outputs(out_path, overwrite: bool) -> Path:
 def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: int, reflectors: int = 1,
                      joint_noise_deg: float = 0.0, ppm: float = 0.0, length_sigma_mm: float = 0.5,
                      angle_sigma_deg: float = 0.05, offset_sigma_deg: float = 0.05, margin: float = 0.05,
-                     overwrite: bool = False, cell=None) -> dict:
+                     overwrite: bool = False, cell=None, effects: str = "ideal") -> dict:
     """Simulate a laser-tracker campaign of ``robot`` and write the measurement and truth files.
 
     robot: shipped robot name or robot file path. n_poses: random poses within the joint limits
@@ -55,7 +56,12 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
     virtual robot [deg] (default 0: the only noise is the tracker's). length_sigma_mm /
     angle_sigma_deg / offset_sigma_deg: spread of the hidden true parameters around the nominal
     ones. seed: one integer; independent streams are derived for the robot, the tracker placement
-    and the campaign (``numpy.random.SeedSequence(seed).spawn(3)``).
+    and the campaign (``numpy.random.SeedSequence(seed).spawn(3)``). effects: a preset of
+    :class:`~robocal.sim.campaign_effects.CampaignEffects` -- ``ideal`` (default: the true robot
+    is exactly a geometric model with other parameters, as before) or ``realistic`` (reducer
+    transmission error, warm-up growth during the campaign, tracker scale error: effects the model
+    lacks); the truth file then holds them under ``campaign_effects``, with the drawn phases, and
+    ``robocal simulate execute`` applies them to the true robot.
 
     Nothing is written if either file exists (``FileExistsError``) unless ``overwrite``.
     Returns {``measurements``, ``truth`` (paths), ``n_poses``, ``robot``, ``truth_data``}.
@@ -71,6 +77,7 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
         raise ValueError(f"reflectors must be 1 or 3, got {reflectors}")
     if not noise_mm >= 0 or not joint_noise_deg >= 0:
         raise ValueError("noise levels must be >= 0")
+    campaign_effects = CampaignEffects.preset(effects)
     nominal = load_robot(robot)
     s_robot, s_tracker, s_campaign = (np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(3))
     virtual = VirtualRobot.perturbed(nominal, s_robot, length_sigma_mm=length_sigma_mm,
@@ -86,13 +93,15 @@ def simulate_tracker(robot, out_path, *, n_poses: int, noise_mm: float, seed: in
         at = T_base_cell[:3, :3] @ np.asarray(cell.instrument.position) + T_base_cell[:3, 3]
     tracker = LaserTracker.placed(s_tracker, reflectors, sigma_mm=noise_mm, ppm=ppm, position=at)
     meas, truth = tracker.campaign(virtual, n_poses, s_campaign, margin=margin, measurements_path=out_path,
-                                   overwrite=overwrite, cell="default" if cell is None else cell)
+                                   overwrite=overwrite, cell="default" if cell is None else cell,
+                                   effects=campaign_effects)
     truth["seed"] = int(seed)
     truth["n_poses"] = int(n_poses)
     truth["simulation"] = {
         "seed_streams": "numpy.random.SeedSequence(seed).spawn(3): robot parameters, tracker placement, campaign",
         "length_sigma_mm": length_sigma_mm, "angle_sigma_deg": angle_sigma_deg,
         "offset_sigma_deg": offset_sigma_deg, "joint_noise_deg": joint_noise_deg, "margin": margin,
+        "effects": campaign_effects.name,
         "cell": "default (floor-mounted, the tracker as instrument)" if cell is None else cell.source,
         "measurements_file": out_path.name,
     }
