@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._cholesky import cholesky_factor, cholesky_inverse, cholesky_solve
+from . import _normal
 from ._iterate import DampedGaussNewton, pose_norms
 from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
@@ -77,7 +78,21 @@ class CalibrationResult:
     outliers: list = field(default_factory=list)
     point_errors_before: np.ndarray | None = None
     point_errors_after: np.ndarray | None = None
-    jacobian: np.ndarray | None = None  # (M, n) final prediction Jacobian (unweighted by robust losses)
+    #: (M, n) final prediction Jacobian (unweighted by robust losses); see :attr:`jacobian`
+    _jacobian: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def jacobian(self) -> np.ndarray | None:
+        """(M, n) final prediction Jacobian (unweighted by robust losses). A solve on normal equations
+        (point-only problems, :mod:`robocal.calib._normal`) never forms it: it is evaluated here on
+        first use (``problem.evaluate`` at the final state) and kept."""
+        if self._jacobian is None and self.problem is not None and self.state is not None:
+            self._jacobian = self.problem.evaluate(self.state)[1]
+        return self._jacobian
+
+    @jacobian.setter
+    def jacobian(self, J) -> None:
+        self._jacobian = J
 
     @property
     def model(self):
@@ -223,8 +238,17 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
         raise ValueError(f"method must be 'lm' or 'svd', got {method!r}")
     state = problem.initial_state() if state0 is None else state0
     start_state = state
-    r, J, labels = problem.evaluate(state)
-    M, n = J.shape
+    # point-only problems: LM on normal equations summed per block of poses (J never formed)
+    normal = method == "lm" and loss == "linear" and not prior_weight and _normal.supports(problem)
+    evaluator = _normal.PointNormalEquations(problem) if normal else None
+    labels = problem.labels
+    if normal and (ident is not None or not auto_identifiable):
+        J = None
+        r, ne = evaluator.evaluate(state)
+        M, n = len(r), problem.n_variables
+    else:
+        r, J, labels = problem.evaluate(state)
+        M, n = J.shape
     if M < n:
         raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
                          f"add poses or fix parameters")
@@ -234,17 +258,27 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     ident_set = set(ident.identifiable)
     active = np.array([nm in ident_set for nm in problem.names])
     r0 = r.copy()
-    gn = DampedGaussNewton(problem, state, r, J, labels, active, method=method, loss=loss, f_scale=f_scale,
-                           prior_weight=prior_weight, rcond=rcond, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol,
-                           progress=progress)
+    kw = dict(method=method, loss=loss, f_scale=f_scale, prior_weight=prior_weight, rcond=rcond, ftol=ftol,
+              xtol=xtol, chi2_tol=chi2_tol, progress=progress)
+    if normal:
+        if J is not None:  # evaluated for the identifiability analysis: its sums, then let it go
+            ne, J = _normal.NormalEquations(J.T @ J, J.T @ r), None
+        gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
+    else:
+        gn = DampedGaussNewton(problem, state, r, J, labels, active, **kw)
     gn.run_phase(1, max_iterations)
     if gn.robust and reject_outliers and gn.drop_outliers(outlier_threshold):
         # robust phase done: the down-weighted poses dropped, finish by plain least squares
         gn.run_phase(gn.it + 1, max_iterations)
     n_rows = len(gn.pose_of_row)
-    state, r, J = gn.state, gn.r[:n_rows], gn.J[:n_rows]
     weights = gn.weights if not gn.rejected.any() else np.where(gn.rejected, gn.robust_weights, 1.0)
-    cov, std, rank, cond, sigma0 = _covariance(problem, J, r, gn.weights[gn.pose_of_row], active, gn.col_scale, rcond)
+    if normal:
+        state, r, J = gn.state, gn.r, None
+        cov, std, rank, cond, sigma0 = _covariance_from_normal(problem, gn.J.JtJ, r, active, gn.col_scale, rcond)
+    else:
+        state, r, J = gn.state, gn.r[:n_rows], gn.J[:n_rows]
+        cov, std, rank, cond, sigma0 = _covariance(problem, J, r, gn.weights[gn.pose_of_row], active, gn.col_scale,
+                                                   rcond)
     outliers = _outlier_report(problem, gn, r, weights, outlier_threshold) if loss != "linear" else []
     r_before_pts = problem.point_errors(r0)
     r_after_pts = problem.point_errors(r)
@@ -254,7 +288,7 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
         covariance=cov, state=state, problem=problem, residuals_before=r0, residuals_after=r,
         iterations=gn.it, converged=gn.converged, reason=gn.reason, rank=rank, condition_number=cond, sigma0=sigma0,
         identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts,
-        jacobian=J)
+        _jacobian=J)
 
 
 def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
@@ -270,8 +304,23 @@ def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
     dof = max(Ja.shape[0] - Ja.shape[1], 1)
     sigma0 = math.sqrt(float(ra @ ra) / dof)
     Js = Ja / col_scale[active]
+    return _covariance_tail(problem, Js.T @ Js, sigma0, active, col_scale, rcond, n)
+
+
+def _covariance_from_normal(problem: Problem, JtJ, r, active, col_scale, rcond):
+    """:func:`_covariance` from the unweighted-by-robust-loss normal matrix ``JtJ`` (n, n) = J^T J of
+    the weighted Jacobian and the residuals r (M,) (all rows weight 1)."""
+    n = len(JtJ)
+    dof = max(len(r) - int(active.sum()), 1)
+    sigma0 = math.sqrt(float(r @ r) / dof)
+    ca = col_scale[active]
+    G = (JtJ if active.all() else JtJ[np.ix_(active, active)]) / np.outer(ca, ca)
+    return _covariance_tail(problem, G, sigma0, active, col_scale, rcond, n)
+
+
+def _covariance_tail(problem: Problem, G, sigma0, active, col_scale, rcond, n):
+    """Covariance, std, rank, condition and sigma0 from the scaled normal matrix G (n_a, n_a)."""
     # singular values from the (small, scaled) normal matrix: s_i^2 are its eigenvalues
-    G = Js.T @ Js
     s = np.sqrt(np.maximum(np.linalg.eigvalsh(G)[::-1], 0.0))
     keep = s > max(rcond, 1e-7) * s[0] if s.size else s > 0  # squared: rcond below ~1e-8 is noise
     rank = int(np.sum(keep))
