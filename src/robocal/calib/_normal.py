@@ -43,8 +43,8 @@ def supports(problem) -> bool:
     from .problem import CalibrationProblem
     from .residuals.points import PointResidual
 
-    if type(problem) is not CalibrationProblem:
-        return False
+    if type(problem) is not CalibrationProblem or "evaluate" in vars(problem):
+        return False  # a subclass or an instance with its own evaluate: the general path reads it
     rbs = problem.residual_blocks
     if len(rbs) != 1 or type(rbs[0]) is not PointResidual or rbs[0].chain is not problem.chain:
         return False
@@ -79,12 +79,22 @@ class PointNormalEquations:
         self.m_rows = int(self.mask.sum()) * 3
         self._buf = None
 
-    def evaluate(self, state, jacobian: bool = True):
+    def r_factor(self, state):
+        """``(r (M,), NormalEquations, R (k, n))`` with R the triangular factor of a QR factorization
+        of the weighted Jacobian J (M, n), k = min(M, n), built block by block (R of [R; J_block]).
+
+        ``J = Q R`` with orthonormal Q, so R has J's column norms, its QR in any column order gives
+        the same |R_jj|, and least squares on its columns the same coefficients: the identifiability
+        analysis of R is that of J (without squaring the conditioning as J^T J would), in n x n memory."""
+        return self.evaluate(state, True, want_r=True)
+
+    def evaluate(self, state, jacobian: bool = True, *, want_r: bool = False):
         params, bases, pts_ee = state.params, state.bases, state.targets
         N, K, n, w = len(self.q), self.K, self.n, self.w
         r = np.empty(self.m_rows)
         JtJ = np.zeros((n, n)) if jacobian else None
         Jtr = np.zeros(n) if jacobian else None
+        Rf = np.zeros((0, n))
         root = bases[0]
         row = 0
         for i0 in range(0, N, self.block):
@@ -107,11 +117,15 @@ class PointNormalEquations:
                 Jb = Jb.reshape(i1 - i0, K, 3, n)[self.mask[i0:i1]].reshape(-1, n)
             JtJ += Jb.T @ Jb
             Jtr += Jb.T @ rb
+            if want_r:
+                Rf = np.linalg.qr(np.vstack([Rf, w * Jb]), mode="r")
         if not jacobian:
             return r, None
         # the rows above are unweighted: J = w * Jb, and rb already carries w
         JtJ *= w * w
         Jtr *= w
+        if want_r:
+            return r, NormalEquations(JtJ, Jtr), Rf
         return r, NormalEquations(JtJ, Jtr)
 
     def _block_jacobian(self, pts, R, Jg, B):

@@ -164,13 +164,15 @@ def _refine_identifiable(problem, res, state0, kw):
     """Solve again from ``res`` while the identifiable set changes at the solution."""
     start = problem.initial_state() if state0 is None else state0
     for _ in range(2):
-        if not _dropped_may_have_become_identifiable(res.jacobian, problem.names, res.identifiability):
+        if not res.identifiability.dropped:
             break
-        quick = analyse_identifiability(res.jacobian, problem.names, problem.blocks, explain=False)
+        J = _identifiability_matrix(problem, res)
+        if not _dropped_may_have_become_identifiable(J, problem.names, res.identifiability):
+            break
+        quick = analyse_identifiability(J, problem.names, problem.blocks, explain=False)
         if set(quick.identifiable) == set(res.identifiability.identifiable):
             break
-        ident = analyse_identifiability(res.jacobian, problem.names, problem.blocks,
-                                        column_blocks=problem.column_blocks)
+        ident = analyse_identifiability(J, problem.names, problem.blocks, column_blocks=problem.column_blocks)
         iters = res.iterations
         before, err_before = res.residuals_before, res.point_errors_before
         res = _solve_once(problem, state0=res.state, ident=ident, **kw)
@@ -178,6 +180,15 @@ def _refine_identifiable(problem, res, state0, kw):
         res.residuals_before, res.point_errors_before = before, err_before
         res.initial = problem.initial_values() if state0 is None else _state_values(problem, start)
     return res
+
+
+def _identifiability_matrix(problem, res):
+    """What the identifiability analysis of ``res``'s final state reads: its Jacobian, or for a solve on
+    normal equations the R factor of the Jacobian's QR built per block of poses (same verdicts,
+    n x n memory; :meth:`robocal.calib._normal.PointNormalEquations.r_factor`)."""
+    if res._jacobian is None and _normal.supports(problem):
+        return _normal.PointNormalEquations(problem).r_factor(res.state)[2]
+    return res.jacobian
 
 
 def _dropped_may_have_become_identifiable(J, names, ident, screen: float = 1e-4) -> bool:
@@ -242,13 +253,14 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     normal = method == "lm" and loss == "linear" and not prior_weight and _normal.supports(problem)
     evaluator = _normal.PointNormalEquations(problem) if normal else None
     labels = problem.labels
+    J = None
     if normal and (ident is not None or not auto_identifiable):
-        J = None
         r, ne = evaluator.evaluate(state)
-        M, n = len(r), problem.n_variables
+    elif normal:  # the identifiability analysis reads the R factor of J's QR, built per block of poses
+        r, ne, J = evaluator.r_factor(state)
     else:
         r, J, labels = problem.evaluate(state)
-        M, n = J.shape
+    M, n = len(r), problem.n_variables
     if M < n:
         raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
                          f"add poses or fix parameters")
@@ -261,8 +273,7 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     kw = dict(method=method, loss=loss, f_scale=f_scale, prior_weight=prior_weight, rcond=rcond, ftol=ftol,
               xtol=xtol, chi2_tol=chi2_tol, progress=progress)
     if normal:
-        if J is not None:  # evaluated for the identifiability analysis: its sums, then let it go
-            ne, J = _normal.NormalEquations(J.T @ J, J.T @ r), None
+        J = None
         gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
     else:
         gn = DampedGaussNewton(problem, state, r, J, labels, active, **kw)
