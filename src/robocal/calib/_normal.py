@@ -78,6 +78,10 @@ class PointNormalEquations:
         self.g_index = ch.geometry.index if self.geom is not None else ch._no_columns
         self.m_rows = int(self.mask.sum()) * 3
         self._buf = None
+        # every entry of a block's rows is written (one target, every column a whole block's): no zeroing
+        plans = [p for p in (self.geom, self.frames, self.targets) if p is not None]
+        self._covers = (self.K == 1 and all(p[2] is None for p in plans)
+                        and sum(p[1] - p[0] for p in plans) == self.n)
 
     def r_factor(self, state):
         """``(r (M,), NormalEquations, R (k, n))`` with R the triangular factor of a QR factorization
@@ -135,20 +139,24 @@ class PointNormalEquations:
         if self._buf is None or self._buf.shape[0] < rows:
             self._buf = np.zeros((max(rows, self.block * K * 3), n))
         Jb = self._buf[:rows]
-        Jb[:] = 0.0
+        if not self._covers:
+            Jb[:] = 0.0
         J4 = Jb.reshape(B, K, 3, n)
         if self.geom is not None:
             c0, c1, loc = self.geom
             J4[..., c0:c1] = Jg if loc is None else Jg[..., loc]
         if self.frames is not None:  # left perturbation (w, v) of the base frame: dp = w x p + v
             c0, c1, loc = self.frames
+            Jf = J4[..., c0:c1] if loc is None else np.zeros((B, K, 3, 6))
             x, y, z = pts[..., 0], pts[..., 1], pts[..., 2]
-            Jf = np.zeros((B, K, 3, 6))
+            Jf[..., 0, 0] = Jf[..., 1, 1] = Jf[..., 2, 2] = 0.0
             Jf[..., 0, 1], Jf[..., 0, 2] = z, -y
             Jf[..., 1, 0], Jf[..., 1, 2] = -z, x
             Jf[..., 2, 0], Jf[..., 2, 1] = y, -x
+            Jf[..., 3:] = 0.0
             Jf[..., 0, 3] = Jf[..., 1, 4] = Jf[..., 2, 5] = 1.0
-            J4[..., c0:c1] = Jf if loc is None else Jf[..., loc]
+            if loc is not None:
+                J4[..., c0:c1] = Jf[..., loc]
         if self.targets is not None:  # a point moves with its end effector's orientation
             c0, c1, loc = self.targets
             if loc is None:
