@@ -137,7 +137,7 @@ class PointNormalEquations:
         K, n = self.K, self.n
         rows = B * K * 3
         if self._buf is None or self._buf.shape[0] < rows:
-            self._buf = np.zeros((max(rows, self.block * K * 3), n))
+            self._buf = np.zeros((max(rows, min(self.block, len(self.q)) * K * 3), n))
         Jb = self._buf[:rows]
         if not self._covers:
             Jb[:] = 0.0
