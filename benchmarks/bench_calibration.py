@@ -75,16 +75,23 @@ def _lm_alone(prob):
     are evaluated once here (their cost, ~0.1 ms, is in the solve rows, not in this one)."""
     from types import SimpleNamespace
 
+    from robocal.calib import _normal
     from robocal.calib._iterate import DampedGaussNewton
 
     state0 = prob.initial_state()
     r0, J0, labels = prob.evaluate(state0)
     active = np.ones(prob.n_variables, dtype=bool)
+    kw = dict(method="lm", loss="linear", f_scale=None, prior_weight=0.0, rcond=1e-8, ftol=1e-9, xtol=1e-10,
+              chi2_tol=1e-3, progress=None)
+    if _normal.supports(prob):  # what solve() runs: LM on normal equations summed per block of poses
+        ev = _normal.PointNormalEquations(prob)
+        r0, ne0 = ev.evaluate(state0)
 
     def run():
-        gn = DampedGaussNewton(prob, state0, r0.copy(), J0.copy(), labels, active, method="lm", loss="linear",
-                               f_scale=None, prior_weight=0.0, rcond=1e-8, ftol=1e-9, xtol=1e-10, chi2_tol=1e-3,
-                               progress=None)
+        if _normal.supports(prob):
+            gn = _normal.NormalEquationsLM(prob, state0, r0.copy(), ne0, labels, active, evaluator=ev, **kw)
+        else:
+            gn = DampedGaussNewton(prob, state0, r0.copy(), J0.copy(), labels, active, **kw)
         gn.run_phase(1, 50)
         return SimpleNamespace(state=gn.state, iterations=gn.it)
 

@@ -61,12 +61,12 @@ class DampedGaussNewton:
         self.ftol, self.xtol, self.chi2_tol, self.progress = ftol, xtol, chi2_tol, progress
         self.prior_weight = prior_weight
         self.active = active
-        self.n = J.shape[1]
+        self.n = self._n_columns(J)
         self.n_poses = problem.n_poses
         # robust weights act per pose; rows of no pose (priors, label -1) share one extra slot of weight 1
         self.pose_of_row = np.where(labels[:, 0] < 0, self.n_poses, labels[:, 0])
         self.n_slots = self.n_poses + 1
-        self.col_scale = np.sqrt(np.einsum("ij,ij->j", J, J))  # column norms
+        self.col_scale = self._column_norms(J)
         self.col_scale[self.col_scale == 0] = 1.0
         self.geom = problem.blocks == "geometry"
         self.p_start = problem.variable_values(state, "geometry") if prior_weight else None
@@ -93,6 +93,13 @@ class DampedGaussNewton:
         self._refused_last = False
 
     # ------------------------------------------------------------------ pieces
+    def _column_norms(self, J):
+        """Norms (n,) of the Jacobian's columns (the column scaling)."""
+        return np.sqrt(np.einsum("ij,ij->j", J, J))
+
+    def _n_columns(self, J) -> int:
+        return J.shape[1]
+
     def _initial_robust_weights(self, r):
         pose_norm = pose_norms(self.pose_of_row, r, self.n_slots)[:self.n_poses]
         if self.f_scale is None:
@@ -132,6 +139,11 @@ class DampedGaussNewton:
             return (self.J[:, active] * sw[:, None]) / cs[active], self.r * sw
         return (self.J[:, active] if not self.all_active else self.J) / cs[active], self.r
 
+    def _normal_system(self):
+        """Scaled, weighted normal matrix G = Ja^T Ja (n_a, n_a) and gradient g = Ja^T ra (n_a,)."""
+        Ja, ra = self._scaled_system()
+        return Ja.T @ Ja, Ja.T @ ra
+
     # ------------------------------------------------------------------ iteration
     def run_phase(self, first_iteration: int, max_iterations: int) -> None:
         """Iterate until a stop rule fires or ``max_iterations`` steps are taken."""
@@ -142,20 +154,20 @@ class DampedGaussNewton:
 
     def _iteration(self, it) -> bool:
         """One accepted step (True when a stop rule fired)."""
-        Ja, ra = self._scaled_system()
-        g = Ja.T @ ra
         G = g_max = step_s = None
         if self.method == "svd":
+            Ja, ra = self._scaled_system()
+            g = Ja.T @ ra
             U, s, Vt = np.linalg.svd(Ja, full_matrices=False)
             keep = s > self.rcond * s[0]
             step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
             s_max = s[0]
         else:
-            # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky
-            G = Ja.T @ Ja
+            # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky (the scaled copy
+            # of J is not kept while the line search evaluates trial Jacobians)
+            G, g = self._normal_system()
             g_max = float(G.diagonal().max())
             s_max = math.sqrt(g_max)
-            Ja = None  # a scaled copy of J (M, n): not kept while the line search evaluates trial Jacobians
         g_inf = float(np.abs(g).max()) if g.size else 0.0
         if g_inf <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
             return self._stop("gradient is zero")

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._cholesky import cholesky_factor, cholesky_inverse, cholesky_solve
+from . import _normal
 from ._iterate import DampedGaussNewton, pose_norms
 from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
@@ -77,7 +78,21 @@ class CalibrationResult:
     outliers: list = field(default_factory=list)
     point_errors_before: np.ndarray | None = None
     point_errors_after: np.ndarray | None = None
-    jacobian: np.ndarray | None = None  # (M, n) final prediction Jacobian (unweighted by robust losses)
+    #: (M, n) final prediction Jacobian (unweighted by robust losses); see :attr:`jacobian`
+    _jacobian: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def jacobian(self) -> np.ndarray | None:
+        """(M, n) final prediction Jacobian (unweighted by robust losses). A solve on normal equations
+        (point-only problems, :mod:`robocal.calib._normal`) never forms it: it is evaluated here on
+        first use (``problem.evaluate`` at the final state) and kept."""
+        if self._jacobian is None and self.problem is not None and self.state is not None:
+            self._jacobian = self.problem.evaluate(self.state)[1]
+        return self._jacobian
+
+    @jacobian.setter
+    def jacobian(self, J) -> None:
+        self._jacobian = J
 
     @property
     def model(self):
@@ -149,13 +164,15 @@ def _refine_identifiable(problem, res, state0, kw):
     """Solve again from ``res`` while the identifiable set changes at the solution."""
     start = problem.initial_state() if state0 is None else state0
     for _ in range(2):
-        if not _dropped_may_have_become_identifiable(res.jacobian, problem.names, res.identifiability):
+        if not res.identifiability.dropped:
             break
-        quick = analyse_identifiability(res.jacobian, problem.names, problem.blocks, explain=False)
+        J = _identifiability_matrix(problem, res)
+        if not _dropped_may_have_become_identifiable(J, problem.names, res.identifiability):
+            break
+        quick = analyse_identifiability(J, problem.names, problem.blocks, explain=False)
         if set(quick.identifiable) == set(res.identifiability.identifiable):
             break
-        ident = analyse_identifiability(res.jacobian, problem.names, problem.blocks,
-                                        column_blocks=problem.column_blocks)
+        ident = analyse_identifiability(J, problem.names, problem.blocks, column_blocks=problem.column_blocks)
         iters = res.iterations
         before, err_before = res.residuals_before, res.point_errors_before
         res = _solve_once(problem, state0=res.state, ident=ident, **kw)
@@ -163,6 +180,15 @@ def _refine_identifiable(problem, res, state0, kw):
         res.residuals_before, res.point_errors_before = before, err_before
         res.initial = problem.initial_values() if state0 is None else _state_values(problem, start)
     return res
+
+
+def _identifiability_matrix(problem, res):
+    """What the identifiability analysis of ``res``'s final state reads: its Jacobian, or for a solve on
+    normal equations the R factor of the Jacobian's QR built per block of poses (same verdicts,
+    n x n memory; :meth:`robocal.calib._normal.PointNormalEquations.r_factor`)."""
+    if res._jacobian is None and _normal.supports(problem):
+        return _normal.PointNormalEquations(problem).r_factor(res.state)[2]
+    return res.jacobian
 
 
 def _dropped_may_have_become_identifiable(J, names, ident, screen: float = 1e-4) -> bool:
@@ -223,8 +249,18 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
         raise ValueError(f"method must be 'lm' or 'svd', got {method!r}")
     state = problem.initial_state() if state0 is None else state0
     start_state = state
-    r, J, labels = problem.evaluate(state)
-    M, n = J.shape
+    # point-only problems: LM on normal equations summed per block of poses (J never formed)
+    normal = method == "lm" and loss == "linear" and not prior_weight and _normal.supports(problem)
+    evaluator = _normal.PointNormalEquations(problem) if normal else None
+    labels = problem.labels
+    J = None
+    if normal and (ident is not None or not auto_identifiable):
+        r, ne = evaluator.evaluate(state)
+    elif normal:  # the identifiability analysis reads the R factor of J's QR, built per block of poses
+        r, ne, J = evaluator.r_factor(state)
+    else:
+        r, J, labels = problem.evaluate(state)
+    M, n = len(r), problem.n_variables
     if M < n:
         raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
                          f"add poses or fix parameters")
@@ -234,17 +270,26 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     ident_set = set(ident.identifiable)
     active = np.array([nm in ident_set for nm in problem.names])
     r0 = r.copy()
-    gn = DampedGaussNewton(problem, state, r, J, labels, active, method=method, loss=loss, f_scale=f_scale,
-                           prior_weight=prior_weight, rcond=rcond, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol,
-                           progress=progress)
+    kw = dict(method=method, loss=loss, f_scale=f_scale, prior_weight=prior_weight, rcond=rcond, ftol=ftol,
+              xtol=xtol, chi2_tol=chi2_tol, progress=progress)
+    if normal:
+        J = None
+        gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
+    else:
+        gn = DampedGaussNewton(problem, state, r, J, labels, active, **kw)
     gn.run_phase(1, max_iterations)
     if gn.robust and reject_outliers and gn.drop_outliers(outlier_threshold):
         # robust phase done: the down-weighted poses dropped, finish by plain least squares
         gn.run_phase(gn.it + 1, max_iterations)
     n_rows = len(gn.pose_of_row)
-    state, r, J = gn.state, gn.r[:n_rows], gn.J[:n_rows]
     weights = gn.weights if not gn.rejected.any() else np.where(gn.rejected, gn.robust_weights, 1.0)
-    cov, std, rank, cond, sigma0 = _covariance(problem, J, r, gn.weights[gn.pose_of_row], active, gn.col_scale, rcond)
+    if normal:
+        state, r, J = gn.state, gn.r, None
+        cov, std, rank, cond, sigma0 = _covariance_from_normal(problem, gn.J.JtJ, r, active, gn.col_scale, rcond)
+    else:
+        state, r, J = gn.state, gn.r[:n_rows], gn.J[:n_rows]
+        cov, std, rank, cond, sigma0 = _covariance(problem, J, r, gn.weights[gn.pose_of_row], active, gn.col_scale,
+                                                   rcond)
     outliers = _outlier_report(problem, gn, r, weights, outlier_threshold) if loss != "linear" else []
     r_before_pts = problem.point_errors(r0)
     r_after_pts = problem.point_errors(r)
@@ -254,7 +299,7 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
         covariance=cov, state=state, problem=problem, residuals_before=r0, residuals_after=r,
         iterations=gn.it, converged=gn.converged, reason=gn.reason, rank=rank, condition_number=cond, sigma0=sigma0,
         identifiability=ident, outliers=outliers, point_errors_before=r_before_pts, point_errors_after=r_after_pts,
-        jacobian=J)
+        _jacobian=J)
 
 
 def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
@@ -270,8 +315,23 @@ def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
     dof = max(Ja.shape[0] - Ja.shape[1], 1)
     sigma0 = math.sqrt(float(ra @ ra) / dof)
     Js = Ja / col_scale[active]
+    return _covariance_tail(problem, Js.T @ Js, sigma0, active, col_scale, rcond, n)
+
+
+def _covariance_from_normal(problem: Problem, JtJ, r, active, col_scale, rcond):
+    """:func:`_covariance` from the unweighted-by-robust-loss normal matrix ``JtJ`` (n, n) = J^T J of
+    the weighted Jacobian and the residuals r (M,) (all rows weight 1)."""
+    n = len(JtJ)
+    dof = max(len(r) - int(active.sum()), 1)
+    sigma0 = math.sqrt(float(r @ r) / dof)
+    ca = col_scale[active]
+    G = (JtJ if active.all() else JtJ[np.ix_(active, active)]) / np.outer(ca, ca)
+    return _covariance_tail(problem, G, sigma0, active, col_scale, rcond, n)
+
+
+def _covariance_tail(problem: Problem, G, sigma0, active, col_scale, rcond, n):
+    """Covariance, std, rank, condition and sigma0 from the scaled normal matrix G (n_a, n_a)."""
     # singular values from the (small, scaled) normal matrix: s_i^2 are its eigenvalues
-    G = Js.T @ Js
     s = np.sqrt(np.maximum(np.linalg.eigvalsh(G)[::-1], 0.0))
     keep = s > max(rcond, 1e-7) * s[0] if s.size else s > 0  # squared: rcond below ~1e-8 is noise
     rank = int(np.sum(keep))
