@@ -6,8 +6,10 @@
    similar views) the principal point is put at the image centre and ``fx, fy`` solved from the
    same constraints by least squares (OpenCV's start). Distortion starts at zero.
 2. Per-image target poses from the homographies (:mod:`.pnp`).
-3. The calibration core's Levenberg–Marquardt (:func:`robocal.calib.solve`) over the intrinsics,
-   the distortion and every image's target pose (:class:`~robocal.calib.residuals.ReprojectionResidual`
+3. The calibration core's Levenberg–Marquardt over the intrinsics, the distortion and every
+   image's target pose, the poses eliminated per image by a Schur complement
+   (:func:`robocal.calib.schur.solve_schur`: same steps and stop rules as :func:`robocal.calib.solve`,
+   time linear in the image count) (:class:`~robocal.calib.residuals.ReprojectionResidual`
    with the camera frame fixed at the identity); 1-sigma from the covariance, scaled by the
    residual spread; unidentifiable parameters held and named (``identifiability``).
 """
@@ -23,6 +25,7 @@ from ..calib import Problem, solve
 from ..calib.blocks import CameraIntrinsics, FramesBlock
 from ..calib.residuals import BoardShapeReprojectionResidual, ReprojectionResidual
 from ..calib.residuals.board_shape import board_shape_block, sag_bases
+from ..calib.schur import StructureError, solve_schur
 from ..calib.solve import NotConvergedWarning
 from ..camera import BROWN_SIZES, Camera
 from .backprojection import rms_px
@@ -186,12 +189,18 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
     if board_shape:
         shape = board_shape_block()
         blocks.append(shape)
-        res = BoardShapeReprojectionResidual(cam, identity, poses, uv[good], X, shape)
-    else:
-        res = ReprojectionResidual(cam, identity, poses, uv[good], X)
+
+    def residual(compact):
+        if board_shape:
+            return BoardShapeReprojectionResidual(cam, identity, poses, uv[good], X, shape, compact_targets=compact)
+        return ReprojectionResidual(cam, identity, poses, uv[good], X, compact_targets=compact)
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)
-        result = solve(Problem(blocks, [res]), loss=loss)
+        try:  # the per-image poses eliminated (Schur complement): linear in the image count
+            result = solve_schur(Problem(blocks, [residual(True)]), poses, loss=loss)
+        except StructureError:  # a pose its image does not determine: the dense solve names it
+            result = solve(Problem(blocks, [residual(False)]), loss=loss)
     value = result.state[0]
     refined = Camera(*value[:4], tuple(value[4:]), camera.model, tuple(image_size))
     T = np.full((N, 4, 4), np.nan)

@@ -38,13 +38,16 @@ class ReprojectionResidual(ResidualBlock):
     docstring); image_points (N, P, 2) [px], NaN where a point was not detected; target_points
     (P, 3) [mm] in the target frame (z = 0 for a planar target); camera_index, target_index (N,)
     the frame of each image in its block (default 0 for a single frame, else the image index);
-    links (N, 4, 4) the known ``M_i`` (default identity); sigma [px].
+    links (N, 4, 4) the known ``M_i`` (default identity); sigma [px]; compact_targets: return the
+    target poses' Jacobian as (M, 6), each row's derivative by its own target frame
+    (``target_frame_of_row`` (M,) says which), instead of (M, 6 n_frames) mostly zeros -- for the
+    structured solver (:mod:`robocal.calib.schur`), not for :meth:`Problem.evaluate`.
     """
 
     kind = "reprojection"
 
     def __init__(self, camera: CameraIntrinsics, camera_poses, target_poses, image_points, target_points, *,
-                 camera_index=None, target_index=None, links=None, sigma: float | None = None):
+                 camera_index=None, target_index=None, links=None, sigma: float | None = None, compact_targets: bool = False):
         uv = np.asarray(image_points, dtype=float)
         X = np.asarray(target_points, dtype=float)
         if uv.ndim != 3 or uv.shape[2] != 2 or X.shape != (uv.shape[1], 3):
@@ -60,6 +63,8 @@ class ReprojectionResidual(ResidualBlock):
             raise ProblemError(f"reprojection: links must be ({N}, 4, 4), got {self.links.shape}")
         self.mask = np.all(np.isfinite(uv), axis=2)  # (N, P)
         self.image_of_row = np.nonzero(self.mask)[0]
+        self.compact_targets = bool(compact_targets)
+        self.target_frame_of_row = np.repeat(self.target_index[self.image_of_row], 2)
         super().__init__((camera, camera_poses, target_poses), np.repeat(self.image_of_row, 2), sigma)
 
     @staticmethod
@@ -109,7 +114,9 @@ class ReprojectionResidual(ResidualBlock):
         for frames, index, dp in ((self.camera_poses, self.camera_index, np.concatenate([RCt @ skew(q), -RCt], 2)),
                                   (self.target_poses, self.target_index,
                                    np.concatenate([-(RCt @ RM) @ skew(y), RCt @ RM], 2))):
-            if ev.wants(frames):
+            if ev.wants(frames) and self.compact_targets and frames is self.target_poses:
+                jac[frames] = (proj.d_point @ dp).reshape(len(r), 6) * w
+            elif ev.wants(frames):
                 J = np.zeros((len(p), 2, frames.n_frames, 6))
                 J[np.arange(len(p)), :, index[img], :] = proj.d_point @ dp
                 jac[frames] = J.reshape(len(r), -1) * w
