@@ -62,6 +62,12 @@ class _Layout:
             raise StructureError("rows must be grouped by target frame, every frame seen")
         self.frame_of_row = frame
         self.starts = np.flatnonzero(np.r_[True, np.diff(frame) != 0])
+        # each row's slot in a zero-padded (n_frames, most rows of a frame) layout: the per-frame
+        # products become one batched matrix product
+        counts = np.diff(np.r_[self.starts, len(frame)])
+        self.rows_max = int(counts.max(initial=0))
+        self.slot = frame * self.rows_max + (np.arange(len(frame)) - self.starts[frame])
+        self.dense_slots = bool(np.all(counts == self.rows_max))
 
     def evaluate(self, state, jacobian=True):
         """``(r (M,), (Jg (M, g), Jl (M, 6)) or None)``."""
@@ -76,14 +82,26 @@ class _Layout:
             Jg[:, o:o + w] = Jb if loc is None else Jb[:, loc]
         return r, (Jg, jac[self.local])
 
+    def frame_gram(self, *columns):
+        """Per frame ``Z_i^T Z_i`` (n_frames, k, k) of the row-wise concatenation Z (M, k) of
+        ``columns`` (each (M,) or (M, j)), rows of frame i only."""
+        cols = [c[:, None] if c.ndim == 1 else c for c in columns]
+        k = sum(c.shape[1] for c in cols)
+        if self.dense_slots:
+            Z = np.concatenate(cols, axis=1)
+        else:
+            Z = np.zeros((self.n_frames * self.rows_max, k))
+            Z[self.slot] = np.concatenate(cols, axis=1)
+        Z = Z.reshape(self.n_frames, self.rows_max, k)
+        return np.swapaxes(Z, 1, 2) @ Z
+
     def per_frame(self, X):
         """Sums of the rows of X (M, ...) per frame: (n_frames, ...)."""
         return np.add.reduceat(X, self.starts, axis=0)
 
 
-def _pose_blocks_sound(lay, Jl, tol=IDENTIFIABILITY_TOL):
+def _pose_blocks_sound(D, tol=IDENTIFIABILITY_TOL):
     """Every frame's 6 pose columns independent (unit columns, |R_jj| > tol): else StructureError."""
-    D = lay.per_frame(Jl[:, :, None] * Jl[:, None, :])
     d = np.sqrt(np.maximum(np.einsum("nii->ni", D), 1e-300))
     try:
         L = np.linalg.cholesky(D / d[:, :, None] / d[:, None, :])
@@ -98,8 +116,9 @@ def reduced_identifiability(lay, Jg, Jl) -> IdentifiabilityReport:
     """Identifiability of every column from the reduced system: the per-frame poses (always kept,
     checked independent) first, the global columns projected off them (module docstring)."""
     p = lay.problem
-    D = _pose_blocks_sound(lay, Jl)
-    B = lay.per_frame(Jl[:, :, None] * Jg[:, None, :])  # (N, 6, g) = Jl_i^T Jg_i
+    Q = lay.frame_gram(Jl, Jg)
+    D = _pose_blocks_sound(Q[:, :6, :6])
+    B = Q[:, :6, 6:]  # (N, 6, g) = Jl_i^T Jg_i
     C = np.linalg.solve(D, B)  # D_i^-1 Jl_i^T Jg_i
     Jperp = Jg - np.einsum("mk,mkj->mj", Jl, C[lay.frame_of_row])
     gnames = [p.names[i] for i in lay.gcols]
@@ -140,8 +159,8 @@ class SchurGaussNewton(DampedGaussNewton):
     def augmented(self, st, with_jac=True):
         return self.lay.evaluate(st, with_jac)
 
-    def _blocks(self, J, r, w_rows):
-        """(A, B, D, gA, gl) of the scaled, weighted active system."""
+    def _scaled(self, J, r, w_rows):
+        """Scaled, weighted active global (M, g) and pose (M, 6) Jacobians and residuals (M,)."""
         lay, cs = self.lay, self.col_scale
         Jg, Jl = J
         ga = Jg[:, self.g_act] / cs[lay.gcols[self.g_act]]
@@ -149,13 +168,21 @@ class SchurGaussNewton(DampedGaussNewton):
         if w_rows is not None:
             sw = np.sqrt(w_rows)
             ga, la, r = ga * sw[:, None], la * sw[:, None], r * sw
-        A = ga.T @ ga
-        B = lay.per_frame(ga[:, :, None] * la[:, None, :])  # (N, g, 6)
-        D = lay.per_frame(la[:, :, None] * la[:, None, :])  # (N, 6, 6)
-        return A, B, D, ga.T @ r, lay.per_frame(la * r[:, None]), float(r @ r), len(r)
+        return ga, la, r
+
+    def _blocks(self, J, r, w_rows):
+        """(A, B, D, gA, gl) of the scaled, weighted active system."""
+        lay = self.lay
+        ga, la, r = self._scaled(J, r, w_rows)
+        g = ga.shape[1]
+        Q = lay.frame_gram(ga, la, r)  # (N, g + 7, g + 7): every block of the normal equations per frame
+        A = Q[:, :g, :g].sum(0)
+        B = Q[:, :g, g:g + 6]  # (N, g, 6)
+        D = Q[:, g:g + 6, g:g + 6]  # (N, 6, 6)
+        return A, B, D, Q[:, :g, -1].sum(0), Q[:, g:g + 6, -1]
 
     def _normal_equations(self):
-        A, B, D, gA, gl, _, _ = self._blocks(self.J, self.r, self.w_rows if self.weighted else None)
+        A, B, D, gA, gl = self._blocks(self.J, self.r, self.w_rows if self.weighted else None)
         g = np.empty(len(self.pos_g) + len(self.pos_l))
         g[self.pos_g], g[self.pos_l] = gA, gl.ravel()
         g_max = max(float(A.diagonal().max(initial=0.0)), float(np.einsum("nii->ni", D).max()))
@@ -184,15 +211,27 @@ def _covariance(gn, row_weights, scale_known):
     system S) and sigma0, from the final blocks: inverse of the arrow normal matrix."""
     lay, n = gn.lay, gn.n
     w = None if np.all(row_weights == 1.0) else row_weights
-    A, B, D, _, _, rr, m = gn._blocks(gn.J, gn.r, w)
+    ga, la, _ = gn._scaled(gn.J, gn.r, w)
+    g = ga.shape[1]
+    Q = lay.frame_gram(ga, la)
+    B, D = Q[:, :g, g:], Q[:, g:, g:]
+    rr = float(gn.r @ gn.r) if w is None else float(np.sum(w * gn.r**2))
     n_act = len(gn.g_act) + 6 * lay.n_frames
-    sigma0 = math.sqrt(rr / max(m - n_act, 1))
+    sigma0 = math.sqrt(rr / max(len(gn.r) - n_act, 1))
     Dinv = np.linalg.inv(D)
     W = Dinv @ np.swapaxes(B, 1, 2)  # (N, 6, g) = D_i^-1 B_i^T
-    S = A - np.einsum("nij,njk->ik", B, W)
-    s = np.sqrt(np.maximum(np.linalg.eigvalsh(S)[::-1], 0.0))
+    # S as the Gram matrix of the global columns projected off the poses (no cancellation, PSD)
+    Jperp = ga - np.einsum("mk,mkj->mj", la, W[lay.frame_of_row])
+    S = Jperp.T @ Jperp
+    ev, V = np.linalg.eigh(S)
+    ev, V = ev[::-1], V[:, ::-1]
+    s = np.sqrt(np.maximum(ev, 0.0))
     cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
-    Sinv = cholesky_inverse(S) if len(S) else np.zeros((0, 0))
+    try:
+        Sinv = cholesky_inverse(S) if len(S) else np.zeros((0, 0))
+    except np.linalg.LinAlgError:  # numerically singular: pseudo-inverse on the resolvable directions
+        keep = s > 1e-7 * s[0]
+        Sinv = (V * np.where(keep, 1.0 / np.where(ev > 0, ev, 1.0), 0.0)) @ V.T
     Wf = W.reshape(-1, W.shape[2])  # (6N, g)
     cov_gl = -Sinv @ Wf.T
     cov_ll = Wf @ Sinv @ Wf.T

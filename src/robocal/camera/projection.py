@@ -55,10 +55,12 @@ def project_points(points, intrinsics, distortion=(0.0, 0.0, 0.0, 0.0), model: s
     if not jacobian:
         return Projection(pixels)
     _, Jx, Jc = out
-    dx_dP = np.zeros((len(P), 2, 3))  # d (X/Z, Y/Z) / d (X, Y, Z)
-    dx_dP[:, 0, 0] = dx_dP[:, 1, 1] = 1.0 / Z
-    dx_dP[:, :, 2] = -x / Z[:, None]
-    d_point = f[None, :, None] * (Jx @ dx_dP)
+    # Jx @ d(X/Z, Y/Z)/d(X, Y, Z) written out: d(X/Z, Y/Z)/dP = [[1, 0, -x], [0, 1, -y]] / Z
+    fz = f[None, :] / Z[:, None]  # (N, 2): row k scaled by f_k / Z
+    d_point = np.empty((len(P), 2, 3))
+    d_point[:, :, 0] = Jx[:, :, 0] * fz
+    d_point[:, :, 1] = Jx[:, :, 1] * fz
+    d_point[:, :, 2] = -(Jx[:, :, 0] * x[:, :1] + Jx[:, :, 1] * x[:, 1:]) * fz
     d_intr = np.zeros((len(P), 2, 4))
     d_intr[:, 0, 0], d_intr[:, 1, 1] = xd[:, 0], xd[:, 1]
     d_intr[:, 0, 2] = d_intr[:, 1, 3] = 1.0

@@ -169,12 +169,13 @@ def refine_poses(camera, target_points, image_points, T0, *, mask=None, iteratio
     return T, np.sqrt(cost / n)
 
 
-def solve_pnp(camera, target_points, image_points, *, min_points: int = 4) -> tuple:
+def solve_pnp(camera, target_points, image_points, *, min_points: int = 4, iterations: int = 30) -> tuple:
     """The target's pose in the camera per image: homography start, then :func:`refine_poses`.
 
     camera: :class:`robocal.camera.Camera`; target_points (P, 3) [mm, target frame]; image_points
     (N, P, 2) [px], NaN where not detected. Returns ``(T_camera_target (N, 4, 4) [mm], rms (N,)
-    [px], reasons)``: ``reasons`` a list of N strings, empty for a solved image, else why not (its
+    [px], reasons)``; iterations: at most this many refinement steps (a start for a joint
+    solve needs few); ``reasons`` a list of N strings, empty for a solved image, else why not (its
     pose and rms are NaN).
     """
     X = np.asarray(target_points, dtype=float)
@@ -200,5 +201,5 @@ def solve_pnp(camera, target_points, image_points, *, min_points: int = 4) -> tu
     T0 = poses_from_homographies(H) @ np.linalg.inv(T_tp)
     bad = ~np.all(np.isfinite(T0), axis=(1, 2))
     T0[bad] = np.eye(4)
-    T[ok], rms[ok] = refine_poses(camera, X, uv[ok], T0, mask=mask[ok])
+    T[ok], rms[ok] = refine_poses(camera, X, uv[ok], T0, mask=mask[ok], iterations=iterations)
     return T, rms, reasons

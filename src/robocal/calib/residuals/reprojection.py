@@ -23,7 +23,6 @@ from __future__ import annotations
 import numpy as np
 
 from ...camera.projection import project_points
-from ...transforms import skew
 from ..blocks.camera import CameraIntrinsics
 from ..errors import ProblemError
 from .base import ResidualBlock
@@ -84,15 +83,16 @@ class ReprojectionResidual(ResidualBlock):
     def _points(self, ev):
         """(y, q, p_camera, R_C, R_M, image of each point), each (n, 3) or (n, 3, 3) for the n
         detected points."""
-        img, pt = np.nonzero(self.mask)
-        T = ev[self.target_poses][self.target_index[img]]
-        C = ev[self.camera_poses][self.camera_index[img]]
-        M = self._links(ev)[img]
-        X = self.target_points[pt]
-        y = np.einsum("nij,nj->ni", T[:, :3, :3], X) + T[:, :3, 3]
-        q = np.einsum("nij,nj->ni", M[:, :3, :3], y) + M[:, :3, 3]
-        p = np.einsum("nji,nj->ni", C[:, :3, :3], q - C[:, :3, 3])
-        return y, q, p, C[:, :3, :3], M[:, :3, :3], img
+        img = self.image_of_row
+        # per image (N, P, 3) by matrix products, then the detected points
+        T = ev[self.target_poses][self.target_index]
+        C = ev[self.camera_poses][self.camera_index]
+        M = self._links(ev)
+        y = self.target_points @ np.swapaxes(T[:, :3, :3], 1, 2) + T[:, None, :3, 3]
+        q = y @ np.swapaxes(M[:, :3, :3], 1, 2) + M[:, None, :3, 3]
+        p = (q - C[:, None, :3, 3]) @ C[:, :3, :3]
+        m = self.mask
+        return y[m], q[m], p[m], C[img, :3, :3], M[img, :3, :3], img
 
     def evaluate(self, ev, jacobian):
         return self._evaluate(ev, jacobian)[:2]
@@ -110,15 +110,21 @@ class ReprojectionResidual(ResidualBlock):
         jac = {}
         if ev.wants(self.camera):
             jac[self.camera] = np.concatenate([proj.d_intrinsics, proj.d_distortion], axis=2).reshape(len(r), -1) * w
-        RCt = np.swapaxes(RC, 1, 2)
-        for frames, index, dp in ((self.camera_poses, self.camera_index, np.concatenate([RCt @ skew(q), -RCt], 2)),
-                                  (self.target_poses, self.target_index,
-                                   np.concatenate([-(RCt @ RM) @ skew(y), RCt @ RM], 2))):
-            if ev.wants(frames) and self.compact_targets and frames is self.target_poses:
-                jac[frames] = (proj.d_point @ dp).reshape(len(r), 6) * w
-            elif ev.wants(frames):
+        # a row a of d_point times [y]x is (a x y): the pose derivatives as cross products
+        # (camera step: e_C = d_point R_C^T, [-(q x e_C), -e_C]; target step: e_T = e_C R_M, [y x e_T, e_T])
+        e_C = proj.d_point if _all_identity(RC) else proj.d_point @ np.swapaxes(RC, 1, 2)
+        for frames, index in ((self.camera_poses, self.camera_index), (self.target_poses, self.target_index)):
+            if not ev.wants(frames):
+                continue
+            if frames is self.camera_poses:
+                dpose = _cross_rows(q, e_C, -1.0)
+            else:
+                dpose = _cross_rows(y, e_C if _all_identity(RM) else e_C @ RM, 1.0)
+            if self.compact_targets and frames is self.target_poses:
+                jac[frames] = dpose.reshape(len(r), 6) * w
+            else:
                 J = np.zeros((len(p), 2, frames.n_frames, 6))
-                J[np.arange(len(p)), :, index[img], :] = proj.d_point @ dp
+                J[np.arange(len(p)), :, index[img], :] = dpose
                 jac[frames] = J.reshape(len(r), -1) * w
         return r, jac, (y, q, p, RC, RM, img, proj.d_point)
 
@@ -156,3 +162,22 @@ class ReprojectionResidual(ResidualBlock):
             out.append(cls(cam, FramesBlock("camera", C, free=shared), FramesBlock("target", T), uv, X,
                            links=None if not shared else links, sigma=0.3))
         return out
+
+
+def _cross_rows(a, e, sign):
+    """``[sign * (a x e_k), sign * e_k]`` (n, 2, 6) for a (n, 3) and the two rows e (n, 2, 3)."""
+    out = np.empty((len(a), 2, 6))
+    a0, a1, a2 = (a[:, None, k] for k in range(3))
+    e0, e1, e2 = e[..., 0], e[..., 1], e[..., 2]
+    out[..., 0] = a1 * e2 - a2 * e1
+    out[..., 1] = a2 * e0 - a0 * e2
+    out[..., 2] = a0 * e1 - a1 * e0
+    out[..., 3:] = e
+    if sign != 1.0:
+        out *= sign
+    return out
+
+
+def _all_identity(R) -> bool:
+    """Every rotation of R (n, 3, 3) exactly the identity (a fixed camera frame, no links)."""
+    return bool(np.all(R == np.eye(3)))
