@@ -67,15 +67,17 @@ def brown_distort(x, coeffs, jacobian: bool = False):
     J[:, 0, 1] = 2 * X * Y * drad + 2 * p1 * X + 2 * p2 * Y
     J[:, 1, 0] = 2 * X * Y * drad + 2 * p1 * X + 2 * p2 * Y
     J[:, 1, 1] = rad + 2 * Y * Y * drad + 6 * p1 * Y + 2 * p2 * X
-    Jc = np.zeros((len(x), 2, 8))
+    Jc = np.empty((len(x), 2, K))
     xy = np.stack([X, Y], axis=1)  # radial terms scale x and y alike
     for col, term in ((0, r2 / den), (1, r2**2 / den), (4, r2**3 / den)):
-        Jc[:, :, col] = xy * term[:, None]
+        if col < K:
+            Jc[:, :, col] = xy * term[:, None]
     for col, term in ((5, -num * r2 / den**2), (6, -num * r2**2 / den**2), (7, -num * r2**3 / den**2)):
-        Jc[:, :, col] = xy * term[:, None]
+        if col < K:
+            Jc[:, :, col] = xy * term[:, None]
     Jc[:, 0, 2], Jc[:, 1, 2] = 2 * X * Y, r2 + 2 * Y * Y
     Jc[:, 0, 3], Jc[:, 1, 3] = r2 + 2 * X * X, 2 * X * Y
-    return xd, J, Jc[:, :, :K]
+    return xd, J, Jc
 
 
 def division_distort(x, kappa, jacobian: bool = False):

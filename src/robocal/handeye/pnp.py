@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..transforms import skew, so3_exp
+from ..calib.residuals.reprojection import cross_rows
+from ..transforms import so3_exp
 
 __all__ = ["plane_frame", "spread_ratio", "homographies", "poses_from_homographies", "refine_poses", "solve_pnp"]
 
@@ -122,8 +123,7 @@ def _residuals(camera, X, uv, mask, T, jacobian):
     r = np.nan_to_num(r, nan=1e6)  # a point behind the camera: a huge residual, the step is rejected
     if not jacobian:
         return r, None
-    dstep = np.concatenate([-skew(p.reshape(-1, 3)), np.broadcast_to(np.eye(3), (N * P, 3, 3))], axis=2)
-    J = (proj.d_point @ dstep).reshape(N, P, 2, 6)
+    J = cross_rows(p.reshape(-1, 3), proj.d_point, 1.0).reshape(N, P, 2, 6)  # d_point @ [-[p]x, I]
     J = np.where(mask[..., None, None], np.nan_to_num(J), 0.0)
     return r, J
 
@@ -146,8 +146,9 @@ def refine_poses(camera, target_points, image_points, T0, *, mask=None, iteratio
     cost = np.einsum("npk,npk->n", r, r)
     active = np.ones(N, bool)
     for _ in range(iterations):
-        H = np.einsum("npki,npkj->nij", J, J)
-        g = np.einsum("npki,npk->ni", J, r)
+        Jr = J.reshape(N, -1, 6)
+        H = np.swapaxes(Jr, 1, 2) @ Jr
+        g = (np.swapaxes(Jr, 1, 2) @ r.reshape(N, -1, 1))[..., 0]
         damping = np.einsum("nii->ni", H)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
         d = np.linalg.solve(H + lam[:, None, None] * damping, g[..., None])[..., 0]
         d[~active] = 0.0

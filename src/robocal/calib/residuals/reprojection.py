@@ -27,7 +27,7 @@ from ..blocks.camera import CameraIntrinsics
 from ..errors import ProblemError
 from .base import ResidualBlock
 
-__all__ = ["ReprojectionResidual"]
+__all__ = ["ReprojectionResidual", "cross_rows"]
 
 
 class ReprojectionResidual(ResidualBlock):
@@ -117,9 +117,9 @@ class ReprojectionResidual(ResidualBlock):
             if not ev.wants(frames):
                 continue
             if frames is self.camera_poses:
-                dpose = _cross_rows(q, e_C, -1.0)
+                dpose = cross_rows(q, e_C, -1.0)
             else:
-                dpose = _cross_rows(y, e_C if _all_identity(RM) else e_C @ RM, 1.0)
+                dpose = cross_rows(y, e_C if _all_identity(RM) else e_C @ RM, 1.0)
             if self.compact_targets and frames is self.target_poses:
                 jac[frames] = dpose.reshape(len(r), 6) * w
             else:
@@ -164,8 +164,10 @@ class ReprojectionResidual(ResidualBlock):
         return out
 
 
-def _cross_rows(a, e, sign):
-    """``[sign * (a x e_k), sign * e_k]`` (n, 2, 6) for a (n, 3) and the two rows e (n, 2, 3)."""
+def cross_rows(a, e, sign):
+    """``[sign * (a x e_k), sign * e_k]`` (n, 2, 6) for a (n, 3) and the two rows e (n, 2, 3): the
+    derivative of two image coordinates by a left step ``(w, v)`` of a frame moving the point ``a``
+    [mm], from their derivative ``e`` by the point (``e_k^T [a]x = (e_k x a)^T``)."""
     out = np.empty((len(a), 2, 6))
     a0, a1, a2 = (a[:, None, k] for k in range(3))
     e0, e1, e2 = e[..., 0], e[..., 1], e[..., 2]
