@@ -88,11 +88,12 @@ class ReprojectionResidual(ResidualBlock):
         T = ev[self.target_poses][self.target_index]
         C = ev[self.camera_poses][self.camera_index]
         M = self._links(ev)
-        y = self.target_points @ np.swapaxes(T[:, :3, :3], 1, 2) + T[:, None, :3, 3]
-        q = y @ np.swapaxes(M[:, :3, :3], 1, 2) + M[:, None, :3, 3]
-        p = (q - C[:, None, :3, 3]) @ C[:, :3, :3]
         m = self.mask
-        return y[m], q[m], p[m], C[img, :3, :3], M[img, :3, :3], img
+        y = (self.target_points @ np.swapaxes(T[:, :3, :3], 1, 2) + T[:, None, :3, 3])[m]
+        # identity links / camera frames (camera calibration) are skipped, not multiplied
+        q = y if _all_identity(M, 4) else np.einsum("nij,nj->ni", M[img, :3, :3], y) + M[img, :3, 3]
+        p = q if _all_identity(C, 4) else np.einsum("nji,nj->ni", C[img, :3, :3], q - C[img, :3, 3])
+        return y, q, p, C[img, :3, :3], M[img, :3, :3], img
 
     def evaluate(self, ev, jacobian):
         return self._evaluate(ev, jacobian)[:2]
@@ -180,6 +181,6 @@ def cross_rows(a, e, sign):
     return out
 
 
-def _all_identity(R) -> bool:
-    """Every rotation of R (n, 3, 3) exactly the identity (a fixed camera frame, no links)."""
-    return bool(np.all(R == np.eye(3)))
+def _all_identity(R, k: int = 3) -> bool:
+    """Every matrix of R (n, k, k) exactly the identity (a fixed camera frame, no links)."""
+    return bool(np.all(R == np.eye(k)))
