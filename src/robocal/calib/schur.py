@@ -95,6 +95,14 @@ class _Layout:
         Z = Z.reshape(self.n_frames, self.rows_max, k)
         return np.swapaxes(Z, 1, 2) @ Z
 
+    def frame_product(self, X, C):
+        """Rows ``X_r C_{frame(r)}`` (M, j) of X (M, k) times per-frame matrices C (n_frames, k, j)."""
+        if self.dense_slots:
+            return (X.reshape(self.n_frames, self.rows_max, -1) @ C).reshape(len(X), -1)
+        Z = np.zeros((self.n_frames * self.rows_max, X.shape[1]))
+        Z[self.slot] = X
+        return (Z.reshape(self.n_frames, self.rows_max, -1) @ C).reshape(-1, C.shape[2])[self.slot]
+
     def per_frame(self, X):
         """Sums of the rows of X (M, ...) per frame: (n_frames, ...)."""
         return np.add.reduceat(X, self.starts, axis=0)
@@ -120,7 +128,7 @@ def reduced_identifiability(lay, Jg, Jl) -> IdentifiabilityReport:
     D = _pose_blocks_sound(Q[:, :6, :6])
     B = Q[:, :6, 6:]  # (N, 6, g) = Jl_i^T Jg_i
     C = np.linalg.solve(D, B)  # D_i^-1 Jl_i^T Jg_i
-    Jperp = Jg - np.einsum("mk,mkj->mj", Jl, C[lay.frame_of_row])
+    Jperp = Jg - lay.frame_product(Jl, C)
     gnames = [p.names[i] for i in lay.gcols]
     rep = analyse_identifiability(Jperp, gnames, p.blocks[lay.gcols], column_blocks=p.column_blocks[lay.gcols],
                                   column_norms=np.linalg.norm(Jg, axis=0))
@@ -221,7 +229,7 @@ def _covariance(gn, row_weights, scale_known):
     Dinv = np.linalg.inv(D)
     W = Dinv @ np.swapaxes(B, 1, 2)  # (N, 6, g) = D_i^-1 B_i^T
     # S as the Gram matrix of the global columns projected off the poses (no cancellation, PSD)
-    Jperp = ga - np.einsum("mk,mkj->mj", la, W[lay.frame_of_row])
+    Jperp = ga - lay.frame_product(la, W)
     S = Jperp.T @ Jperp
     ev, V = np.linalg.eigh(S)
     ev, V = ev[::-1], V[:, ::-1]
@@ -240,9 +248,13 @@ def _covariance(gn, row_weights, scale_known):
     cols = np.r_[lay.gcols[gn.g_act], np.arange(lay.l0, lay.l1)]
     cs = gn.col_scale[cols]
     cov_s = np.block([[Sinv, cov_gl], [cov_gl.T, cov_ll]])
-    cov_a = cov_s / np.outer(cs, cs) * (1.0 if scale_known else sigma0**2)
-    cov = np.full((n, n), np.nan)
-    cov[np.ix_(cols, cols)] = cov_a
+    cov_s /= np.outer(cs, cs)
+    cov_a = cov_s if scale_known else cov_s * sigma0**2
+    if len(cols) == n and np.array_equal(cols, np.arange(n)):  # every column active, in this order
+        cov = cov_a
+    else:
+        cov = np.full((n, n), np.nan)
+        cov[np.ix_(cols, cols)] = cov_a
     return cov, np.sqrt(np.diag(cov)), n_act, cond, sigma0
 
 

@@ -173,7 +173,7 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
         camera = Camera(*initial_intrinsics(uv[use], X, image_size), tuple(dist), model, tuple(image_size))
     # per-image start: homography in normalised coordinates of the starting camera, then LM
     T0, _, reasons = solve_pnp(camera, X, np.where(use[:, None, None], uv, np.nan), min_points=min_points,
-                             iterations=3)  # a start: the joint solve refines the poses
+                             iterations=1)  # a start: the joint solve refines the poses
     good = use & np.all(np.isfinite(T0), axis=(1, 2))
     for i in np.flatnonzero(use & ~good):
         skipped[int(i)] = reasons[i] or "no pose of the target found in this image"
