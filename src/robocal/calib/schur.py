@@ -86,12 +86,15 @@ class _Layout:
         """Per frame ``Z_i^T Z_i`` (n_frames, k, k) of the row-wise concatenation Z (M, k) of
         ``columns`` (each (M,) or (M, j)), rows of frame i only."""
         cols = [c[:, None] if c.ndim == 1 else c for c in columns]
-        k = sum(c.shape[1] for c in cols)
-        if self.dense_slots:
-            Z = np.concatenate(cols, axis=1)
-        else:
-            Z = np.zeros((self.n_frames * self.rows_max, k))
-            Z[self.slot] = np.concatenate(cols, axis=1)
+        return self.gram_rows(np.concatenate(cols, axis=1))
+
+    def gram_rows(self, Z):
+        """Per frame ``Z_i^T Z_i`` (n_frames, k, k) of Z (M, k), rows of frame i only."""
+        k = Z.shape[1]
+        if not self.dense_slots:
+            Zp = np.zeros((self.n_frames * self.rows_max, k))
+            Zp[self.slot] = Z
+            Z = Zp
         Z = Z.reshape(self.n_frames, self.rows_max, k)
         return np.swapaxes(Z, 1, 2) @ Z
 
@@ -180,10 +183,20 @@ class SchurGaussNewton(DampedGaussNewton):
 
     def _blocks(self, J, r, w_rows):
         """(A, B, D, gA, gl) of the scaled, weighted active system."""
-        lay = self.lay
-        ga, la, r = self._scaled(J, r, w_rows)
-        g = ga.shape[1]
-        Q = lay.frame_gram(ga, la, r)  # (N, g + 7, g + 7): every block of the normal equations per frame
+        lay, cs = self.lay, self.col_scale
+        Jg, Jl = J
+        g = len(self.g_act)
+        if getattr(self, "_inv_rows", None) is None:  # the column scaling is fixed for the solve
+            self._inv_g = 1.0 / cs[lay.gcols[self.g_act]]
+            self._inv_rows = 1.0 / cs[lay.l0:lay.l1].reshape(-1, 6)[lay.frame_of_row]
+            self._all_g = len(self.g_act) == Jg.shape[1]
+        Z = np.empty((len(r), g + 7))  # [scaled Jg, scaled Jl, r] written in place
+        np.multiply(Jg if self._all_g else Jg[:, self.g_act], self._inv_g, out=Z[:, :g])
+        np.multiply(Jl, self._inv_rows, out=Z[:, g:g + 6])
+        Z[:, -1] = r
+        if w_rows is not None:
+            Z *= np.sqrt(w_rows)[:, None]
+        Q = lay.gram_rows(Z)  # (N, g + 7, g + 7): every block of the normal equations per frame
         A = Q[:, :g, :g].sum(0)
         B = Q[:, :g, g:g + 6]  # (N, g, 6)
         D = Q[:, g:g + 6, g:g + 6]  # (N, 6, 6)
