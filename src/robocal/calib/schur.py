@@ -235,12 +235,17 @@ def _covariance(gn, row_weights, scale_known):
     ga, la, _ = gn._scaled(gn.J, gn.r, w)
     g = ga.shape[1]
     Q = lay.frame_gram(ga, la)
-    B, D = Q[:, :g, g:], Q[:, g:, g:]
+    B, D = Q[:, :g, g:].copy(), Q[:, g:, g:].copy()
+    # a frame of weight 0 (an image dropped as an outlier) carries no information: no covariance
+    dead = np.einsum("nii->n", D) == 0.0
+    D[dead], B[dead] = np.eye(6), 0.0
     rr = float(gn.r @ gn.r) if w is None else float(np.sum(w * gn.r**2))
     n_act = len(gn.g_act) + 6 * lay.n_frames
     sigma0 = math.sqrt(rr / max(len(gn.r) - n_act, 1))
     Dinv = np.linalg.inv(D)
+    Dinv[dead] = np.nan
     W = Dinv @ np.swapaxes(B, 1, 2)  # (N, 6, g) = D_i^-1 B_i^T
+    W[dead] = 0.0
     # S as the Gram matrix of the global columns projected off the poses (no cancellation, PSD)
     Jperp = ga - lay.frame_product(la, W)
     S = Jperp.T @ Jperp
