@@ -265,7 +265,9 @@ def _covariance(gn, row_weights, scale_known):
     cov_ll.reshape(lay.n_frames, 6, lay.n_frames, 6)[idx, :, idx, :] += Dinv
     cols = np.r_[lay.gcols[gn.g_act], np.arange(lay.l0, lay.l1)]
     cs = gn.col_scale[cols]
-    cov_s = np.block([[Sinv, cov_gl], [cov_gl.T, cov_ll]])
+    ng = len(Sinv)
+    cov_s = np.empty((ng + len(cov_ll),) * 2)
+    cov_s[:ng, :ng], cov_s[:ng, ng:], cov_s[ng:, :ng], cov_s[ng:, ng:] = Sinv, cov_gl, cov_gl.T, cov_ll
     cov_s /= np.outer(cs, cs)
     cov_a = cov_s if scale_known else cov_s * sigma0**2
     if len(cols) == n and np.array_equal(cols, np.arange(n)):  # every column active, in this order
