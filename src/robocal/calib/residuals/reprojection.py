@@ -61,6 +61,7 @@ class ReprojectionResidual(ResidualBlock):
         if self.links.shape != (N, 4, 4):
             raise ProblemError(f"reprojection: links must be ({N}, 4, 4), got {self.links.shape}")
         self.mask = np.all(np.isfinite(uv), axis=2)  # (N, P)
+        self._detected = uv[self.mask]  # (n, 2) the detected points, in row order
         self.image_of_row = np.nonzero(self.mask)[0]
         self.compact_targets = bool(compact_targets)
         self.target_frame_of_row = np.repeat(self.target_index[self.image_of_row], 2)
@@ -89,7 +90,10 @@ class ReprojectionResidual(ResidualBlock):
         C = ev[self.camera_poses][self.camera_index]
         M = self._links(ev)
         m = self.mask
-        y = (self.target_points @ np.swapaxes(T[:, :3, :3], 1, 2) + T[:, None, :3, 3])[m]
+        # one matrix product for every image: Y[p, 3n + i] = sum_j X[p, j] R_n[i, j]
+        N, P = m.shape
+        Y = self.target_points @ T[:, :3, :3].transpose(2, 0, 1).reshape(3, 3 * N)
+        y = (Y.reshape(P, N, 3).transpose(1, 0, 2) + T[:, None, :3, 3])[m]
         # identity links / camera frames (camera calibration) are skipped, not multiplied
         q = y if _all_identity(M, 4) else np.einsum("nij,nj->ni", M[img, :3, :3], y) + M[img, :3, 3]
         p = q if _all_identity(C, 4) else np.einsum("nji,nj->ni", C[img, :3, :3], q - C[img, :3, 3])
@@ -105,7 +109,7 @@ class ReprojectionResidual(ResidualBlock):
         intr, dist = CameraIntrinsics.split(ev[self.camera])
         proj = project_points(p, intr, dist, self.camera.model, jacobian)
         w = self.weight
-        r = ((self.image_points[self.mask] - proj.pixels) * w).ravel()
+        r = ((self._detected - proj.pixels) * w).ravel()
         if not jacobian:
             return r, None, (y, q, p, RC, RM, img, None)
         jac = {}
