@@ -215,7 +215,11 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
         for n, s_ in zip(result.names, result.std):
             if n.startswith("board."):
                 sigma[n.split(".", 1)[1]] = float(s_)
-    residuals = _residuals(refined, X, uv, T)
+    # the solver's final residuals (weight 1: detected minus projected, sag included) per image
+    used = np.full(uv[good].shape, np.nan)
+    used[np.all(np.isfinite(uv[good]), axis=2)] = np.asarray(result.residuals_after).reshape(-1, 2)
+    residuals = np.full(uv.shape, np.nan)
+    residuals[good] = used
     rms, per_image = rms_px(residuals)
     dropped = result.identifiability.dropped_names
     msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
@@ -227,9 +231,3 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
     return CameraCalibration(refined, T, residuals, rms, per_image, sigma, bool(result.converged),
                              result.identifiability, msg, skipped, sag)
 
-
-def _residuals(camera: Camera, X, uv, T) -> np.ndarray:
-    """Detected minus projected pixels (N, P, 2), NaN where not detected or no pose."""
-    p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
-    pred = camera.project(p.reshape(-1, 3)).pixels.reshape(uv.shape)
-    return uv - pred

@@ -109,12 +109,16 @@ class ReprojectionResidual(ResidualBlock):
         intr, dist = CameraIntrinsics.split(ev[self.camera])
         proj = project_points(p, intr, dist, self.camera.model, jacobian)
         w = self.weight
-        r = ((self._detected - proj.pixels) * w).ravel()
+        r = (self._detected - proj.pixels).ravel()
+        if w != 1.0:
+            r *= w
         if not jacobian:
             return r, None, (y, q, p, RC, RM, img, None)
         jac = {}
         if ev.wants(self.camera):
-            jac[self.camera] = np.concatenate([proj.d_intrinsics, proj.d_distortion], axis=2).reshape(len(r), -1) * w
+            jac[self.camera] = np.concatenate([proj.d_intrinsics, proj.d_distortion], axis=2).reshape(len(r), -1)
+            if w != 1.0:
+                jac[self.camera] *= w
         # a row a of d_point times [y]x is (a x y): the pose derivatives as cross products
         # (camera step: e_C = d_point R_C^T, [-(q x e_C), -e_C]; target step: e_T = e_C R_M, [y x e_T, e_T])
         e_C = proj.d_point if _all_identity(RC) else proj.d_point @ np.swapaxes(RC, 1, 2)
@@ -126,7 +130,7 @@ class ReprojectionResidual(ResidualBlock):
             else:
                 dpose = cross_rows(y, e_C if _all_identity(RM) else e_C @ RM, 1.0)
             if self.compact_targets and frames is self.target_poses:
-                jac[frames] = dpose.reshape(len(r), 6) * w
+                jac[frames] = dpose.reshape(len(r), 6) if w == 1.0 else dpose.reshape(len(r), 6) * w
             else:
                 J = np.zeros((len(p), 2, frames.n_frames, 6))
                 J[np.arange(len(p)), :, index[img], :] = dpose
