@@ -8,6 +8,9 @@ board, 0.3 px corner noise, N images. Interleaved repeats in one process; median
 medians and the median of per-repeat ratios; the RMS of both and the largest difference of an
 intrinsic / distortion value in units of robocal's reported 1-sigma.
 
+A second table: batched PnP, ``robocal.handeye.solve_pnp`` (homography start, LM per image, all
+images at once) against ``cv2.solvePnP`` (ITERATIVE) called once per image, the true camera.
+
 Run: ``python benchmarks/bench_camera_solver.py [--images 30 60 100] [--repeat 7]``.
 """
 
@@ -24,7 +27,7 @@ import time  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from robocal.handeye import calibrate_camera  # noqa: E402
+from robocal.handeye import calibrate_camera, solve_pnp  # noqa: E402
 from robocal.sim.cameras.handeye_points import simulate_hand_eye  # noqa: E402
 
 NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
@@ -61,6 +64,32 @@ def run(n_images: int, repeat: int, seed: int = 11):
                 rms=res.rms_px, rms_cv=float(rms), dz=dz, iterations=res.message.split(" iterations")[0])
 
 
+def run_pnp(n_images: int, repeat: int, seed: int = 11):
+    sim = simulate_hand_eye(seed, n_images=n_images, pose_noise_mm=0.0, pose_noise_deg=0.0)
+    cam, X, uv = sim.camera, sim.target_points, sim.image_points
+    obj, img = _opencv_inputs(sim)
+    K, D = cam.matrix, np.asarray(cam.distortion, dtype=float)
+
+    def cv():
+        return [cv2.solvePnP(o, i, K, D, flags=cv2.SOLVEPNP_ITERATIVE) for o, i in zip(obj, img)]
+
+    solve_pnp(cam, X, uv)
+    cv()
+    t_rc, t_cv = [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        T, _, _ = solve_pnp(cam, X, uv)
+        t1 = time.perf_counter()
+        out = cv()
+        t2 = time.perf_counter()
+        t_rc.append(t1 - t0)
+        t_cv.append(t2 - t1)
+    dt = max(float(np.linalg.norm(T[k, :3, 3] - o[2].ravel())) for k, o in enumerate(out))
+    t_rc, t_cv = np.array(t_rc), np.array(t_cv)
+    return dict(n=n_images, robocal=float(np.median(t_rc)), opencv=float(np.median(t_cv)),
+                ratio=float(np.median(t_rc) / np.median(t_cv)), paired=float(np.median(t_rc / t_cv)), dt=dt)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--images", type=int, nargs="+", default=[30, 60, 100])
@@ -73,6 +102,13 @@ def main():
         r = run(n, a.repeat)
         print(f"| {r['n']} | {r['robocal']:.3f} | {r['opencv']:.3f} | x{r['ratio']:.2f} (x{r['paired']:.2f}) | "
               f"{1e3 * r['robocal'] / n:.2f} | {r['rms']:.4f} / {r['rms_cv']:.4f} | {r['dz']:.2e} |", flush=True)
+    print("\n| images | robocal `solve_pnp` (batched) [ms] | OpenCV `solvePnP` x images [ms] | robocal / OpenCV (paired) "
+          "| largest translation difference [mm] |")
+    print("|---:|---:|---:|---:|---:|")
+    for n in a.images:
+        r = run_pnp(n, a.repeat)
+        print(f"| {r['n']} | {1e3 * r['robocal']:.2f} | {1e3 * r['opencv']:.2f} | x{r['ratio']:.2f} (x{r['paired']:.2f}) | "
+              f"{r['dt']:.2e} |", flush=True)
     print(f"\n(load average {os.getloadavg()[0]:.1f}; {a.repeat} interleaved repeats, medians)")
 
 

@@ -121,14 +121,20 @@ def _residuals(camera, X, uv, mask, T, jacobian):
     """Pixel residuals (N, P, 2) (0 where masked) and, with ``jacobian``, d(prediction)/d(left step)
     (N, P, 2, 6)."""
     N, P = uv.shape[:2]
-    p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
+    # every image in one matrix product: Y[p, 3n + i] = sum_j X[p, j] R_n[i, j]
+    p = (X @ T[:, :3, :3].transpose(2, 0, 1).reshape(3, 3 * N)).reshape(P, N, 3).transpose(1, 0, 2) \
+        + T[:, None, :3, 3]
     proj = camera.project(p.reshape(-1, 3), jacobian=jacobian)
     r = np.where(mask[..., None], uv - proj.pixels.reshape(N, P, 2), 0.0)
-    r = np.nan_to_num(r, nan=1e6)  # a point behind the camera: a huge residual, the step is rejected
+    finite = bool(np.isfinite(r).all())
+    if not finite:
+        r = np.nan_to_num(r, nan=1e6)  # a point behind the camera: a huge residual, the step is rejected
     if not jacobian:
         return r, None
     J = cross_rows(p.reshape(-1, 3), proj.d_point, 1.0).reshape(N, P, 2, 6)  # d_point @ [-[p]x, I]
-    J = np.where(mask[..., None, None], np.nan_to_num(J), 0.0)
+    J[~mask] = 0.0
+    if not finite:
+        J = np.nan_to_num(J)
     return r, J
 
 
@@ -150,24 +156,28 @@ def refine_poses(camera, target_points, image_points, T0, *, mask=None, iteratio
     cost = np.einsum("npk,npk->n", r, r)
     active = np.ones(N, bool)
     for _ in range(iterations):
-        Jr = J.reshape(N, -1, 6)
-        H = np.swapaxes(Jr, 1, 2) @ Jr
-        g = (np.swapaxes(Jr, 1, 2) @ r.reshape(N, -1, 1))[..., 0]
+        idx = np.flatnonzero(active)  # only the images still iterating are evaluated
+        Jr = J[idx].reshape(len(idx), -1, 6)
+        JrT = np.swapaxes(Jr, 1, 2)
+        H = JrT @ Jr
+        g = (JrT @ r[idx].reshape(len(idx), -1, 1))[..., 0]
         damping = np.einsum("nii->ni", H)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
-        d = np.linalg.solve(H + lam[:, None, None] * damping, g[..., None])[..., 0]
-        d[~active] = 0.0
-        Tn = T.copy()
+        d = np.linalg.solve(H + lam[idx, None, None] * damping, g[..., None])[..., 0]
+        Tn = T[idx].copy()
         R = so3_exp(d[:, :3])
-        Tn[:, :3, :3] = R @ T[:, :3, :3]
-        Tn[:, :3, 3] = (R @ T[:, :3, 3, None])[..., 0] + d[:, 3:]
-        rn, Jn = _residuals(camera, X, uv, mask, Tn, True)
+        Tn[:, :3, :3] = R @ Tn[:, :3, :3]
+        Tn[:, :3, 3] = (R @ Tn[:, :3, 3, None])[..., 0] + d[:, 3:]
+        rn, Jn = _residuals(camera, X, uv[idx], mask[idx], Tn, True)
         cn = np.einsum("npk,npk->n", rn, rn)
-        better = (cn <= cost) & active
-        T[better], r[better], J[better] = Tn[better], rn[better], Jn[better]
-        small = better & (cost - cn <= tol * np.maximum(cost, 1e-30)) | (np.abs(d).max(1) < 1e-12)
-        cost = np.where(better, cn, cost)
-        lam = np.where(better, lam * 0.3, lam * 10.0)
-        active &= ~small & (lam < 1e8)
+        c0 = cost[idx]
+        better = cn <= c0
+        up = idx[better]
+        T[up], r[up], J[up], cost[up] = Tn[better], rn[better], Jn[better], cn[better]
+        small = better & (c0 - cn <= tol * np.maximum(c0, 1e-30)) | (np.abs(d).max(1) < 1e-12)
+        # a refused step whose predicted reduction is at the rounding level: a stationary point
+        small |= ~better & (np.einsum("ni,ni->n", g, d) <= tol * np.maximum(c0, 1e-30))
+        lam[idx] = np.where(better, lam[idx] * 0.3, lam[idx] * 10.0)
+        active[idx] = ~small & (lam[idx] < 1e8)
         if not active.any():
             break
     n = np.maximum(mask.sum(1), 1)
