@@ -41,11 +41,11 @@ def _brown_coefficients(coeffs) -> np.ndarray:
     return np.concatenate([c, np.zeros(8 - c.size)])
 
 
-def brown_distort(x, coeffs, jacobian: bool = False):
+def brown_distort(x, coeffs, jacobian: bool = False, coefficients: bool = True):
     """Brown–Conrady distortion (OpenCV order) of normalised points x (N, 2).
 
     Returns xd (N, 2), and with ``jacobian`` also ``dxd/dx`` (N, 2, 2) and ``dxd/dcoeffs``
-    (N, 2, K) with K = len(coeffs).
+    (N, 2, K) with K = len(coeffs) (None when not ``coefficients``).
     """
     x = np.asarray(x, dtype=float)
     K = np.asarray(coeffs, dtype=float).size
@@ -71,6 +71,8 @@ def brown_distort(x, coeffs, jacobian: bool = False):
     J[:, 0, 1] = 2 * X * Y * drad + 2 * p1 * X + 2 * p2 * Y
     J[:, 1, 0] = 2 * X * Y * drad + 2 * p1 * X + 2 * p2 * Y
     J[:, 1, 1] = rad + 2 * Y * Y * drad + 6 * p1 * Y + 2 * p2 * X
+    if not coefficients:
+        return xd, J, None
     Jc = np.empty((len(x), 2, K))
     xy = np.stack([X, Y], axis=1)  # radial terms scale x and y alike
     r4 = r2 * r2

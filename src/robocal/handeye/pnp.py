@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..calib.residuals.reprojection import cross_rows
+from ..camera.projection import project_points
 from ..transforms import so3_exp
 
 __all__ = ["plane_frame", "spread_ratio", "homographies", "poses_from_homographies", "refine_poses", "solve_pnp"]
@@ -124,7 +125,8 @@ def _residuals(camera, X, uv, mask, T, jacobian):
     # every image in one matrix product: Y[p, 3n + i] = sum_j X[p, j] R_n[i, j]
     p = (X @ T[:, :3, :3].transpose(2, 0, 1).reshape(3, 3 * N)).reshape(P, N, 3).transpose(1, 0, 2) \
         + T[:, None, :3, 3]
-    proj = camera.project(p.reshape(-1, 3), jacobian=jacobian)
+    proj = project_points(p.reshape(-1, 3), camera.intrinsics, camera.distortion, camera.model, jacobian,
+                          point_only=True)
     r = np.where(mask[..., None], uv - proj.pixels.reshape(N, P, 2), 0.0)
     finite = bool(np.isfinite(r).all())
     if not finite:
