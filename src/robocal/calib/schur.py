@@ -58,7 +58,7 @@ class _Layout:
                 self.global_plan.append((blk, int(np.searchsorted(self.gcols, c0)), loc, c1 - c0))
         frame = self.residual.target_frame_of_row
         if len(frame) and (np.any(np.diff(frame) < 0) or
-                           not np.array_equal(np.unique(frame), np.arange(self.n_frames))):
+                           np.any(np.bincount(frame, minlength=self.n_frames) == 0)):
             raise StructureError("rows must be grouped by target frame, every frame seen")
         self.frame_of_row = frame
         self.starts = np.flatnonzero(np.r_[True, np.diff(frame) != 0])

@@ -58,7 +58,8 @@ def _conditioning(pts, mask):
 
 
 def _apply(T, pts):
-    return np.einsum("nij,npj->npi", T[:, :2, :2], pts) + T[:, None, :2, 2]
+    """The similarities T (N, 3, 3) of :func:`_conditioning` (``s I`` and a shift) on pts (N, P, 2)."""
+    return pts * T[:, None, 0, 0, None] + T[:, None, :2, 2]
 
 
 def spread_ratio(plane_xy, mask) -> np.ndarray:
