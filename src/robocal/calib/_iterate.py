@@ -61,7 +61,7 @@ class DampedGaussNewton:
         self.ftol, self.xtol, self.chi2_tol, self.progress = ftol, xtol, chi2_tol, progress
         self.prior_weight = prior_weight
         self.active = active
-        self.n = self._n_columns(J)
+        self.n = problem.n_variables
         self.n_poses = problem.n_poses
         # robust weights act per pose; rows of no pose (priors, label -1) share one extra slot of weight 1
         self.pose_of_row = np.where(labels[:, 0] < 0, self.n_poses, labels[:, 0])
@@ -93,12 +93,28 @@ class DampedGaussNewton:
         self._refused_last = False
 
     # ------------------------------------------------------------------ pieces
-    def _column_norms(self, J):
+    # The linear algebra goes through hooks (_column_norms, augmented, _normal_system /
+    # _normal_equations, _damped_solve) so a structured subclass can keep J in blocks and eliminate
+    # per-image unknowns (robocal.calib.schur) or accumulate J^T J per block of poses without J
+    # (robocal.calib._normal) while the iteration and its stop rules stay these.
+    def _column_norms(self, J) -> np.ndarray:
         """Norms (n,) of the Jacobian's columns (the column scaling)."""
         return np.sqrt(np.einsum("ij,ij->j", J, J))
 
     def _n_columns(self, J) -> int:
         return J.shape[1]
+
+    def _normal_equations(self):
+        """(G, g, max(diag G)) of the scaled, weighted active system: G = Ja^T Ja, g = Ja^T ra."""
+        G, g = self._normal_system()
+        return G, g, float(G.diagonal().max())
+
+    @staticmethod
+    def _damped_solve(G, shift, g) -> np.ndarray:
+        """``(G + shift I)^-1 g`` by Cholesky; numpy.linalg.LinAlgError when not positive definite."""
+        A = G.copy()
+        A.ravel()[::len(A) + 1] += shift  # a view of the copy's diagonal
+        return cholesky_solve(cholesky_factor(A, overwrite=True), g)
 
     def _initial_robust_weights(self, r):
         pose_norm = pose_norms(self.pose_of_row, r, self.n_slots)[:self.n_poses]
@@ -163,10 +179,9 @@ class DampedGaussNewton:
             step_s = Vt.T @ np.where(keep, (U.T @ ra) / np.where(keep, s, 1.0), 0.0)
             s_max = s[0]
         else:
-            # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky (the scaled copy
-            # of J is not kept while the line search evaluates trial Jacobians)
-            G, g = self._normal_system()
-            g_max = float(G.diagonal().max())
+            # damped normal equations (G + lam * max(diag G) I) step = g, by Cholesky
+            # (the scaled copy of J is not kept while the line search evaluates trial Jacobians)
+            G, g, g_max = self._normal_equations()
             s_max = math.sqrt(g_max)
         g_inf = float(np.abs(g).max()) if g.size else 0.0
         if g_inf <= 1e-14 * max(1.0, s_max * math.sqrt(2 * self.cost)):
@@ -201,13 +216,10 @@ class DampedGaussNewton:
         dcost, self.cost = self.cost - new_cost, new_cost
         return self._converged_after_step(dcost, step_s)
 
-    @staticmethod
-    def _predicted_reduction(G, g, g_max) -> float:
+    def _predicted_reduction(self, G, g, g_max) -> float:
         """Cost reduction 0.5 g^T G^-1 g the (barely damped) Gauss-Newton step predicts (inf if singular)."""
         try:
-            A = G.copy()
-            A.ravel()[::len(A) + 1] += 1e-12 * g_max
-            return 0.5 * float(g @ cholesky_solve(cholesky_factor(A, overwrite=True), g))
+            return 0.5 * float(g @ self._damped_solve(G, 1e-12 * g_max, g))
         except np.linalg.LinAlgError:
             return math.inf
 
@@ -216,10 +228,8 @@ class DampedGaussNewton:
         Returns (trial state, its r, its J, scaled step) or None."""
         for attempt in range(30):
             if self.method == "lm":
-                try:
-                    A = G.copy()  # G + lam * max(diag G) * I: only the diagonal changes
-                    A.ravel()[::len(A) + 1] += self.lam * g_max  # a view of the copy's diagonal
-                    step_s = cholesky_solve(cholesky_factor(A, overwrite=True), g)
+                try:  # G + lam * max(diag G) * I: only the diagonal changes
+                    step_s = self._damped_solve(G, self.lam * g_max, g)
                 except np.linalg.LinAlgError:
                     self.lam *= 10.0
                     continue

@@ -24,6 +24,8 @@ Example: a tool point touching one fixed point from several flange poses::
 
 from __future__ import annotations
 
+from collections import Counter
+
 import numpy as np
 
 from .errors import ProblemError
@@ -77,7 +79,7 @@ class Problem:
             groups += [blk.group] * len(loc)
             owners += [blk.name] * len(loc)
             c += len(loc)
-        dup = sorted({n for n in names if names.count(n) > 1})
+        dup = sorted(n for n, k in Counter(names).items() if k > 1)
         if dup:
             raise ProblemError(f"variable names used twice: {', '.join(dup)}")
         self.names, self.units = tuple(names), tuple(units)

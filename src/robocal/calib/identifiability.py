@@ -76,19 +76,24 @@ class IdentifiabilityReport:
 
 
 def analyse_identifiability(J, names, blocks=None, *, tol: float = IDENTIFIABILITY_TOL, priority=DEFAULT_PRIORITY,
-                            explain: bool = True, column_blocks=None) -> IdentifiabilityReport:
+                            explain: bool = True, column_blocks=None, column_norms=None) -> IdentifiabilityReport:
     """Analyse the columns of ``J`` (M, n) named ``names``; ``blocks`` (n,) gives each column's
     identifiability group (priority order ``priority``, other groups after them);
     ``column_blocks`` (n,) optionally the parameter block of each column (reported per block).
 
     ``explain=False`` skips the least-squares explanation of each dropped parameter (and the
     singular values): a quick check of which set is identifiable.
+
+    ``column_norms`` (n,): scale the columns by these norms instead of their own. For a reduced
+    Jacobian -- columns already projected off other (eliminated, always identifiable) columns,
+    given the norms of the unprojected columns -- the verdicts are those of the full Jacobian with
+    the eliminated columns first in priority (:mod:`robocal.calib.schur`).
     """
     J = np.asarray(J, dtype=float)
     n = J.shape[1]
     names = list(names)
     blocks = np.array(["geometry"] * n) if blocks is None else np.asarray(blocks)
-    norms = np.linalg.norm(J, axis=0)
+    norms = np.linalg.norm(J, axis=0) if column_norms is None else np.asarray(column_norms, dtype=float)
     scale = norms.max(initial=0.0)
     order = [i for b in priority for i in np.flatnonzero(blocks == b).tolist()]
     seen = set(order)

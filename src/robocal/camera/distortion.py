@@ -41,11 +41,11 @@ def _brown_coefficients(coeffs) -> np.ndarray:
     return np.concatenate([c, np.zeros(8 - c.size)])
 
 
-def brown_distort(x, coeffs, jacobian: bool = False):
+def brown_distort(x, coeffs, jacobian: bool = False, coefficients: bool = True):
     """Brown–Conrady distortion (OpenCV order) of normalised points x (N, 2).
 
     Returns xd (N, 2), and with ``jacobian`` also ``dxd/dx`` (N, 2, 2) and ``dxd/dcoeffs``
-    (N, 2, K) with K = len(coeffs).
+    (N, 2, K) with K = len(coeffs) (None when not ``coefficients``).
     """
     x = np.asarray(x, dtype=float)
     K = np.asarray(coeffs, dtype=float).size
@@ -53,29 +53,38 @@ def brown_distort(x, coeffs, jacobian: bool = False):
     X, Y = x[:, 0], x[:, 1]
     r2 = X * X + Y * Y
     num = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
-    den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6))
-    rad = num / den
+    rational = K == 8  # without k4..k6 the denominator is 1: not computed
+    den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6)) if rational else 1.0
+    rad = num / den if rational else num
     xd = np.stack([X * rad + 2 * p1 * X * Y + p2 * (r2 + 2 * X * X),
                    Y * rad + p1 * (r2 + 2 * Y * Y) + 2 * p2 * X * Y], axis=1)
     if not jacobian:
         return xd
     dnum = k1 + r2 * (2 * k2 + 3 * k3 * r2)  # d num / d r2
-    dden = k4 + r2 * (2 * k5 + 3 * k6 * r2)
-    drad = (dnum * den - num * dden) / den**2  # d rad / d r2
+    if rational:
+        dden = k4 + r2 * (2 * k5 + 3 * k6 * r2)
+        drad = (dnum * den - num * dden) / den**2  # d rad / d r2
+    else:
+        drad = dnum
     J = np.empty((len(x), 2, 2))
     J[:, 0, 0] = rad + 2 * X * X * drad + 2 * p1 * Y + 6 * p2 * X
     J[:, 0, 1] = 2 * X * Y * drad + 2 * p1 * X + 2 * p2 * Y
     J[:, 1, 0] = 2 * X * Y * drad + 2 * p1 * X + 2 * p2 * Y
     J[:, 1, 1] = rad + 2 * Y * Y * drad + 6 * p1 * Y + 2 * p2 * X
-    Jc = np.zeros((len(x), 2, 8))
+    if not coefficients:
+        return xd, J, None
+    Jc = np.empty((len(x), 2, K))
     xy = np.stack([X, Y], axis=1)  # radial terms scale x and y alike
-    for col, term in ((0, r2 / den), (1, r2**2 / den), (4, r2**3 / den)):
-        Jc[:, :, col] = xy * term[:, None]
-    for col, term in ((5, -num * r2 / den**2), (6, -num * r2**2 / den**2), (7, -num * r2**3 / den**2)):
-        Jc[:, :, col] = xy * term[:, None]
+    r4 = r2 * r2
+    for col, term in ((0, r2), (1, r4), (4, r4 * r2)):
+        if col < K:
+            Jc[:, :, col] = xy * (term / den if rational else term)[:, None]
+    if rational:
+        for col, term in ((5, -num * r2 / den**2), (6, -num * r4 / den**2), (7, -num * r4 * r2 / den**2)):
+            Jc[:, :, col] = xy * term[:, None]
     Jc[:, 0, 2], Jc[:, 1, 2] = 2 * X * Y, r2 + 2 * Y * Y
     Jc[:, 0, 3], Jc[:, 1, 3] = r2 + 2 * X * X, 2 * X * Y
-    return xd, J, Jc[:, :, :K]
+    return xd, J, Jc
 
 
 def division_distort(x, kappa, jacobian: bool = False):

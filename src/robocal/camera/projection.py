@@ -42,23 +42,31 @@ def distort(x, distortion, model: str = "brown", jacobian: bool = False):
 
 
 def project_points(points, intrinsics, distortion=(0.0, 0.0, 0.0, 0.0), model: str = "brown",
-                   jacobian: bool = False) -> Projection:
-    """Project points (N, 3) [mm, camera frame] to pixels (N, 2); see the module docstring."""
+                   jacobian: bool = False, point_only: bool = False) -> Projection:
+    """Project points (N, 3) [mm, camera frame] to pixels (N, 2); see the module docstring.
+    ``point_only``: with ``jacobian``, only ``d_point`` (a pose solve needs no intrinsics' derivatives)."""
     P = np.asarray(points, dtype=float).reshape(-1, 3)
     fx, fy, cx, cy = np.asarray(intrinsics, dtype=float).ravel()
     Z = np.where(P[:, 2] > 0, P[:, 2], np.nan)
     x = P[:, :2] / Z[:, None]
-    out = distort(x, distortion, model, jacobian)
+    if jacobian and point_only and model == "brown":
+        out = brown_distort(x, distortion, True, coefficients=False)
+    else:
+        out = distort(x, distortion, model, jacobian)
     xd = out[0] if jacobian else out
     f = np.array([fx, fy])
     pixels = xd * f + np.array([cx, cy])
     if not jacobian:
         return Projection(pixels)
     _, Jx, Jc = out
-    dx_dP = np.zeros((len(P), 2, 3))  # d (X/Z, Y/Z) / d (X, Y, Z)
-    dx_dP[:, 0, 0] = dx_dP[:, 1, 1] = 1.0 / Z
-    dx_dP[:, :, 2] = -x / Z[:, None]
-    d_point = f[None, :, None] * (Jx @ dx_dP)
+    # Jx @ d(X/Z, Y/Z)/d(X, Y, Z) written out: d(X/Z, Y/Z)/dP = [[1, 0, -x], [0, 1, -y]] / Z
+    fz = f[None, :] / Z[:, None]  # (N, 2): row k scaled by f_k / Z
+    d_point = np.empty((len(P), 2, 3))
+    d_point[:, :, 0] = Jx[:, :, 0] * fz
+    d_point[:, :, 1] = Jx[:, :, 1] * fz
+    d_point[:, :, 2] = -(Jx[:, :, 0] * x[:, :1] + Jx[:, :, 1] * x[:, 1:]) * fz
+    if point_only:
+        return Projection(pixels, d_point)
     d_intr = np.zeros((len(P), 2, 4))
     d_intr[:, 0, 0], d_intr[:, 1, 1] = xd[:, 0], xd[:, 1]
     d_intr[:, 0, 2] = d_intr[:, 1, 3] = 1.0
@@ -79,7 +87,7 @@ def undistort_normalized(xd, distortion, model: str = "brown", *, iterations: in
     x = xd.copy()
     step = np.full(len(x), np.inf)
     for _ in range(iterations):
-        f, J, _ = distort(x, distortion, model, jacobian=True)
+        f, J, _ = brown_distort(x, distortion, True, coefficients=False)  # the division model returned above
         d = np.linalg.solve(J, (xd - f)[:, :, None])[..., 0]
         x += d
         step = np.max(np.abs(d), axis=1)

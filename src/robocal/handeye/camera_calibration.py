@@ -6,8 +6,10 @@
    similar views) the principal point is put at the image centre and ``fx, fy`` solved from the
    same constraints by least squares (OpenCV's start). Distortion starts at zero.
 2. Per-image target poses from the homographies (:mod:`.pnp`).
-3. The calibration core's Levenberg–Marquardt (:func:`robocal.calib.solve`) over the intrinsics,
-   the distortion and every image's target pose (:class:`~robocal.calib.residuals.ReprojectionResidual`
+3. The calibration core's Levenberg–Marquardt over the intrinsics, the distortion and every
+   image's target pose, the poses eliminated per image by a Schur complement
+   (:func:`robocal.calib.schur.solve_schur`: same steps and stop rules as :func:`robocal.calib.solve`,
+   time linear in the image count) (:class:`~robocal.calib.residuals.ReprojectionResidual`
    with the camera frame fixed at the identity); 1-sigma from the covariance, scaled by the
    residual spread; unidentifiable parameters held and named (``identifiability``).
 """
@@ -23,6 +25,7 @@ from ..calib import Problem, solve
 from ..calib.blocks import CameraIntrinsics, FramesBlock
 from ..calib.residuals import BoardShapeReprojectionResidual, ReprojectionResidual
 from ..calib.residuals.board_shape import board_shape_block, sag_bases
+from ..calib.schur import StructureError, solve_schur
 from ..calib.solve import NotConvergedWarning
 from ..camera import BROWN_SIZES, Camera
 from .backprojection import rms_px
@@ -169,7 +172,8 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
         dist = np.zeros(n_distortion if model == "brown" else 1)
         camera = Camera(*initial_intrinsics(uv[use], X, image_size), tuple(dist), model, tuple(image_size))
     # per-image start: homography in normalised coordinates of the starting camera, then LM
-    T0, _, reasons = solve_pnp(camera, X, np.where(use[:, None, None], uv, np.nan), min_points=min_points)
+    T0, _, reasons = solve_pnp(camera, X, np.where(use[:, None, None], uv, np.nan), min_points=min_points,
+                             iterations=1)  # a start: the joint solve refines the poses
     good = use & np.all(np.isfinite(T0), axis=(1, 2))
     for i in np.flatnonzero(use & ~good):
         skipped[int(i)] = reasons[i] or "no pose of the target found in this image"
@@ -186,12 +190,18 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
     if board_shape:
         shape = board_shape_block()
         blocks.append(shape)
-        res = BoardShapeReprojectionResidual(cam, identity, poses, uv[good], X, shape)
-    else:
-        res = ReprojectionResidual(cam, identity, poses, uv[good], X)
+
+    def residual(compact):
+        if board_shape:
+            return BoardShapeReprojectionResidual(cam, identity, poses, uv[good], X, shape, compact_targets=compact)
+        return ReprojectionResidual(cam, identity, poses, uv[good], X, compact_targets=compact)
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotConvergedWarning)
-        result = solve(Problem(blocks, [res]), loss=loss)
+        try:  # the per-image poses eliminated (Schur complement): linear in the image count
+            result = solve_schur(Problem(blocks, [residual(True)]), poses, loss=loss)
+        except StructureError:  # a pose its image does not determine: the dense solve names it
+            result = solve(Problem(blocks, [residual(False)]), loss=loss)
     value = result.state[0]
     refined = Camera(*value[:4], tuple(value[4:]), camera.model, tuple(image_size))
     T = np.full((N, 4, 4), np.nan)
@@ -205,7 +215,11 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
         for n, s_ in zip(result.names, result.std):
             if n.startswith("board."):
                 sigma[n.split(".", 1)[1]] = float(s_)
-    residuals = _residuals(refined, X, uv, T)
+    # the solver's final residuals (weight 1: detected minus projected, sag included) per image
+    used = np.full(uv[good].shape, np.nan)
+    used[np.all(np.isfinite(uv[good]), axis=2)] = np.asarray(result.residuals_after).reshape(-1, 2)
+    residuals = np.full(uv.shape, np.nan)
+    residuals[good] = used
     rms, per_image = rms_px(residuals)
     dropped = result.identifiability.dropped_names
     msg = (f"{'converged' if result.converged else 'NOT CONVERGED (' + result.reason + ')'} after "
@@ -217,9 +231,3 @@ def calibrate_camera(image_points, target_points, image_size, *, model: str = "b
     return CameraCalibration(refined, T, residuals, rms, per_image, sigma, bool(result.converged),
                              result.identifiability, msg, skipped, sag)
 
-
-def _residuals(camera: Camera, X, uv, T) -> np.ndarray:
-    """Detected minus projected pixels (N, P, 2), NaN where not detected or no pose."""
-    p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
-    pred = camera.project(p.reshape(-1, 3)).pixels.reshape(uv.shape)
-    return uv - pred

@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..transforms import skew, so3_exp
+from ..calib.residuals.reprojection import cross_rows
+from ..camera.projection import project_points
+from ..transforms import so3_exp
 
 __all__ = ["plane_frame", "spread_ratio", "homographies", "poses_from_homographies", "refine_poses", "solve_pnp"]
 
@@ -56,7 +58,8 @@ def _conditioning(pts, mask):
 
 
 def _apply(T, pts):
-    return np.einsum("nij,npj->npi", T[:, :2, :2], pts) + T[:, None, :2, 2]
+    """The similarities T (N, 3, 3) of :func:`_conditioning` (``s I`` and a shift) on pts (N, P, 2)."""
+    return pts * T[:, None, 0, 0, None] + T[:, None, :2, 2]
 
 
 def spread_ratio(plane_xy, mask) -> np.ndarray:
@@ -75,7 +78,8 @@ def homographies(plane_xy, image_xy, mask) -> np.ndarray:
     """Homographies H (N, 3, 3) with ``image ~ H [x, y, 1]`` by the normalised DLT.
 
     plane_xy (P, 2) or (N, P, 2); image_xy (N, P, 2); mask (N, P) bool: the points used (at least
-    4 per image). Rows of undetected points are zero, so all images are solved in one batched SVD.
+    4 per image). Rows of undetected points are zero, so all images are solved in one batched
+    eigen-decomposition.
     """
     img = np.asarray(image_xy, dtype=float)
     N, P = img.shape[:2]
@@ -90,7 +94,10 @@ def homographies(plane_xy, image_xy, mask) -> np.ndarray:
     A[:, :, 1, 3:6] = sh
     A[:, :, 1, 6:9] = -d[..., 1:2] * sh
     A *= mask[:, :, None, None]
-    h = np.linalg.svd(A.reshape(N, 2 * P, 9), full_matrices=False)[2][:, -1]
+    # the null vector from the 9 x 9 normal matrix (its smallest eigenvector): on conditioned
+    # coordinates its precision suffices for a start and it costs a fraction of an SVD of A
+    A = A.reshape(N, 2 * P, 9)
+    h = np.linalg.eigh(np.swapaxes(A, 1, 2) @ A)[1][:, :, 0]
     H = np.linalg.solve(Td, h.reshape(N, 3, 3) @ Ts)
     return H / H[:, 2:3, 2:3]
 
@@ -116,15 +123,21 @@ def _residuals(camera, X, uv, mask, T, jacobian):
     """Pixel residuals (N, P, 2) (0 where masked) and, with ``jacobian``, d(prediction)/d(left step)
     (N, P, 2, 6)."""
     N, P = uv.shape[:2]
-    p = np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]
-    proj = camera.project(p.reshape(-1, 3), jacobian=jacobian)
+    # every image in one matrix product: Y[p, 3n + i] = sum_j X[p, j] R_n[i, j]
+    p = (X @ T[:, :3, :3].transpose(2, 0, 1).reshape(3, 3 * N)).reshape(P, N, 3).transpose(1, 0, 2) \
+        + T[:, None, :3, 3]
+    proj = project_points(p.reshape(-1, 3), camera.intrinsics, camera.distortion, camera.model, jacobian,
+                          point_only=True)
     r = np.where(mask[..., None], uv - proj.pixels.reshape(N, P, 2), 0.0)
-    r = np.nan_to_num(r, nan=1e6)  # a point behind the camera: a huge residual, the step is rejected
+    finite = bool(np.isfinite(r).all())
+    if not finite:
+        r = np.nan_to_num(r, nan=1e6)  # a point behind the camera: a huge residual, the step is rejected
     if not jacobian:
         return r, None
-    dstep = np.concatenate([-skew(p.reshape(-1, 3)), np.broadcast_to(np.eye(3), (N * P, 3, 3))], axis=2)
-    J = (proj.d_point @ dstep).reshape(N, P, 2, 6)
-    J = np.where(mask[..., None, None], np.nan_to_num(J), 0.0)
+    J = cross_rows(p.reshape(-1, 3), proj.d_point, 1.0).reshape(N, P, 2, 6)  # d_point @ [-[p]x, I]
+    J[~mask] = 0.0
+    if not finite:
+        J = np.nan_to_num(J)
     return r, J
 
 
@@ -146,35 +159,41 @@ def refine_poses(camera, target_points, image_points, T0, *, mask=None, iteratio
     cost = np.einsum("npk,npk->n", r, r)
     active = np.ones(N, bool)
     for _ in range(iterations):
-        H = np.einsum("npki,npkj->nij", J, J)
-        g = np.einsum("npki,npk->ni", J, r)
+        idx = np.flatnonzero(active)  # only the images still iterating are evaluated
+        Jr = J[idx].reshape(len(idx), -1, 6)
+        JrT = np.swapaxes(Jr, 1, 2)
+        H = JrT @ Jr
+        g = (JrT @ r[idx].reshape(len(idx), -1, 1))[..., 0]
         damping = np.einsum("nii->ni", H)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
-        d = np.linalg.solve(H + lam[:, None, None] * damping, g[..., None])[..., 0]
-        d[~active] = 0.0
-        Tn = T.copy()
+        d = np.linalg.solve(H + lam[idx, None, None] * damping, g[..., None])[..., 0]
+        Tn = T[idx].copy()
         R = so3_exp(d[:, :3])
-        Tn[:, :3, :3] = R @ T[:, :3, :3]
-        Tn[:, :3, 3] = (R @ T[:, :3, 3, None])[..., 0] + d[:, 3:]
-        rn, Jn = _residuals(camera, X, uv, mask, Tn, True)
+        Tn[:, :3, :3] = R @ Tn[:, :3, :3]
+        Tn[:, :3, 3] = (R @ Tn[:, :3, 3, None])[..., 0] + d[:, 3:]
+        rn, Jn = _residuals(camera, X, uv[idx], mask[idx], Tn, True)
         cn = np.einsum("npk,npk->n", rn, rn)
-        better = (cn <= cost) & active
-        T[better], r[better], J[better] = Tn[better], rn[better], Jn[better]
-        small = better & (cost - cn <= tol * np.maximum(cost, 1e-30)) | (np.abs(d).max(1) < 1e-12)
-        cost = np.where(better, cn, cost)
-        lam = np.where(better, lam * 0.3, lam * 10.0)
-        active &= ~small & (lam < 1e8)
+        c0 = cost[idx]
+        better = cn <= c0
+        up = idx[better]
+        T[up], r[up], J[up], cost[up] = Tn[better], rn[better], Jn[better], cn[better]
+        small = better & (c0 - cn <= tol * np.maximum(c0, 1e-30)) | (np.abs(d).max(1) < 1e-12)
+        # a refused step whose predicted reduction is at the rounding level: a stationary point
+        small |= ~better & (np.einsum("ni,ni->n", g, d) <= tol * np.maximum(c0, 1e-30))
+        lam[idx] = np.where(better, lam[idx] * 0.3, lam[idx] * 10.0)
+        active[idx] = ~small & (lam[idx] < 1e8)
         if not active.any():
             break
     n = np.maximum(mask.sum(1), 1)
     return T, np.sqrt(cost / n)
 
 
-def solve_pnp(camera, target_points, image_points, *, min_points: int = 4) -> tuple:
+def solve_pnp(camera, target_points, image_points, *, min_points: int = 4, iterations: int = 30) -> tuple:
     """The target's pose in the camera per image: homography start, then :func:`refine_poses`.
 
     camera: :class:`robocal.camera.Camera`; target_points (P, 3) [mm, target frame]; image_points
     (N, P, 2) [px], NaN where not detected. Returns ``(T_camera_target (N, 4, 4) [mm], rms (N,)
-    [px], reasons)``: ``reasons`` a list of N strings, empty for a solved image, else why not (its
+    [px], reasons)``; iterations: at most this many refinement steps (a start for a joint
+    solve needs few); ``reasons`` a list of N strings, empty for a solved image, else why not (its
     pose and rms are NaN).
     """
     X = np.asarray(target_points, dtype=float)
@@ -200,5 +219,5 @@ def solve_pnp(camera, target_points, image_points, *, min_points: int = 4) -> tu
     T0 = poses_from_homographies(H) @ np.linalg.inv(T_tp)
     bad = ~np.all(np.isfinite(T0), axis=(1, 2))
     T0[bad] = np.eye(4)
-    T[ok], rms[ok] = refine_poses(camera, X, uv[ok], T0, mask=mask[ok])
+    T[ok], rms[ok] = refine_poses(camera, X, uv[ok], T0, mask=mask[ok], iterations=iterations)
     return T, rms, reasons
