@@ -19,13 +19,14 @@ when ``ROBOCAL_SLOW=1`` is set (before each release).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Figure", "FIGURES", "check_figures", "printed_value", "repository_root"]
+__all__ = ["Figure", "FIGURES", "check_figure", "check_figures", "printed_value", "repository_root"]
 
 
 def repository_root() -> Path:
@@ -68,16 +69,67 @@ class Figure:
 
 
 # ----------------------------------------------------------------------------------------- producers
+def _flat(obj, prefix: str = "") -> dict:
+    """Every number of a nested record as ``{"a.b.c": value}``; list items are named by their
+    ``set`` / ``seed`` field when they have one, else by their index."""
+    out = {}
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            out.update(_flat(v, f"{prefix}{k}."))
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            name = v.get("set", v.get("seed", i)) if isinstance(v, dict) else i
+            out.update(_flat(v, f"{prefix}{name}."))
+    elif isinstance(obj, (int, float)) and not isinstance(obj, bool):
+        out[prefix[:-1]] = float(obj)
+    return out
+
+
 @functools.lru_cache(maxsize=None)
 def _dataset(name: str, model: str) -> dict:
+    """``robocal datasets run NAME --model MODEL --json``, flattened (:func:`_flat`); Hilti's sets
+    also as ``{set}.holdout_rms_mm``."""
     from ..workflows.datasets.run import run_dataset
 
     r = run_dataset(name, model)
-    out = {k: v for k, v in r.items() if isinstance(v, (int, float))}
-    if "sets" in r:
-        for s in r["sets"]:
-            out[f"{s['set']}.holdout_rms_mm"] = s["holdout_rms_mm"]
+    out = _flat(r)
+    for s in r.get("sets", []):
+        out[f"{s['set']}.holdout_rms_mm"] = s["holdout_rms_mm"]
     return out
+
+
+@functools.lru_cache(maxsize=None)
+def _closed_chain(n_seeds: int, plates: int, known_spacing: bool) -> dict:
+    """docs/closed-chain.md: the study per seed (flattened) and its medians over the seeds."""
+    import numpy as np
+
+    from ..workflows.calibration.closed_chain_study import run_study
+
+    rows = run_study(range(n_seeds), plates=plates, known_spacing=known_spacing)
+    out = _flat(rows)
+    for k in ("closed_chain", "tracker", "nominal"):
+        out[f"median.{k}"] = float(np.median([r["workspace_rms_mm"][k] for r in rows]))
+    out["median.ratio"] = float(np.median([r["ratio_closed_chain_to_tracker"] for r in rows]))
+    out["median.max_abs_z"] = float(np.median([r["max_abs_z"] for r in rows]))
+    out["max.max_abs_z"] = float(max(r["max_abs_z"] for r in rows))
+    out["n_not_converged"] = float(sum(r["n_not_converged"] for r in rows))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def _tcp_accuracy(preset: str) -> dict:
+    """docs/tcp.md: ``robocal tcp accuracy --preset PRESET --seeds 20 --repeats 10 --json``'s summary."""
+    from ..workflows.tool.accuracy import tcp_accuracy_study
+
+    return _flat(tcp_accuracy_study(preset=preset, seeds=20, first_seed=1, repeats=10)["summary"])
+
+
+@functools.lru_cache(maxsize=None)
+def _tcp_budget() -> dict:
+    """docs/tcp.md: ``robocal tcp accuracy --budget --seeds 10 --repeats 5 --json`` (both methods)."""
+    from ..workflows.tool.accuracy import METHODS, tcp_error_budget
+
+    return _flat(tcp_error_budget(seeds=10, first_seed=1, repeats=5, methods=METHODS))
 
 
 @functools.lru_cache(maxsize=None)
@@ -124,9 +176,38 @@ PRODUCERS = {
     "nao/simulated": _nao_simulated,
     "iso_cube/abb_irb140": lambda: _iso_cube("abb_irb140"),
     "iso_cube/kuka_kr150_r3100": lambda: _iso_cube("kuka_kr150_r3100"),
+    "hilti_trailblazer/geometric": lambda: _dataset("hilti_trailblazer", "geometric"),
+    "boby_fanuc/elastic-full": lambda: _dataset("boby_fanuc", "elastic-full"),
+    "hilti_trailblazer/elastic-joint": lambda: _dataset("hilti_trailblazer", "elastic-joint"),
+    "hilti_trailblazer/elastic-full": lambda: _dataset("hilti_trailblazer", "elastic-full"),
+    "closed_chain/study": lambda: _closed_chain(10, 2, True),
+    **{f"closed_chain/{p}-{'spacing' if k else 'free'}": functools.partial(_closed_chain, 5, p, k)
+       for p in (1, 2) for k in (False, True)},
+    "tcp/realistic": lambda: _tcp_accuracy("realistic"),
+    "tcp/ideal": lambda: _tcp_accuracy("ideal"),
+    "tcp/budget": _tcp_budget,
 }
 
-_N = r"([0-9]+(?:\.[0-9]+)?)"
+_N = r"([−-]?[0-9]+(?:\.[0-9]+)?)"
+
+
+def _cell(row: str, col: int, pos: int = 0, file_row_start: str = r"(?m)^\| ") -> str:
+    """Pattern of the ``pos``-th number in cell ``col`` (0 = the first cell after the label) of the
+    Markdown table row whose label cells are ``row`` (e.g. ``"realistic | cross-laser"``)."""
+    return (file_row_start + re.escape(row) + r" \|" + r"[^|\n]*\|" * col
+            + r"(?:[^0-9|\n]*?[0-9][0-9.]*)" * pos + r"[^0-9|\n]*?" + _N)
+
+
+def _table(file: str, rows: dict, producer: str, columns: list, *, prefix: str = "", rel_tol: float = 0.005,
+           slow: bool = False, note: str = "") -> list:
+    """Figures of a table: ``rows`` label -> field prefix, ``columns`` [(col, pos, field suffix)]."""
+    out = []
+    for label, key in rows.items():
+        for col, pos, field in columns:
+            f = f"{key}.{field}" if key else field
+            out.append(Figure(f"{prefix}{label.split(' (')[0].replace(' | ', '/')} {f}", file, _cell(label, col, pos),
+                              producer, f, rel_tol=rel_tol, slow=slow, note=note))
+    return out
 _ROW_BOBY = r"\| boby_fanuc \(mean over seeds 0-4\) \| "
 _ROW_JUSTIN = r"\| dlr_justin \(seed 0\) \| "
 
@@ -155,6 +236,82 @@ FIGURES = [
 ]
 
 
+# datasets.md: the protocols' tables (``python -m robocal.workflows.datasets`` prints them)
+_METRICS3 = [(0, 0, "rms"), (1, 0, "mean"), (2, 0, "max")]
+FIGURES += _table("docs/datasets.md", {"nominal (robocal)": "nominal"}, "boby_fanuc/geometric", _METRICS3,
+                  prefix="datasets:boby ")
+FIGURES += _table("docs/datasets.md", {"calibrated (robocal)": "geometric"}, "boby_fanuc/geometric",
+                  [(1, 0, "mean"), (2, 0, "max")], prefix="datasets:boby ")
+FIGURES += _table("docs/datasets.md", {"nominal, base + 2 marker offsets": "nominal"}, "dlr_justin/geometric",
+                  _METRICS3, prefix="datasets:justin ")
+FIGURES += _table("docs/datasets.md", {"+ all modified-DH params of torso and arms (alpha, a, theta, d; beta where "
+                                       "alpha = 0), prior 1e-3": ""}, "dlr_justin/geometric",
+                  [(0, 0, "geometric.rms"), (1, 0, "geometric.mean"), (2, 0, "geometric.max"), (3, 0, "train_rms_mm")],
+                  prefix="datasets:justin ")
+_HILTI_SETS = {"flat (275, training data)": "sets.flat", "pallet (316)": "sets.pallet",
+               "orthogonal_wood (255)": "sets.orthogonal_wood", "wood_left_track (273)": "sets.wood_left_track",
+               "seesaw (300)": "sets.seesaw", "diagonal_wood (313)": "sets.diagonal_wood",
+               "outdoor (324, 9 C)": "sets.outdoor"}
+FIGURES += [dataclasses.replace(f, note="training data" if "flat" in f.key else "holdout")
+            for f in _table("docs/datasets.md", _HILTI_SETS, "hilti_trailblazer/geometric",
+                            [(0, 0, "nominal.rms"), (0, 3, "nominal.max"), (1, 0, "geometric.rms"), (1, 1, "p95_xy_mm"),
+                             (1, 2, "p95_z_mm"), (1, 3, "geometric.mean"), (1, 4, "geometric.max")],
+                            prefix="datasets:hilti ")]
+FIGURES += _table("docs/datasets.md", {"boby_fanuc (mean over seeds 0-4)": ""}, "boby_fanuc/elastic-joint",
+                  [(1, 1, "holdout_mean_mm"), (1, 2, "holdout_max_mm")], prefix="datasets:boby elastic-joint ",
+                  rel_tol=0.01)
+FIGURES += _table("docs/datasets.md", {"boby_fanuc (mean over seeds 0-4)": ""}, "boby_fanuc/elastic-full",
+                  [(2, 0, "holdout_rms_mm"), (2, 1, "holdout_mean_mm"), (2, 2, "holdout_max_mm")],
+                  prefix="datasets:boby elastic-full ", rel_tol=0.01, slow=True)
+for _col, _model, _slow in ((0, "geometric", False), (1, "elastic-joint", True), (2, "elastic-full", True)):
+    for _label, _sets in (("hilti flat (training set) / pallet / orthogonal_wood (RMS)",
+                           ("flat", "pallet", "orthogonal_wood")),
+                          ("hilti wood_left_track / seesaw / diagonal_wood / outdoor (RMS)",
+                           ("wood_left_track", "seesaw", "diagonal_wood", "outdoor"))):
+        FIGURES += [Figure(f"datasets:hilti {_model} {s} rms", "docs/datasets.md", _cell(_label, _col, k),
+                           f"hilti_trailblazer/{_model}", f"sets.{s}.holdout_rms_mm", rel_tol=0.01, slow=_slow,
+                           note="training data" if s == "flat" else "holdout")
+                    for k, s in enumerate(_sets)]
+
+# closed-chain.md: ``python -m robocal.workflows.calibration.closed_chain_study --seeds 10`` and the variants
+FIGURES += _table("docs/closed-chain.md", {str(s): str(s) for s in range(10)}, "closed_chain/study",
+                  [(0, 0, "E_OP_before_mm"), (0, 1, "E_OP_after_mm"), (1, 0, "workspace_rms_mm.nominal"),
+                   (2, 0, "workspace_rms_mm.closed_chain"), (3, 0, "workspace_rms_mm.tracker"),
+                   (4, 0, "workspace_rms_mm.true_model"), (5, 0, "ratio_closed_chain_to_tracker"), (6, 0, "max_abs_z")],
+                  prefix="closed-chain:seed ", rel_tol=0.01, slow=True)
+FIGURES += [
+    Figure("closed-chain:median ratio", "docs/closed-chain.md", r"Median ratio closed chain / tracker: " + _N,
+           "closed_chain/study", "median.ratio", rel_tol=0.01, slow=True),
+    Figure("closed-chain:largest z", "docs/closed-chain.md", r"for all 22 parameters \(largest " + _N,
+           "closed_chain/study", "max.max_abs_z", rel_tol=0.01, slow=True),
+    Figure("closed-chain:median of the largest z", "docs/closed-chain.md", r"the maxima \(median " + _N,
+           "closed_chain/study", "median.max_abs_z", rel_tol=0.01, slow=True),
+]
+for _p, _k, _label in ((1, False, "1 | no | 40"), (1, True, "1 | 50 mm | 40"), (2, False, "2 | no | 80"),
+                       (2, True, "2 | 50 mm | 80")):
+    FIGURES += _table("docs/closed-chain.md", {_label: ""}, f"closed_chain/{_p}-{'spacing' if _k else 'free'}",
+                      [(0, 0, "median.closed_chain"), (1, 0, "median.tracker"), (2, 0, "median.ratio"),
+                       (3, 0, "max.max_abs_z")], prefix="closed-chain:variant ", rel_tol=0.01, slow=True)
+
+# tcp.md: ``robocal tcp accuracy --preset realistic|ideal --seeds 20 --repeats 10`` and ``--budget``
+_Q = ["median", "q25", "q75"]
+for _preset in ("realistic", "ideal"):
+    for _m, _lab in (("cross_laser", "cross-laser"), ("parallel_barriers", "parallel barriers")):
+        _cols = [(c, k, f"{metric}.{q}") for c, metric in enumerate(("repeatability_mm", "accuracy_mm", "check_mm",
+                                                                      "axis_accuracy_deg"))
+                 for k, q in enumerate(_Q)]
+        FIGURES += _table("docs/tcp.md", {f"{_preset} | {_lab}": _m}, f"tcp/{_preset}",
+                          _cols + [(4, 0, "cycle_s.median")], prefix="tcp:", rel_tol=0.01, slow=True)
+_BUDGET = {"ideal": "ideal", "+ I/O 125 Hz, late, jitter": "I/O 125 Hz, late, jitter",
+           "+ absolute error": "absolute error", "+ dirty beams": "dirty beams", "+ tool runout": "tool runout",
+           "+ measuring arm": "measuring arm", "realistic (all)": "realistic"}
+for _c, _m in enumerate(("cross_laser", "parallel_barriers")):
+    FIGURES += _table("docs/tcp.md", {k: f"{v}.{_m}" for k, v in _BUDGET.items()}, "tcp/budget",
+                      [(_c, k, f"{metric}.median") for k, metric in
+                       enumerate(("repeatability_mm", "accuracy_mm", "check_mm", "axis_accuracy_deg"))],
+                      prefix="tcp:budget ", rel_tol=0.01, slow=True)
+
+
 # ----------------------------------------------------------------------------------------- checking
 def printed_value(fig: Figure, root: Path | None = None) -> tuple[float, int]:
     """The number as printed in the file, and its count of decimals.
@@ -172,22 +329,23 @@ def printed_value(fig: Figure, root: Path | None = None) -> tuple[float, int]:
     if not m:
         raise InputFileError(f"{fig.file}: the figure {fig.key!r} is no longer where its pattern looks "
                              f"({fig.pattern!r}); update robocal/docs/figures.py with the text")
-    s = m.group(1)
+    s = m.group(1).replace("−", "-")
     return float(s), (len(s.split(".")[1]) if "." in s else 0)
 
 
+def check_figure(fig: Figure, root: Path | None = None) -> dict:
+    """Regenerate one figure and compare: ``key, file, printed, computed, tolerance, ok, note``."""
+    printed, decimals = printed_value(fig, root)
+    computed = float(PRODUCERS[fig.producer]()[fig.field])
+    tol = 0.5 * 10 ** (-decimals) + fig.rel_tol * abs(printed)
+    return {"key": fig.key, "file": fig.file, "printed": printed, "computed": computed, "tolerance": tol,
+            "ok": abs(computed - printed) <= tol, "note": fig.note}
+
+
 def check_figures(*, include_slow: bool = False, only=None, root: Path | None = None) -> list[dict]:
-    """Regenerate and compare; one row per figure: printed, computed, tolerance, ok."""
-    rows = []
-    for fig in FIGURES:
-        if (fig.slow and not include_slow) or (only and not any(o in fig.key for o in only)):
-            continue
-        printed, decimals = printed_value(fig, root)
-        computed = float(PRODUCERS[fig.producer]()[fig.field])
-        tol = 0.5 * 10 ** (-decimals) + fig.rel_tol * abs(printed)
-        rows.append({"key": fig.key, "file": fig.file, "printed": printed, "computed": computed, "tolerance": tol,
-                     "ok": abs(computed - printed) <= tol, "note": fig.note})
-    return rows
+    """Regenerate and compare (:func:`check_figure`); ``only``: texts one of which each key contains."""
+    return [check_figure(fig, root) for fig in FIGURES
+            if not (fig.slow and not include_slow) and not (only and not any(o in fig.key for o in only))]
 
 
 def main(argv=None) -> int:
