@@ -26,7 +26,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Figure", "FIGURES", "check_figure", "check_figures", "printed_value", "repository_root"]
+__all__ = ["Figure", "FIGURES", "PRODUCERS", "SLOW_PRODUCERS", "check_figure", "check_figures", "printed_value", "repository_root"]
 
 
 def repository_root() -> Path:
@@ -310,6 +310,39 @@ for _c, _m in enumerate(("cross_laser", "parallel_barriers")):
                       [(_c, k, f"{metric}.median") for k, metric in
                        enumerate(("repeatability_mm", "accuracy_mm", "check_mm", "axis_accuracy_deg"))],
                       prefix="tcp:budget ", rel_tol=0.01, slow=True)
+
+
+# elastic.md: the three protocols with the three models (``robocal datasets run NAME --model M --json``)
+_HOLDOUT3 = ("holdout_rms_mm", "holdout_mean_mm", "holdout_max_mm")
+_ELASTIC_ROWS = {"dlr_justin (400/100, seed 0)": ("dlr_justin", ""), "boby_fanuc (24/12, seeds 0-4)": ("boby_fanuc", ""),
+                 **{f"hilti {s}" + (" (training set)" if s == "flat" else ""): ("hilti_trailblazer", f"sets.{s}")
+                    for s in ("flat", "pallet", "orthogonal_wood", "wood_left_track", "seesaw", "diagonal_wood",
+                              "outdoor")}}
+for _col, _model in enumerate(("geometric", "elastic-joint", "elastic-full")):
+    for _label, (_ds, _key) in _ELASTIC_ROWS.items():
+        FIGURES += [dataclasses.replace(f, key=f"elastic:{_model} {f.key}",
+                                        note="training data" if "flat" in _label else "holdout")
+                    for f in _table("docs/elastic.md", {_label: _key}, f"{_ds}/{_model}",
+                                    [(_col, k, field) for k, field in enumerate(_HOLDOUT3)], rel_tol=0.01,
+                                    slow=_model != "geometric" and _ds == "dlr_justin"
+                                    or _model == "elastic-full" and _ds == "hilti_trailblazer")]
+FIGURES += [
+    Figure("elastic:justin train rms geometric", "docs/elastic.md", r"Training RMS: Justin " + _N,
+           "dlr_justin/geometric", "train_rms_mm"),
+    Figure("elastic:justin train rms joint", "docs/elastic.md", r"Training RMS: Justin [0-9.]+ → " + _N,
+           "dlr_justin/elastic-joint", "train_rms_mm", rel_tol=0.01, slow=True),
+    Figure("elastic:justin train rms full", "docs/elastic.md", r"Training RMS: Justin [0-9.]+ → [0-9.]+ \(joint\) → " + _N,
+           "dlr_justin/elastic-full", "train_rms_mm", rel_tol=0.01, slow=True),
+]
+for _model, _pat in (("elastic-joint", r"0\.276 mm RMS \(per seed "), ("elastic-full", r"0\.320 mm \(per seed ")):
+    FIGURES += [Figure(f"elastic:boby {_model} seed {k}", "docs/elastic.md", _pat + r"(?:[0-9.]+,\s+)" * k + _N,
+                       f"boby_fanuc/{_model}", f"per_seed_holdout_rms_mm.{k}", rel_tol=0.01) for k in range(5)]
+
+
+#: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
+SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full",
+                  *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/")))}
+FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
 
 
 # ----------------------------------------------------------------------------------------- checking
