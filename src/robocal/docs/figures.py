@@ -159,6 +159,56 @@ def _nao_simulated() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _nao_acceptance() -> dict:
+    """docs/self-calibration.md, NAO H25 acceptance (the setup of ``tests/test_self_calibration_nao.py``):
+    40 views per hand, offsets uniform in +-3 deg (seed 25), 0.3 px; both arms and each arm alone.
+    Fields ``max_abs_z``, ``rms_px_per_coordinate``, ``{both|left_hand|right_hand}.{param}.error_deg``
+    / ``.sigma_deg`` and ``truth.{param}`` [deg]."""
+    import numpy as np
+
+    from ..camera import Camera
+    from ..handeye.refine import joint_offset_names
+    from ..handeye.self_calibration import solve_self_calibration
+    from ..io.boards import parse_board
+    from ..robots import load_robot
+    from ..sim.cameras.self_calibration_views import simulate_corner_views
+    from ..transforms import so3_exp, transforms_from
+
+    cam = Camera(556.8, 556.8, 319.5, 239.5, (0.0, 0.0, 0.0, 0.0, 0.0), "brown", (640, 480))
+    hands = ("left_hand", "right_hand")
+    m = load_robot("nao_h25")
+    rng = np.random.default_rng(25)
+    pn = list(m.params.names)
+    truth = m.params.values.copy()
+    offsets = {n: np.radians(rng.uniform(-3.0, 3.0)) for n in joint_offset_names(m)}
+    for n, v in offsets.items():
+        truth[pn.index(n)] += v
+    board = parse_board("checkerboard:5x4:12mm")
+    X = board.object_points()
+    mounts = {h: transforms_from(so3_exp(np.array([0.02, np.pi / 2, -0.03])), np.array([20.0, 2.0, -1.0]))
+              for h in hands}
+    T_ee_camera = transforms_from(so3_exp(np.array([0.005, -0.01, 0.008])), np.array([1.0, -0.5, 0.8]))
+    q, on, uv = simulate_corner_views(m.with_params(truth), cam, X, camera_end_effector="camera_top",
+                                      T_ee_camera=T_ee_camera, boards=mounts, n_per_carrier=40, rng=rng,
+                                      pixel_noise=0.3, front_z=board.front_z, pitch_mm=board.pitch_mm)
+    kw = dict(camera_end_effector="camera_top", pixel_sigma=0.3)
+    fits = {"both": solve_self_calibration(m, q, uv, X, cam, on, **kw),
+            **{h: solve_self_calibration(m, q[on == h], uv[on == h], X, cam, on[on == h], **kw) for h in hands}}
+    out = {f"truth.{n}": float(np.degrees(v)) for n, v in offsets.items()}
+    for name, res in fits.items():
+        held = {r["name"] for r in res.joint_report if not r["identifiable"]}
+        for n, v, s in zip(res.joint_offset_names, res.joint_offsets, res.joint_offset_sigma):
+            if n not in held:
+                out[f"{name}.{n}.error_deg"] = float(np.degrees(v - offsets[n]))
+                out[f"{name}.{n}.sigma_deg"] = float(np.degrees(s))
+                if name == "both":
+                    out["max_abs_z"] = max(out.get("max_abs_z", 0.0), abs(float((v - offsets[n]) / s)))
+    out["rms_px_per_coordinate"] = float(fits["both"].rms_px / np.sqrt(2))
+    out["n_not_converged"] = float(sum(not r.converged for r in fits.values()))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -174,6 +224,7 @@ PRODUCERS = {
     "dlr_justin/elastic-joint": lambda: _dataset("dlr_justin", "elastic-joint"),
     "dlr_justin/elastic-full": lambda: _dataset("dlr_justin", "elastic-full"),
     "nao/simulated": _nao_simulated,
+    "nao/acceptance": _nao_acceptance,
     "iso_cube/abb_irb140": lambda: _iso_cube("abb_irb140"),
     "iso_cube/kuka_kr150_r3100": lambda: _iso_cube("kuka_kr150_r3100"),
     "hilti_trailblazer/geometric": lambda: _dataset("hilti_trailblazer", "geometric"),
@@ -337,6 +388,25 @@ FIGURES += [
 for _model, _pat in (("elastic-joint", r"0\.276 mm RMS \(per seed "), ("elastic-full", r"0\.320 mm \(per seed ")):
     FIGURES += [Figure(f"elastic:boby {_model} seed {k}", "docs/elastic.md", _pat + r"(?:[0-9.]+,\s+)" * k + _N,
                        f"boby_fanuc/{_model}", f"per_seed_holdout_rms_mm.{k}", rel_tol=0.01) for k in range(5)]
+
+
+# self-calibration.md: the NAO H25 acceptance (tests/test_self_calibration_nao.py's setup)
+FIGURES += [
+    Figure("self-calibration:nao acceptance max |z|", "docs/self-calibration.md",
+           r"the other 9 within\s+max \|error / sigma\| = " + _N, "nao/acceptance", "max_abs_z", rel_tol=0.02),
+    Figure("self-calibration:nao acceptance rms", "docs/self-calibration.md",
+           r"reprojection RMS per coordinate " + _N + r" px for 0\.3 px", "nao/acceptance", "rms_px_per_coordinate"),
+]
+_NAO = {"theta1 HeadYaw": "theta1", "theta4 LShoulderPitch": "theta4", "theta5 LShoulderRoll": "theta5",
+        "theta6 LElbowYaw": "theta6", "theta7 LElbowRoll": "theta7", "theta9 RShoulderPitch": "theta9",
+        "theta10 RShoulderRoll": "theta10", "theta11 RElbowYaw": "theta11", "theta12 RElbowRoll": "theta12"}
+for _label, _p in _NAO.items():
+    _cols = [(0, 0, f"truth.{_p}")]
+    for _c, _fit in ((1, "both"), (2, "left_hand"), (3, "right_hand")):
+        if _c == 1 or (_fit == "left_hand") == (_label.split()[1][0] == "L") or _p == "theta1":
+            _cols += [(_c, 0, f"{_fit}.{_p}.error_deg"), (_c, 1, f"{_fit}.{_p}.sigma_deg")]
+    FIGURES += [dataclasses.replace(f, rel_tol=0.02) for f in
+                _table("docs/self-calibration.md", {_label: ""}, "nao/acceptance", _cols, prefix="self-calibration:nao ")]
 
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
