@@ -242,21 +242,23 @@ PRODUCERS = {
 _N = r"([−-]?[0-9]+(?:\.[0-9]+)?)"
 
 
-def _cell(row: str, col: int, pos: int = 0, file_row_start: str = r"(?m)^\| ") -> str:
+def _cell(row: str, col: int, pos: int = 0, after: str = "") -> str:
     """Pattern of the ``pos``-th number in cell ``col`` (0 = the first cell after the label) of the
-    Markdown table row whose label cells are ``row`` (e.g. ``"realistic | cross-laser"``)."""
-    return (file_row_start + re.escape(row) + r" \|" + r"[^|\n]*\|" * col
+    Markdown table row whose label cells are ``row`` (e.g. ``"realistic | cross-laser"``), the
+    first such row after the text ``after``."""
+    start = (re.escape(after) + r"(?s:.*?)\n\| ") if after else r"(?m)^\| "
+    return (start + re.escape(row) + r" \|" + r"[^|\n]*\|" * col
             + r"(?:[^0-9|\n]*?[0-9][0-9.]*)" * pos + r"[^0-9|\n]*?" + _N)
 
 
 def _table(file: str, rows: dict, producer: str, columns: list, *, prefix: str = "", rel_tol: float = 0.005,
-           slow: bool = False, note: str = "") -> list:
+           slow: bool = False, note: str = "", after: str = "") -> list:
     """Figures of a table: ``rows`` label -> field prefix, ``columns`` [(col, pos, field suffix)]."""
     out = []
     for label, key in rows.items():
         for col, pos, field in columns:
             f = f"{key}.{field}" if key else field
-            out.append(Figure(f"{prefix}{label.split(' (')[0].replace(' | ', '/')} {f}", file, _cell(label, col, pos),
+            out.append(Figure(f"{prefix}{label.split(' (')[0].replace(' | ', '/')} {f}", file, _cell(label, col, pos, after),
                               producer, f, rel_tol=rel_tol, slow=slow, note=note))
     return out
 _ROW_BOBY = r"\| boby_fanuc \(mean over seeds 0-4\) \| "
@@ -329,7 +331,7 @@ FIGURES += _table("docs/closed-chain.md", {str(s): str(s) for s in range(10)}, "
                   [(0, 0, "E_OP_before_mm"), (0, 1, "E_OP_after_mm"), (1, 0, "workspace_rms_mm.nominal"),
                    (2, 0, "workspace_rms_mm.closed_chain"), (3, 0, "workspace_rms_mm.tracker"),
                    (4, 0, "workspace_rms_mm.true_model"), (5, 0, "ratio_closed_chain_to_tracker"), (6, 0, "max_abs_z")],
-                  prefix="closed-chain:seed ", rel_tol=0.01, slow=True)
+                  prefix="closed-chain:seed ", rel_tol=0.01, slow=True, after="| seed | E_OP before / after")
 FIGURES += [
     Figure("closed-chain:median ratio", "docs/closed-chain.md", r"Median ratio closed chain / tracker: " + _N,
            "closed_chain/study", "median.ratio", rel_tol=0.01, slow=True),
@@ -360,7 +362,7 @@ for _c, _m in enumerate(("cross_laser", "parallel_barriers")):
     FIGURES += _table("docs/tcp.md", {k: f"{v}.{_m}" for k, v in _BUDGET.items()}, "tcp/budget",
                       [(_c, k, f"{metric}.median") for k, metric in
                        enumerate(("repeatability_mm", "accuracy_mm", "check_mm", "axis_accuracy_deg"))],
-                      prefix="tcp:budget ", rel_tol=0.01, slow=True)
+                      prefix="tcp:budget ", rel_tol=0.01, slow=True, after="Error budget (`--budget`)")
 
 
 # elastic.md: the three protocols with the three models (``robocal datasets run NAME --model M --json``)
