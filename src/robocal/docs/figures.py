@@ -26,7 +26,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Figure", "FIGURES", "PRODUCERS", "SLOW_PRODUCERS", "check_figure", "check_figures", "printed_value", "repository_root"]
+__all__ = ["Figure", "FIGURES", "PRODUCERS", "SLOW_PRODUCERS", "check_figure", "check_figures", "datasets_needed", "printed_value", "repository_root"]
 
 
 def repository_root() -> Path:
@@ -208,6 +208,47 @@ def _nao_acceptance() -> dict:
     return out
 
 
+_NUMBER = re.compile(r"[−-]?[0-9]+(?:\.[0-9]+)?(?:e[−+-]?[0-9]+)?")
+
+
+def _markdown_rows(text: str) -> dict:
+    """Every Markdown table row of ``text`` as ``{"label|col|pos": number}`` (label = the first cell,
+    col counted from the cell after it, pos = the number's place in its cell)."""
+    out = {}
+    for line in text.splitlines():
+        if not line.startswith("|") or line.startswith("|---"):
+            continue
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        for col, cell in enumerate(cells[1:]):
+            for pos, s in enumerate(_NUMBER.findall(cell)):
+                out[f"{cells[0]}|{col}|{pos}"] = float(s.replace("−", "-"))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def _printed_table(module: str, function: str) -> dict:
+    """The Markdown table a workflow function returns as text, as :func:`_markdown_rows`."""
+    import importlib
+
+    return _markdown_rows(getattr(importlib.import_module(f"robocal.{module}"), function)())
+
+
+@functools.lru_cache(maxsize=None)
+def _datasets_report() -> dict:
+    """``python -m robocal.workflows.datasets``'s text: Justin's middle level and boby's seeds."""
+    from ..workflows.datasets.report import report
+
+    text = report()
+    out = {}
+    m = re.search(r"\+ 18 joint offsets\s+" + r"([0-9.]+)\s+" * 3 + r"\(train ([0-9.]+)\)", text)
+    if m:
+        out.update(zip(("justin_offsets.rms", "justin_offsets.mean", "justin_offsets.max", "justin_offsets.train"),
+                       map(float, m.groups())))
+    for s, cal, train in re.findall(r"seed ([0-9]+): nominal [0-9.]+, calibrated ([0-9.]+) \(train ([0-9.]+)\)", text):
+        out[f"boby_seed{s}.holdout"], out[f"boby_seed{s}.train"] = float(cal), float(train)
+    return out
+
+
 @functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
@@ -225,6 +266,9 @@ PRODUCERS = {
     "dlr_justin/elastic-full": lambda: _dataset("dlr_justin", "elastic-full"),
     "nao/simulated": _nao_simulated,
     "nao/acceptance": _nao_acceptance,
+    "datasets/report": _datasets_report,
+    "ros_industrial_positioner/table": lambda: _printed_table("workflows.datasets.ros_industrial_positioner",
+                                                              "positioner_table"),
     "iso_cube/abb_irb140": lambda: _iso_cube("abb_irb140"),
     "iso_cube/kuka_kr150_r3100": lambda: _iso_cube("kuka_kr150_r3100"),
     "hilti_trailblazer/geometric": lambda: _dataset("hilti_trailblazer", "geometric"),
@@ -409,6 +453,29 @@ for _label, _p in _NAO.items():
             _cols += [(_c, 0, f"{_fit}.{_p}.error_deg"), (_c, 1, f"{_fit}.{_p}.sigma_deg")]
     FIGURES += [dataclasses.replace(f, rel_tol=0.02) for f in
                 _table("docs/self-calibration.md", {_label: ""}, "nao/acceptance", _cols, prefix="self-calibration:nao ")]
+
+
+# datasets.md: Justin's middle level, boby's seeds (the report's text) and the positioner's table
+FIGURES += _table("docs/datasets.md", {"+ 18 joint offsets (torso incl. passive joint, both arms)": "justin_offsets"}, "datasets/report",
+                  [(0, 0, "rms"), (1, 0, "mean"), (2, 0, "max"), (3, 0, "train")], prefix="datasets:justin ")
+FIGURES += [Figure(f"datasets:boby seed {k} {what}", "docs/datasets.md",
+                   r"\(calibrated holdout RMS / train RMS\): " + r"(?:[0-9.]+/[0-9.]+,\s+)" * k
+                   + (_N if what == "holdout" else r"[0-9.]+/" + _N), "datasets/report", f"boby_seed{k}.{what}")
+            for k in range(5) for what in ("holdout", "train")]
+for _label, _spec in (("nominal DH (base + target mount fitted)", ((0, 3), (1, 1), (2, 3), (3, 2))),
+                      ("calibrated (+ the identifiable DH parameters)", ((0, 3), (1, 1), (2, 3), (3, 2)))):
+    FIGURES += [Figure(f"datasets:positioner {_label.split(' (')[0]} {c}.{k}", "docs/datasets.md",
+                       _cell(_label, c, k), "ros_industrial_positioner/table", f"{_label}|{c}|{k}")
+                for c, n in _spec for k in range(n)]
+
+
+def datasets_needed(producer: str) -> tuple:
+    """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
+    head = producer.split("/")[0]
+    if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
+        return (head,)
+    return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
+            "ros_industrial_positioner": ("ros_industrial_handeye",)}.get(head, ())
 
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
