@@ -250,6 +250,16 @@ def _datasets_report() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _thermal_seeds(preset: str) -> dict:
+    """docs/thermal.md section 6: ``robocal thermal experiment --preset PRESET --seeds 20 --resamples 20``;
+    lambda [%] as ``{rms|max}.{screening|evaluation}.{column}.{median|q25|q75|min|max}``."""
+    from ..workflows.thermal.seeds import run_thermal_seeds
+
+    r = run_thermal_seeds(preset=preset, seeds=20, first_seed=1, n_cycles=90, resamples=20)
+    return {**_flat(r["lambda"]), "n_not_converged": float(r["fits"]["not_converged"])}
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -281,6 +291,8 @@ PRODUCERS = {
     "tcp/realistic": lambda: _tcp_accuracy("realistic"),
     "tcp/ideal": lambda: _tcp_accuracy("ideal"),
     "tcp/budget": _tcp_budget,
+    "thermal/realistic": lambda: _thermal_seeds("realistic"),
+    "thermal/ideal": lambda: _thermal_seeds("ideal"),
 }
 
 _N = r"([−-]?[0-9]+(?:\.[0-9]+)?)"
@@ -469,6 +481,20 @@ for _label, _spec in (("nominal DH (base + target mount fitted)", ((0, 3), (1, 1
                 for c, n in _spec for k in range(n)]
 
 
+# thermal.md section 6: lambda over 20 seeds; per row the count of numbers in each column's cell
+# (median, q25, q75[, min, max])
+for _row, _counts in (("realistic, rms | screening", (5, 5, 5, 5)), ("realistic, rms | evaluation", (5, 5, 5, 5)),
+                      ("realistic, strict | screening", (3, 3, 3, 3)), ("realistic, strict | evaluation", (3, 3, 3, 3)),
+                      ("ideal, rms | screening", (3, 3, 3, 3)), ("ideal, rms | evaluation", (5, 3, 5, 3)),
+                      ("ideal, strict | screening", (3, 3, 3, 3)), ("ideal, strict | evaluation", (3, 3, 3, 3))):
+    _preset, _rest = _row.split(", ")
+    _stat, _role = _rest.split(" | ")
+    FIGURES += _table("docs/thermal.md", {_row: f"{'rms' if _stat == 'rms' else 'max'}.{_role}"}, f"thermal/{_preset}",
+                      [(c, k, f"{col}.{q}") for c, col in enumerate(("before", "traditional", "screened", "stable"))
+                       for k, q in enumerate(("median", "q25", "q75", "min", "max")[:_counts[c]])],
+                      prefix="thermal:", rel_tol=0.0)
+
+
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
@@ -480,7 +506,7 @@ def datasets_needed(producer: str) -> tuple:
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full",
-                  *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/")))}
+                  *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/", "thermal/")))}
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
 
 
