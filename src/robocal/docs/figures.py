@@ -260,6 +260,20 @@ def _thermal_seeds(preset: str) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _demo() -> dict:
+    """``robocal demo --poses 100`` (seed 7) in a temporary folder: the ISO 9283 comparison as
+    ``iso.{characteristic}.{before|after}``."""
+    import tempfile
+
+    from ..workflows.demo import run_demo
+
+    with tempfile.TemporaryDirectory() as tmp:
+        r = run_demo(Path(tmp) / "demo", seed=7, n_poses=100)
+    return {f"iso.{c['characteristic']}.{k}": float(c[k]) for c in r["iso9283"]["comparison"]
+            for k in ("before", "after")}
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -277,6 +291,7 @@ PRODUCERS = {
     "nao/simulated": _nao_simulated,
     "nao/acceptance": _nao_acceptance,
     "datasets/report": _datasets_report,
+    "demo/poses100": _demo,
     "ros_industrial_positioner/table": lambda: _printed_table("workflows.datasets.ros_industrial_positioner",
                                                               "positioner_table"),
     "iso_cube/abb_irb140": lambda: _iso_cube("abb_irb140"),
@@ -493,6 +508,21 @@ for _row, _counts in (("realistic, rms | screening", (5, 5, 5, 5)), ("realistic,
                       [(c, k, f"{col}.{q}") for c, col in enumerate(("before", "traditional", "screened", "stable"))
                        for k, q in enumerate(("median", "q25", "q75", "min", "max")[:_counts[c]])],
                       prefix="thermal:", rel_tol=0.0)
+
+
+# iso9283.md "In the demo" and README.md: ``robocal demo --poses 100`` (seed 7)
+FIGURES += [Figure(f"iso9283:demo {what} {k}", "docs/iso9283.md", pat, "demo/poses100", f"iso.{field}.{k}")
+            for what, field, text in (("AP", "AP_mm", r"AP "), ("AT line", "AT_mm_line", r"AT \(line\) "),
+                                      ("AT circle", "AT_mm_circle", r"AT \(circle\) "))
+            for k, pat in (("before", r"seed 7\)(?s:.*?)" + text + _N),
+                           ("after", r"seed 7\)(?s:.*?)" + text + r"[0-9.]+ → " + _N))]
+FIGURES += [
+    Figure("iso9283:demo RP", "docs/iso9283.md", r"seed 7\)(?s:.*?)RP " + _N + " mm before and after", "demo/poses100",
+           "iso.RP_mm.before"),
+    Figure("readme:demo AP before", "README.md", r"corrected program \(AP " + _N, "demo/poses100", "iso.AP_mm.before"),
+    Figure("readme:demo AP after", "README.md", r"corrected program \(AP [0-9.]+ -> " + _N, "demo/poses100",
+           "iso.AP_mm.after"),
+]
 
 
 def datasets_needed(producer: str) -> tuple:
