@@ -274,6 +274,23 @@ def _demo() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _plan_poses(robot: str) -> dict:
+    """docs/cells.md: ``robocal plan-poses ROBOT --count 40 --candidates 800 --tracker-at 2500,0,500``
+    (default cell, seed 0) without writing the file: draws, D-efficiency, path lengths [deg]."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..workflows.calibration.plan_poses import plan_cell, plan_in_cell
+
+    model = load_robot(robot)
+    r = plan_in_cell(model, plan_cell(model, None, np.array([2500.0, 0.0, 500.0]), None), count=40, candidates=800,
+                     seed=0)
+    return {"draws": float(r["draws"]), "d_efficiency": float(r["d_efficiency"]),
+            "lost_percent": 100.0 * (1.0 - float(r["d_efficiency"])),
+            "path_deg": float(np.degrees(r["path_rad"])), "path_unordered_deg": float(np.degrees(r["path_rad_unordered"]))}
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -292,6 +309,7 @@ PRODUCERS = {
     "nao/acceptance": _nao_acceptance,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    **{f"plan_poses/{r}": functools.partial(_plan_poses, r) for r in ("ur10", "kuka_kr150_r3100", "abb_irb140")},
     "ros_industrial_positioner/table": lambda: _printed_table("workflows.datasets.ros_industrial_positioner",
                                                               "positioner_table"),
     "iso_cube/abb_irb140": lambda: _iso_cube("abb_irb140"),
@@ -523,6 +541,14 @@ FIGURES += [
     Figure("readme:demo AP after", "README.md", r"corrected program \(AP [0-9.]+ -> " + _N, "demo/poses100",
            "iso.AP_mm.after"),
 ]
+
+
+# cells.md "Measured": plan-poses in the default cell (the time column is machine-dependent: not checked)
+for _r in ("ur10", "kuka_kr150_r3100", "abb_irb140"):
+    FIGURES += _table("docs/cells.md", {_r: ""}, f"plan_poses/{_r}",
+                      [(0, 0, "draws"), (1, 0, "d_efficiency"), (1, 1, "lost_percent"), (2, 0, "path_deg"),
+                       (2, 1, "path_unordered_deg")], prefix="cells:plan-poses ", rel_tol=0.0,
+                      after="robocal plan-poses ROBOT --count 40")
 
 
 def datasets_needed(producer: str) -> tuple:
