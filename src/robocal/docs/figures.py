@@ -291,6 +291,31 @@ def _plan_poses(robot: str) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _ipso(experiment: str) -> dict:
+    """docs/calibration.md "IPSO against LM": one experiment of
+    ``python -m robocal.workflows.calibration.ipso_study --seeds 20`` (``deg``, ``rad``, ``tracker``:
+    20 seeds; ``x30``, ``slip``: 5 seeds): ``{method}.{figure}`` medians, ``{method}.at_floor``
+    (count of seeds), ``floor_mm``, ``nominal_mm``."""
+    import numpy as np
+
+    from ..workflows.calibration.ipso_study import compare, er10l_experiment, tracker_experiment
+
+    runs = {"deg": (lambda s: er10l_experiment(s, "deg"), range(20), {}),
+            "rad": (lambda s: er10l_experiment(s, "rad"), range(20), {}),
+            "tracker": (tracker_experiment, range(20), {}),
+            "x30": (lambda s: er10l_experiment(s, "deg", error_scale=30.0), range(5), dict(box_rad=0.3, box_mm=1.5)),
+            "slip": (lambda s: er10l_experiment(s, "deg", slip={"theta4": np.pi}), range(5), dict(box_rad=np.pi))}
+    make, seeds, options = runs[experiment]
+    table = compare(make, seeds, **options)
+    out = {"floor_mm": table["floor_mm"], "nominal_mm": table["nominal_mm"]}
+    for m, r in table.items():
+        if isinstance(r, dict):
+            out.update({f"{m}.{k}": float(v) for k, v in r.items() if isinstance(v, (int, float))})
+            out[f"{m}.at_floor"] = float(r["at_floor"].split("/")[0])
+    return out
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -309,6 +334,7 @@ PRODUCERS = {
     "nao/acceptance": _nao_acceptance,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    **{f"ipso/{e}": functools.partial(_ipso, e) for e in ("deg", "rad", "tracker", "x30", "slip")},
     **{f"plan_poses/{r}": functools.partial(_plan_poses, r) for r in ("ur10", "kuka_kr150_r3100", "abb_irb140")},
     "ros_industrial_positioner/table": lambda: _printed_table("workflows.datasets.ros_industrial_positioner",
                                                               "positioner_table"),
@@ -551,6 +577,22 @@ for _r in ("ur10", "kuka_kr150_r3100", "abb_irb140"):
                       after="robocal plan-poses ROBOT --count 40")
 
 
+# calibration.md "IPSO against LM" (the time column is machine-dependent: not checked)
+for _e, _heading in (("deg", "#### ER10L-C10, joint noise +-0.1 deg"), ("rad", "#### ER10L-C10, joint noise +-0.1 rad"),
+                     ("tracker", "#### UR10 (DH + beta) tracker simulation"), ("x30", "#### ER10L, errors x30"),
+                     ("slip", "#### ER10L, theta4 slipped by 180 deg")):
+    FIGURES += _table("docs/calibration.md", {m: m for m in ("lm", "ipso", "ipso+lm")}, f"ipso/{_e}",
+                      [(0, 0, "holdout_mm"), (1, 0, "holdout_deg"), (2, 0, "param_mm"), (3, 0, "param_mrad"),
+                       (5, 0, "at_floor")], prefix=f"calibration:ipso {_e} ", rel_tol=0.01, after=_heading)
+    FIGURES.append(Figure(f"calibration:ipso {_e} floor", "docs/calibration.md",
+                          re.escape(_heading) + r"(?s:.*?)noise floor \(true model\) " + _N, f"ipso/{_e}", "floor_mm",
+                          rel_tol=0.01))
+    if _e != "tracker":
+        FIGURES.append(Figure(f"calibration:ipso {_e} nominal", "docs/calibration.md",
+                              re.escape(_heading) + r"(?s:.*?)nominal model " + _N, f"ipso/{_e}", "nominal_mm",
+                              rel_tol=0.01))
+
+
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
@@ -562,7 +604,7 @@ def datasets_needed(producer: str) -> tuple:
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full",
-                  *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/", "thermal/")))}
+                  *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/", "thermal/", "ipso/")))}
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
 
 
