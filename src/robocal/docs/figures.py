@@ -316,6 +316,21 @@ def _ipso(experiment: str) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _ur_import(conf: str, robot: str) -> dict:
+    """docs/controller.md: ``robocal controller import ur ROBOT tests/data/controller/CONF --json``:
+    the largest controller ``d`` [m] and the FK check over 1000 joint sets [mm, rad]."""
+    import numpy as np
+
+    from ..workflows.controller.models import import_ur
+
+    r = import_ur(repository_root() / "tests" / "data" / "controller" / conf, robot, n_check=1000, seed=0)
+    d_m = np.asarray(r["dh"]["d"], float)
+    d_m = d_m / 1000.0 if np.max(np.abs(d_m)) > 10_000 else d_m  # the table may be in mm
+    return {"largest_d_m": float(np.max(np.abs(d_m))), "fk_max_mm": float(r["agreement"]["max_mm"]),
+            "fk_max_rad": float(r["agreement"]["max_rad"])}
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -334,6 +349,9 @@ PRODUCERS = {
     "nao/acceptance": _nao_acceptance,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    "ur_import/ur10": lambda: _ur_import("ur10_driver_test.conf", "ur10"),
+    "ur_import/ur10e_a": lambda: _ur_import("ur10e_driver_test_a.conf", "ur10e"),
+    "ur_import/ur10e_b": lambda: _ur_import("ur10e_driver_test_b.conf", "ur10e"),
     **{f"ipso/{e}": functools.partial(_ipso, e) for e in ("deg", "rad", "tracker", "x30", "slip")},
     **{f"plan_poses/{r}": functools.partial(_plan_poses, r) for r in ("ur10", "kuka_kr150_r3100", "abb_irb140")},
     "ros_industrial_positioner/table": lambda: _printed_table("workflows.datasets.ros_industrial_positioner",
@@ -354,7 +372,7 @@ PRODUCERS = {
     "thermal/ideal": lambda: _thermal_seeds("ideal"),
 }
 
-_N = r"([−-]?[0-9]+(?:\.[0-9]+)?)"
+_N = r"([−-]?[0-9]+(?:\.[0-9]+)?(?:e[−+-]?[0-9]+)?)"
 
 
 def _cell(row: str, col: int, pos: int = 0, after: str = "") -> str:
@@ -363,17 +381,17 @@ def _cell(row: str, col: int, pos: int = 0, after: str = "") -> str:
     first such row after the text ``after``."""
     start = (re.escape(after) + r"(?s:.*?)\n\| ") if after else r"(?m)^\| "
     return (start + re.escape(row) + r" \|" + r"[^|\n]*\|" * col
-            + r"(?:[^0-9|\n]*?[0-9][0-9.]*)" * pos + r"[^0-9|\n]*?" + _N)
+            + r"(?:[^0-9|\n]*?[0-9][0-9.]*(?:e[−+-]?[0-9]+)?)" * pos + r"[^0-9|\n]*?" + _N)
 
 
 def _table(file: str, rows: dict, producer: str, columns: list, *, prefix: str = "", rel_tol: float = 0.005,
-           slow: bool = False, note: str = "", after: str = "") -> list:
+           slow: bool = False, note: str = "", after: str = "", short: bool = True) -> list:
     """Figures of a table: ``rows`` label -> field prefix, ``columns`` [(col, pos, field suffix)]."""
     out = []
     for label, key in rows.items():
         for col, pos, field in columns:
             f = f"{key}.{field}" if key else field
-            out.append(Figure(f"{prefix}{label.split(' (')[0].replace(' | ', '/')} {f}", file, _cell(label, col, pos, after),
+            out.append(Figure(f"{prefix}{(label.split(' (')[0] if short else label).replace(' | ', '/')} {f}", file, _cell(label, col, pos, after),
                               producer, f, rel_tol=rel_tol, slow=slow, note=note))
     return out
 _ROW_BOBY = r"\| boby_fanuc \(mean over seeds 0-4\) \| "
@@ -593,6 +611,16 @@ for _e, _heading in (("deg", "#### ER10L-C10, joint noise +-0.1 deg"), ("rad", "
                               rel_tol=0.01))
 
 
+# controller.md: the UR driver's three test arms (the FK difference is rounding: checked to its order
+# of magnitude, 0-10x the printed value)
+for _label, _p in (("UR10", "ur10"), ("UR10e (a)", "ur10e_a"), ("UR10e (b, `algorithm.rst`)", "ur10e_b")):
+    FIGURES += _table("docs/controller.md", {_label: ""}, f"ur_import/{_p}", [(0, 0, "largest_d_m")],
+                      prefix="controller:", rel_tol=0.0, after="| arm (test case) |", short=False)
+    FIGURES += _table("docs/controller.md", {_label: ""}, f"ur_import/{_p}", [(1, 0, "fk_max_mm"), (1, 1, "fk_max_rad")],
+                      prefix="controller:", rel_tol=9.0, after="| arm (test case) |",
+                      note="floating-point rounding: order of magnitude", short=False)
+
+
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
@@ -626,7 +654,9 @@ def printed_value(fig: Figure, root: Path | None = None) -> tuple[float, int]:
         raise InputFileError(f"{fig.file}: the figure {fig.key!r} is no longer where its pattern looks "
                              f"({fig.pattern!r}); update robocal/docs/figures.py with the text")
     s = m.group(1).replace("−", "-")
-    return float(s), (len(s.split(".")[1]) if "." in s else 0)
+    mantissa, _, exponent = s.partition("e")
+    decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+    return float(s), decimals - int(exponent or 0)
 
 
 def check_figure(fig: Figure, root: Path | None = None) -> dict:
