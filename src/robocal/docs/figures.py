@@ -331,6 +331,18 @@ def _ur_import(conf: str, robot: str) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _fleet_pose_sets() -> dict:
+    """docs/fleet.md: ``robocal fleet study pose-sets ur10 --sets 12 --count 40 --candidates 800``
+    (serial: every sample has its own seed, so the figures do not depend on the workers)."""
+    from ..workflows.fleet.study import pose_set_selection
+
+    r = pose_set_selection("ur10", sets=12, count=40, candidates=800)
+    return {**{f"spread.{k}": float(v) for k, v in r["spread_mm"].items()},
+            "relative_spread_percent": 100.0 * float(r["best"]["relative_spread"]),
+            "n_within_noise": float(len(r["within_noise"]))}
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -349,6 +361,7 @@ PRODUCERS = {
     "nao/acceptance": _nao_acceptance,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    "fleet/pose_sets": _fleet_pose_sets,
     "ur_import/ur10": lambda: _ur_import("ur10_driver_test.conf", "ur10"),
     "ur_import/ur10e_a": lambda: _ur_import("ur10e_driver_test_a.conf", "ur10e"),
     "ur_import/ur10e_b": lambda: _ur_import("ur10e_driver_test_b.conf", "ur10e"),
@@ -621,6 +634,16 @@ for _label, _p in (("UR10", "ur10"), ("UR10e (a)", "ur10e_a"), ("UR10e (b, `algo
                       note="floating-point rounding: order of magnitude", short=False)
 
 
+# fleet.md: the pose-set study
+_FLEET = r"--candidates 800 --workers 2`\s+gave "
+FIGURES += [Figure(f"fleet:pose-sets {k}", "docs/fleet.md", _FLEET + r"(?:[0-9.]+ / )" * i + _N, "fleet/pose_sets",
+                   f"spread.{k}", rel_tol=0.01) for i, k in enumerate(("min", "median", "max"))]
+FIGURES += [Figure("fleet:pose-sets campaign spread", "docs/fleet.md", r"with a campaign spread of " + _N + " %",
+                   "fleet/pose_sets", "relative_spread_percent", rel_tol=0.05),
+            Figure("fleet:pose-sets within noise", "docs/fleet.md", r"all " + _N + r" sets\s+within noise",
+                   "fleet/pose_sets", "n_within_noise", rel_tol=0.0)]
+
+
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
@@ -631,7 +654,7 @@ def datasets_needed(producer: str) -> tuple:
 
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
-SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full",
+SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/", "thermal/", "ipso/")))}
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
 
