@@ -211,18 +211,39 @@ def _nao_acceptance() -> dict:
 _NUMBER = re.compile(r"[−-]?[0-9]+(?:\.[0-9]+)?(?:e[−+-]?[0-9]+)?")
 
 
-def _markdown_rows(text: str) -> dict:
-    """Every Markdown table row of ``text`` as ``{"label|col|pos": number}`` (label = the first cell,
-    col counted from the cell after it, pos = the number's place in its cell)."""
+def _markdown_rows(text: str, label_cells: int = 1) -> dict:
+    """Every Markdown table row of ``text`` as ``{"label|col|pos": number}`` (label = the first
+    ``label_cells`` cells joined by " | ", col counted from the cell after them, pos = the number's
+    place in its cell)."""
     out = {}
     for line in text.splitlines():
         if not line.startswith("|") or line.startswith("|---"):
             continue
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        for col, cell in enumerate(cells[1:]):
+        label = " | ".join(cells[:label_cells])
+        for col, cell in enumerate(cells[label_cells:]):
             for pos, s in enumerate(_NUMBER.findall(cell)):
-                out[f"{cells[0]}|{col}|{pos}"] = float(s.replace("−", "-"))
+                out[f"{label}|{col}|{pos}"] = float(s.replace("−", "-"))
     return out
+
+
+@functools.lru_cache(maxsize=None)
+def _benchmark_table(script: str, *args) -> dict:
+    """The Markdown table a script of ``benchmarks/`` prints from its ``run(*args)`` (the accuracy
+    studies kept there for their OpenCV / SciPy peers), as :func:`_markdown_rows` with two label
+    cells."""
+    import contextlib
+    import importlib.util
+    import io
+
+    path = repository_root() / "benchmarks" / script
+    spec = importlib.util.spec_from_file_location(f"_robocal_figures_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        module.run(*args)
+    return _markdown_rows(buf.getvalue(), label_cells=2)
 
 
 @functools.lru_cache(maxsize=None)
@@ -361,6 +382,7 @@ PRODUCERS = {
     "nao/acceptance": _nao_acceptance,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", list(range(20))),
     "fleet/pose_sets": _fleet_pose_sets,
     "ur_import/ur10": lambda: _ur_import("ur10_driver_test.conf", "ur10"),
     "ur_import/ur10e_a": lambda: _ur_import("ur10e_driver_test_a.conf", "ur10e"),
@@ -644,6 +666,20 @@ FIGURES += [Figure("fleet:pose-sets campaign spread", "docs/fleet.md", r"with a 
                    "fleet/pose_sets", "n_within_noise", rel_tol=0.0)]
 
 
+# handeye.md "A fair comparison": ``python benchmarks/handeye_fair_comparison.py --seeds 20`` (accuracy
+# figures of a script kept in benchmarks/ for its OpenCV and SciPy peers)
+_HE_METHODS = ("**robocal default (auto)**", "robocal --exact-poses", "robocal prior 0.05 mm / 0.01 deg",
+               "solvePnP + SciPy least_squares (12 unknowns)",
+               *(f"OpenCV {k}" for k in ("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS", "RW_SHAH", "RW_LI")))
+for _level in ("none (0 / 0)", "0.02 mm / 0.004 deg", "0.2 mm / 0.03 deg", "1 mm / 0.1 deg",
+               "systematic 0.5 mm/m + 0.02 mm / 0.004 deg"):
+    for _m in _HE_METHODS:
+        _cols = [(0, 0), (1, 0)] + ([] if _m.startswith("**") else [(2, 0)])
+        FIGURES += [Figure(f"handeye:fair {_level} {_m.strip('*')} {c}", "docs/handeye.md", _cell(f"{_level} | {_m}", c, k),
+                           "handeye/fair_comparison", f"{_level} | {_m}|{c}|{k}", rel_tol=0.02 if c < 2 else 0.0)
+                    for c, k in _cols]
+
+
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
@@ -655,6 +691,7 @@ def datasets_needed(producer: str) -> tuple:
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
+                  "handeye/fair_comparison",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/", "thermal/", "ipso/")))}
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
 
