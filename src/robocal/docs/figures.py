@@ -364,6 +364,57 @@ def _fleet_pose_sets() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _justin_self_calibration() -> dict:
+    """docs/self-calibration.md "Figures": the DLR Justin tree (the setup of
+    ``tests/test_self_calibration.py``): 25 views per arm, offsets uniform in +-3 deg (seed 15), 0.3 px.
+    Fields ``max_abs_z``, ``n_identifiable``, ``rms_px_per_coordinate``, ``{both|left|right}.head_j1.error_deg``
+    (absolute) / ``.sigma_deg``."""
+    import numpy as np
+
+    from ..camera import Camera
+    from ..handeye.refine import joint_offset_names
+    from ..handeye.self_calibration import solve_self_calibration
+    from ..io.boards import parse_board
+    from ..robots import load_robot
+    from ..sim.cameras.self_calibration_views import simulate_corner_views
+    from ..transforms import so3_exp, transforms_from
+
+    cam = Camera(800.0, 800.0, 319.5, 239.5, (-0.1, 0.05, 0.0, 0.0, 0.0), "brown", (640, 480))
+    boards = {"left": transforms_from(so3_exp(np.array([0.1, -0.2, 0.3])), np.array([10.0, 20.0, 120.0])),
+              "right": transforms_from(so3_exp(np.array([-0.2, 0.1, 2.0])), np.array([-15.0, 5.0, 110.0]))}
+    mount = transforms_from(so3_exp(np.array([0.01, -0.02, 0.015])), np.array([3.0, -2.0, 5.0]))
+    m = load_robot("dlr_justin19")
+    rng = np.random.default_rng(15)
+    pn = list(m.params.names)
+    truth = m.params.values.copy()
+    offsets = {}
+    for n in joint_offset_names(m):
+        if m.links[int(n[5:]) - 1].name.startswith(("head", "left", "right")):
+            offsets[n] = np.radians(rng.uniform(-3.0, 3.0))
+            truth[pn.index(n)] += offsets[n]
+    board = parse_board("checkerboard:7x4:25mm")
+    X = board.object_points()
+    q, carriers, uv = simulate_corner_views(m.with_params(truth), cam, X, camera_end_effector="head", T_ee_camera=mount,
+                                            boards=boards, n_per_carrier=25, rng=rng, pixel_noise=0.3,
+                                            front_z=board.front_z, pitch_mm=board.pitch_mm)
+    c = np.asarray(carriers)
+    kw = dict(camera_end_effector="head", pixel_sigma=0.3)
+    fits = {"both": solve_self_calibration(m, q, uv, X, cam, list(carriers), **kw),
+            **{a: solve_self_calibration(m, q[c == a], uv[c == a], X, cam, c[c == a], **kw) for a in ("left", "right")}}
+    both = fits["both"]
+    held = {r["name"] for r in both.joint_report if not r["identifiable"]}
+    z = [(v - offsets[n]) / s for n, v, s in zip(both.joint_offset_names, both.joint_offsets, both.joint_offset_sigma)
+         if n in offsets and n not in held]
+    out = {"max_abs_z": float(np.max(np.abs(z))), "n_identifiable": float(len(z)),
+           "rms_px_per_coordinate": float(both.rms_px / np.sqrt(2))}
+    for name, res in fits.items():
+        k = res.joint_offset_names.index("theta23")  # head_j1
+        out[f"{name}.head_j1.error_deg"] = float(np.degrees(abs(res.joint_offsets[k] - offsets["theta23"])))
+        out[f"{name}.head_j1.sigma_deg"] = float(np.degrees(res.joint_offset_sigma[k]))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -380,6 +431,7 @@ PRODUCERS = {
     "dlr_justin/elastic-full": lambda: _dataset("dlr_justin", "elastic-full"),
     "nao/simulated": _nao_simulated,
     "nao/acceptance": _nao_acceptance,
+    "justin/self_calibration": _justin_self_calibration,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
     "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", list(range(20))),
@@ -678,6 +730,21 @@ for _level in ("none (0 / 0)", "0.02 mm / 0.004 deg", "0.2 mm / 0.03 deg", "1 mm
         FIGURES += [Figure(f"handeye:fair {_level} {_m.strip('*')} {c}", "docs/handeye.md", _cell(f"{_level} | {_m}", c, k),
                            "handeye/fair_comparison", f"{_level} | {_m}|{c}|{k}", rel_tol=0.02 if c < 2 else 0.0)
                     for c, k in _cols]
+
+
+# self-calibration.md "Figures": the Justin tree (tests/test_self_calibration.py's setup)
+FIGURES += [
+    Figure("self-calibration:justin max |z|", "docs/self-calibration.md",
+           r"\| identifiable joint offsets \(13\) within 3 reported sigma \| max \\\|error/sigma\\\| = " + _N,
+           "justin/self_calibration", "max_abs_z", rel_tol=0.02),
+    Figure("self-calibration:justin rms", "docs/self-calibration.md",
+           r"\| reprojection RMS per coordinate / simulated noise \| " + _N, "justin/self_calibration",
+           "rms_px_per_coordinate"),
+]
+for _label, _fit in (("head_j1 offset, both arms together", "both"), ("head_j1 offset, left arm alone", "left"),
+                     ("head_j1 offset, right arm alone", "right")):
+    FIGURES += _table("docs/self-calibration.md", {_label: f"{_fit}.head_j1"}, "justin/self_calibration",
+                      [(0, 0, "error_deg"), (0, 1, "sigma_deg")], prefix="self-calibration:justin ", rel_tol=0.02)
 
 
 def datasets_needed(producer: str) -> tuple:
