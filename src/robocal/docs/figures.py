@@ -811,7 +811,7 @@ def main(argv=None) -> int:
     print(f"{'figure':<52}{'printed':>10}{'computed':>12}{'tol':>9}  ok")
     for r in rows:
         print(f"{r['key']:<52}{r['printed']:>10g}{r['computed']:>12.5g}{r['tolerance']:>9.2g}  "
-              f"{'yes' if r['ok'] else 'NO'}")
+              f"{'yes' if r['ok'] else 'NO'}" + (f"  ({r['note']})" if r["note"] == "training data" else ""))
     bad = [r for r in rows if not r["ok"]]
     if bad:
         print(f"{len(bad)} figure(s) drifted: {', '.join(r['key'] for r in bad)}", file=sys.stderr)
