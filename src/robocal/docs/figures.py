@@ -277,7 +277,7 @@ def _thermal_seeds(preset: str) -> dict:
     from ..workflows.thermal.seeds import run_thermal_seeds
 
     r = run_thermal_seeds(preset=preset, seeds=20, first_seed=1, n_cycles=90, resamples=20)
-    return {**_flat(r["lambda"]), "n_not_converged": float(r["fits"]["not_converged"])}
+    return {**_flat(r["tables"]), "n_not_converged": float(r["fits"]["not_converged"])}
 
 
 @functools.lru_cache(maxsize=None)
