@@ -345,8 +345,7 @@ def _ur_import(conf: str, robot: str) -> dict:
     from ..workflows.controller.models import import_ur
 
     r = import_ur(repository_root() / "tests" / "data" / "controller" / conf, robot, n_check=1000, seed=0)
-    d_m = np.asarray(r["dh"]["d"], float)
-    d_m = d_m / 1000.0 if np.max(np.abs(d_m)) > 10_000 else d_m  # the table may be in mm
+    d_m = np.asarray(r["dh"]["d"], float)  # the controller's table is in metres
     return {"largest_d_m": float(np.max(np.abs(d_m))), "fk_max_mm": float(r["agreement"]["max_mm"]),
             "fk_max_rad": float(r["agreement"]["max_rad"])}
 
