@@ -362,6 +362,42 @@ def _justin_self_calibration() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _iso_wear() -> dict:
+    """docs/iso9283.md: the worn / healthy IRB 140 (the page's commands through the command line, in
+    a temporary folder): ``{worn|healthy}.{k}.{AP|RP|U}`` [mm] for the tests k = 0, 1, 2."""
+    import json
+    import tempfile
+
+    from click.testing import CliRunner
+
+    from ..cli import main as cli
+
+    def run(*args):
+        r = CliRunner().invoke(cli, [str(a) for a in args], catch_exceptions=False)
+        if r.exit_code != 0:
+            raise RuntimeError(f"robocal {' '.join(map(str, args))}: exit {r.exit_code}: {r.output[-500:]}")
+        return r.stdout
+
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        run("iso9283", "plan", "abb_irb140", "--out", d / "plan", "--cycles", 10, "--path-cycles", 2)
+        run("simulate", "tracker", "abb_irb140", "--poses", 10, "--seed", 3, "--out", d / "c.csv")
+        for robot, noise in (("worn", (0.002, 0.005, 0.008)), ("healthy", (0.002, 0.002, 0.002))):
+            for k, jn in enumerate(noise):
+                csv = d / f"{robot}{k}.csv"
+                run("simulate", "iso9283", "abb_irb140", d / "plan", "--seed", 10 + k, "--truth", d / "c.truth.json",
+                    "--out", csv, "--joint-noise", jn, "--instrument-at", "3500,0,300")
+                res = json.loads(run("iso9283", "evaluate", d / "plan", csv, "--out", d / f"ev-{robot}{k}", "--mpe",
+                                     "15um+6um/m", "--instrument-at", "3500,0,300", "--json"))["runs"][0]
+                s = res["summary"]
+                pose = max(res["pose"], key=lambda p: res["pose"][p]["RP_mm"])
+                out.update({f"{robot}.{k}.AP": s["AP_mm"], f"{robot}.{k}.RP": s["RP_mm"],
+                            f"{robot}.{k}.U": res["adequacy"][f"RP_mm.{pose}"]["U_mm"]})
+    return out
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -381,6 +417,7 @@ PRODUCERS = {
     "justin/self_calibration": _justin_self_calibration,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    "iso9283/wear": _iso_wear,
     "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", list(range(20))),
     "fleet/pose_sets": _fleet_pose_sets,
     "ur_import/ur10": lambda: _ur_import("ur10_driver_test.conf", "ur10"),

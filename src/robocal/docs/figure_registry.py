@@ -337,4 +337,12 @@ for _label, _fit in (("head_j1 offset, both arms together", "both"), ("head_j1 o
 
 
 
+# iso9283.md: the worn / healthy IRB 140, three tests each (the fleet-status trend depends on the day
+# it is run: not checked)
+for _robot in ("worn", "healthy"):
+    for _k, _date in enumerate(("2026-01-02", "2026-03-02", "2026-05-02")):
+        FIGURES += _table("docs/iso9283.md", {f"{_robot} | {_date}": f"{_robot}.{_k}"}, "iso9283/wear",
+                          [(0, 0, "AP"), (1, 0, "RP"), (1, 1, "U")], prefix="iso9283:", rel_tol=0.0)
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
