@@ -398,6 +398,20 @@ def _iso_wear() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _beta_error() -> dict:
+    """docs/tcp.md (4-30): the x error when the sensor's beta is ignored, d_x = d_y = 5 mm, per
+    beta - 90 deg (``de.{k}``, k = the table's columns), and where it reaches 0.1 mm [deg]."""
+    import numpy as np
+
+    from ..tcp.sensor import beta_error_mm, beta_error_threshold_deg
+
+    out = {f"de.{k}": float(beta_error_mm(5.0, np.radians(90.0 + b), d_to_y_beam=5.0))
+           for k, b in enumerate((-5.0, -2.0, -1.2, -1.0, -0.5, 0.5, 1.0, 1.2, 2.0, 5.0))}
+    lo, hi = beta_error_threshold_deg()
+    return {**out, "threshold_low_deg": -float(lo), "threshold_high_deg": float(hi)}
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -417,6 +431,7 @@ PRODUCERS = {
     "justin/self_calibration": _justin_self_calibration,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    "tcp/beta_error": _beta_error,
     "iso9283/wear": _iso_wear,
     "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", list(range(20))),
     "fleet/pose_sets": _fleet_pose_sets,
@@ -457,4 +472,5 @@ def datasets_needed(producer: str) -> tuple:
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison",
-                  *(p for p in PRODUCERS if p.startswith(("closed_chain/", "tcp/", "thermal/", "ipso/")))}
+                  "tcp/realistic", "tcp/ideal", "tcp/budget",
+                  *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

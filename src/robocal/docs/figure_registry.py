@@ -345,4 +345,13 @@ for _robot in ("worn", "healthy"):
                           [(0, 0, "AP"), (1, 0, "RP"), (1, 1, "U")], prefix="iso9283:", rel_tol=0.0)
 
 
+# tcp.md (4-30): the error when beta is ignored (a formula: exact to the printed digit)
+FIGURES += _table("docs/tcp.md", {"ΔE [mm]": ""}, "tcp/beta_error", [(k, 0, f"de.{k}") for k in range(10)],
+                  prefix="tcp:beta error ", rel_tol=0.0)
+FIGURES += [Figure("tcp:beta error threshold low", "docs/tcp.md", r"0\.1 mm at β − 90° = " + _N, "tcp/beta_error",
+                   "threshold_low_deg", rel_tol=0.0),
+            Figure("tcp:beta error threshold high", "docs/tcp.md", r"0\.1 mm at β − 90° = [−-][0-9.]+° and \+" + _N,
+                   "tcp/beta_error", "threshold_high_deg", rel_tol=0.0)]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
