@@ -412,6 +412,24 @@ def _beta_error() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _tcp_collisions() -> dict:
+    """docs/tcp.md collision study: ``robocal tcp simulate --collisions 10 --seed 0 --json``, each
+    variant's summary as ``{variant}.{tcp_rms_mm|tcp_max_mm|axis_rms_deg|axis_max_deg|cycle_max_s}``."""
+    import json
+
+    from click.testing import CliRunner
+
+    from ..cli import main as cli
+
+    r = CliRunner().invoke(cli, ["tcp", "simulate", "--collisions", "10", "--seed", "0", "--json"],
+                           catch_exceptions=False)
+    if r.exit_code != 0:
+        raise RuntimeError(f"robocal tcp simulate: exit {r.exit_code}: {r.output[-500:]}")
+    return {f"{name}.{k}": float(v) for name, var in json.loads(r.stdout)["variants"].items()
+            for k, v in var["summary"].items()}
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -431,6 +449,7 @@ PRODUCERS = {
     "justin/self_calibration": _justin_self_calibration,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    "tcp/collisions": _tcp_collisions,
     "tcp/beta_error": _beta_error,
     "iso9283/wear": _iso_wear,
     "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", list(range(20))),

@@ -354,4 +354,12 @@ FIGURES += [Figure("tcp:beta error threshold low", "docs/tcp.md", r"0\.1 mm at Î
                    "tcp/beta_error", "threshold_high_deg", rel_tol=0.0)]
 
 
+# tcp.md collision study (ideal cell, 10 collisions, seed 0)
+FIGURES += _table("docs/tcp.md", {"beta corrected (default)": "beta_corrected", "no beta correction": "no_beta_correction",
+                                  "thesis step 3": "thesis_step3", "thesis step 3, no beta correction": "thesis_step3_no_beta"},
+                  "tcp/collisions", [(0, 0, "tcp_rms_mm"), (1, 0, "tcp_max_mm"), (2, 0, "axis_rms_deg"),
+                                     (3, 0, "axis_max_deg"), (4, 0, "cycle_max_s")],
+                  prefix="tcp:collisions ", rel_tol=0.01, short=False)
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
