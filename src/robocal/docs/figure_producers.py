@@ -179,7 +179,7 @@ def _markdown_rows(text: str, label_cells: int = 1) -> dict:
 def _benchmark_table(script: str, *args) -> dict:
     """The Markdown table a script of ``benchmarks/`` prints from its ``run(*args)`` (the accuracy
     studies kept there for their OpenCV / SciPy peers), as :func:`_markdown_rows` with two label
-    cells."""
+    cells. ``args`` are hashable (the cache); a tuple is passed on as a list."""
     import contextlib
     import importlib.util
     import io
@@ -190,7 +190,7 @@ def _benchmark_table(script: str, *args) -> dict:
     spec.loader.exec_module(module)
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        module.run(*args)
+        module.run(*(list(a) if isinstance(a, tuple) else a for a in args))
     return _markdown_rows(buf.getvalue(), label_cells=2)
 
 
@@ -452,7 +452,7 @@ PRODUCERS = {
     "tcp/collisions": _tcp_collisions,
     "tcp/beta_error": _beta_error,
     "iso9283/wear": _iso_wear,
-    "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", list(range(20))),
+    "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", tuple(range(20))),
     "fleet/pose_sets": _fleet_pose_sets,
     "ur_import/ur10": lambda: _ur_import("ur10_driver_test.conf", "ur10"),
     "ur_import/ur10e_a": lambda: _ur_import("ur10e_driver_test_a.conf", "ur10e"),
