@@ -430,6 +430,53 @@ def _tcp_collisions() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def _handeye_vs_opencv() -> dict:
+    """docs/handeye.md "Accuracy against OpenCV" (the setup of ``tests/test_handeye_refine.py``):
+    15 simulated poses, 0.3 px, 0.05 mm / 0.01 deg robot noise, seeds 0-4 per set-up; OpenCV's linear
+    methods on robocal's per-image target poses. Medians ``{setup}.{method}.{rot_deg|trans_mm}``."""
+    import cv2
+    import numpy as np
+
+    from ..handeye import refine_hand_eye
+    from ..handeye.refine import rotation_error_deg
+    from ..sim.cameras.handeye_points import simulate_hand_eye
+    from ..transforms import invert_transforms
+
+    def pose(R, t):
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R, np.ravel(t)
+        return T
+
+    hand_eye = {"TSAI": cv2.CALIB_HAND_EYE_TSAI, "PARK": cv2.CALIB_HAND_EYE_PARK, "HORAUD": cv2.CALIB_HAND_EYE_HORAUD,
+                "ANDREFF": cv2.CALIB_HAND_EYE_ANDREFF, "DANIILIDIS": cv2.CALIB_HAND_EYE_DANIILIDIS}
+    robot_world = {"SHAH": cv2.CALIB_ROBOT_WORLD_HAND_EYE_SHAH, "LI": cv2.CALIB_ROBOT_WORLD_HAND_EYE_LI}
+    out = {}
+    for setup in ("eye_in_hand", "eye_to_hand"):
+        errors = {}
+        for seed in range(5):
+            sim = simulate_hand_eye(seed, setup=setup, n_images=15, pixel_noise=0.3, pose_noise_mm=0.05,
+                                    pose_noise_deg=0.01)
+            res = refine_hand_eye(sim.T_base_flange, sim.image_points, sim.target_points, sim.camera, setup=setup)
+            F = sim.T_base_flange if setup == "eye_in_hand" else invert_transforms(sim.T_base_flange)
+            C = res.T_camera_target
+            found = {"robocal": res.camera_pose}
+            found.update({k: pose(*cv2.calibrateHandEye(list(F[:, :3, :3]), list(F[:, :3, 3]), list(C[:, :3, :3]),
+                                                        list(C[:, :3, 3]), method=m)) for k, m in hand_eye.items()})
+            G = invert_transforms(F)
+            for k, m in robot_world.items():
+                _, _, R_gc, t_gc = cv2.calibrateRobotWorldHandEye(list(C[:, :3, :3]), list(C[:, :3, 3]),
+                                                                  list(G[:, :3, :3]), list(G[:, :3, 3]), method=m)
+                found[k] = invert_transforms(pose(R_gc, t_gc)[None])[0]
+            for k, T in found.items():
+                errors.setdefault(k, []).append((rotation_error_deg(T, sim.camera_pose),
+                                                 float(np.linalg.norm(T[:3, 3] - sim.camera_pose[:3, 3]))))
+        for k, v in errors.items():
+            rot, trans = np.median(np.asarray(v, float), axis=0)
+            out[f"{setup}.{k}.rot_deg"], out[f"{setup}.{k}.trans_mm"] = float(rot), float(trans)
+    return out
+
+
+@functools.lru_cache(maxsize=None)
 def _iso_cube(robot: str) -> dict:
     from ..performance.iso_cube import largest_iso_cube
     from ..robots import load_robot
@@ -449,6 +496,7 @@ PRODUCERS = {
     "justin/self_calibration": _justin_self_calibration,
     "datasets/report": _datasets_report,
     "demo/poses100": _demo,
+    "handeye/vs_opencv": _handeye_vs_opencv,
     "tcp/collisions": _tcp_collisions,
     "tcp/beta_error": _beta_error,
     "iso9283/wear": _iso_wear,

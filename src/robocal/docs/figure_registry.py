@@ -362,4 +362,15 @@ FIGURES += _table("docs/tcp.md", {"beta corrected (default)": "beta_corrected", 
                   prefix="tcp:collisions ", rel_tol=0.01, short=False)
 
 
+# handeye.md "Accuracy against OpenCV" (tests/test_handeye_refine.py's setup)
+for _label, _m in (("**robocal `refine_hand_eye`**", "robocal"), ("`cv2.calibrateHandEye` TSAI", "TSAI"),
+                   ("PARK", "PARK"), ("HORAUD", "HORAUD"), ("ANDREFF", "ANDREFF"), ("DANIILIDIS", "DANIILIDIS"),
+                   ("`cv2.calibrateRobotWorldHandEye` SHAH", "SHAH"), ("LI", "LI")):
+    FIGURES += [Figure(f"handeye:vs opencv {_m} {setup} {what}", "docs/handeye.md",
+                       _cell(_label, col, 0, after="### Accuracy against OpenCV"), "handeye/vs_opencv",
+                       f"{setup}.{_m}.{what}", rel_tol=0.02)
+                for col, (setup, what) in enumerate((("eye_in_hand", "rot_deg"), ("eye_in_hand", "trans_mm"),
+                                                     ("eye_to_hand", "rot_deg"), ("eye_to_hand", "trans_mm")))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
