@@ -1,0 +1,376 @@
+"""The registry of documented figures (:mod:`robocal.docs.figures`): where each number is printed
+(file, a pattern whose first group is the number, usually a table row and cell), which producer
+(:mod:`robocal.docs.figure_producers`) recomputes it, and its tolerance."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from dataclasses import dataclass
+
+from .figure_producers import SLOW_PRODUCERS
+
+__all__ = ["Figure", "FIGURES"]
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One documented number.
+
+    Attributes
+    ----------
+    key : str
+        Identifier (``file:what``).
+    file : str
+        Path relative to the repository root.
+    pattern : str
+        Regular expression; its first group is the printed number.
+    producer : str
+        Name of the producer in :data:`PRODUCERS`.
+    field : str
+        Key of the producer's result dict.
+    rel_tol : float
+        Relative tolerance on top of half a unit of the last printed digit.
+    slow : bool
+        Longer than ~30 s: run with ``--all`` / ``ROBOCAL_SLOW=1``.
+    note : str
+        What the figure is (e.g. "training data", not a holdout).
+    """
+
+    key: str
+    file: str
+    pattern: str
+    producer: str
+    field: str
+    rel_tol: float = 0.005
+    slow: bool = False
+    note: str = ""
+
+
+
+_N = r"([−-]?[0-9]+(?:\.[0-9]+)?(?:e[−+-]?[0-9]+)?)"
+
+
+def _cell(row: str, col: int, pos: int = 0, after: str = "") -> str:
+    """Pattern of the ``pos``-th number in cell ``col`` (0 = the first cell after the label) of the
+    Markdown table row whose label cells are ``row`` (e.g. ``"realistic | cross-laser"``), the
+    first such row after the text ``after``."""
+    start = (re.escape(after) + r"(?s:.*?)\n\| ") if after else r"(?m)^\| "
+    return (start + re.escape(row) + r" \|" + r"[^|\n]*\|" * col
+            + r"(?:[^0-9|\n]*?[0-9][0-9.]*(?:e[−+-]?[0-9]+)?)" * pos + r"[^0-9|\n]*?" + _N)
+
+
+def _table(file: str, rows: dict, producer: str, columns: list, *, prefix: str = "", rel_tol: float = 0.005,
+           slow: bool = False, note: str = "", after: str = "", short: bool = True) -> list:
+    """Figures of a table: ``rows`` label -> field prefix, ``columns`` [(col, pos, field suffix)]."""
+    out = []
+    for label, key in rows.items():
+        for col, pos, field in columns:
+            f = f"{key}.{field}" if key else field
+            out.append(Figure(f"{prefix}{(label.split(' (')[0] if short else label).replace(' | ', '/')} {f}", file, _cell(label, col, pos, after),
+                              producer, f, rel_tol=rel_tol, slow=slow, note=note))
+    return out
+_ROW_BOBY = r"\| boby_fanuc \(mean over seeds 0-4\) \| "
+_ROW_JUSTIN = r"\| dlr_justin \(seed 0\) \| "
+
+FIGURES = [
+    Figure("datasets:boby geometric rms", "docs/datasets.md", _ROW_BOBY + _N, "boby_fanuc/geometric", "holdout_rms_mm"),
+    Figure("datasets:boby geometric mean", "docs/datasets.md", _ROW_BOBY + r"[0-9.]+ / " + _N, "boby_fanuc/geometric",
+           "holdout_mean_mm"),
+    Figure("datasets:boby elastic-joint rms", "docs/datasets.md", _ROW_BOBY + r"[0-9.]+ / [0-9.]+ / [0-9.]+ \| \*\*" + _N,
+           "boby_fanuc/elastic-joint", "holdout_rms_mm", rel_tol=0.01),
+    Figure("datasets:justin geometric mean", "docs/datasets.md", _ROW_JUSTIN + r"[0-9.]+ / " + _N,
+           "dlr_justin/geometric", "holdout_mean_mm"),
+    Figure("datasets:justin elastic-joint mean", "docs/datasets.md",
+           _ROW_JUSTIN + r"[0-9.]+ / [0-9.]+ / [0-9.]+ \| [0-9.]+ / " + _N, "dlr_justin/elastic-joint",
+           "holdout_mean_mm", rel_tol=0.01, slow=True),
+    Figure("datasets:justin elastic-full mean (README headline)", "docs/datasets.md",
+           _ROW_JUSTIN + r"[0-9.]+ / [0-9.]+ / [0-9.]+ \| [0-9.]+ / [0-9.]+ / [0-9.]+ [^|]*\| \*\*[0-9.]+ / " + _N,
+           "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01, slow=True),
+    Figure("self-calibration:nao max |error/sigma|", "docs/self-calibration.md",
+           r"9 identifiable offsets\s+within max \|error/sigma\| = " + _N, "nao/simulated", "max_abs_z", rel_tol=0.02),
+    Figure("self-calibration:nao rms px", "docs/self-calibration.md", r"= [0-9.]+, RMS " + _N + r" px per coordinate \(regenerated",
+           "nao/simulated", "rms_px_per_coordinate", rel_tol=0.01),
+    Figure("iso9283:irb140 cube", "docs/iso9283.md", r"IRB 140 cube " + _N + " mm", "iso_cube/abb_irb140", "edge_mm",
+           rel_tol=0.0),
+    Figure("iso9283:kr150 cube", "docs/iso9283.md", r"KR 150 R3100 " + _N + " mm", "iso_cube/kuka_kr150_r3100",
+           "edge_mm", rel_tol=0.0),
+]
+
+
+# datasets.md: the protocols' tables (``python -m robocal.workflows.datasets`` prints them)
+_METRICS3 = [(0, 0, "rms"), (1, 0, "mean"), (2, 0, "max")]
+FIGURES += _table("docs/datasets.md", {"nominal (robocal)": "nominal"}, "boby_fanuc/geometric", _METRICS3,
+                  prefix="datasets:boby ")
+FIGURES += _table("docs/datasets.md", {"calibrated (robocal)": "geometric"}, "boby_fanuc/geometric",
+                  [(1, 0, "mean"), (2, 0, "max")], prefix="datasets:boby ")
+FIGURES += _table("docs/datasets.md", {"nominal, base + 2 marker offsets": "nominal"}, "dlr_justin/geometric",
+                  _METRICS3, prefix="datasets:justin ")
+FIGURES += _table("docs/datasets.md", {"+ all modified-DH params of torso and arms (alpha, a, theta, d; beta where "
+                                       "alpha = 0), prior 1e-3": ""}, "dlr_justin/geometric",
+                  [(0, 0, "geometric.rms"), (1, 0, "geometric.mean"), (2, 0, "geometric.max"), (3, 0, "train_rms_mm")],
+                  prefix="datasets:justin ")
+_HILTI_SETS = {"flat (275, training data)": "sets.flat", "pallet (316)": "sets.pallet",
+               "orthogonal_wood (255)": "sets.orthogonal_wood", "wood_left_track (273)": "sets.wood_left_track",
+               "seesaw (300)": "sets.seesaw", "diagonal_wood (313)": "sets.diagonal_wood",
+               "outdoor (324, 9 C)": "sets.outdoor"}
+FIGURES += [dataclasses.replace(f, note="training data" if "flat" in f.key else "holdout")
+            for f in _table("docs/datasets.md", _HILTI_SETS, "hilti_trailblazer/geometric",
+                            [(0, 0, "nominal.rms"), (0, 3, "nominal.max"), (1, 0, "geometric.rms"), (1, 1, "p95_xy_mm"),
+                             (1, 2, "p95_z_mm"), (1, 3, "geometric.mean"), (1, 4, "geometric.max")],
+                            prefix="datasets:hilti ")]
+FIGURES += _table("docs/datasets.md", {"boby_fanuc (mean over seeds 0-4)": ""}, "boby_fanuc/elastic-joint",
+                  [(1, 1, "holdout_mean_mm"), (1, 2, "holdout_max_mm")], prefix="datasets:boby elastic-joint ",
+                  rel_tol=0.01)
+FIGURES += _table("docs/datasets.md", {"boby_fanuc (mean over seeds 0-4)": ""}, "boby_fanuc/elastic-full",
+                  [(2, 0, "holdout_rms_mm"), (2, 1, "holdout_mean_mm"), (2, 2, "holdout_max_mm")],
+                  prefix="datasets:boby elastic-full ", rel_tol=0.01, slow=True)
+for _col, _model, _slow in ((0, "geometric", False), (1, "elastic-joint", True), (2, "elastic-full", True)):
+    for _label, _sets in (("hilti flat (training set) / pallet / orthogonal_wood (RMS)",
+                           ("flat", "pallet", "orthogonal_wood")),
+                          ("hilti wood_left_track / seesaw / diagonal_wood / outdoor (RMS)",
+                           ("wood_left_track", "seesaw", "diagonal_wood", "outdoor"))):
+        FIGURES += [Figure(f"datasets:hilti {_model} {s} rms", "docs/datasets.md", _cell(_label, _col, k),
+                           f"hilti_trailblazer/{_model}", f"sets.{s}.holdout_rms_mm", rel_tol=0.01, slow=_slow,
+                           note="training data" if s == "flat" else "holdout")
+                    for k, s in enumerate(_sets)]
+
+# closed-chain.md: ``python -m robocal.workflows.calibration.closed_chain_study --seeds 10`` and the variants
+FIGURES += _table("docs/closed-chain.md", {str(s): str(s) for s in range(10)}, "closed_chain/study",
+                  [(0, 0, "E_OP_before_mm"), (0, 1, "E_OP_after_mm"), (1, 0, "workspace_rms_mm.nominal"),
+                   (2, 0, "workspace_rms_mm.closed_chain"), (3, 0, "workspace_rms_mm.tracker"),
+                   (4, 0, "workspace_rms_mm.true_model"), (5, 0, "ratio_closed_chain_to_tracker"), (6, 0, "max_abs_z")],
+                  prefix="closed-chain:seed ", rel_tol=0.01, slow=True, after="| seed | E_OP before / after")
+FIGURES += [
+    Figure("closed-chain:median ratio", "docs/closed-chain.md", r"Median ratio closed chain / tracker: " + _N,
+           "closed_chain/study", "median.ratio", rel_tol=0.01, slow=True),
+    Figure("closed-chain:largest z", "docs/closed-chain.md", r"for all 22 parameters \(largest " + _N,
+           "closed_chain/study", "max.max_abs_z", rel_tol=0.01, slow=True),
+    Figure("closed-chain:median of the largest z", "docs/closed-chain.md", r"the maxima \(median " + _N,
+           "closed_chain/study", "median.max_abs_z", rel_tol=0.01, slow=True),
+]
+for _p, _k, _label in ((1, False, "1 | no | 40"), (1, True, "1 | 50 mm | 40"), (2, False, "2 | no | 80"),
+                       (2, True, "2 | 50 mm | 80")):
+    FIGURES += _table("docs/closed-chain.md", {_label: ""}, f"closed_chain/{_p}-{'spacing' if _k else 'free'}",
+                      [(0, 0, "median.closed_chain"), (1, 0, "median.tracker"), (2, 0, "median.ratio"),
+                       (3, 0, "max.max_abs_z")], prefix="closed-chain:variant ", rel_tol=0.01, slow=True)
+
+# tcp.md: ``robocal tcp accuracy --preset realistic|ideal --seeds 20 --repeats 10`` and ``--budget``
+_Q = ["median", "q25", "q75"]
+for _preset in ("realistic", "ideal"):
+    for _m, _lab in (("cross_laser", "cross-laser"), ("parallel_barriers", "parallel barriers")):
+        _cols = [(c, k, f"{metric}.{q}") for c, metric in enumerate(("repeatability_mm", "accuracy_mm", "check_mm",
+                                                                      "axis_accuracy_deg"))
+                 for k, q in enumerate(_Q)]
+        FIGURES += _table("docs/tcp.md", {f"{_preset} | {_lab}": _m}, f"tcp/{_preset}",
+                          _cols + [(4, 0, "cycle_s.median")], prefix="tcp:", rel_tol=0.01, slow=True)
+_BUDGET = {"ideal": "ideal", "+ I/O 125 Hz, late, jitter": "I/O 125 Hz, late, jitter",
+           "+ absolute error": "absolute error", "+ dirty beams": "dirty beams", "+ tool runout": "tool runout",
+           "+ measuring arm": "measuring arm", "realistic (all)": "realistic"}
+for _c, _m in enumerate(("cross_laser", "parallel_barriers")):
+    FIGURES += _table("docs/tcp.md", {k: f"{v}.{_m}" for k, v in _BUDGET.items()}, "tcp/budget",
+                      [(_c, k, f"{metric}.median") for k, metric in
+                       enumerate(("repeatability_mm", "accuracy_mm", "check_mm", "axis_accuracy_deg"))],
+                      prefix="tcp:budget ", rel_tol=0.01, slow=True, after="Error budget (`--budget`)")
+
+
+# elastic.md: the three protocols with the three models (``robocal datasets run NAME --model M --json``)
+_HOLDOUT3 = ("holdout_rms_mm", "holdout_mean_mm", "holdout_max_mm")
+_ELASTIC_ROWS = {"dlr_justin (400/100, seed 0)": ("dlr_justin", ""), "boby_fanuc (24/12, seeds 0-4)": ("boby_fanuc", ""),
+                 **{f"hilti {s}" + (" (training set)" if s == "flat" else ""): ("hilti_trailblazer", f"sets.{s}")
+                    for s in ("flat", "pallet", "orthogonal_wood", "wood_left_track", "seesaw", "diagonal_wood",
+                              "outdoor")}}
+for _col, _model in enumerate(("geometric", "elastic-joint", "elastic-full")):
+    for _label, (_ds, _key) in _ELASTIC_ROWS.items():
+        FIGURES += [dataclasses.replace(f, key=f"elastic:{_model} {f.key}",
+                                        note="training data" if "flat" in _label else "holdout")
+                    for f in _table("docs/elastic.md", {_label: _key}, f"{_ds}/{_model}",
+                                    [(_col, k, field) for k, field in enumerate(_HOLDOUT3)], rel_tol=0.01,
+                                    slow=_model != "geometric" and _ds == "dlr_justin"
+                                    or _model == "elastic-full" and _ds == "hilti_trailblazer")]
+FIGURES += [
+    Figure("elastic:justin train rms geometric", "docs/elastic.md", r"Training RMS: Justin " + _N,
+           "dlr_justin/geometric", "train_rms_mm"),
+    Figure("elastic:justin train rms joint", "docs/elastic.md", r"Training RMS: Justin [0-9.]+ → " + _N,
+           "dlr_justin/elastic-joint", "train_rms_mm", rel_tol=0.01, slow=True),
+    Figure("elastic:justin train rms full", "docs/elastic.md", r"Training RMS: Justin [0-9.]+ → [0-9.]+ \(joint\) → " + _N,
+           "dlr_justin/elastic-full", "train_rms_mm", rel_tol=0.01, slow=True),
+]
+for _model, _pat in (("elastic-joint", r"0\.276 mm RMS \(per seed "), ("elastic-full", r"0\.320 mm \(per seed ")):
+    FIGURES += [Figure(f"elastic:boby {_model} seed {k}", "docs/elastic.md", _pat + r"(?:[0-9.]+,\s+)" * k + _N,
+                       f"boby_fanuc/{_model}", f"per_seed_holdout_rms_mm.{k}", rel_tol=0.01) for k in range(5)]
+
+
+# self-calibration.md: the NAO H25 acceptance (tests/test_self_calibration_nao.py's setup)
+FIGURES += [
+    Figure("self-calibration:nao acceptance max |z|", "docs/self-calibration.md",
+           r"the other 9 within\s+max \|error / sigma\| = " + _N, "nao/acceptance", "max_abs_z", rel_tol=0.02),
+    Figure("self-calibration:nao acceptance rms", "docs/self-calibration.md",
+           r"reprojection RMS per coordinate " + _N + r" px for 0\.3 px", "nao/acceptance", "rms_px_per_coordinate"),
+]
+_NAO = {"theta1 HeadYaw": "theta1", "theta4 LShoulderPitch": "theta4", "theta5 LShoulderRoll": "theta5",
+        "theta6 LElbowYaw": "theta6", "theta7 LElbowRoll": "theta7", "theta9 RShoulderPitch": "theta9",
+        "theta10 RShoulderRoll": "theta10", "theta11 RElbowYaw": "theta11", "theta12 RElbowRoll": "theta12"}
+for _label, _p in _NAO.items():
+    _cols = [(0, 0, f"truth.{_p}")]
+    for _c, _fit in ((1, "both"), (2, "left_hand"), (3, "right_hand")):
+        if _c == 1 or (_fit == "left_hand") == (_label.split()[1][0] == "L") or _p == "theta1":
+            _cols += [(_c, 0, f"{_fit}.{_p}.error_deg"), (_c, 1, f"{_fit}.{_p}.sigma_deg")]
+    FIGURES += [dataclasses.replace(f, rel_tol=0.02) for f in
+                _table("docs/self-calibration.md", {_label: ""}, "nao/acceptance", _cols, prefix="self-calibration:nao ")]
+
+
+# datasets.md: Justin's middle level, boby's seeds (the report's text) and the positioner's table
+FIGURES += _table("docs/datasets.md", {"+ 18 joint offsets (torso incl. passive joint, both arms)": "justin_offsets"}, "datasets/report",
+                  [(0, 0, "rms"), (1, 0, "mean"), (2, 0, "max"), (3, 0, "train")], prefix="datasets:justin ")
+FIGURES += [Figure(f"datasets:boby seed {k} {what}", "docs/datasets.md",
+                   r"\(calibrated holdout RMS / train RMS\): " + r"(?:[0-9.]+/[0-9.]+,\s+)" * k
+                   + (_N if what == "holdout" else r"[0-9.]+/" + _N), "datasets/report", f"boby_seed{k}.{what}")
+            for k in range(5) for what in ("holdout", "train")]
+for _label, _spec in (("nominal DH (base + target mount fitted)", ((0, 3), (1, 1), (2, 3), (3, 2))),
+                      ("calibrated (+ the identifiable DH parameters)", ((0, 3), (1, 1), (2, 3), (3, 2)))):
+    FIGURES += [Figure(f"datasets:positioner {_label.split(' (')[0]} {c}.{k}", "docs/datasets.md",
+                       _cell(_label, c, k), "ros_industrial_positioner/table", f"{_label}|{c}|{k}")
+                for c, n in _spec for k in range(n)]
+
+
+# thermal.md section 6: lambda over 20 seeds; per row the count of numbers in each column's cell
+# (median, q25, q75[, min, max])
+for _row, _counts in (("realistic, rms | screening", (5, 5, 5, 5)), ("realistic, rms | evaluation", (5, 5, 5, 5)),
+                      ("realistic, strict | screening", (3, 3, 3, 3)), ("realistic, strict | evaluation", (3, 3, 3, 3)),
+                      ("ideal, rms | screening", (3, 3, 3, 3)), ("ideal, rms | evaluation", (5, 3, 5, 3)),
+                      ("ideal, strict | screening", (3, 3, 3, 3)), ("ideal, strict | evaluation", (3, 3, 3, 3))):
+    _preset, _rest = _row.split(", ")
+    _stat, _role = _rest.split(" | ")
+    FIGURES += _table("docs/thermal.md", {_row: f"{'rms' if _stat == 'rms' else 'max'}.{_role}"}, f"thermal/{_preset}",
+                      [(c, k, f"{col}.{q}") for c, col in enumerate(("before", "traditional", "screened", "stable"))
+                       for k, q in enumerate(("median", "q25", "q75", "min", "max")[:_counts[c]])],
+                      prefix="thermal:", rel_tol=0.0)
+
+
+# iso9283.md "In the demo" and README.md: ``robocal demo --poses 100`` (seed 7)
+FIGURES += [Figure(f"iso9283:demo {what} {k}", "docs/iso9283.md", pat, "demo/poses100", f"iso.{field}.{k}")
+            for what, field, text in (("AP", "AP_mm", r"AP "), ("AT line", "AT_mm_line", r"AT \(line\) "),
+                                      ("AT circle", "AT_mm_circle", r"AT \(circle\) "))
+            for k, pat in (("before", r"seed 7\)(?s:.*?)" + text + _N),
+                           ("after", r"seed 7\)(?s:.*?)" + text + r"[0-9.]+ → " + _N))]
+FIGURES += [
+    Figure("iso9283:demo RP", "docs/iso9283.md", r"seed 7\)(?s:.*?)RP " + _N + " mm before and after", "demo/poses100",
+           "iso.RP_mm.before"),
+    Figure("readme:demo AP before", "README.md", r"corrected program \(AP " + _N, "demo/poses100", "iso.AP_mm.before"),
+    Figure("readme:demo AP after", "README.md", r"corrected program \(AP [0-9.]+ -> " + _N, "demo/poses100",
+           "iso.AP_mm.after"),
+]
+
+
+# cells.md "Measured": plan-poses in the default cell (the time column is machine-dependent: not checked)
+for _r in ("ur10", "kuka_kr150_r3100", "abb_irb140"):
+    FIGURES += _table("docs/cells.md", {_r: ""}, f"plan_poses/{_r}",
+                      [(0, 0, "draws"), (1, 0, "d_efficiency"), (1, 1, "lost_percent"), (2, 0, "path_deg"),
+                       (2, 1, "path_unordered_deg")], prefix="cells:plan-poses ", rel_tol=0.0,
+                      after="robocal plan-poses ROBOT --count 40")
+
+
+# calibration.md "IPSO against LM" (the time column is machine-dependent: not checked)
+for _e, _heading in (("deg", "#### ER10L-C10, joint noise +-0.1 deg"), ("rad", "#### ER10L-C10, joint noise +-0.1 rad"),
+                     ("tracker", "#### UR10 (DH + beta) tracker simulation"), ("x30", "#### ER10L, errors x30"),
+                     ("slip", "#### ER10L, theta4 slipped by 180 deg")):
+    FIGURES += _table("docs/calibration.md", {m: m for m in ("lm", "ipso", "ipso+lm")}, f"ipso/{_e}",
+                      [(0, 0, "holdout_mm"), (1, 0, "holdout_deg"), (2, 0, "param_mm"), (3, 0, "param_mrad"),
+                       (5, 0, "at_floor")], prefix=f"calibration:ipso {_e} ", rel_tol=0.01, after=_heading)
+    FIGURES.append(Figure(f"calibration:ipso {_e} floor", "docs/calibration.md",
+                          re.escape(_heading) + r"(?s:.*?)noise floor \(true model\) " + _N, f"ipso/{_e}", "floor_mm",
+                          rel_tol=0.01))
+    if _e != "tracker":
+        FIGURES.append(Figure(f"calibration:ipso {_e} nominal", "docs/calibration.md",
+                              re.escape(_heading) + r"(?s:.*?)nominal model " + _N, f"ipso/{_e}", "nominal_mm",
+                              rel_tol=0.01))
+
+
+# controller.md: the UR driver's three test arms (the FK difference is rounding: checked to its order
+# of magnitude, 0-10x the printed value)
+for _label, _p in (("UR10", "ur10"), ("UR10e (a)", "ur10e_a"), ("UR10e (b, `algorithm.rst`)", "ur10e_b")):
+    FIGURES += _table("docs/controller.md", {_label: ""}, f"ur_import/{_p}", [(0, 0, "largest_d_m")],
+                      prefix="controller:", rel_tol=0.0, after="| arm (test case) |", short=False)
+    FIGURES += _table("docs/controller.md", {_label: ""}, f"ur_import/{_p}", [(1, 0, "fk_max_mm"), (1, 1, "fk_max_rad")],
+                      prefix="controller:", rel_tol=9.0, after="| arm (test case) |",
+                      note="floating-point rounding: order of magnitude", short=False)
+
+
+# fleet.md: the pose-set study
+_FLEET = r"--candidates 800 --workers 2`\s+gave "
+FIGURES += [Figure(f"fleet:pose-sets {k}", "docs/fleet.md", _FLEET + r"(?:[0-9.]+ / )" * i + _N, "fleet/pose_sets",
+                   f"spread.{k}", rel_tol=0.01) for i, k in enumerate(("min", "median", "max"))]
+FIGURES += [Figure("fleet:pose-sets campaign spread", "docs/fleet.md", r"with a campaign spread of " + _N + " %",
+                   "fleet/pose_sets", "relative_spread_percent", rel_tol=0.05),
+            Figure("fleet:pose-sets within noise", "docs/fleet.md", r"all " + _N + r" sets\s+within noise",
+                   "fleet/pose_sets", "n_within_noise", rel_tol=0.0)]
+
+
+# handeye.md "A fair comparison": ``python benchmarks/handeye_fair_comparison.py --seeds 20`` (accuracy
+# figures of a script kept in benchmarks/ for its OpenCV and SciPy peers)
+_HE_METHODS = ("**robocal default (auto)**", "robocal --exact-poses", "robocal prior 0.05 mm / 0.01 deg",
+               "solvePnP + SciPy least_squares (12 unknowns)",
+               *(f"OpenCV {k}" for k in ("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS", "RW_SHAH", "RW_LI")))
+for _level in ("none (0 / 0)", "0.02 mm / 0.004 deg", "0.2 mm / 0.03 deg", "1 mm / 0.1 deg",
+               "systematic 0.5 mm/m + 0.02 mm / 0.004 deg"):
+    for _m in _HE_METHODS:
+        _cols = [(0, 0), (1, 0)] + ([] if _m.startswith("**") else [(2, 0)])
+        FIGURES += [Figure(f"handeye:fair {_level} {_m.strip('*')} {c}", "docs/handeye.md", _cell(f"{_level} | {_m}", c, k),
+                           "handeye/fair_comparison", f"{_level} | {_m}|{c}|{k}", rel_tol=0.02 if c < 2 else 0.0)
+                    for c, k in _cols]
+
+
+# self-calibration.md "Figures": the Justin tree (tests/test_self_calibration.py's setup)
+FIGURES += [
+    Figure("self-calibration:justin max |z|", "docs/self-calibration.md",
+           r"\| identifiable joint offsets \(13\) within 3 reported sigma \| max \\\|error/sigma\\\| = " + _N,
+           "justin/self_calibration", "max_abs_z", rel_tol=0.02),
+    Figure("self-calibration:justin rms", "docs/self-calibration.md",
+           r"\| reprojection RMS per coordinate / simulated noise \| " + _N, "justin/self_calibration",
+           "rms_px_per_coordinate"),
+]
+for _label, _fit in (("head_j1 offset, both arms together", "both"), ("head_j1 offset, left arm alone", "left"),
+                     ("head_j1 offset, right arm alone", "right")):
+    FIGURES += _table("docs/self-calibration.md", {_label: f"{_fit}.head_j1"}, "justin/self_calibration",
+                      [(0, 0, "error_deg"), (0, 1, "sigma_deg")], prefix="self-calibration:justin ", rel_tol=0.02)
+
+
+
+# iso9283.md: the worn / healthy IRB 140, three tests each (the fleet-status trend depends on the day
+# it is run: not checked)
+for _robot in ("worn", "healthy"):
+    for _k, _date in enumerate(("2026-01-02", "2026-03-02", "2026-05-02")):
+        FIGURES += _table("docs/iso9283.md", {f"{_robot} | {_date}": f"{_robot}.{_k}"}, "iso9283/wear",
+                          [(0, 0, "AP"), (1, 0, "RP"), (1, 1, "U")], prefix="iso9283:", rel_tol=0.0)
+
+
+# tcp.md (4-30): the error when beta is ignored (a formula: exact to the printed digit)
+FIGURES += _table("docs/tcp.md", {"ΔE [mm]": ""}, "tcp/beta_error", [(k, 0, f"de.{k}") for k in range(10)],
+                  prefix="tcp:beta error ", rel_tol=0.0)
+FIGURES += [Figure("tcp:beta error threshold low", "docs/tcp.md", r"0\.1 mm at β − 90° = " + _N, "tcp/beta_error",
+                   "threshold_low_deg", rel_tol=0.0),
+            Figure("tcp:beta error threshold high", "docs/tcp.md", r"0\.1 mm at β − 90° = [−-][0-9.]+° and \+" + _N,
+                   "tcp/beta_error", "threshold_high_deg", rel_tol=0.0)]
+
+
+# tcp.md collision study (ideal cell, 10 collisions, seed 0)
+FIGURES += _table("docs/tcp.md", {"beta corrected (default)": "beta_corrected", "no beta correction": "no_beta_correction",
+                                  "thesis step 3": "thesis_step3", "thesis step 3, no beta correction": "thesis_step3_no_beta"},
+                  "tcp/collisions", [(0, 0, "tcp_rms_mm"), (1, 0, "tcp_max_mm"), (2, 0, "axis_rms_deg"),
+                                     (3, 0, "axis_max_deg"), (4, 0, "cycle_max_s")],
+                  prefix="tcp:collisions ", rel_tol=0.01, short=False)
+
+
+# handeye.md "Accuracy against OpenCV" (tests/test_handeye_refine.py's setup)
+for _label, _m in (("**robocal `refine_hand_eye`**", "robocal"), ("`cv2.calibrateHandEye` TSAI", "TSAI"),
+                   ("PARK", "PARK"), ("HORAUD", "HORAUD"), ("ANDREFF", "ANDREFF"), ("DANIILIDIS", "DANIILIDIS"),
+                   ("`cv2.calibrateRobotWorldHandEye` SHAH", "SHAH"), ("LI", "LI")):
+    FIGURES += [Figure(f"handeye:vs opencv {_m} {setup} {what}", "docs/handeye.md",
+                       _cell(_label, col, 0, after="### Accuracy against OpenCV"), "handeye/vs_opencv",
+                       f"{setup}.{_m}.{what}", rel_tol=0.02)
+                for col, (setup, what) in enumerate((("eye_in_hand", "rot_deg"), ("eye_in_hand", "trans_mm"),
+                                                     ("eye_to_hand", "rot_deg"), ("eye_to_hand", "trans_mm")))]
+
+
+FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
