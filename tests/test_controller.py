@@ -261,12 +261,22 @@ def test_probe_programs_are_written_and_their_lines_read_back(tmp_path):
 def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):
     a = tmp_path / "controller.toml"
     assert run("controller", "import", "ur", "ur10", DATA / "ur10_driver_test.conf", "--out", a).exit_code == 0
-    res = run("controller", "diff", "ur10", a, "--poses", 300, "--cell", tmp_path / "cell.toml", "--json",
+    cell = tmp_path / "cell.toml"  # the floor and a table in front of the robot
+    cell.write_text('format = "robocal-cell/1"\nlength_unit = "mm"\nangle_unit = "deg"\n[mounting]\nkind = "floor"\n'
+                    '[[box]]\nname = "table"\nmin = [400.0, -500.0, 0.0]\nmax = [1000.0, 500.0, 300.0]\n')
+    res = run("controller", "diff", "ur10", a, "--poses", 300, "--cell", cell, "--json",
               "--out", tmp_path / "d.csv", "--plot", tmp_path / "map.png")
     assert res.exit_code == 0, res.output
     import json
 
     doc = json.loads(res.output)
+    # every joint set of the map is one the robot can take in that cell
+    from robocal.calib.cell import feasible
+    from robocal.io.cell_file import read_cell
+
+    rows = [ln.split(",") for ln in (tmp_path / "d.csv").read_text().splitlines()[1:]]
+    q = np.radians(np.array([[float(v) for v in r[:6]] for r in rows]))
+    assert feasible(read_cell(cell, load_robot("ur10")), load_robot("ur10"), q).all()
     assert 1.0 < doc["position_mm"]["max"] < 20.0  # a factory calibration moves the UR10's flange by mm
     assert len(doc["accuracy_map"]["by_reach"]) >= 3 and doc["notes"]
     assert len((tmp_path / "d.csv").read_text().splitlines()) == 301

@@ -318,3 +318,23 @@ def test_figures_equal_the_truth_within_the_stated_uncertainty_over_20_seeds(tmp
                           "RT_mm_circle"}
     assert max(worst.values()) <= 1.0, worst
 
+
+
+def test_evaluate_gate_names_an_unregistered_instrument(iso_run, tmp_path):
+    """Measurements in the tracker's own frame (not registered to the base: every point shifted by
+    a metre) are not a robot 1000 mm off: the gate fails (exit 3) and names the likely cause."""
+    d, _, _ = iso_run
+    lines = (d / "run.csv").read_text().splitlines()
+    head = [i for i, s in enumerate(lines) if s.startswith("id,")][0]
+    out = lines[:head + 1]
+    for s in lines[head + 1:]:
+        v = s.split(",")
+        v[2] = f"{float(v[2]) + 1000.0:.5f}"
+        out.append(",".join(v))
+    (tmp_path / "shifted.csv").write_text("\n".join(out) + "\n")
+    r = CliRunner().invoke(main, ["iso9283", "evaluate", str(d / "plan"), str(tmp_path / "shifted.csv"),
+                                  "--out", str(tmp_path / "ev"), "--json"])
+    assert r.exit_code == 3, r.output
+    res = json.loads(r.stdout)["runs"][0]
+    assert res["status"] == "failed" and any("not registered to the robot's base frame" in x for x in res["reasons"])
+    assert json.loads((d / "ev-run.csv" / "iso9283.json").read_text())["runs"][0]["status"] == "ok"

@@ -167,7 +167,8 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, flange, out_fi
 @click.argument("model_a", metavar="MODEL_A")
 @click.argument("model_b", metavar="MODEL_B")
 @click.option("--cell", default=None, type=FILE,
-              help="Cell model (robot placement, tool, working volume); accepted and not used yet (see the note).")
+              help="Cell file (robocal-cell/1, docs/cells.md): the joint sets are drawn among the poses MODEL_A can "
+                   "take in the cell (mounting, obstacles, joint ranges); default: the whole common joint range.")
 @click.option("--poses", "n_poses", default=2000, show_default=True, help="Random joint sets within both models' limits.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the joint sets.")
 @click.option("--tool", default=None, metavar="X,Y,Z", help="TCP in the flange frame [mm] (default: the flange).")
@@ -202,11 +203,22 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, plot_file, o
                 raise click.ClickException(f"{f}: output file exists; pass --overwrite to replace it")
     if n_poses < 10:
         raise click.ClickException(f"--poses must be at least 10, got {n_poses}")
-    r = model_diff(model_a, model_b, n_poses=n_poses, seed=seed, tool=tcp)
+    cell_model = None
+    if cell is not None:
+        from ..io.cell_file import read_cell
+        from ..workflows.controller.models import load_nominal
+
+        try:
+            cell_model = read_cell(cell, load_nominal(model_a))
+        except (ValueError, OSError) as exc:
+            raise click.ClickException(str(exc)) from None
+    try:
+        r = model_diff(model_a, model_b, n_poses=n_poses, seed=seed, tool=tcp, cell=cell_model)
+    except ValueError as exc:
+        raise click.ClickException(" ".join(str(exc).split())) from None
     notes = []
     if cell is not None:
-        notes.append(f"--cell {cell}: the cell model is not part of this robocal version yet; the difference is taken "
-                     "over the robots' whole joint range in their base frames")
+        notes.append(f"--cell {cell}: {n_poses} joint sets the robot can take in the cell")
     if r["bases_differ"]:
         notes.append("the models' [base] frames differ (e.g. a tracker frame); each TCP is compared in its own robot "
                      "base frame")

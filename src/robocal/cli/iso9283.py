@@ -203,8 +203,11 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
                       "corrected_program": bool(after)})}
     except (ValueError, OSError, RobocalError) as exc:
         raise _user_error(exc) from None
+    failed = [r for r in runs if r["status"] != "ok"]
     if as_json:
         click.echo(json.dumps(result, indent=1, default=float))
+        if failed:
+            sys.exit(EXIT_FAILED_RESULT)
         return
     click.echo("\n".join(iso_table_lines(runs[0])))
     if after:
@@ -215,7 +218,11 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
     click.echo(f"wrote {', '.join(files.values())}")
     if db is not None:
         click.echo(f"recorded in the history of {robot_id!r} (cycle {result['history']['cycle_id']})")
-    if runs[0]["missing"] and len(runs[0]["missing"]) == len(protocol["measurements"]):
+    if failed:
+        click.echo("FAILED: the evaluation did not pass its sanity gate (exit code 3):", err=True)
+        for r in failed:
+            for reason in r["reasons"]:
+                click.echo(f"  - {reason}", err=True)
         sys.exit(EXIT_FAILED_RESULT)
 
 

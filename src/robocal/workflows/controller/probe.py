@@ -249,8 +249,12 @@ def _best_fit_rigid(src, dst):
     return R, cd - R @ cs
 
 
-def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
+def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None, cell=None) -> dict:
     """TCP difference of two robot models over the working range (each in its own base frame).
+
+    ``cell``: a :class:`robocal.calib.cell.Cell` (docs/cells.md): the joint sets are drawn among
+    the poses model A can take in it (its mounting, obstacles and joint ranges); default: the
+    whole common joint range.
 
     ``tool``: (3,) TCP in the flange frame [mm] (default the flange origin). Joint sets are drawn
     uniformly within both models' limits. Returns ``position_mm`` / ``rotation_deg`` statistics, an
@@ -268,7 +272,13 @@ def model_diff(model_a, model_b, *, n_poses=2000, seed=0, tool=None) -> dict:
     hi = np.minimum(A.limits[:, 1], B.limits[:, 1])
     if np.any(lo >= hi):
         raise ControllerInputError(f"{A.name} and {B.name} have no joint range in common")
-    q = random_joints(A.replace(limits=np.stack([lo, hi], axis=1)), n_poses, seed)
+    if cell is None:
+        q = random_joints(A.replace(limits=np.stack([lo, hi], axis=1)), n_poses, seed)
+    else:
+        from ...calib.cell import sample_feasible
+
+        q, _ = sample_feasible(cell, A.replace(limits=np.stack([lo, hi], axis=1)), n_poses,
+                               np.random.default_rng(seed))
     tcp = np.zeros(3) if tool is None else np.asarray(tool, float)
     Ta = np.linalg.inv(A.T_world_base)[None] @ A.fk(q)
     Tb = np.linalg.inv(B.T_world_base)[None] @ B.fk(q)

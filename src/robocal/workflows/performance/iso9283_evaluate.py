@@ -159,12 +159,45 @@ def evaluate_iso_run(protocol: dict, meas, *, mpe: InstrumentMPE | None = None, 
             continue
         pts, tang = _eval_points(np.asarray(spec["points_mm"], float), int(spec["evaluation_points"]),
                                  closed=(kind == "circle"))
-        pc = path_characteristics(pts, tang, [meas.positions[i] for i in ids])
+        try:
+            pc = path_characteristics(pts, tang, [meas.positions[i] for i in ids])
+        except ValueError as exc:  # the measured path misses the commanded one: judged by the gate
+            out.setdefault("path_problems", []).append(f"path {kind}: {exc}")
+            continue
         out["path"][kind] = pc.as_dict()
         adequacy(f"AT_mm.{kind}", pc.AT_mm, pts)
         adequacy(f"RT_mm.{kind}", pc.RT_mm, pts)
     out["summary"] = _summary(out)
+    out["status"], out["reasons"] = _gate(protocol, meas, out)
     return out
+
+
+#: a measured pose farther than this from its commanded pose is not a robot's inaccuracy but a
+#: frame or pairing error (the instrument not registered to the base, another plan's file) [mm]
+FRAME_GATE_MM = 25.0
+
+
+def _gate(protocol: dict, meas, out: dict) -> tuple:
+    """The sanity gate of an evaluation: ``("ok" | "failed", reasons)``. Fails when no
+    characteristic could be computed, or when measured poses lie farther than
+    :data:`FRAME_GATE_MM` from what was commanded (named, with the likely cause)."""
+    reasons = []
+    if not out["summary"]:
+        reasons.append("no ISO 9283 characteristic could be computed from these measurements "
+                       f"({len(out['missing'])} of {len(protocol['measurements'])} planned measurements missing)")
+    reasons += [f"{p} (not evaluated)" for p in out.get("path_problems", [])]
+    far = []
+    for m in protocol["measurements"]:
+        if m["test"] in ("pose", "vap", "drift") and m["id"] in meas.positions:
+            d = float(np.linalg.norm(meas.positions[m["id"]][0] - np.asarray(protocol["poses"][m["pose"]]["position_mm"])))
+            if d > FRAME_GATE_MM:
+                far.append((d, m["id"]))
+    if far:
+        far.sort(reverse=True)
+        reasons.append(f"{len(far)} measured pose(s) lie more than {FRAME_GATE_MM:g} mm from the commanded pose (worst "
+                       f"{far[0][1]}: {far[0][0]:.1f} mm): likely cause: the instrument is not registered to the robot's "
+                       "base frame, the file belongs to another plan, or ids are paired with the wrong points")
+    return ("failed" if reasons else "ok"), reasons
 
 
 def _summary(r: dict) -> dict:
