@@ -183,7 +183,8 @@ def six_d_fit_bias(model, free, q, T_inst, T_tool, T_meas, weight_mm_per_rad: fl
     ``q_at``, noise-free) also ``"miss_at"`` (M, 6): where it lands minus where the biased fit
     says, ``e_at - J_at delta``, position [mm] and rotation vector [rad] in the instrument frame;
     with ``noise_mm`` (per coordinate; rotations ``noise_mm / weight`` rad) also ``"sigma_at_mm"``
-    (M,): the RMS length of the noise part of the landing error, ``noise sqrt(tr(J_p (J^T J)^-1 J_p^T))``."""
+    (M,): the RMS length of the noise part of the landing error, ``noise sqrt(tr(J_p (J^T J)^-1 J_p^T))``,
+    and ``"sigma_at_rad"`` (M,): the same for the landing rotation's error (its rotation vector, rad)."""
     from robocal.transforms import so3_log
 
     vals = model.params.values
@@ -229,6 +230,7 @@ def six_d_fit_bias(model, free, q, T_inst, T_tool, T_meas, weight_mm_per_rad: fl
         if noise_mm is not None:
             J_pinv = np.linalg.pinv((np.asarray(cols) - base).T / STEP)
             cov = J_pinv @ J_pinv.T * noise_mm**2
-            J_p = J_at.reshape(-1, 6, J_at.shape[1])[:, :3]
-            out["sigma_at_mm"] = np.sqrt(np.einsum("mij,jk,mik->m", J_p, cov, J_p))
+            J_6 = J_at.reshape(-1, 6, J_at.shape[1])
+            out["sigma_at_mm"] = np.sqrt(np.einsum("mij,jk,mik->m", J_6[:, :3], cov, J_6[:, :3]))
+            out["sigma_at_rad"] = np.sqrt(np.einsum("mij,jk,mik->m", J_6[:, 3:], cov, J_6[:, 3:]))
     return out
