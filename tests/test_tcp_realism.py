@@ -184,27 +184,55 @@ def cells():
     return tcp_accuracy_study(preset="realistic", seeds=20, first_seed=1, repeats=3)
 
 
-# Medians of cells 1-20 and tolerances: the largest deviation of the same median over five
-# disjoint groups of 20 cells (1-20, ..., 81-100), rounded up (docs/tcp.md). Re-measured after
-# the robots gained Hayati's beta between parallel axes (issue 31: the true robots now carry a beta
-# error there, so every cell's truth changed). Measured (cells 1 / 21 / 41 / 61 / 81 ...):
-# cross-laser repeatability 0.062 / 0.052 / 0.068 / 0.069 / 0.074 mm, accuracy 0.196 / 0.240 /
-# 0.215 / 0.315 / 0.255 mm, arm check 0.480 / 0.404 / 0.462 / 0.448 / 0.554 mm, axis 0.121 / 0.135
-# / 0.152 / 0.147 / 0.140 deg; parallel barriers repeatability 0.118 / 0.113 / 0.098 / 0.097 /
-# 0.083 mm, accuracy 1.966 / 1.962 / 1.865 / 1.735 / 1.635 mm, axis 0.061 / 0.053 / 0.059 / 0.042 /
-# 0.048 deg.
-TCP_MEDIANS = {"cross_laser": {"repeatability_mm": (0.062, 0.015), "accuracy_mm": (0.196, 0.12),
-                               "check_mm": (0.480, 0.08), "axis_accuracy_deg": (0.121, 0.035)},
-               "parallel_barriers": {"repeatability_mm": (0.118, 0.04), "accuracy_mm": (1.966, 0.34),
-                                     "axis_accuracy_deg": (0.061, 0.02)}}
+THESIS_RMS_MM = 0.48  # thesis 5.2 (METHODS.md section 5): rms of 10 recalibrated TCPs, checked with a ROMER arm
+DIRT_BIAS_MM = 0.3  # BarrierEffects.realistic: dust on up to 30 % of a 2 mm beam biases a crossing by f w / 2
+ROBOT_ABS_MM = (0.2, 0.4)  # BarrierEffects.realistic: the robot's absolute error after calibration, 0.2-0.4 mm
+ARM_MM = 0.025 * math.sqrt(3)  # the arm's 0.025 mm per coordinate, 3-D
+REGISTRATION_MM = 0.05 + math.radians(0.003) * 800.0  # 0.05 mm + 0.003 deg at the check point (~0.8 m from the base)
+REPEAT_MM = 0.1 / 3.6 * math.sqrt(3)  # ISO repeatability 0.1 mm (~3.6 sigma of the 3-D distance), as simulated
 
 
 def test_tool_frame_repeatability_and_accuracy_over_20_cells(cells):
+    """Against the thesis and the simulated truth, not against robocal's earlier medians (those
+    are documented figures of docs/tcp.md, checked by ``python -m robocal.docs.figures --all``).
+
+    * Thesis: its 0.48 mm rms (one UR10 cell, 10 recalibrations checked with a measuring arm) must
+      lie within the interquartile range of the simulated cells' arm check (the same kind of
+      figure). A simulated cell is another cell with other dirt, another robot and another bent
+      tool: it cannot be expected to match one real cell more closely than the cells match each
+      other. The ideal cell's arm check (0.06-0.07 mm) would fail this.
+    * Truth, parallel barriers: (4-6, 4-7) take the TCP as ``D * axis``; the bent tool's axis
+      misses the flange origin, so its TCP error must equal the true tool's off-axis distance (the
+      method's assumption, from the hidden bent tool) within what the cell's effects can add: the
+      dirt's beam-height bias (f w / 2 <= 0.3 mm) plus the robot's absolute error (<= 0.4 mm),
+      summed as a worst case, 0.7 mm, in every cell.
+    * Truth, cross-laser: its TCP error is part of what the arm check sees, and the check adds the
+      robot's absolute error at the check pose, the arm and its registration and the robot's
+      repeatability (independent of the TCP's error, so in quadrature): ``sqrt(median(check^2 -
+      accuracy^2))`` must lie between the robot's stated 0.2 mm and the worst-case sum 0.4 + 0.043
+      + 0.092 + 0.048 = 0.58 mm; the median TCP error must stay below the thesis's check figure.
+
+    Measured (cells 1-20, 3 repeats): arm check quartiles 0.337 / 0.594 mm (median 0.480);
+    parallel barriers |error - off-axis| <= 0.44 mm (median 0.07); cross-laser accuracy median
+    0.196 mm, check part beyond the TCP 0.40 mm.
+    """
+    from robocal.sim.tool.parallel_barrier_cell import straight_tool
+
     s = cells["summary"]
-    for method, figures in TCP_MEDIANS.items():
-        for k, (value, tol) in figures.items():
-            assert s[method][k]["median"] == pytest.approx(value, abs=tol), (method, k)
     cl, pb = s["cross_laser"], s["parallel_barriers"]
+    assert cl["check_mm"]["q25"] <= THESIS_RMS_MM <= cl["check_mm"]["q75"], cl["check_mm"]
+    for c in cells["per_seed"]:
+        s_tool = np.random.SeedSequence([c["seed"], 11]).spawn(6)[1]  # the cell's bent tool, as tcp_accuracy_study draws it
+        bent, _ = straight_tool().collided(np.random.default_rng(s_tool))
+        t, a = bent.tcp_flange_mm, bent.axis_flange
+        np.testing.assert_allclose(t, c["tcp_true_mm"], atol=1e-9)
+        off_axis = np.linalg.norm(t - (t @ a) * a)
+        assert abs(c["parallel_barriers"]["accuracy_mm"] - off_axis) <= DIRT_BIAS_MM + ROBOT_ABS_MM[1], (c["seed"], off_axis)
+    acc = np.array([c["cross_laser"]["accuracy_mm"] for c in cells["per_seed"]])
+    chk = np.array([c["cross_laser"]["check_mm"] for c in cells["per_seed"]])
+    beyond_tcp = math.sqrt(max(float(np.median(chk**2 - acc**2)), 0.0))
+    assert ROBOT_ABS_MM[0] <= beyond_tcp <= ROBOT_ABS_MM[1] + ARM_MM + REGISTRATION_MM + REPEAT_MM, beyond_tcp
+    assert cl["accuracy_mm"]["median"] < THESIS_RMS_MM
     # repeatability is not accuracy: the spread of the same tool is a fraction of the error
     assert cl["repeatability_mm"]["median"] < 0.5 * cl["accuracy_mm"]["median"] < cl["check_mm"]["median"]
     # the arm check adds the robot's absolute error at the check pose and the arm's own error
@@ -212,7 +240,7 @@ def test_tool_frame_repeatability_and_accuracy_over_20_cells(cells):
     # the parallel barriers measure the axis well, the TCP only through the flange origin
     assert pb["axis_accuracy_deg"]["median"] < cl["axis_accuracy_deg"]["median"]
     assert pb["accuracy_mm"]["median"] > 4 * cl["accuracy_mm"]["median"]
-    assert cells["thesis_rms_mm"] == 0.48
+    assert cells["thesis_rms_mm"] == THESIS_RMS_MM
 
 
 def test_ideal_cell_is_an_order_of_magnitude_better():
