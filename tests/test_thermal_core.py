@@ -84,40 +84,71 @@ def test_both_methods_exact_without_noise(kuka):
     assert c.least_squares.rms_mm < 1e-6
 
 
-def test_system_calibration_accuracy_at_0_02_mm_noise(kuka):
-    """Acceptance: 9 poses, 0.02 mm noise, 20 seeds.
+SYSTEM_KEYS = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+N_SYSTEM_SEEDS = 100
+# one-sided sign tests on N_SYSTEM_SEEDS independent seeds, each at alpha = 0.01 / 5 (Bonferroni over the
+# five measures): least squares wins >= 65 seeds rejects "equally good" (P(Bin(100, 0.5) >= 65) = 0.0018);
+# it wins <= 80 rejects "least squares wins (almost) always", p >= 0.9 (P(Bin(100, 0.9) <= 80) = 0.0020)
+WINS_NOT_CHANCE, WINS_NOT_ALWAYS = 65, 80
 
-    Measured (seeds 0-19, means): least squares: rotation 0.0021 deg, frame position at the centre
-    of the measured volume 0.020 mm, sensor origin 0.029 mm, base origin seen from the sensor
-    0.055 mm, P_e 0.020 mm; thesis penalty method: 0.0026 deg, 0.025, 0.039, 0.079, 0.026 mm.
-    Per seed the picture is mixed: least squares is better in 11 / 13 / 15 / 15 / 14 of the 20
-    seeds on those five measures, on all five in only 8, and in single seeds the penalty method
-    is up to 2.7 times better (P_e).
+
+def _system_errors(kuka, seed, true_model=None):
+    """Errors (least squares, thesis penalty) on :data:`SYSTEM_KEYS` and the least-squares P_e
+    z-score ``|error| / |sigma|`` of one seed: 9 poses, 0.02 mm noise, the sphere centres of
+    ``true_model`` (default: the model itself)."""
+    rng = np.random.default_rng(seed)
+    T_sb = _sensor(rng)
+    q = design_sphere_poses(kuka, CENTRE, P_E, 9, rng, spread_mm=FOV, tilt_deg=60)
+    P = predict_sphere(true_model or kuka, T_sb, P_E, q) + rng.normal(0, 0.02, (9, 3))
+    c = compare_system_calibrations(kuka, q, P, T_sensor_base_true=T_sb, P_e_true=P_E, point_sigma_mm=0.02)
+    assert c.least_squares.converged and c.thesis.converged
+    assert c.thesis.orthonormality_error < 1e-5
+    z = c.errors["least-squares"]["P_e_mm"] / np.linalg.norm(c.least_squares.std_P_e_mm)
+    return [c.errors["least-squares"][k] for k in SYSTEM_KEYS], [c.errors["thesis-penalty"][k] for k in SYSTEM_KEYS], z
+
+
+def test_system_calibration_accuracy_at_0_02_mm_noise(kuka):
+    """Acceptance, noise only (the robot is its model: here that is the point, the comparison the
+    thesis's method was designed for): 9 poses, 0.02 mm noise, 100 seeds.
+
+    * sigma is the right size: the reported covariance C of P_e gives E|error|^2 = tr(C) = |std|^2,
+      so the RMS over seeds of ``|error| / |std|`` is 1; with 100 seeds its sampling spread is about
+      +-0.1 (|error|^2 / tr C has a variance of ~2/3 for three similar axes): asserted 0.8-1.2, and
+      every seed within 3.
+    * least squares (the maximum-likelihood estimator for Gaussian noise) against the thesis's
+      penalty method, seed by seed: sign tests (:data:`WINS_NOT_CHANCE`, :data:`WINS_NOT_ALWAYS`):
+      on each of the five measures least squares wins more seeds than chance allows, and the
+      penalty method still wins more seeds than "least squares nearly always wins" allows.
+
+    Measured (seeds 0-99): least squares wins 67 / 68 / 70 / 70 / 68 seeds (rotation, position at
+    the centre of the measured volume, sensor origin, base origin seen from the sensor, P_e), all
+    five in 31; mean error ratio penalty / least squares 1.20-1.28; RMS z 0.97, max 2.1. (On seeds
+    0-19 alone the counts are 11 / 13 / 15 / 15 / 14: too few seeds to tell the methods apart.)
     """
-    ls, th = [], []
-    for seed in range(20):
-        rng = np.random.default_rng(seed)
-        T_sb = _sensor(rng)
-        q = design_sphere_poses(kuka, CENTRE, P_E, 9, rng, spread_mm=FOV, tilt_deg=60)
-        P = predict_sphere(kuka, T_sb, P_E, q) + rng.normal(0, 0.02, (9, 3))
-        c = compare_system_calibrations(kuka, q, P, T_sensor_base_true=T_sb, P_e_true=P_E, point_sigma_mm=0.02)
-        keys = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
-        ls.append([c.errors["least-squares"][k] for k in keys])
-        th.append([c.errors["thesis-penalty"][k] for k in keys])
-        assert c.least_squares.converged and c.thesis.converged
-        assert c.thesis.orthonormality_error < 1e-5
-        # the reported uncertainty is the right size: 3-sigma of P_e covers its error
-        assert c.errors["least-squares"]["P_e_mm"] < 3 * np.linalg.norm(c.least_squares.std_P_e_mm)
-    ls, th = np.array(ls), np.array(th)
-    rot, at_centre, origin, t_sb, pe = ls.mean(axis=0)
-    assert rot < 0.003 and at_centre < 0.03 and pe < 0.03, ls.mean(axis=0)
-    assert origin < 0.035, ls.mean(axis=0)
-    # on average the thesis's penalty method is worse on every measure (by 20-45 %) ...
-    assert np.all(th.mean(axis=0) >= 1.15 * ls.mean(axis=0)), (th.mean(axis=0), ls.mean(axis=0))
-    # ... but not seed by seed: least squares wins 55-75 % of the seeds per measure, all five in 40 %
+    ls, th, z = zip(*(_system_errors(kuka, seed) for seed in range(N_SYSTEM_SEEDS)))
+    ls, th, z = np.array(ls), np.array(th), np.array(z)
+    assert z.max() < 3.0 and 0.8 < np.sqrt(np.mean(z**2)) < 1.2, z
     wins = (ls < th).sum(axis=0)
-    assert np.all((10 <= wins) & (wins <= 16)), wins
-    assert 5 <= np.all(ls < th, axis=1).sum() <= 11
+    assert np.all(wins >= WINS_NOT_CHANCE), wins
+    assert np.all(wins <= WINS_NOT_ALWAYS), wins
+
+
+def test_system_calibration_comparison_on_a_robot_that_differs_from_its_model(kuka):
+    """The comparison above with the true robot 0.1 mm / 0.01 deg per parameter off its model (the
+    absolute error a calibration leaves; the effect the 9-unknown model lacks, see the next test).
+    Both methods then share a bias several sigma large (max z > 5: "within 3 sigma" fails), and
+    least squares' advantage is no longer established: for the position at the centre of the
+    measured volume the sign test does not reject "equally good" (fewer than
+    :data:`WINS_NOT_CHANCE` wins). Measured (seeds 0-99): wins 63 / 47 / 59 / 63 / 64, mean error
+    ratio 1.00-1.12, z max 26.6."""
+    ls, th, z = zip(*(_system_errors(kuka, seed, VirtualRobot.perturbed(
+        kuka, 500 + seed, length_sigma_mm=0.1, angle_sigma_deg=0.01, offset_sigma_deg=0.01).true_model)
+        for seed in range(N_SYSTEM_SEEDS)))
+    ls, th, z = np.array(ls), np.array(th), np.array(z)
+    assert np.max(z) > 5.0, z
+    wins = (ls < th).sum(axis=0)
+    assert wins[SYSTEM_KEYS.index("at_point_mm")] < WINS_NOT_CHANCE, wins
+    assert np.all(wins <= WINS_NOT_ALWAYS), wins
 
 
 def test_system_calibration_on_a_robot_that_differs_from_its_model(kuka):
