@@ -17,6 +17,9 @@ from robocal.sim.cameras.self_calibration_views import camera_board_poses
 from robocal.transforms import so3_exp, transforms_from
 
 STEP = 1e-6
+NO_EFFECTS = {"transmission_deg": [0.0, 0.0], "transmission_phases_rad": [[0.0], [0.0]], "growth_ppm": 0.0,
+              "tracker_scale_ppm": 0.0}
+"""The campaign effects of an ideal ``simulate tracker`` campaign (its truth file has no entry)."""
 
 
 def first_order_bias(columns, base, e, h: float = STEP) -> np.ndarray:
@@ -77,7 +80,7 @@ def campaign_effect_points(truth: dict, q, growth) -> tuple:
 
     nominal = load_robot(truth["robot"])
     true = nominal.with_params(**{k: float(v) for k, v in truth["true_parameters"].items()})
-    eff = truth["campaign_effects"]
+    eff = truth.get("campaign_effects") or NO_EFFECTS  # an ideal campaign's truth file has none
     a1, a2 = np.radians(eff["transmission_deg"])
     ph = np.asarray(eff["transmission_phases_rad"])
     q = np.atleast_2d(q)
@@ -95,7 +98,7 @@ def campaign_effect_points(truth: dict, q, growth) -> tuple:
     return points(q, np.zeros(len(q))), points(q_real, growth)
 
 
-def tracker_campaign_bias(truth: dict, free, q_train, q_at) -> np.ndarray:
+def tracker_campaign_bias(truth: dict, free, q_train, q_at, *, point=None) -> np.ndarray:
     """First-order miss (M, 3) [mm, tracker frame] of the first reflector at joints ``q_at`` (M, n)
     [rad] after a point calibration (positions of every reflector, unweighted) on ``q_train``
     (N, n) [rad], the campaign's effects from the truth file: the fit's variables (the ``free``
@@ -104,7 +107,14 @@ def tracker_campaign_bias(truth: dict, free, q_train, q_at) -> np.ndarray:
     ``e_at - J_at delta`` from where the calibrated model says. Jacobians by finite differences of
     the true geometry (:data:`STEP`). ``free``: the parameters the calibration estimated (not the
     ones it reported as not identified: their columns make ``J`` singular up to finite-difference
-    noise, and ``J^+`` would then follow that noise)."""
+    noise, and ``J^+`` would then follow that noise).
+
+    ``point`` (3,) [mm, true flange frame]: the miss of that flange point instead (a tool the campaign
+    never saw, not a fit variable). The parameters the calibration did not estimate are then held at
+    their nominal values in the fit and in the calibrated model, as robocal holds them: their
+    errors enter the fit's data as ``g = F(held nominal) - F(true)`` (the fit moves by ``J^+ (e -
+    g)``) and the point's prediction by the same difference at ``q_at``, so the miss includes the
+    part robocal reports as unknown (``unknown_mm``), here derived from the hidden truth."""
     from robocal.robots import load_robot
 
     nominal = load_robot(truth["robot"])
@@ -131,15 +141,36 @@ def tracker_campaign_bias(truth: dict, free, q_train, q_at) -> np.ndarray:
             cols.append(predict(q, r=r.reshape(refl.shape)))
         return np.array(cols)
 
-    g = float(truth["campaign_effects"]["growth_ppm"]) * 1e-6
-    scale = 1.0 + float(truth["campaign_effects"]["tracker_scale_ppm"]) * 1e-6
+    eff = truth.get("campaign_effects") or NO_EFFECTS
+    g = float(eff["growth_ppm"]) * 1e-6
+    scale = 1.0 + float(eff["tracker_scale_ppm"]) * 1e-6
     model, reached = campaign_effect_points(truth, q_train, np.linspace(0.0, g, len(q_train)))
     J = (columns(q_train) - predict(q_train)).T / STEP
-    delta = np.linalg.lstsq(J, (reached * scale - model).ravel(), rcond=None)[0]
-    model_at, reached_at = campaign_effect_points(truth, q_at, np.full(len(np.atleast_2d(q_at)), g))
-    J_at = (columns(q_at) - predict(q_at)).T / STEP
-    miss = (reached_at - model_at).ravel() - J_at @ delta
-    return miss.reshape(len(np.atleast_2d(q_at)), len(refl), 3)[:, 0]
+    if point is None:
+        delta = np.linalg.lstsq(J, (reached * scale - model).ravel(), rcond=None)[0]
+        model_at, reached_at = campaign_effect_points(truth, q_at, np.full(len(np.atleast_2d(q_at)), g))
+        J_at = (columns(q_at) - predict(q_at)).T / STEP
+        miss = (reached_at - model_at).ravel() - J_at @ delta
+        return miss.reshape(len(np.atleast_2d(q_at)), len(refl), 3)[:, 0]
+    held = vals.copy()  # the parameters not estimated, at their nominal values
+    for i, n in enumerate(true.params.names):
+        if n not in free:
+            held[i] = nominal.params.values[i]
+    g_train = predict(q_train, values=held) - predict(q_train)
+    delta = np.linalg.lstsq(J, (reached * scale - model).ravel() - g_train, rcond=None)[0]
+    x = np.asarray(point, dtype=float)[None]
+    at = {**truth, "reflectors_mm": x.tolist()}
+    model_at, reached_at = campaign_effect_points(at, q_at, np.full(len(np.atleast_2d(q_at)), g))
+    cols_at = []  # the point's columns: the free parameters and the base twist (no reflector variable)
+    for n in free:
+        v = vals.copy()
+        v[true.params.index(n)] += STEP
+        cols_at.append(predict(q_at, values=v, r=x))
+    cols_at += [predict(q_at, T=T_tb @ twist(k), r=x) for k in range(6)]
+    J_at = (np.array(cols_at) - predict(q_at, r=x)).T / STEP
+    g_at = predict(q_at, values=held, r=x) - predict(q_at, r=x)
+    miss = (reached_at - model_at).ravel() - J_at @ delta[: len(cols_at)] - g_at
+    return miss.reshape(len(np.atleast_2d(q_at)), 3)
 
 
 REALISTIC = {"transmission_deg": (0.005, 0.003), "growth_ppm": 20.0, "tracker_scale_ppm": 5.0}
