@@ -190,6 +190,7 @@ ROBOT_ABS_MM = (0.2, 0.4)  # BarrierEffects.realistic: the robot's absolute erro
 ARM_MM = 0.025 * math.sqrt(3)  # the arm's 0.025 mm per coordinate, 3-D
 REGISTRATION_MM = 0.05 + math.radians(0.003) * 800.0  # 0.05 mm + 0.003 deg at the check point (~0.8 m from the base)
 REPEAT_MM = 0.1 / 3.6 * math.sqrt(3)  # ISO repeatability 0.1 mm (~3.6 sigma of the 3-D distance), as simulated
+IO_PB_MM = (0.008 + 0.008) * 5.0  # parallel barriers: one 125 Hz cycle late + 8 ms jitter at the rig's 5 mm/s
 
 
 def test_tool_frame_repeatability_and_accuracy_over_20_cells(cells):
@@ -204,8 +205,9 @@ def test_tool_frame_repeatability_and_accuracy_over_20_cells(cells):
     * Truth, parallel barriers: (4-6, 4-7) take the TCP as ``D * axis``; the bent tool's axis
       misses the flange origin, so its TCP error must equal the true tool's off-axis distance (the
       method's assumption, from the hidden bent tool) within what the cell's effects can add: the
-      dirt's beam-height bias (f w / 2 <= 0.3 mm) plus the robot's absolute error (<= 0.4 mm),
-      summed as a worst case, 0.7 mm, in every cell.
+      dirt's beam-height bias (f w / 2 <= 0.3 mm), the robot's absolute error (<= 0.4 mm) and the
+      I/O's delay at the rig's 5 mm/s (16 ms: 0.08 mm), summed as a worst case, 0.78 mm, in every
+      cell (the tool's runout, 0.02 mm / 0.02 deg, is below the rounding of these).
     * Truth, cross-laser: its TCP error is part of what the arm check sees, and the check adds the
       robot's absolute error at the check pose, the arm and its registration and the robot's
       repeatability (independent of the TCP's error, so in quadrature): ``sqrt(median(check^2 -
@@ -227,7 +229,8 @@ def test_tool_frame_repeatability_and_accuracy_over_20_cells(cells):
         t, a = bent.tcp_flange_mm, bent.axis_flange
         np.testing.assert_allclose(t, c["tcp_true_mm"], atol=1e-9)
         off_axis = np.linalg.norm(t - (t @ a) * a)
-        assert abs(c["parallel_barriers"]["accuracy_mm"] - off_axis) <= DIRT_BIAS_MM + ROBOT_ABS_MM[1], (c["seed"], off_axis)
+        assert abs(c["parallel_barriers"]["accuracy_mm"] - off_axis) <= DIRT_BIAS_MM + ROBOT_ABS_MM[1] + IO_PB_MM, \
+            (c["seed"], off_axis)
     acc = np.array([c["cross_laser"]["accuracy_mm"] for c in cells["per_seed"]])
     chk = np.array([c["cross_laser"]["check_mm"] for c in cells["per_seed"]])
     beyond_tcp = math.sqrt(max(float(np.median(chk**2 - acc**2)), 0.0))
