@@ -18,7 +18,10 @@ The simulation does exactly that on a hidden true robot:
   model (closed-form branch on the nominal model, refined numerically on the true one);
 * **effects the identification model lacks** -- every joint has a small cyclic (gear) error
   ``a sin(2 q + phi)`` between the encoder and the link, and the controller reads the encoders
-  with Gaussian noise and quantises them to its resolution.
+  with Gaussian noise and quantises them to its resolution; with ``effects``
+  (:class:`~robocal.sim.closed_chain_effects.CellEffects`, preset ``realistic``) also a
+  transmission error of realistic size, the gravity sag of J2 and J3 and the arm's warm-up during
+  the session.
 
 Output: :class:`~robocal.io.spots.HeldSpots` (written as a ``robocal-spots/1`` file) and the
 truth. Lengths mm, angles rad.
@@ -36,6 +39,8 @@ from ..io.spots import HeldSpots
 from ..kinematics.ik import ik_numeric
 from ..kinematics.ik_analytic import ik_analytic
 from ..transforms import so3_exp
+from .campaign_effects import grown
+from .closed_chain_effects import CellEffects
 from .robot import VirtualRobot, as_rng
 
 __all__ = ["LaserPointer", "Plate", "default_plates", "JointReadout", "ClosedChainCell"]
@@ -138,10 +143,43 @@ class JointReadout:
 
 class ClosedChainCell:
     """A hidden true robot (:class:`~robocal.sim.VirtualRobot`), a laser pointer, plates and the
-    controller's joint readout; :meth:`hold_spots` simulates the spot-holding procedure."""
+    controller's joint readout; :meth:`hold_spots` simulates the spot-holding procedure.
 
-    def __init__(self, robot: VirtualRobot, laser: LaserPointer, plates, readout: JointReadout):
+    effects: :class:`~robocal.sim.closed_chain_effects.CellEffects` (or a preset name) the
+    geometric model lacks, with ``phases`` (2, n) [rad] of its transmission error; ``None``: the
+    cell without them (the same random streams either way)."""
+
+    def __init__(self, robot: VirtualRobot, laser: LaserPointer, plates, readout: JointReadout, effects=None,
+                 phases=None):
         self.robot, self.laser, self.plates, self.readout = robot, laser, list(plates), readout
+        self.effects = None if effects is None else CellEffects.preset(effects)
+        if self.effects is not None and self.effects.is_ideal():
+            self.effects = None
+        n = robot.nominal.n_joints
+        self.phases = np.zeros((2, n)) if phases is None else np.asarray(phases, dtype=float).reshape(2, n)
+
+    def encoder_angles(self, q_link) -> np.ndarray:
+        """Encoder angles (N, n) [rad] whose link angles are ``q_link`` (N, n) [rad]: the readout's
+        cyclic error and the effects inverted by fixed-point iteration (NaN rows stay NaN)."""
+        q_link = np.atleast_2d(np.asarray(q_link, dtype=float))
+        if self.effects is None:
+            return self.readout.encoder_angles(q_link)
+        q = self.readout.encoder_angles(q_link)
+        ok = np.all(np.isfinite(q_link), axis=1)
+        for _ in range(6):
+            err = np.zeros_like(q)
+            if ok.any():
+                err[ok] = self.effects.joint_error(self.robot.true_model, q[ok], self.phases)
+            q = self.readout.encoder_angles(q_link - err)
+        return q
+
+    def link_angles(self, q_encoder) -> np.ndarray:
+        """Link angles (N, n) [rad] the arm reaches at encoder angles ``q_encoder`` (N, n) [rad]."""
+        q = np.atleast_2d(np.asarray(q_encoder, dtype=float))
+        out = self.readout.link_angles(q)
+        if self.effects is not None:
+            out = out + self.effects.joint_error(self.robot.true_model, q, self.phases)
+        return out
 
     def _candidate_poses(self, aim, normal, rng, max_tilt_deg, standoff_mm):
         """Flange poses (C, 4, 4) putting the *true* beam through ``aim`` (C, 3) [mm], from beam
@@ -191,16 +229,23 @@ class ClosedChainCell:
 
         Returns ``(spots, truth_rows)``: :class:`~robocal.io.spots.HeldSpots` (joints as the
         controller reads them) and a dict of per-row truth (``aim_mm`` (H, 3) where the spot really
-        was, ``q_link`` (H, n) the true link angles)."""
+        was, ``q_link`` (H, n) the true link angles, ``q_encoder`` (H, n) the encoders before the
+        reading's noise, ``growth`` (H,) the arm's relative growth, 0 without effects)."""
         rng = as_rng(rng)
         if n_configs < 1:
             raise ValueError(f"n_configs must be at least 1, got {n_configs}")
-        rows_q, rows_aim, plate_l, target_l = [], [], [], []
+        rows_q, rows_aim, plate_l, target_l, rows_g = [], [], [], [], []
         lo, hi = self.robot.nominal.limits[:, 0], self.robot.nominal.limits[:, 1]
+        n_targets = sum(p.n_targets for p in self.plates)
+        growth = self.effects.target_growth(n_targets) if self.effects is not None else np.zeros(n_targets)
+        T_wb = self.robot.true_model.T_world_base
+        k_target = -1
         for plate in self.plates:
             normal = plate.T_base_plate[:3, 2]
             ex, ey = plate.T_base_plate[:3, 0], plate.T_base_plate[:3, 1]
             for name, P in zip(plate.target_names, plate.targets_base()):
+                k_target += 1
+                eps = float(growth[k_target])
                 got_q, got_aim = [], []
                 for _ in range(max_rounds):
                     C = 6 * n_configs
@@ -208,8 +253,10 @@ class ClosedChainCell:
                     ang = rng.uniform(-np.pi, np.pi, C)
                     aim = P + (rad * np.cos(ang))[:, None] * ex + (rad * np.sin(ang))[:, None] * ey
                     T = self._candidate_poses(aim, normal, rng, max_tilt_deg, standoff_mm)
+                    if eps:  # the grown arm reaches (1 + eps) times where the geometric one does
+                        T = grown(T, T_wb, 1.0 / (1.0 + eps) - 1.0)
                     q_link = self._solve_joints(T, rng)
-                    q_enc = self.readout.encoder_angles(q_link)
+                    q_enc = self.encoder_angles(q_link)
                     ok = np.all(np.isfinite(q_enc), axis=1) & np.all((q_enc >= lo) & (q_enc <= hi), axis=1)
                     got_q += list(q_link[ok])
                     got_aim += list(aim[ok])
@@ -220,14 +267,16 @@ class ClosedChainCell:
                                        "configurations reachable; move the plate closer")
                 rows_q += got_q[:n_configs]
                 rows_aim += got_aim[:n_configs]
+                rows_g += [eps] * n_configs
                 plate_l += [plate.name] * n_configs
                 target_l += [name] * n_configs
         q_link = np.array(rows_q)
-        q_read = self.readout.read(self.readout.encoder_angles(q_link), rng)
+        q_enc = self.encoder_angles(q_link)
+        q_read = self.readout.read(q_enc, rng)
         H = len(q_link)
         spots = HeldSpots(tuple(str(i + 1) for i in range(H)), tuple(plate_l), tuple(target_l), q_read,
                           tuple(self.robot.nominal.controller_joints), tolerance_mm)
-        return spots, {"aim_mm": np.array(rows_aim), "q_link": q_link}
+        return spots, {"aim_mm": np.array(rows_aim), "q_link": q_link, "q_encoder": q_enc, "growth": np.array(rows_g)}
 
     def truth(self) -> dict:
         """What a calibration should find (JSON-ready with numpy arrays)."""
@@ -241,5 +290,6 @@ class ClosedChainCell:
                         "targets_base_mm": p.targets_base(), "target_names": p.target_names} for p in self.plates],
             "joint_readout": {"noise_rad": self.readout.noise_rad, "resolution_rad": self.readout.resolution_rad,
                               "cyclic_error_rad": self.readout.cyclic_rad},
+            **({"cell_effects": self.effects.as_truth(self.phases)} if self.effects is not None else {}),
             "units": "lengths mm, angles rad; T_a_b is frame b written in frame a",
         }

@@ -45,6 +45,7 @@ from ...metrics import error_statistics
 from ...robots import load_robot, save_robot
 from ...sim import VirtualRobot, write_truth
 from ...sim.closed_chain import ClosedChainCell, JointReadout, LaserPointer, default_plates
+from ...sim.closed_chain_effects import CellEffects
 from .calibrate import OUTPUT_FILES, CalibrationInputError, output_paths, select_free
 from ..convergence import Convergence, record_fit
 from ..outputs import check_outputs_free, ensure_writable_dir, staged_outputs
@@ -64,11 +65,13 @@ def simulate_closed_chain(robot, out_path, *, plates: int = 2, targets: int = 5,
                           joint_resolution_deg: float = DEFAULT_JOINT_RESOLUTION_DEG, joint_noise_deg=None,
                           cyclic_error_deg: float = 0.0005, seed: int = 0, length_sigma_mm: float = 0.5,
                           angle_sigma_deg: float = 0.05, offset_sigma_deg: float = 0.05, overwrite: bool = False,
-                          return_cell: bool = False) -> dict:
+                          return_cell: bool = False, effects="ideal") -> dict:
     """Simulate the spot-holding procedure and write ``out_path`` (held spots) and
-    ``<name>.truth.json``. joint_noise_deg: reading noise (default: the resolution). Seeds:
-    ``SeedSequence(seed).spawn(3)`` -> robot, laser mount, holding. Returns the paths, the row
-    count and (``return_cell``) the simulated cell."""
+    ``<name>.truth.json``. joint_noise_deg: reading noise (default: the resolution); effects: a
+    :data:`~robocal.sim.closed_chain_effects.CELL_PRESETS` name (``realistic``: transmission
+    error, gravity sag of J2/J3, warm-up; written to the truth file as ``cell_effects``). Seeds:
+    ``SeedSequence(seed).spawn(4)`` -> robot, laser mount, holding, effects' phases. Returns the
+    paths, the row count and (``return_cell``) the simulated cell."""
     out_path = Path(out_path)
     truth_path = check_simulation_outputs(out_path, overwrite)
     for name, v, lo in (("--plates", plates, 1), ("--targets", targets, 2), ("--configurations", configurations, 2)):
@@ -80,16 +83,16 @@ def simulate_closed_chain(robot, out_path, *, plates: int = 2, targets: int = 5,
     cell, s_hold = make_cell(nominal, seed, plates=plates, targets=targets, spacing_mm=spacing_mm,
                              joint_resolution_deg=joint_resolution_deg, joint_noise_deg=joint_noise_deg,
                              cyclic_error_deg=cyclic_error_deg, length_sigma_mm=length_sigma_mm,
-                             angle_sigma_deg=angle_sigma_deg, offset_sigma_deg=offset_sigma_deg)
+                             angle_sigma_deg=angle_sigma_deg, offset_sigma_deg=offset_sigma_deg, effects=effects)
     spots, _ = cell.hold_spots(configurations, s_hold, tolerance_mm=tolerance_mm)
     notes = [f"simulated: {plates} plate position(s), {targets} targets {spacing_mm:g} mm apart, {configurations} "
-             f"configurations each; seed {seed}", f"robocal closed-chain calibrate ... --target-spacing {spacing_mm:g}"]
+             f"configurations each; seed {seed}; effects {CellEffects.preset(effects).name}", f"robocal closed-chain calibrate ... --target-spacing {spacing_mm:g}"]
     write_spots(out_path, spots, robot=nominal.name, notes=notes, overwrite=overwrite)
     truth = cell.truth()
     truth.update(seed=int(seed), spacing_mm=spacing_mm, tolerance_mm=tolerance_mm,
-                 simulation={"seed_streams": "SeedSequence(seed).spawn(3): robot, laser mount, holding",
+                 simulation={"seed_streams": "SeedSequence(seed).spawn(4): robot, laser mount, holding, effects' phases",
                              "joint_resolution_deg": joint_resolution_deg, "cyclic_error_deg": cyclic_error_deg,
-                             "spots_file": out_path.name})
+                             "effects": CellEffects.preset(effects).name, "spots_file": out_path.name})
     write_truth(truth_path, truth, overwrite=overwrite)
     out = {"spots": out_path, "truth": truth_path, "n_rows": spots.n_rows, "robot": nominal.name}
     if return_cell:
@@ -100,12 +103,14 @@ def simulate_closed_chain(robot, out_path, *, plates: int = 2, targets: int = 5,
 def make_cell(nominal, seed: int, *, plates: int = 2, targets: int = 5, spacing_mm: float = 50.0,
               joint_resolution_deg: float = DEFAULT_JOINT_RESOLUTION_DEG, joint_noise_deg=None,
               cyclic_error_deg: float = 0.0005, length_sigma_mm: float = 0.5, angle_sigma_deg: float = 0.05,
-              offset_sigma_deg: float = 0.05):
+              offset_sigma_deg: float = 0.05, effects="ideal"):
     """A simulated cell (:class:`~robocal.sim.closed_chain.ClosedChainCell`) of ``nominal`` and the
-    random generator for the holding; seeds ``SeedSequence(seed).spawn(3)``: robot (and the
-    readout's cyclic-error phases), laser mount, holding. The plates are placed for the robot's
-    reach (its flange distance at zero joints)."""
-    s_robot, s_laser, s_hold = (np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(3))
+    random generator for the holding; seeds ``SeedSequence(seed).spawn(4)``: robot (and the
+    readout's cyclic-error phases), laser mount, holding, the phases of the ``effects``' transmission
+    error (a :data:`~robocal.sim.closed_chain_effects.CELL_PRESETS` name; ``ideal``: the cell as
+    before, the first three streams unchanged). The plates are placed for the robot's reach (its
+    flange distance at zero joints)."""
+    s_robot, s_laser, s_hold, s_effects = (np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(4))
     virtual = VirtualRobot.perturbed(nominal, s_robot, length_sigma_mm=length_sigma_mm, angle_sigma_deg=angle_sigma_deg,
                                      offset_sigma_deg=offset_sigma_deg, joint_noise_deg=0.0, joint_noise_mm=0.0)
     res = math.radians(joint_resolution_deg)
@@ -113,7 +118,8 @@ def make_cell(nominal, seed: int, *, plates: int = 2, targets: int = 5, spacing_
     readout = JointReadout(noise, res, math.radians(cyclic_error_deg), s_robot.uniform(-np.pi, np.pi, nominal.n_joints))
     reach = float(np.linalg.norm(nominal.fk(np.zeros(nominal.n_joints))[:3, 3]))
     cell = ClosedChainCell(virtual, LaserPointer.drawn(s_laser), default_plates(plates, reach_mm=reach,
-                           n_targets=targets, spacing_mm=spacing_mm), readout)
+                           n_targets=targets, spacing_mm=spacing_mm), readout, effects=CellEffects.preset(effects),
+                           phases=CellEffects.transmission_phases(nominal.n_joints, s_effects))
     return cell, s_hold
 
 
