@@ -173,14 +173,6 @@ class ClosedChainCell:
             q = self.readout.encoder_angles(q_link - err)
         return q
 
-    def link_angles(self, q_encoder) -> np.ndarray:
-        """Link angles (N, n) [rad] the arm reaches at encoder angles ``q_encoder`` (N, n) [rad]."""
-        q = np.atleast_2d(np.asarray(q_encoder, dtype=float))
-        out = self.readout.link_angles(q)
-        if self.effects is not None:
-            out = out + self.effects.joint_error(self.robot.true_model, q, self.phases)
-        return out
-
     def _candidate_poses(self, aim, normal, rng, max_tilt_deg, standoff_mm):
         """Flange poses (C, 4, 4) putting the *true* beam through ``aim`` (C, 3) [mm], from beam
         directions within ``max_tilt_deg`` of the plate ``normal``, stand-offs and rolls drawn."""
