@@ -89,8 +89,8 @@ def test_writers_without_overwrite_refuse_an_existing_file(tmp_path):
         f = _file(tmp_path / f"{option[2:]}.txt")
         r = run("tcp", "simulate", "--collisions", 1, option, f)
         _refused(r, f, phrase="pass --overwrite")
-    plot = _file(tmp_path / "drift.png")
-    r = run("history", "ur10", "--db", tmp_path / "h.sqlite", "--plot", plot)
+    plot = _file(tmp_path / "ur10_drift.png")
+    r = run("history", "ur10", "--db", tmp_path / "h.sqlite", "--plots", tmp_path)
     _refused(r, plot, phrase="pass --overwrite")
 
 
