@@ -15,10 +15,10 @@ from robocal.cli._grammar import (ARGUMENT, DEPRECATED, DEPRECATED_COMMANDS, OLD
 
 #: names the grammar replaced (docs/cli.md, "Deprecated names"); none may be declared any more
 OLD_NAMES = {"--sigma", "--joint-noise-deg", "--joint-resolution", "--euler", "--convention", "--tcp", "--history",
-             "--first-seed", "--tolerance", "--plot"}
+             "--first-seed", "--tolerance", "--plot", "--tolerance-deg", "--events-out", "--sensor-out"}
 #: option -> what its help must name (the unit or the kind of value)
 UNIT_IN_HELP = {"--noise": "[mm]", "--joint-noise": "[deg]", "--time-tolerance": "[s]",
-                "--distance-tolerance": "[mm]", "--tool": "[mm]"}
+                "--distance-tolerance": "[mm]", "--angle-tolerance": "[deg]", "--tool": "[mm]"}
 #: an optional robot that only overrides what the inputs say stays an option (docs/cli.md)
 #: `controller import ur` takes the robot first *and* `--robot NAME`, the spelling issue 33 names
 OPTIONAL_ROBOT_OPTION = {"controller import ur"}
@@ -31,12 +31,10 @@ OUT_OPTIONAL = {
     "controller diff": "the result is printed; --out adds the joint sets as a CSV file",
     "controller probe": "the result is printed; --out adds the fitted robot file",
     "thermal calibrate-sensor": "the result is printed; --out adds the sensor file for thermal compensate",
+    "tcp simulate": "the study is printed; --out adds a simulated events file and sensor file",
 }
 #: commands that write files through options other than --out, --plots and --summary, and why
-OTHER_OUTPUT_OPTIONS = {
-    "tcp simulate": "--events-out FILE, --sensor-out FILE: two optional files of two formats (a deviation, "
-                    "docs/cli.md)",
-}
+OTHER_OUTPUT_OPTIONS = {}
 #: commands known to write output files (a folder or files); each has --out, --plots or --summary
 WRITES_FILES = {"calibrate", "camera calibrate", "handeye solve", "self-calibrate", "closed-chain calibrate",
                 "fleet calibrate", "iso9283 evaluate", "iso9283 plan", "simulate camera", "simulate self-calibration",
@@ -411,3 +409,13 @@ def test_controller_diff_plots_folder_and_old_plot_file(tmp_path):
     assert r.exit_code == 0, r.output
     assert (tmp_path / "m.png").read_bytes()[:4] == b"\x89PNG"
     assert "Warning: --plot FILE is deprecated, use --plots DIR" in err
+
+
+def test_tcp_simulate_out_folder_and_old_file_options(tmp_path):
+    r, _, err = _invoke("tcp", "simulate", "none", "--collisions", 1, "--no-beta-correction", "--out", tmp_path / "sim")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "sim" / "events.csv").is_file() and (tmp_path / "sim" / "sensor.json").is_file()
+    r, _, err = _invoke("tcp", "simulate", "none", "--collisions", 1, "--no-beta-correction", "--events-out",
+                        tmp_path / "ev.csv")
+    assert r.exit_code == 0 and (tmp_path / "ev.csv").is_file(), r.output
+    assert "Warning: --events-out FILE is deprecated, use --out DIR" in err

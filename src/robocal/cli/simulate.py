@@ -69,8 +69,10 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
 @click.option("--pose-noise-deg", default=0.01, show_default=True, help="Robot pose noise per axis [deg].")
 @click.option("--orientation", "convention", default="kuka_abc", show_default=True,
               help="Orientation convention of flange_poses.csv (a robocal.transforms.POSE_CONVENTIONS name).")
-@click.option("--length-unit", type=click.Choice(["mm", "m"]), default="mm", show_default=True)
-@click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True)
+@click.option("--length-unit", type=click.Choice(["mm", "m"]), default="mm", show_default=True,
+              help="Unit of the positions written to flange_poses.csv [mm or m].")
+@click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True,
+              help="Unit of the angles written to flange_poses.csv [deg or rad].")
 @click.argument("robot", default=None, required=False)
 @click.option("--joint-offset-sigma-deg", default=0.05, show_default=True,
               help="With ROBOT: spread of the robot's true joint zero offsets around its robot file [deg].")
