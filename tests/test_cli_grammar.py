@@ -147,6 +147,16 @@ def test_out_is_required_unless_documented(path, cmd):
 
 
 @pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_the_unit_is_in_the_help_not_in_the_name(path, cmd):
+    """`--joint-noise DEG`, not `--joint-noise-deg` (docs/cli.md): no option name ends in a unit."""
+    import re
+
+    with_unit = sorted(n for n in names(cmd, hidden=False) - {"--deg", "--rad"}
+                       if re.search(r"-(mm|deg|rad|s|px|m|hz|um|kg)$", n))
+    assert not with_unit, f"{path}: {with_unit}: put the unit in the help"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
 def test_plots_is_a_folder(path, cmd):
     """One name for one concept: drift plots, accuracy maps go to ``--plots DIR`` (fleet status,
     history, controller diff); ``--plot FILE`` is a deprecated hidden alias only."""

@@ -55,8 +55,12 @@ DEPRECATED: dict[str, dict] = {
     "import": {"--tolerance": "--time-tolerance", "--robot": ROBOT_ARGUMENT},
     "plan-poses": {"--tool": ("--tool", 3)},
     "self-calibrate": {"--tolerance": "--time-tolerance", "--joint-noise": "--joint-noise"},
-    "simulate self-calibration": {"--joint-noise": "--joint-noise"},
-    "simulate camera": {"--robot": ROBOT_ARGUMENT},
+    "simulate self-calibration": {"--joint-noise": "--joint-noise", "--joint-offsets-deg": "--joint-offsets",
+                                  "--length-sigma-mm": "--length-sigma", "--board-bow-mm": "--board-bow",
+                                  "--clock-offset-s": "--clock-offset", "--jitter-s": "--jitter",
+                                  "--log-rate-hz": "--log-rate"},
+    "simulate camera": {"--robot": ROBOT_ARGUMENT, "--pose-noise-mm": "--pose-noise", "--pose-noise-deg": "--pose-angle-noise",
+                        "--joint-offset-sigma-deg": "--joint-offset-sigma"},
     "tcp accuracy": {"--first-seed": "--seed"},
     "tcp cross-laser": {"--convention": "--orientation"},
     "tcp seven-point": {"--tcp": ("--tool", 3)},
@@ -64,7 +68,7 @@ DEPRECATED: dict[str, dict] = {
     "thermal calibrate-sensor": {"--sigma": "--noise"},
     "thermal compensate": {"--sigma": "--noise", "--history": "--db"},
     "thermal experiment": {"--first-seed": "--seed"},
-    "thermal screen": {"--robot": ROBOT_ARGUMENT},
+    "thermal screen": {"--robot": ROBOT_ARGUMENT, "--threshold-mm": "--threshold"},
 }
 
 #: group path -> {old command name: new command name}
