@@ -347,6 +347,11 @@ def test_an_output_folder_that_is_an_input_is_refused_even_with_overwrite(tmp_pa
                         "world", "--out", robot.parent, "--overwrite")
     assert r.exit_code == 1 and "robot.toml: is an input of this command (ROBOT)" in err, r.output
     assert robot.read_bytes() == before
+    calibrated = tmp_path / "cal" / "calibrated_robot.toml"  # robocal calibrate's own output name
+    robot.rename(calibrated)
+    r, _, err = _invoke("calibrate", calibrated, tmp_path / "c.csv", "--out", tmp_path / "cal", "--overwrite")
+    assert r.exit_code == 1 and "calibrated_robot.toml: is an input of this command (ROBOT)" in err, r.output
+    assert calibrated.read_bytes() == before
 
 
 @pytest.fixture
