@@ -199,6 +199,8 @@ def test_every_deprecated_name_maps_to_a_declared_option():
             else:
                 new = rule if isinstance(rule, str) else rule[0]
                 assert new in names(cmd), f"{path}: {old} -> {new}, which is not an option"
+                # a plain rename of a name to itself would warn on every use of the new name
+                assert not (isinstance(rule, str) and new == old), f"{path}: {old} -> {old}"
     for group, renamed in DEPRECATED_COMMANDS.items():
         for new in renamed.values():
             assert f"{group} {new}" in declared
@@ -227,6 +229,15 @@ def test_old_option_name_works_with_a_warning():
     assert new.exit_code == old.exit_code == 0, old.output
     assert json.loads(out_old) == json.loads(out_new)
     assert "Warning: --euler is deprecated, use --orientation" in err_old
+
+
+def test_a_current_name_never_warns_and_the_old_joint_noise_name_works(capsys):
+    """The table once mapped --joint-noise to itself: the new name warned, the old one failed."""
+    for path in ("self-calibrate", "simulate self-calibration"):
+        assert rewrite(["r", "--joint-noise", "0.01"], DEPRECATED[path]) == ["r", "--joint-noise", "0.01"]
+        assert "Warning" not in capsys.readouterr().err
+        assert rewrite(["r", "--joint-noise-deg", "0.01"], DEPRECATED[path]) == ["r", "--joint-noise", "0.01"]
+        assert "Warning: --joint-noise-deg is deprecated, use --joint-noise" in capsys.readouterr().err
 
 
 def test_old_three_number_form_works_with_a_warning(tmp_path):
