@@ -201,6 +201,8 @@ def test_every_deprecated_name_maps_to_a_declared_option():
                 assert new in names(cmd), f"{path}: {old} -> {new}, which is not an option"
                 # a plain rename of a name to itself would warn on every use of the new name
                 assert not (isinstance(rule, str) and new == old), f"{path}: {old} -> {old}"
+            if rule == ROBOT_ARGUMENT or isinstance(rule, str) or rule[1] in (ARGUMENT, OLD_FILE):
+                assert old not in names(cmd, hidden=False), f"{path}: {old} is still a visible option"
     for group, renamed in DEPRECATED_COMMANDS.items():
         for new in renamed.values():
             assert f"{group} {new}" in declared
