@@ -66,5 +66,6 @@ def test_a_decompression_bomb_is_refused_before_decoding(tmp_path):
     assert bomb.stat().st_size < 200_000
     with pytest.raises(ImageFileError, match="10050 x 10050 px is more than the 100 megapixels"):
         read_image_gray(bomb)
-    r = run("camera", "calibrate", tmp_path / "imgs", "--board", "charuco:9x7:30mm:22mm:DICT_5X5_100")
+    r = run("camera", "calibrate", tmp_path / "imgs", "--board", "charuco:9x7:30mm:22mm:DICT_5X5_100",
+            "--out", tmp_path / "cam")
     assert r.exit_code == 1 and "bomb.png" in r.output and "megapixels" in r.output and "Traceback" not in r.output

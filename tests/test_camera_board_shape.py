@@ -7,6 +7,7 @@ biased by tens of pixels by a flat-board model, is recovered."""
 from __future__ import annotations
 
 import json
+import tempfile
 
 import cv2
 import numpy as np
@@ -44,8 +45,9 @@ def bent(tmp_path_factory):
 
 
 def _calibrate(folder, *extra):
-    r = CliRunner().invoke(main, ["camera", "calibrate", str(folder), "--board", SPEC, "--distortion", "5",
-                                  "--fix", "k3", "--json", *extra])
+    with tempfile.TemporaryDirectory() as out:  # --out is required; the test reads the printed result
+        r = CliRunner().invoke(main, ["camera", "calibrate", str(folder), "--board", SPEC, "--distortion", "5",
+                                      "--fix", "k3", "--json", "--out", out, *extra])
     assert r.exit_code == 0, r.output
     return json.loads(r.stdout[r.stdout.index("{"):])
 

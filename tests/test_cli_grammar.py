@@ -10,19 +10,35 @@ from click.testing import CliRunner
 from robocal.cli import main
 from robocal.cli._common import (EXIT_ERROR, EXIT_FAILED_RESULT, EXIT_NOT_CONVERGED, EXIT_OK,
                                  EXIT_MECHANICAL_FAULT, EXIT_TARGETS_NOT_REACHED, EXIT_USAGE)
-from robocal.cli._grammar import DEPRECATED, DEPRECATED_COMMANDS, ROBOT_ARGUMENT, rewrite
+from robocal.cli._grammar import (ARGUMENT, DEPRECATED, DEPRECATED_COMMANDS, OLD_FILE, ROBOT_ARGUMENT,
+                                  OptionalRobotCommand, rewrite)
 
 #: names the grammar replaced (docs/cli.md, "Deprecated names"); none may be declared any more
 OLD_NAMES = {"--sigma", "--joint-noise-deg", "--joint-resolution", "--euler", "--convention", "--tcp", "--history",
-             "--first-seed", "--tolerance"}
+             "--first-seed", "--tolerance", "--plot", "--tolerance-deg", "--events-out", "--sensor-out"}
 #: option -> what its help must name (the unit or the kind of value)
 UNIT_IN_HELP = {"--noise": "[mm]", "--joint-noise": "[deg]", "--time-tolerance": "[s]",
-                "--distance-tolerance": "[mm]", "--tool": "[mm]"}
+                "--distance-tolerance": "[mm]", "--angle-tolerance": "[deg]", "--tool": "[mm]"}
 #: an optional robot that only overrides what the inputs say stays an option (docs/cli.md)
 #: `controller import ur` takes the robot first *and* `--robot NAME`, the spelling issue 33 names
-OPTIONAL_ROBOT_OPTION = {"handeye solve", "controller import ur"}
+OPTIONAL_ROBOT_OPTION = {"controller import ur"}
 #: commands that produce a result but have no --json yet (docs/cli.md lists them)
 JSON_PENDING = set()
+#: commands whose --out may be left out, and why (docs/cli.md, "output"); every other --out is required
+OUT_OPTIONAL = {
+    "demo": "a default folder, robocal-demo",
+    "ik-train": "a default file next to the robot file",
+    "controller diff": "the result is printed; --out adds the joint sets as a CSV file",
+    "controller probe": "the result is printed; --out adds the fitted robot file",
+    "thermal calibrate-sensor": "the result is printed; --out adds the sensor file for thermal compensate",
+    "tcp simulate": "the study is printed; --out adds a simulated events file and sensor file",
+}
+#: commands that write files through options other than --out, --plots and --summary, and why
+OTHER_OUTPUT_OPTIONS = {}
+#: commands known to write output files (a folder or files); each has --out, --plots or --summary
+WRITES_FILES = {"calibrate", "camera calibrate", "handeye solve", "self-calibrate", "closed-chain calibrate",
+                "fleet calibrate", "iso9283 evaluate", "iso9283 plan", "simulate camera", "simulate self-calibration",
+                "thermal simulate", "history", "fleet status", "controller diff"}
 
 
 def commands():
@@ -52,8 +68,9 @@ def options(cmd):
     return [p for p in cmd.params if isinstance(p, click.Option)]
 
 
-def names(cmd):
-    return {o for p in options(cmd) for o in p.opts + p.secondary_opts}
+def names(cmd, hidden=True):
+    """The option names of ``cmd`` (without hidden ones: a deprecated ``--plot FILE``, when ``hidden`` is False)."""
+    return {o for p in options(cmd) if hidden or not p.hidden for o in p.opts + p.secondary_opts}
 
 
 def test_the_walk_sees_every_command():
@@ -62,7 +79,10 @@ def test_the_walk_sees_every_command():
 
 @pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
 def test_no_old_names(path, cmd):
-    assert not names(cmd) & OLD_NAMES, f"{path}: {sorted(names(cmd) & OLD_NAMES)} (docs/cli.md)"
+    visible = names(cmd, hidden=False)
+    assert not visible & OLD_NAMES, f"{path}: {sorted(visible & OLD_NAMES)} (docs/cli.md)"
+    hidden = names(cmd) - visible  # a hidden option is a deprecated name of the table
+    assert hidden <= set(DEPRECATED.get(path, {})), f"{path}: hidden {sorted(hidden)} not in _grammar.DEPRECATED"
 
 
 @pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
@@ -72,6 +92,21 @@ def test_robot_is_the_first_positional_argument(path, cmd):
     assert robot_args in ([], [0]), f"{path}: the robot must be the first argument"
     if path not in OPTIONAL_ROBOT_OPTION:
         assert "--robot" not in names(cmd), f"{path}: --robot must be the first positional argument"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_positional_arguments_are_never_ambiguous(path, cmd):
+    """One token is never 'either of two arguments': an optional robot comes only before required
+    arguments (then the command counts them: OptionalRobotCommand), any other optional argument
+    only last and after required ones."""
+    args = [p for p in cmd.params if isinstance(p, click.Argument)]
+    optional = [i for i, a in enumerate(args) if not a.required]
+    if args and args[0].name == "robot" and not args[0].required:
+        assert all(a.required for a in args[1:]), f"{path}: [ROBOT] followed by an optional argument"
+        if len(args) > 1:
+            assert isinstance(cmd, OptionalRobotCommand), f"{path}: [ROBOT] before required arguments"
+        optional = optional[1:]
+    assert optional in ([], [len(args) - 1]), f"{path}: an optional argument before others"
 
 
 @pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
@@ -93,6 +128,43 @@ def test_out_is_a_folder_unless_the_help_says_file(path, cmd):
             assert "folder" in p.help.lower(), f"{path}: --out is a folder: say so in its help"
         else:
             assert "file" in p.help.lower(), f"{path}: --out is a file only where its help says 'file'"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_out_is_required_unless_documented(path, cmd):
+    """A command that writes its results needs --out: without it it would do the work and write
+    nothing (issue 26: camera calibrate, handeye solve, self-calibrate did)."""
+    out = [p for p in options(cmd) if "--out" in p.opts]
+    if path in OUT_OPTIONAL:
+        assert out and not out[0].required, f"{path}: listed in OUT_OPTIONAL but --out is required or absent"
+    elif out:
+        assert out[0].required, f"{path}: --out must be required (or listed with its reason in OUT_OPTIONAL)"
+    writers = {"--out", "--plots", "--summary"} & names(cmd, hidden=False)
+    if path in WRITES_FILES:
+        assert writers, f"{path}: writes files but has no --out, --plots or --summary"
+    others = {n for n in names(cmd, hidden=False) if n != "--out" and (n.endswith("-out") or n.startswith("--out-"))}
+    assert bool(others) == (path in OTHER_OUTPUT_OPTIONS), f"{path}: output options {sorted(others)}"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_the_unit_is_in_the_help_not_in_the_name(path, cmd):
+    """`--joint-noise DEG`, not `--joint-noise-deg` (docs/cli.md): no option name ends in a unit."""
+    import re
+
+    with_unit = sorted(n for n in names(cmd, hidden=False) - {"--deg", "--rad"}
+                       if re.search(r"-(mm|deg|rad|s|px|m|hz|um|kg)$", n))
+    assert not with_unit, f"{path}: {with_unit}: put the unit in the help"
+
+
+@pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
+def test_plots_is_a_folder(path, cmd):
+    """One name for one concept: drift plots, accuracy maps go to ``--plots DIR`` (fleet status,
+    history, controller diff); ``--plot FILE`` is a deprecated hidden alias only."""
+    assert "--plot" not in names(cmd, hidden=False), f"{path}: --plot FILE; use --plots DIR"
+    for p in options(cmd):
+        if "--plots" in p.opts:
+            assert isinstance(p.type, click.Path) and not p.type.file_okay, f"{path}: --plots is a folder"
+            assert "folder" in p.help.lower(), f"{path}: --plots is a folder: say so in its help"
 
 
 @pytest.mark.parametrize("path,cmd", COMMANDS, ids=IDS)
@@ -120,9 +192,17 @@ def test_every_deprecated_name_maps_to_a_declared_option():
             if rule == ROBOT_ARGUMENT:
                 first = [p for p in cmd.params if isinstance(p, click.Argument)][0]
                 assert first.name == "robot", path
+            elif rule[1] == ARGUMENT:
+                assert rule[0].lower() in [p.name for p in cmd.params if isinstance(p, click.Argument)], path
+            elif rule[1] == OLD_FILE:
+                assert rule[0] in names(cmd, hidden=False) and old in names(cmd) - names(cmd, hidden=False), path
             else:
                 new = rule if isinstance(rule, str) else rule[0]
                 assert new in names(cmd), f"{path}: {old} -> {new}, which is not an option"
+                # a plain rename of a name to itself would warn on every use of the new name
+                assert not (isinstance(rule, str) and new == old), f"{path}: {old} -> {old}"
+            if rule == ROBOT_ARGUMENT or isinstance(rule, str) or rule[1] in (ARGUMENT, OLD_FILE):
+                assert old not in names(cmd, hidden=False), f"{path}: {old} is still a visible option"
     for group, renamed in DEPRECATED_COMMANDS.items():
         for new in renamed.values():
             assert f"{group} {new}" in declared
@@ -151,6 +231,15 @@ def test_old_option_name_works_with_a_warning():
     assert new.exit_code == old.exit_code == 0, old.output
     assert json.loads(out_old) == json.loads(out_new)
     assert "Warning: --euler is deprecated, use --orientation" in err_old
+
+
+def test_a_current_name_never_warns_and_the_old_joint_noise_name_works(capsys):
+    """The table once mapped --joint-noise to itself: the new name warned, the old one failed."""
+    for path in ("self-calibrate", "simulate self-calibration"):
+        assert rewrite(["r", "--joint-noise", "0.01"], DEPRECATED[path]) == ["r", "--joint-noise", "0.01"]
+        assert "Warning" not in capsys.readouterr().err
+        assert rewrite(["r", "--joint-noise-deg", "0.01"], DEPRECATED[path]) == ["r", "--joint-noise", "0.01"]
+        assert "Warning: --joint-noise-deg is deprecated, use --joint-noise" in capsys.readouterr().err
 
 
 def test_old_three_number_form_works_with_a_warning(tmp_path):
@@ -239,3 +328,122 @@ def test_optional_robot_before_a_required_argument(tmp_path):
         assert r.exit_code == 0 and captured["robot"] == "ur10" and "--robot is deprecated" in err
     finally:
         screen.callback = callback
+
+
+# ------------------------------------------------------------ outputs, handeye solve's arguments
+@pytest.mark.parametrize("args", [
+    ["camera", "calibrate", "IMGS", "--board", "checkerboard:9x6:25mm"],
+    ["handeye", "solve", "cal_data.yaml"],
+    ["self-calibrate", "ur10", "--images", "IMGS", "--joints", "j.csv", "--frames", "f.csv", "--board",
+     "checkerboard:9x6:25mm", "--camera-on", "flange", "--board-on", "world"],
+], ids=["camera calibrate", "handeye solve", "self-calibrate"])
+def test_a_command_that_writes_results_needs_out(args):
+    """Without --out these did the work and wrote nothing (issue 26): now a usage error naming it."""
+    r, _, err = _invoke(*args)
+    assert r.exit_code == 2 and "Missing option '--out'" in err, r.output
+
+
+def test_an_output_folder_that_is_an_input_is_refused_even_with_overwrite(tmp_path):
+    from importlib.resources import files
+
+    images = tmp_path / "imgs"
+    images.mkdir()
+    r, _, err = _invoke("camera", "calibrate", images, "--board", "checkerboard:9x6:25mm", "--out", images,
+                        "--overwrite")
+    assert r.exit_code == 1 and f"{images}: is an input of this command (the images)" in err, r.output
+    robot = tmp_path / "cal" / "robot.toml"  # self-calibrate writes <out>/robot.toml: here its own input
+    robot.parent.mkdir()
+    robot.write_bytes((files("robocal.robots") / "data" / "ur10.toml").read_bytes())
+    before = robot.read_bytes()
+    r, _, err = _invoke("self-calibrate", robot, "--images", images, "--joints", tmp_path / "j.csv", "--frames",
+                        tmp_path / "f.csv", "--board", "checkerboard:9x6:25mm", "--camera-on", "flange", "--board-on",
+                        "world", "--out", robot.parent, "--overwrite")
+    assert r.exit_code == 1 and "robot.toml: is an input of this command (ROBOT)" in err, r.output
+    assert robot.read_bytes() == before
+    calibrated = tmp_path / "cal" / "calibrated_robot.toml"  # robocal calibrate's own output name
+    robot.rename(calibrated)
+    r, _, err = _invoke("calibrate", calibrated, tmp_path / "c.csv", "--out", tmp_path / "cal", "--overwrite")
+    assert r.exit_code == 1 and "calibrated_robot.toml: is an input of this command (ROBOT)" in err, r.output
+    assert calibrated.read_bytes() == before
+
+
+@pytest.fixture
+def handeye_inputs(monkeypatch):
+    """What ``handeye solve`` passes to its workflow (which stops there with a one-line error)."""
+    import robocal.workflows.cameras.handeye_solve as workflow
+
+    captured = {}
+
+    def stop(**kwargs):
+        captured.update(kwargs)
+        raise ValueError("stopped by the test")
+
+    monkeypatch.setattr(workflow, "solve_handeye", stop)
+    return captured
+
+
+def test_handeye_solve_takes_the_robot_first_and_one_data_argument(tmp_path, handeye_inputs):
+    """`handeye solve [ROBOT] DATA`: DATA is a cal_data.yaml, or with --poses/--joints the images'
+    folder; ROBOT only with --joints. One token is never either."""
+    out = ["--out", tmp_path / "he"]
+    board = ["--board", "checkerboard:9x6:25mm"]
+    cases = [(["cal_data.yaml"], dict(cal_data="cal_data.yaml", images=None, robot=None, poses=None)),
+             (["imgs", "--poses", "p.csv", *board], dict(cal_data=None, images="imgs", robot=None, poses="p.csv")),
+             (["ur10", "imgs", "--joints", "j.csv", *board], dict(cal_data=None, images="imgs", robot="ur10",
+                                                                  joints="j.csv"))]
+    for args, expected in cases:
+        handeye_inputs.clear()
+        r, _, err = _invoke("handeye", "solve", *args, *out)
+        assert r.exit_code == 1 and "stopped by the test" in err, (args, r.output)
+        assert {k: handeye_inputs[k] for k in expected} == expected, args
+        assert handeye_inputs["out_dir"] == str(tmp_path / "he")
+    for args, message in ((["ur10", "cal_data.yaml"], "is used only with --joints"),
+                          (["imgs", "--joints", "j.csv", *board], "--joints needs ROBOT before DATA"),
+                          (["imgs", "--poses", "p.csv"], "--board SPEC is needed"),
+                          (["imgs", "--poses", "p.csv", "--joints", "j.csv", *board], "not both")):
+        r, _, err = _invoke("handeye", "solve", *args, *out)
+        assert r.exit_code == 2 and message in err, (args, r.output)
+
+
+def test_handeye_solve_old_robot_and_images_options_work_with_a_warning(tmp_path, handeye_inputs):
+    r, _, err = _invoke("handeye", "solve", "--joints", "j.csv", "--robot", "ur10", "--images", "imgs", "--board",
+                        "checkerboard:9x6:25mm", "--out", tmp_path / "he")
+    assert r.exit_code == 1 and "stopped by the test" in err, r.output
+    assert handeye_inputs["robot"] == "ur10" and handeye_inputs["images"] == "imgs"
+    assert handeye_inputs["joints"] == "j.csv" and handeye_inputs["cal_data"] is None
+    assert "Warning: --robot is deprecated, use the first argument ROBOT" in err
+    assert "Warning: --images is deprecated, use the argument DATA" in err
+    handeye_inputs.clear()
+    r, _, err = _invoke("handeye", "solve", "--poses", "p.csv", "--images=imgs", "--board", "checkerboard:9x6:25mm",
+                        "--out", tmp_path / "he")
+    assert r.exit_code == 1 and handeye_inputs["images"] == "imgs" and handeye_inputs["robot"] is None, r.output
+    help_text = CliRunner().invoke(main, ["handeye", "solve", "--help"]).output
+    assert "[ROBOT] DATA" in help_text and "--images" not in help_text and "--robot " not in help_text
+
+
+def test_rewrite_of_an_option_into_an_argument_and_of_a_kept_file_option():
+    rules = {"--images": ("DATA", ARGUMENT), "--plot": ("--plots", OLD_FILE)}
+    assert rewrite(["--images", "d", "--board", "b"], rules) == ["--board", "b", "d"]
+    assert rewrite(["--images=d", "x"], rules) == ["x", "d"]
+    assert rewrite(["--plot", "f.png"], rules) == ["--plot", "f.png"]  # kept: the hidden option writes the file
+
+
+def test_controller_diff_plots_folder_and_old_plot_file(tmp_path):
+    r, _, err = _invoke("controller", "diff", "ur10", "ur10_dh_beta", "--poses", 20, "--plots", tmp_path / "maps",
+                        "--json")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "maps" / "accuracy_map.png").read_bytes()[:4] == b"\x89PNG" and "Warning" not in err
+    r, _, err = _invoke("controller", "diff", "ur10", "ur10_dh_beta", "--poses", 20, "--plot", tmp_path / "m.png")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "m.png").read_bytes()[:4] == b"\x89PNG"
+    assert "Warning: --plot FILE is deprecated, use --plots DIR" in err
+
+
+def test_tcp_simulate_out_folder_and_old_file_options(tmp_path):
+    r, _, err = _invoke("tcp", "simulate", "none", "--collisions", 1, "--no-beta-correction", "--out", tmp_path / "sim")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "sim" / "events.csv").is_file() and (tmp_path / "sim" / "sensor.json").is_file()
+    r, _, err = _invoke("tcp", "simulate", "none", "--collisions", 1, "--no-beta-correction", "--events-out",
+                        tmp_path / "ev.csv")
+    assert r.exit_code == 0 and (tmp_path / "ev.csv").is_file(), r.output
+    assert "Warning: --events-out FILE is deprecated, use --out DIR" in err

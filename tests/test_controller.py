@@ -265,7 +265,7 @@ def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):
     cell.write_text('format = "robocal-cell/1"\nlength_unit = "mm"\nangle_unit = "deg"\n[mounting]\nkind = "floor"\n'
                     '[[box]]\nname = "table"\nmin = [400.0, -500.0, 0.0]\nmax = [1000.0, 500.0, 300.0]\n')
     res = run("controller", "diff", "ur10", a, "--poses", 300, "--cell", cell, "--json",
-              "--out", tmp_path / "d.csv", "--plot", tmp_path / "map.png")
+              "--out", tmp_path / "d.csv", "--plots", tmp_path / "plots")
     assert res.exit_code == 0, res.output
     import json
 
@@ -280,7 +280,7 @@ def test_diff_cli_reports_statistics_map_and_accepts_cell(tmp_path):
     assert 1.0 < doc["position_mm"]["max"] < 20.0  # a factory calibration moves the UR10's flange by mm
     assert len(doc["accuracy_map"]["by_reach"]) >= 3 and doc["notes"]
     assert len((tmp_path / "d.csv").read_text().splitlines()) == 301
-    assert (tmp_path / "map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (tmp_path / "plots" / "accuracy_map.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # a model against itself: zero
     res = run("controller", "diff", a, a, "--poses", 50, "--json")
     assert json.loads(res.output)["position_mm"]["max"] < 1e-9

@@ -354,9 +354,9 @@ def test_cli_simulate_then_cross_laser(tmp_path):
     from robocal.cli.tcp_cross_laser import cross_laser_cmd, simulate_cmd
 
     runner = CliRunner()
-    ev, sj = tmp_path / "ev.csv", tmp_path / "sensor.json"
-    r = runner.invoke(simulate_cmd, ["none", "--collisions", "1", "--seed", "3", "--events-out", str(ev),
-                                     "--sensor-out", str(sj), "--json"])
+    ev, sj = tmp_path / "sim" / "events.csv", tmp_path / "sim" / "sensor.json"
+    r = runner.invoke(simulate_cmd, ["none", "--collisions", "1", "--seed", "3", "--out", str(tmp_path / "sim"),
+                                     "--json"])
     assert r.exit_code == 0, r.output
     study = json.loads(r.stdout)
     assert set(study["variants"]) == {"beta_corrected", "no_beta_correction", "thesis_step3", "thesis_step3_no_beta"}

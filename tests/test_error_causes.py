@@ -35,15 +35,15 @@ def test_unclear_errors_now_name_the_option(tmp_path, monkeypatch, args, words):
 
 
 @pytest.mark.parametrize("module, extra, args", [
-    ("cv2", "camera", ["camera", "calibrate", "IMAGES", "--board", "charuco:9x7:30mm:22mm:DICT_5X5_100"]),
-    ("yaml", "yaml", ["handeye", "solve", "CAL_DATA"]),
+    ("cv2", "camera", ["camera", "calibrate", "IMAGES", "--board", "charuco:9x7:30mm:22mm:DICT_5X5_100", "--out", "OUT"]),
+    ("yaml", "yaml", ["handeye", "solve", "CAL_DATA", "--out", "OUT"]),
 ])
 def test_a_missing_extra_names_the_extra(tmp_path, monkeypatch, module, extra, args):
     (tmp_path / "imgs").mkdir()
     (tmp_path / "imgs" / "a.png").write_bytes(b"\x89PNG\r\n\x1a\n")
     (tmp_path / "cal_data.yaml").write_text("data: []\n")
-    args = [str(tmp_path / "imgs") if a == "IMAGES" else str(tmp_path / "cal_data.yaml") if a == "CAL_DATA" else a
-            for a in args]
+    paths = {"IMAGES": tmp_path / "imgs", "CAL_DATA": tmp_path / "cal_data.yaml", "OUT": tmp_path / "out"}
+    args = [str(paths[a]) if a in paths else a for a in args]
     monkeypatch.setitem(sys.modules, module, None)  # as if not installed
     r = CliRunner().invoke(main, args)
     assert r.exit_code == 1, r.output

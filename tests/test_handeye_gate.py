@@ -35,7 +35,7 @@ def cell(tmp_path_factory):
 
 def _solve(cell, poses, tmp_path, *extra, images=None, camera=None):
     out = tmp_path / "he"
-    r = CliRunner().invoke(main, ["handeye", "solve", "--poses", str(poses), "--images", str(images or cell / "images"),
+    r = CliRunner().invoke(main, ["handeye", "solve", str(images or cell / "images"), "--poses", str(poses),
                                   "--board", BOARD, "--camera", str(camera or cell / "camera.json"), "--out", str(out),
                                   "--json", *extra])
     s = json.loads((out / "handeye.json").read_text()) if (out / "handeye.json").exists() else None
@@ -136,11 +136,11 @@ def test_a_joint_table_attached_to_the_wrong_images(tmp_path):
     names = [line.split(",", 1)[0] for line in lines[head:]]
     moved = [f"{names[(i + 1) % len(names)]},{line.split(',', 1)[1]}" for i, line in enumerate(lines[head:])]
     (tmp_path / "moved.csv").write_text("\n".join(lines[:head] + moved) + "\n")
-    args = ["handeye", "solve", "--robot", "kuka_kr150_r3100", "--images", str(out / "images"), "--board", board,
+    args = ["handeye", "solve", "kuka_kr150_r3100", str(out / "images"), "--board", board,
             "--camera", str(out / "camera.json"), "--json"]
-    r = CliRunner().invoke(main, args + ["--joints", str(out / "joints.csv")])
+    r = CliRunner().invoke(main, args + ["--joints", str(out / "joints.csv"), "--out", str(tmp_path / "he1")])
     assert r.exit_code == 0, r.output
-    r = CliRunner().invoke(main, args + ["--joints", str(tmp_path / "moved.csv")])
+    r = CliRunner().invoke(main, args + ["--joints", str(tmp_path / "moved.csv"), "--out", str(tmp_path / "he2")])
     # the refinement may diverge on such data (exit 1) or fail the gate (exit 3): either way the cause
     assert r.exit_code in (1, 3), r.output
     assert "likely cause: the flange poses are shifted" in r.output and "Traceback" not in r.output
@@ -176,8 +176,9 @@ def test_real_10x10_with_image_i_paired_to_pose_i_plus_1(tmp_path):
 
 @needs_ros
 @pytest.mark.parametrize("name", ["test_set_10x10", "test_set_charuco"])
-def test_clean_real_sets_pass_the_gate(name):
-    r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / name / "cal_data.yaml"), "--json"])
+def test_clean_real_sets_pass_the_gate(name, tmp_path):
+    r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / name / "cal_data.yaml"), "--json",
+                                  "--out", str(tmp_path / "he")])
     assert r.exit_code == 0, r.output
     s = json.loads(r.output[r.output.index("{"):])
     assert s["status"] == "ok" and s["reasons"] == []
@@ -199,5 +200,6 @@ def test_camera_calibrate_gate_on_the_reprojection_rms(cell, tmp_path):
     s = json.loads((tmp_path / "c" / "camera_calibration.json").read_text())
     assert s["status"] == "failed" and "one camera model does not explain" in s["reasons"][0]
     assert not (tmp_path / "c" / "camera.json").exists() and "FAILED" in (tmp_path / "c" / "report.html").read_text()
-    r = CliRunner().invoke(main, ["camera", "calibrate", str(cell / "images"), "--board", BOARD, "--json"])
+    r = CliRunner().invoke(main, ["camera", "calibrate", str(cell / "images"), "--board", BOARD, "--json",
+                                  "--out", str(tmp_path / "clean")])
     assert r.exit_code == 0, r.output

@@ -152,8 +152,8 @@ def test_handeye_and_camera_commands_on_the_simulated_cell(simulated, tmp_path):
     out, _ = simulated
     truth = json.loads((out / "truth.json").read_text())
     board = truth["board"]
-    r = CliRunner().invoke(main, ["handeye", "solve", "--poses", str(out / "flange_poses.csv"), "--images",
-                                  str(out / "images"), "--board", board, "--eye-to-hand", "--camera",
+    r = CliRunner().invoke(main, ["handeye", "solve", str(out / "images"), "--poses", str(out / "flange_poses.csv"),
+                                  "--board", board, "--eye-to-hand", "--camera",
                                   str(out / "camera.json"), "--json", "--out", str(tmp_path / "he")])
     assert r.exit_code == 0, r.output
     s = json.loads((tmp_path / "he" / "handeye.json").read_text())
@@ -180,7 +180,7 @@ def test_command_line_errors_are_one_clear_line(simulated, tmp_path):
     board = json.loads((out / "truth.json").read_text())["board"]
     labels = [f"img_{i:02d}" for i in range(4)]  # one image has no pose
     write_flange_poses_csv(tmp_path / "four.csv", labels, _poses(4))
-    base = ["handeye", "solve", "--images", str(out / "images"), "--board", board]
+    base = ["handeye", "solve", str(out / "images"), "--board", board, "--out", str(tmp_path / "he")]
     r = CliRunner().invoke(main, base + ["--poses", str(tmp_path / "four.csv")])
     assert r.exit_code == 1 and "images without a pose: 'img_04.png'" in r.output and "Traceback" not in r.output
     # all flange rotations about one axis: the rotation about it leaves the translation along it open
@@ -193,12 +193,13 @@ def test_command_line_errors_are_one_clear_line(simulated, tmp_path):
     for name in ("img_00.png", "img_01.png"):
         (tmp_path / "two" / name).write_bytes((out / "images" / name).read_bytes())
     write_flange_poses_csv(tmp_path / "two.csv", ["img_00", "img_01"], _poses(2))
-    r = CliRunner().invoke(main, ["handeye", "solve", "--images", str(tmp_path / "two"), "--board", board, "--poses",
-                                  str(tmp_path / "two.csv")])
+    r = CliRunner().invoke(main, ["handeye", "solve", str(tmp_path / "two"), "--board", board, "--poses",
+                                  str(tmp_path / "two.csv"), "--out", str(tmp_path / "he")])
     assert r.exit_code == 1 and "at least 3 images" in r.output and "got 2 of 2" in r.output
-    r = CliRunner().invoke(main, ["handeye", "solve", "--images", str(out / "images")])
-    assert r.exit_code == 2 and "cal_data.yaml" in r.output
-    r = CliRunner().invoke(main, base[:2] + ["--poses", str(tmp_path / "four.csv"), "--images", str(out / "images"),
+    r = CliRunner().invoke(main, ["handeye", "solve", str(out / "images"), "--poses", str(tmp_path / "four.csv"),
+                                  "--out", str(tmp_path / "he")])
+    assert r.exit_code == 2 and "--board SPEC is needed" in r.output
+    r = CliRunner().invoke(main, base[:3] + ["--poses", str(tmp_path / "four.csv"), "--out", str(tmp_path / "he"),
                                              "--board", "charuco:9x7:30:22mm:DICT_5X5_100"])
     assert r.exit_code == 1 and "unit" in r.output
 
@@ -212,9 +213,9 @@ def test_joints_and_robot_file_route_recovers_the_joint_offsets(tmp_path):
                                   "--seed", "2"])
     assert r.exit_code == 0, r.output
     truth = json.loads((out / "truth.json").read_text())
-    r = CliRunner().invoke(main, ["handeye", "solve", "--joints", str(out / "joints.csv"), "--robot", "kuka_kr150_r3100",
-                                  "--joint-offsets", "--images", str(out / "images"), "--board", truth["board"],
-                                  "--camera", str(out / "camera.json"), "--json"])
+    r = CliRunner().invoke(main, ["handeye", "solve", "kuka_kr150_r3100", str(out / "images"), "--joints",
+                                  str(out / "joints.csv"), "--joint-offsets", "--board", truth["board"],
+                                  "--camera", str(out / "camera.json"), "--json", "--out", str(tmp_path / "he")])
     assert r.exit_code == 0, r.output
     s = json.loads(r.output[r.output.index("{"):])
     true = truth["robot"]["joint_offsets_deg"]
@@ -238,9 +239,9 @@ def test_robust_loss_names_an_image_whose_pose_is_wrong(simulated, tmp_path):
     write_flange_poses_csv(tmp_path / "bad.csv", poses.labels, T)
     errors = {}
     for loss in ("linear", "huber"):
-        r = CliRunner().invoke(main, ["handeye", "solve", "--poses", str(tmp_path / "bad.csv"), "--images",
-                                      str(out / "images"), "--board", truth["board"], "--eye-to-hand", "--camera",
-                                      str(out / "camera.json"), "--loss", loss, "--json"])
+        r = CliRunner().invoke(main, ["handeye", "solve", str(out / "images"), "--poses", str(tmp_path / "bad.csv"),
+                                      "--board", truth["board"], "--eye-to-hand", "--camera",
+                                      str(out / "camera.json"), "--loss", loss, "--json", "--out", str(tmp_path / loss)])
         assert r.exit_code == (3 if loss == "linear" else 0), r.output
         s = json.loads(r.output[r.output.index("{"):r.output.rindex("}") + 1])
         if loss == "linear":
@@ -263,7 +264,7 @@ def test_camera_and_handeye_fits_that_do_not_converge_exit_4_without_model_files
     assert not (tmp_path / "cam" / "camera.json").exists() and not (tmp_path / "cam" / "camera.yaml").exists()
     c = json.loads((tmp_path / "cam" / "camera_calibration.json").read_text())
     assert c["convergence"]["converged"] is False
-    he = ["handeye", "solve", "--poses", str(out / "flange_poses.csv"), "--images", str(out / "images"), "--board",
+    he = ["handeye", "solve", str(out / "images"), "--poses", str(out / "flange_poses.csv"), "--board",
           board, "--eye-to-hand", "--camera", str(out / "camera.json")]
     r = CliRunner().invoke(main, he + ["--out", str(tmp_path / "he")])
     assert r.exit_code == 4, r.output

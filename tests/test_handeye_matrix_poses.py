@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import tempfile
 
 import numpy as np
 import pytest
@@ -43,9 +44,10 @@ def cell(tmp_path_factory):
 
 
 def _solve(root, out, truth, poses_file, *extra):
-    return CliRunner().invoke(main, ["handeye", "solve", "--poses", str(root / poses_file), "--images",
-                                     str(root / "images"), "--board", truth["board"], "--camera",
-                                     str(out / "camera.json"), "--exact-poses", "--json", *extra])
+    with tempfile.TemporaryDirectory() as he:  # --out is required; the tests read the printed result
+        return CliRunner().invoke(main, ["handeye", "solve", str(root / "images"), "--poses", str(root / poses_file),
+                                         "--board", truth["board"], "--camera", str(out / "camera.json"),
+                                         "--exact-poses", "--json", "--out", he, *extra])
 
 
 @pytest.mark.parametrize("poses_file, extra", [("RobotPosesVec.txt", ["--length-unit", "m"]), ("blocks.txt", [])])
@@ -68,8 +70,8 @@ def test_matrix_pose_file_errors_name_the_problem(cell, tmp_path):
     assert r.exit_code == 1 and "look like metres" in r.output
     lines = (root / "RobotPosesVec.txt").read_text().splitlines()
     (tmp_path / "short.txt").write_text("\n".join(lines[:-1]) + "\n")
-    r = CliRunner().invoke(main, ["handeye", "solve", "--poses", str(tmp_path / "short.txt"), "--length-unit", "m",
-                                  "--images", str(root / "images"), "--board", truth["board"]])
+    r = CliRunner().invoke(main, ["handeye", "solve", str(root / "images"), "--poses", str(tmp_path / "short.txt"),
+                                  "--length-unit", "m", "--board", truth["board"], "--out", str(tmp_path / "he")])
     assert r.exit_code == 1 and "12 images" in r.output and "11 poses" in r.output and "by order" in r.output
     T = read_matrix_poses(root / "RobotPosesVec.txt", "m")
     (tmp_path / "transposed.txt").write_text("\n".join(" ".join(map(str, M.T.ravel())) for M in T) + "\n")
@@ -84,7 +86,8 @@ def test_checkerboard_given_by_squares_is_named(tmp_path):
     r = CliRunner().invoke(main, ["simulate", "camera", "--out", str(out), "--images", "3", "--seed", "1",
                                   "--board", "checkerboard:9x6:25mm"])
     assert r.exit_code == 0, r.output
-    r = CliRunner().invoke(main, ["camera", "calibrate", str(out / "images"), "--board", "checkerboard:10x7:25mm"])
+    r = CliRunner().invoke(main, ["camera", "calibrate", str(out / "images"), "--board", "checkerboard:10x7:25mm",
+                                  "--out", str(tmp_path / "cam")])
     assert r.exit_code == 1
     assert "inner corners: 9 x 6 found / 10 x 7 expected, did you give squares?" in r.output
 

@@ -7,6 +7,7 @@ for the checks of ids/order and for OpenCV's linear methods side by side. Figure
 from __future__ import annotations
 
 import json
+import tempfile
 
 import cv2
 import numpy as np
@@ -203,7 +204,8 @@ def default_runs():
     """`robocal handeye solve <set>/cal_data.yaml --json` with every option at its default."""
     out = {}
     for name in ("test_set_charuco", "test_set_10x10"):
-        r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / name / "cal_data.yaml"), "--json"])
+        with tempfile.TemporaryDirectory() as he:  # --out is required; the tests read the printed result
+            r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / name / "cal_data.yaml"), "--json", "--out", he])
         assert r.exit_code == 0, r.output
         out[name] = json.loads(r.stdout[r.stdout.index("{"):])
     return out
@@ -243,11 +245,12 @@ def test_the_default_command_lands_at_the_source_library(runs, default_runs):
     assert ch["reprojection_rms_px"] <= 1.02 * s["reprojection_rms_px"]
 
 
-def test_a_systematic_misfit_is_a_warning_naming_both_fits():
+def test_a_systematic_misfit_is_a_warning_naming_both_fits(tmp_path):
     """Circle grid (nominal Kinect intrinsics: the rigid chain misses by 2.3 px where one PnP pose
     per image fits to 0.3 px): the exact and the estimated-noise fits disagree beyond their sigma,
     and the command says so on one `Warning:` line naming both and the remedies."""
-    r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / "test_set_10x10" / "cal_data.yaml")])
+    r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / "test_set_10x10" / "cal_data.yaml"),
+                                  "--out", str(tmp_path / "he")])
     assert r.exit_code == 0, r.output
     warnings = [ln for ln in r.stderr.splitlines() if ln.startswith("Warning:")]
     assert len(warnings) == 1
@@ -255,9 +258,9 @@ def test_a_systematic_misfit_is_a_warning_naming_both_fits():
     assert "flange poses: taken as exact (auto" in r.stdout
 
 
-def test_robot_pose_sigma_option_values():
+def test_robot_pose_sigma_option_values(tmp_path):
     """--robot-pose-sigma takes auto, estimate or MM,DEG; anything else is a usage error naming it."""
-    args = ["handeye", "solve", str(ROS / "test_set_charuco" / "cal_data.yaml")]
+    args = ["handeye", "solve", str(ROS / "test_set_charuco" / "cal_data.yaml"), "--out", str(tmp_path / "he")]
     r = CliRunner().invoke(main, [*args, "--robot-pose-sigma", "0.5"])
     assert r.exit_code == 2 and "--robot-pose-sigma" in r.output and "MM,DEG" in r.output
     r = CliRunner().invoke(main, [*args, "--robot-pose-sigma", "estimate", "--exact-poses"])
@@ -273,12 +276,12 @@ def test_robot_pose_sigma_option_values():
     assert s["robot_pose_sigma"]["robot_pose_sigma"][0] > 0
 
 
-def test_refined_distortion_terms_the_images_do_not_determine_are_named():
+def test_refined_distortion_terms_the_images_do_not_determine_are_named(tmp_path):
     """Issue 25 item 6 (camera part): `handeye solve --refine-intrinsics` on the ChArUco set refines
     five distortion terms; k3 comes out -0.17 +- 0.19 and is named as not determined, not reported
     as identifiable; every refined intrinsic has its 1-sigma and unit."""
     r = CliRunner().invoke(main, ["handeye", "solve", str(ROS / "test_set_charuco" / "cal_data.yaml"),
-                                  "--refine-intrinsics", "--exact-poses", "--json"])
+                                  "--refine-intrinsics", "--exact-poses", "--json", "--out", str(tmp_path / "he")])
     assert r.exit_code == 0, r.output
     s = json.loads(r.stdout[r.stdout.index("{"):])
     assert "k3" in s["not_determined"]

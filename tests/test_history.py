@@ -692,8 +692,9 @@ def test_cli_history_table(history_db):
 
 
 def test_cli_history_json_and_plot(history_db, tmp_path):
-    png = tmp_path / "drift.png"
-    r = run_history("kr150-cell3", "--db", f"sqlite:///{history_db}", "--params", "a2", "--plot", png, "--json")
+    png = tmp_path / "plots" / "kr150-cell3_drift.png"  # --plots DIR: <robot>_drift.png, as fleet status
+    r = run_history("kr150-cell3", "--db", f"sqlite:///{history_db}", "--params", "a2", "--plots", tmp_path / "plots",
+                    "--json")
     assert r.exit_code == 0, r.output
     out = json.loads(r.output)
     assert list(out["parameters"]) == ["a2"]
@@ -718,8 +719,6 @@ def test_cli_history_filters(history_db):
     (("kr150-cell3", "--params", "a2,a9"), "no parameter 'a9' stored for robot 'kr150-cell3'; stored: a2, beta3"),
     (("kr150-cell3", "--params", " , "), "--params: give one or more parameter names"),
     (("kr150-cell3", "--since", "last week"), "--since 'last week' is not an ISO 8601 time"),
-    (("kr150-cell3", "--plot", "drift.txt"), "give a .png, .svg or .pdf"),
-    (("kr150-cell3", "--plot", "nowhere/drift.png"), "folder nowhere does not exist"),
 ])
 def test_cli_history_errors_are_one_line(history_db, args, message):
     r = run_history(*args, "--db", history_db)
@@ -769,3 +768,19 @@ def test_version_1_database_is_migrated_lambda_to_percent_and_demo_truth_errors_
         assert demo.metrics["workspace_error_nominal_rms"].value == 1.5
         assert set(real.metrics) == {"residual_rms_after"}
         assert thermal.metrics["lambda"].value == pytest.approx(90.0) and thermal.metrics["lambda"].unit == "%"
+
+
+def test_cli_history_old_plot_file_option_works_with_a_warning(history_db, tmp_path):
+    """`--plot FILE` (before `--plots DIR`, issue 26) still writes the file it names, with one warning."""
+    from robocal.cli import main
+
+    png = tmp_path / "old.png"
+    r = CliRunner().invoke(main, ["history", "kr150-cell3", "--db", str(history_db), "--plot", str(png)])
+    assert r.exit_code == 0, r.output
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert [ln for ln in r.stderr.splitlines() if ln.startswith("Warning:")] == [
+        "Warning: --plot FILE is deprecated, use --plots DIR"]
+    r = CliRunner().invoke(main, ["history", "kr150-cell3", "--db", str(history_db), "--plot", str(png), "--plots",
+                                  str(tmp_path)])
+    assert r.exit_code == 2 and "not both" in r.output
+    assert "--plot " not in CliRunner().invoke(main, ["history", "--help"]).output  # hidden

@@ -195,12 +195,12 @@ def test_fleet_status_flags_the_robot_whose_rp_trend_crosses_the_tolerance(fleet
 
 def test_history_lists_and_plots_ap_rp_over_time(fleet_db, tmp_path):
     _, db, results = fleet_db
-    r = _run(["history", "worn", "--db", db, "--plot", tmp_path / "worn.png"])
+    r = _run(["history", "worn", "--db", db, "--plots", tmp_path])
     assert r.exit_code == 0, r.output
     assert "ISO 9283 performance tests" in r.output
     rp0 = results["worn", 0]["runs"][0]["summary"]["RP_mm"]
     assert f"{rp0:.4f}" in r.output
-    png = (tmp_path / "worn.png").read_bytes()
+    png = (tmp_path / "worn_drift.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10000
     r = _run(["history", "worn", "--db", db, "--json"])
     data = json.loads(r.output)

@@ -85,12 +85,14 @@ def test_thermal_commands_never_replace_their_inputs(tmp_path):
 
 
 def test_writers_without_overwrite_refuse_an_existing_file(tmp_path):
-    for option in ("--events-out", "--sensor-out"):
-        f = _file(tmp_path / f"{option[2:]}.txt")
-        r = run("tcp", "simulate", "--collisions", 1, option, f)
+    (tmp_path / "sim").mkdir()
+    for name in ("events.csv", "sensor.json"):  # tcp simulate --out DIR writes both
+        f = _file(tmp_path / "sim" / name)
+        r = run("tcp", "simulate", "--collisions", 1, "--out", tmp_path / "sim")
         _refused(r, f, phrase="pass --overwrite")
-    plot = _file(tmp_path / "drift.png")
-    r = run("history", "ur10", "--db", tmp_path / "h.sqlite", "--plot", plot)
+        f.unlink()
+    plot = _file(tmp_path / "ur10_drift.png")
+    r = run("history", "ur10", "--db", tmp_path / "h.sqlite", "--plots", tmp_path)
     _refused(r, plot, phrase="pass --overwrite")
 
 

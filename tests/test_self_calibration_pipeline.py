@@ -6,6 +6,7 @@ an image of another size)."""
 from __future__ import annotations
 
 import json
+import tempfile
 
 import numpy as np
 import pytest
@@ -76,7 +77,10 @@ def _run(root, *extra, joints="joints.csv", frames="frames.csv"):
             str(root / "camera.json"), *extra]
     if "--board-on" not in extra:
         args += ["--board-on", "left,right"]
-    return CliRunner().invoke(cli, args)
+    if "--out" in extra:
+        return CliRunner().invoke(cli, args)
+    with tempfile.TemporaryDirectory() as out:  # --out is required; this test reads the printed result
+        return CliRunner().invoke(cli, args + ["--out", out])
 
 
 def test_command_recovers_offsets_from_rendered_images_and_writes_the_outputs(capture, tmp_path):
@@ -116,11 +120,12 @@ def test_a_log_on_another_clock_matches_nothing(capture, tmp_path):
     assert "no joint reading within 0.05 s of any capture time" in r.output
 
 
-def test_a_board_never_fully_visible_is_a_clear_error(capture):
+def test_a_board_never_fully_visible_is_a_clear_error(capture, tmp_path):
     root, _, _, _, t_log, q_log = capture
     r = CliRunner().invoke(cli, ["self-calibrate", "dlr_justin19", "--images", str(root / "images"), "--joints",
                                  str(root / "joints.csv"), "--frames", str(root / "frames.csv"), "--board",
-                                 "checkerboard:9x7:25mm", "--camera-on", "head", "--board-on", "left,right", "--camera", str(root / "camera.json")])
+                                 "checkerboard:9x7:25mm", "--camera-on", "head", "--board-on", "left,right", "--camera",
+                                 str(root / "camera.json"), "--out", str(tmp_path / "out")])
     assert r.exit_code != 0
     assert "is not fully visible in any matched image" in r.output
 

@@ -115,7 +115,7 @@ def test_verify_command_ok_and_fault(tmp_path):
     assert ver[0]["time"].startswith("2026-05-01T06:00") and ver[0]["temperature_c"] == 23.5
     assert ver[1]["suspect"] == "J3 offset" and ver[1]["instrument"] == "AT960 #42"
     assert abs(ver[1]["suspect_value"]) == pytest.approx(np.radians(0.2), abs=np.radians(0.02))
-    r = run(main, ["history", "irb140-cell2", "--db", str(tmp_path / "h.sqlite"), "--plot", str(tmp_path / "v.png")])
+    r = run(main, ["history", "irb140-cell2", "--db", str(tmp_path / "h.sqlite"), "--plots", str(tmp_path / "plots")])
     assert r.exit_code == 0 and "mechanical fault suspected" in r.output
     # fleet status lists the last verification and flags the robot
     r = run(main, ["fleet", "status", "--db", str(tmp_path / "h.sqlite"), "--no-plots", "--json"])

@@ -12,7 +12,12 @@ Rules of a table entry ``{old: new}``:
   joined by commas (``--tcp 1 2 3`` becomes ``--tool 1,2,3``);
 * ``ROBOT_ARGUMENT``: the old ``--robot NAME`` becomes the first positional argument;
 * ``("--new", "value")``: the old option is renamed only when a value follows it (``--json FILE``
-  becomes ``--summary FILE``; a plain ``--json`` stays the flag).
+  becomes ``--summary FILE``; a plain ``--json`` stays the flag);
+* ``("NAME", ARGUMENT)``: the old ``--images DIR`` becomes the positional argument ``NAME``, put
+  after the others (``handeye solve``'s DATA);
+* ``("--new", OLD_FILE)``: the old option named a file where the new one names a folder (``--plot
+  FILE`` vs ``--plots DIR``): the old option stays a *hidden* option of the command, which still
+  writes the file it names; the rewrite only warns.
 
 An optional robot before a required argument (``thermal screen [ROBOT] RUN_DIR``) is declared with
 :data:`OPTIONAL_ROBOT` in a command of class :class:`OptionalRobotCommand`: when the robot is left
@@ -24,10 +29,14 @@ from __future__ import annotations
 
 import click
 
-__all__ = ["DEPRECATED", "DEPRECATED_COMMANDS", "OPTIONAL_ROBOT", "OptionalRobotCommand", "ROBOT_ARGUMENT", "install",
-           "rewrite"]
+__all__ = ["ARGUMENT", "DEPRECATED", "DEPRECATED_COMMANDS", "OLD_FILE", "OPTIONAL_ROBOT", "OptionalRobotCommand",
+           "ROBOT_ARGUMENT", "install", "rewrite"]
 
 ROBOT_ARGUMENT = "ROBOT"
+#: rule kind: the old option becomes a positional argument (module docstring)
+ARGUMENT = "argument"
+#: rule kind: the old option named a file, the new one names a folder (module docstring)
+OLD_FILE = "file"
 
 #: command path (without ``robocal``) -> {old option: rule}
 DEPRECATED: dict[str, dict] = {
@@ -36,23 +45,30 @@ DEPRECATED: dict[str, dict] = {
     "closed-chain simulate": {"--tolerance": "--distance-tolerance", "--joint-resolution": "--joint-noise"},
     "fk": {"--euler": "--orientation"},
     "ik": {"--euler": "--orientation"},
-    "fleet status": {"--tolerance": "--distance-tolerance"},
+    "fleet status": {"--tolerance": "--distance-tolerance", "--tolerance-deg": "--angle-tolerance"},
     "fleet study monte-carlo": {"--json": ("--summary", "value"), "--tool": ("--tool", 3)},
     "fleet study pose-sets": {"--json": ("--summary", "value"), "--tool": ("--tool", 3)},
+    "controller diff": {"--plot": ("--plots", OLD_FILE)},
     "fleet study thermal": {"--json": ("--summary", "value")},
+    "handeye solve": {"--robot": ROBOT_ARGUMENT, "--images": ("DATA", ARGUMENT)},
+    "history": {"--plot": ("--plots", OLD_FILE)},
     "import": {"--tolerance": "--time-tolerance", "--robot": ROBOT_ARGUMENT},
     "plan-poses": {"--tool": ("--tool", 3)},
-    "self-calibrate": {"--tolerance": "--time-tolerance", "--joint-noise": "--joint-noise"},
-    "simulate self-calibration": {"--joint-noise": "--joint-noise"},
-    "simulate camera": {"--robot": ROBOT_ARGUMENT},
+    "self-calibrate": {"--tolerance": "--time-tolerance", "--joint-noise-deg": "--joint-noise"},
+    "simulate self-calibration": {"--joint-noise-deg": "--joint-noise", "--joint-offsets-deg": "--joint-offsets",
+                                  "--length-sigma-mm": "--length-sigma", "--board-bow-mm": "--board-bow",
+                                  "--clock-offset-s": "--clock-offset", "--jitter-s": "--jitter",
+                                  "--log-rate-hz": "--log-rate"},
+    "simulate camera": {"--robot": ROBOT_ARGUMENT, "--pose-noise-mm": "--pose-noise", "--pose-noise-deg": "--pose-angle-noise",
+                        "--joint-offset-sigma-deg": "--joint-offset-sigma"},
     "tcp accuracy": {"--first-seed": "--seed"},
     "tcp cross-laser": {"--convention": "--orientation"},
     "tcp seven-point": {"--tcp": ("--tool", 3)},
-    "tcp simulate": {"--robot": ROBOT_ARGUMENT},
+    "tcp simulate": {"--robot": ROBOT_ARGUMENT, "--events-out": ("--out", OLD_FILE), "--sensor-out": ("--out", OLD_FILE)},
     "thermal calibrate-sensor": {"--sigma": "--noise"},
     "thermal compensate": {"--sigma": "--noise", "--history": "--db"},
     "thermal experiment": {"--first-seed": "--seed"},
-    "thermal screen": {"--robot": ROBOT_ARGUMENT},
+    "thermal screen": {"--robot": ROBOT_ARGUMENT, "--threshold-mm": "--threshold"},
 }
 
 #: group path -> {old command name: new command name}
@@ -113,7 +129,7 @@ def _is_number(text: str) -> bool:
 def rewrite(args: list, rules: dict) -> list:
     """``args`` with the deprecated options of ``rules`` replaced by their new form (a warning
     each); everything after ``--`` is left alone."""
-    out, robot, i = [], None, 0
+    out, robot, arguments, i = [], None, [], 0
     args = list(args)
     while i < len(args):
         token = args[i]
@@ -139,6 +155,20 @@ def rewrite(args: list, rules: dict) -> list:
             i += 1
             continue
         new, how = rule
+        if how == ARGUMENT:  # --images DIR -> the positional argument DATA
+            _warn(name, f"the argument {new}")
+            if eq:
+                arguments.append(value)
+                i += 1
+            else:
+                arguments += args[i + 1:i + 2]
+                i += 2
+            continue
+        if how == OLD_FILE:  # a hidden option of the command: it still writes the file it names
+            _warn(f"{name} FILE", f"{new} DIR")
+            out.append(token)
+            i += 1
+            continue
         if how == "value":  # renamed only with a value: --json FILE -> --summary FILE
             if eq or (i + 1 < len(args) and not args[i + 1].startswith("-")):
                 _warn(f"{name} FILE", f"{new} FILE")
@@ -157,6 +187,11 @@ def rewrite(args: list, rules: dict) -> list:
         else:
             out.append(new + eq + value if name != new else token)
             i += 1
+    if arguments and "--" in out:
+        cut = out.index("--")
+        out = out[:cut] + arguments + out[cut:]
+    else:
+        out += arguments
     return ([robot] if robot is not None else []) + out
 
 

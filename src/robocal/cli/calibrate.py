@@ -97,7 +97,8 @@ def calibrate(robot, data, out_dir, free, free_all, frames_only, fix, holdout, s
         _step_printer(i, 5 if no_report else n, text)
 
     try:
-        check_calibration_outputs(out_dir, overwrite=overwrite, report=not no_report)
+        check_calibration_outputs(out_dir, overwrite=overwrite, report=not no_report,
+                                  inputs={"ROBOT": robot, "DATA": data, "--joints": imp.get("joints_file")})
         meas = read_export(robot, data, imp)
         options = CalibrationOptions(
             free=tuple(_names(free)) if free else None, free_all=free_all, frames_only=frames_only, fix=tuple(_names(fix)), holdout=holdout, seed=seed,

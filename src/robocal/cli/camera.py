@@ -32,12 +32,13 @@ def camera():
               help="Also estimate the board's sag along its x and y axes [mm] (a board that is not flat biases "
                    "the focal length: 1 mm moved fx by ~27 px in a rendered test).")
 @click.option("--fix", multiple=True, help="Parameter held at its start value (repeatable): fx, cx, k3, ...")
-@click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
-              help="Folder for camera.json, camera.yaml (ROS), camera_calibration.json and report.html.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for camera.json, camera.yaml (ROS), camera_calibration.json and report.html (created if "
+                   "needed; not the images' folder).")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--force", is_flag=True,
               help="Write camera.json/camera.yaml even when the result FAILS the sanity gate (exit code 3 all the same).")
-@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON on stdout (the files are written too).")
 @allow_unconverged_option
 def calibrate_cmd(images_dir, board, model, n_distortion, board_shape, fix, out_dir, overwrite, force, as_json,
                   allow_unconverged):

@@ -174,12 +174,14 @@ def probe_cmd(robot, pairs, controller_name, noise_mm, noise_deg, flange, out_fi
 @click.option("--tool", default=None, metavar="X,Y,Z", help="TCP in the flange frame [mm] (default: the flange).")
 @click.option("--out", "out_file", default=None, type=FILE,
               help="CSV file to write with every joint set [deg] and its TCP difference [mm, deg]; optional.")
-@click.option("--plot", "plot_file", default=None, type=FILE,
-              help="PNG file to write: the accuracy map (top and side views coloured by the TCP difference [mm], and "
-                   "its histogram); optional.")
+@click.option("--plots", "plot_dir", default=None, type=click.Path(file_okay=False, path_type=str), metavar="DIR",
+              help="Folder for accuracy_map.png: top and side views coloured by the TCP difference [mm], and its "
+                   "histogram (created if needed); optional.")
+@click.option("--plot", "plot_file", default=None, type=FILE, hidden=True,
+              help="Deprecated: the accuracy map as this PNG file; use --plots DIR.")
 @click.option("--overwrite", is_flag=True, help="Replace existing output files.")
 @click.option("--json", "as_json", **_JSON)
-def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, plot_file, overwrite, as_json):
+def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, plot_dir, plot_file, overwrite, as_json):
     """TCP difference between two robot models (nominal, the controller's, tracker-calibrated) over
     the working range: statistics and an accuracy map by reach and height."""
     import numpy as np
@@ -196,6 +198,10 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, plot_file, o
             raise click.ClickException(f"--tool: expected X,Y,Z [mm], got {tool!r}") from None
         if len(tcp) != 3:
             raise click.ClickException(f"--tool: expected X,Y,Z [mm], got {tool!r}")
+    if plot_dir is not None and plot_file is not None:
+        raise click.UsageError("give --plots DIR (the deprecated --plot FILE is its older form), not both")
+    if plot_dir is not None:
+        plot_file = str(Path(plot_dir) / "accuracy_map.png")
     for f in (out_file, plot_file):
         if f is not None:
             refuse_same_path(f, model_a, model_b, cell)
@@ -231,6 +237,9 @@ def diff_cmd(model_a, model_b, cell, n_poses, seed, tool, out_file, plot_file, o
         atomic_write_text(out_file, buf.getvalue(), overwrite=overwrite)
     if plot_file is not None:
         from ..report.plots import plot_accuracy_map
+
+        if plot_dir is not None:
+            Path(plot_dir).mkdir(parents=True, exist_ok=True)
 
         plot_accuracy_map(r["positions_mm"], r["error_mm"], plot_file,
                           f"{model_b} - {model_a}: TCP difference over {r['n']} joint sets")

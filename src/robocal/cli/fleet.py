@@ -172,11 +172,11 @@ def _exit_on_failures(failed, total) -> None:
 @click.option("--db", required=True, metavar="PATH_OR_URL",
               help="History database: an SQLite file or a URL (postgresql+psycopg://user@host/db).")
 @click.option("--max-age", "max_age_days", type=float, default=90.0, show_default=True, metavar="DAYS",
-              help="A robot whose last calibration is older is stale.")
+              help="A robot whose last calibration is older [days] is stale.")
 @click.option("--distance-tolerance", "tolerance_mm", type=float, default=0.1, show_default=True, metavar="MM",
               help="Flag a length parameter whose drift trend since the first calibration exceeds this [mm].")
-@click.option("--tolerance-deg", type=float, default=0.01, show_default=True, metavar="DEG",
-              help="Flag an angle parameter whose drift trend exceeds this.")
+@click.option("--angle-tolerance", "tolerance_deg", type=float, default=0.01, show_default=True, metavar="DEG",
+              help="Flag an angle parameter whose drift trend exceeds this [deg].")
 @click.option("--kind", default="geometric_calibration", show_default=True,
               type=click.Choice(["geometric_calibration", "thermal_compensation", "tool_recalibration", "measurement"]),
               help="Which cycles count as calibrations.")
@@ -297,7 +297,7 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
               help="Random poses where each result is checked (at most 100,000).")
 @click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")
-@click.option("--seed", default=0, show_default=True)
+@click.option("--seed", default=0, show_default=True, help="Seed of the virtual robots and their noise (integer).")
 @click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every sample to this JSON file.")
 @_OVERWRITE
 @_SCHEDULER
@@ -354,7 +354,7 @@ def _robot_model(robot):
               help="Instrument noise per coordinate [mm], positive.")
 @click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")
-@click.option("--seed", default=0, show_default=True)
+@click.option("--seed", default=0, show_default=True, help="Seed of the first candidate set; the others follow (integer).")
 @click.option("--summary", "out_file", default=None, type=click.Path(dir_okay=False), help="Write every set to this JSON file.")
 @_OVERWRITE
 @_SCHEDULER

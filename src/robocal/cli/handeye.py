@@ -7,6 +7,7 @@ import json
 import click
 
 from ._common import EXIT_FAILED_RESULT, _item_progress, _user_error, allow_unconverged_option, finish_convergence
+from ._grammar import OPTIONAL_ROBOT, OptionalRobotCommand
 from .camera import BOARD_HELP, echo_findings
 
 
@@ -15,8 +16,9 @@ def handeye():
     """Hand-eye calibration: camera on the flange (eye-in-hand) or fixed in the cell (eye-to-hand)."""
 
 
-@handeye.command("solve")
-@click.argument("cal_data", required=False, type=click.Path(path_type=str))
+@handeye.command("solve", cls=OptionalRobotCommand)
+@click.argument("robot", **OPTIONAL_ROBOT)
+@click.argument("data", type=click.Path(path_type=str))
 @click.option("--poses", default=None, type=click.Path(path_type=str),
               help="Flange-pose CSV (docs/tcp.md: '# orientation:', units), one row per image named like the image; "
                    "or 4x4 matrices (16 numbers per line row-major, as RobotPosesVec.txt, or 4 lines per pose) "
@@ -24,13 +26,12 @@ def handeye():
 @click.option("--length-unit", type=click.Choice(["m", "mm"]), default=None,
               help="Unit of the translations in a 4x4 matrix pose file [m or mm] (unless it has '# length_unit:').")
 @click.option("--joints", "joints_file", default=None, type=click.Path(path_type=str),
-              help="Instead of --poses: a robocal-program/1 joint table (point names = image names), with --robot.")
-@click.option("--robot", default=None, help="With --joints: the robot (shipped name or robot file).")
+              help="Instead of --poses: a robocal-program/1 joint table (point names = image names); the flange "
+                   "poses are ROBOT's forward kinematics (ROBOT is then required).")
 @click.option("--joint-offsets", is_flag=True, help="With --joints: also estimate the robot's joint zero offsets.")
-@click.option("--images", default=None, type=click.Path(path_type=str), help="Folder of the images.")
 @click.option("--board", default=None, help=BOARD_HELP + " With cal_data.yaml: taken from its target_finder.")
 @click.option("--eye-in-hand", "setup", flag_value="eye_in_hand", default=None,
-              help="Camera on the flange, board fixed (the default for --poses/--images).")
+              help="Camera on the flange, board fixed (the default for --poses/--joints).")
 @click.option("--eye-to-hand", "setup", flag_value="eye_to_hand", help="Camera fixed in the cell, board on the flange.")
 @click.option("--method", type=click.Choice(["shah", "tsai", "park", "daniilidis"]), default="shah", show_default=True,
               help="Linear solution the refinement starts from (all are reported side by side).")
@@ -49,18 +50,25 @@ def handeye():
 @click.option("--homography-threshold", type=float, default=None,
               help="Skip images whose detections one homography misses by more than this mean [px] "
                    "(default: cal_data.yaml's homography_threshold, else no check).")
-@click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
-              help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for handeye.json, handeye.yaml (ROS transform) and report.html (created if needed).")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--force", is_flag=True,
               help="Write handeye.yaml even when the result FAILS the sanity gates (exit code 3 all the same).")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout (the files are written too).")
 @allow_unconverged_option
-def solve_cmd(cal_data, poses, length_unit, joints_file, robot, joint_offsets, images, board, setup, method, camera_file, loss,
+def solve_cmd(robot, data, poses, length_unit, joints_file, joint_offsets, board, setup, method, camera_file, loss,
               refine_intrinsics, robot_pose_sigma, exact_poses, homography_threshold, out_dir, overwrite, force,
               as_json, allow_unconverged):
-    """Solve the hand-eye transform from images and flange poses: either CAL_DATA (a ROS-Industrial
-    cal_data.yaml) or --poses POSES.csv --images DIR --board SPEC.
+    """Solve the hand-eye transform from images and flange poses. DATA is
+
+    \b
+    * a ROS-Industrial cal_data.yaml (or its folder): images, flange poses, board, intrinsics;
+    * with --poses POSES.csv --board SPEC: the folder of the images;
+    * with ROBOT and --joints JOINTS.csv --board SPEC: the folder of the images, the flange poses
+      computed from the joints.
+
+    ROBOT (a shipped name or a robot file) is given only with --joints.
 
     Sanity gates (docs/reliability.md): back-projection RMS against the corner noise, the screw
     invariants of every image pair (images paired with the wrong pose are named), agreement with the
@@ -72,9 +80,18 @@ def solve_cmd(cal_data, poses, length_unit, joints_file, robot, joint_offsets, i
     from ..handeye import HandEyeError
     from ..workflows.cameras.handeye_solve import solve_handeye
 
-    if cal_data is None and ((poses is None and joints_file is None) or images is None or board is None):
-        raise click.UsageError("give a cal_data.yaml, or --poses POSES.csv (or --joints JOINTS.csv --robot ROBOT) "
-                               "--images DIR --board SPEC")
+    if poses is not None and joints_file is not None:
+        raise click.UsageError("give either --poses or --joints, not both")
+    if joints_file is not None and robot is None:
+        raise click.UsageError("--joints needs ROBOT before DATA: robocal handeye solve ROBOT IMAGES_DIR --joints "
+                               "JOINTS.csv --board SPEC --out DIR")
+    if robot is not None and joints_file is None:
+        raise click.UsageError(f"ROBOT {robot!r} is used only with --joints (the flange poses computed from the "
+                               "joints); give DATA alone with a cal_data.yaml or --poses")
+    image_form = poses is not None or joints_file is not None
+    if image_form and board is None:
+        raise click.UsageError("--board SPEC is needed with --poses or --joints (DATA is then the folder of the images)")
+    cal_data, images = (None, data) if image_form else (data, None)
     sigma = _pose_sigma(robot_pose_sigma)
     if exact_poses:
         if robot_pose_sigma != "auto":

@@ -83,23 +83,40 @@ def _series_json(s) -> dict:
               type=click.Choice(["geometric_calibration", "thermal_compensation", "tool_recalibration", "measurement"]),
               help="Only cycles of this kind (repeatable).")
 @click.option("--since", default=None, metavar="TIME", help="Only cycles started at or after TIME (ISO 8601; UTC if no zone).")
-@click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False), metavar="FILE.png",
-              help="Write a drift plot (parameter deltas and metrics over time).")
-@click.option("--overwrite", is_flag=True, help="Replace an existing --plot file.")
+@click.option("--plots", "plot_dir", default=None, type=click.Path(file_okay=False), metavar="DIR",
+              help="Folder for <robot>_drift.png: parameter deltas and metrics over time (created if needed; as "
+                   "'fleet status --plots').")
+@click.option("--plot", "plot_file", default=None, type=click.Path(dir_okay=False), hidden=True,
+              help="Deprecated: write the drift plot to this file (.png, .svg, .pdf); use --plots DIR.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing drift plot.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def history_cmd(robot, db, params, kinds, since, plot_path, overwrite, as_json):
+def history_cmd(robot, db, params, kinds, since, plot_dir, plot_file, overwrite, as_json):
     """Print (and plot) ROBOT's calibration and maintenance history and its parameter drift."""
     names = None
     if params is not None:
         names = [p.strip() for p in params.split(",") if p.strip()]
         if not names:
             raise click.ClickException("--params: give one or more parameter names separated by commas")
-    _check_plot_path(plot_path, {"--db": db}, overwrite)
+    if plot_dir is not None and plot_file is not None:
+        raise click.UsageError("give --plots DIR (the deprecated --plot FILE is its older form), not both")
+    plot_path = plot_file
+    if plot_dir is not None:
+        from ..io.output_paths import path_under, safe_file_stem
+
+        name = f"{safe_file_stem(robot)}_drift.png"  # the robot id is data: never a path of its own
+        path_under(plot_dir, name)
+        plot_path = Path(plot_dir) / name
+    _check_plot_path(plot_path, {"--db": db}, overwrite, option="--plot" if plot_file is not None else "--plots")
     try:
         view = _read_history(db or default_history_target(), robot, names, list(kinds) or None, _since(since))
     except (HistoryError, HistoryInputError) as exc:
         raise click.ClickException(str(exc)) from None
     if plot_path is not None:
+        if plot_dir is not None:
+            try:
+                Path(plot_dir).mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise click.ClickException(f"--plots {plot_dir}: {exc.strerror or exc}") from None
         _plot(view, robot, plot_path)
     if as_json:
         click.echo(json.dumps(_history_json(view, robot, plot_path), indent=2))
@@ -113,7 +130,7 @@ def history_cmd(robot, db, params, kinds, since, plot_path, overwrite, as_json):
         click.echo(f"plot: {plot_path}")
 
 
-def _check_plot_path(plot_path, inputs=None, overwrite: bool = False) -> None:
+def _check_plot_path(plot_path, inputs=None, overwrite: bool = False, option: str = "--plots") -> None:
     from ..io.output_paths import check_outputs
 
     if plot_path is None:
@@ -121,7 +138,9 @@ def _check_plot_path(plot_path, inputs=None, overwrite: bool = False) -> None:
     try:
         check_outputs(plot_path, inputs, overwrite=overwrite)
     except FileExistsError as exc:
-        raise click.ClickException(f"--plot {exc}") from None
+        raise click.ClickException(f"{option} {exc}") from None
+    if option == "--plots":
+        return
     pp = Path(plot_path)
     if pp.suffix.lower() not in (".png", ".svg", ".pdf"):
         raise click.ClickException(f"--plot {plot_path}: give a .png, .svg or .pdf file name")
@@ -168,9 +187,9 @@ def _plot(view, robot, plot_path) -> None:
         plot_history(view.series, plot_metrics, plot_path, f"{robot}: drift over time", events=events,
                      verifications=outcomes)
     except ValueError as exc:
-        raise click.ClickException(f"--plot: {exc}") from None
+        raise click.ClickException(f"drift plot: {exc}") from None
     except OSError as exc:
-        raise click.ClickException(f"--plot {plot_path}: {exc}") from None
+        raise click.ClickException(f"{plot_path}: {exc}") from None
 
 
 def _history_json(view, robot, plot_path) -> dict:

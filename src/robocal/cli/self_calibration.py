@@ -34,12 +34,12 @@ from .camera import BOARD_HELP
 @click.option("--joint-noise", "joint_noise_deg", type=float, default=None, metavar="DEG",
               help="1-sigma of a joint reading [deg]: per-image joint corrections (errors in variables). Default: "
                    "exact readings when the residuals fit the corner noise, else estimated (reported in the JSON).")
-@click.option("--out", "out_dir", default=None, type=click.Path(file_okay=False),
-              help="Folder for robot.toml, self_calibration.json, report.html.")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for robot.toml, self_calibration.json, report.html (created if needed).")
 @click.option("--overwrite", is_flag=True, help="Replace earlier results in the folder.")
 @click.option("--force", is_flag=True,
               help="Write robot.toml even when the result FAILS the sanity gates or did not converge (same exit code).")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout (the files are written too).")
 @allow_unconverged_option
 def self_calibrate(robot, images, joints_file, frames_file, board, camera_ee, board_on, camera_file, tolerance, match,
                    link_parameters, refine_intrinsics, joint_noise_deg, out_dir, overwrite, force, as_json,

@@ -65,14 +65,18 @@ def simulate_tracker_cmd(robot, n_poses, noise_mm, reflectors, joint_noise_deg, 
               help="Camera on the flange (board fixed) or fixed in the cell (board on the flange).")
 @click.option("--images", "n_images", default=15, show_default=True, type=click.IntRange(1, 1000),
               help="Number of images (robot poses; at most 1000).")
-@click.option("--pose-noise-mm", default=0.05, show_default=True, help="Robot pose noise per axis [mm].")
-@click.option("--pose-noise-deg", default=0.01, show_default=True, help="Robot pose noise per axis [deg].")
+@click.option("--pose-noise", "pose_noise_mm", default=0.05, show_default=True, metavar="MM",
+              help="Robot pose noise per axis, positions [mm].")
+@click.option("--pose-angle-noise", "pose_noise_deg", default=0.01, show_default=True, metavar="DEG",
+              help="Robot pose noise per axis, rotations [deg].")
 @click.option("--orientation", "convention", default="kuka_abc", show_default=True,
               help="Orientation convention of flange_poses.csv (a robocal.transforms.POSE_CONVENTIONS name).")
-@click.option("--length-unit", type=click.Choice(["mm", "m"]), default="mm", show_default=True)
-@click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True)
+@click.option("--length-unit", type=click.Choice(["mm", "m"]), default="mm", show_default=True,
+              help="Unit of the positions written to flange_poses.csv [mm or m].")
+@click.option("--angle-unit", type=click.Choice(["deg", "rad"]), default="deg", show_default=True,
+              help="Unit of the angles written to flange_poses.csv [deg or rad].")
 @click.argument("robot", default=None, required=False)
-@click.option("--joint-offset-sigma-deg", default=0.05, show_default=True,
+@click.option("--joint-offset-sigma", "joint_offset_sigma_deg", default=0.05, show_default=True, metavar="DEG",
               help="With ROBOT: spread of the robot's true joint zero offsets around its robot file [deg].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses and the image noise.")
 @click.option("--overwrite", is_flag=True, help="Replace the files of an earlier run in the folder.")
@@ -112,19 +116,21 @@ def simulate_camera_cmd(out_dir, board, eye_in_hand, n_images, pose_noise_mm, po
 @click.option("--board", default=None,
               help="Board spec (docs/handeye.md). Default checkerboard:7x4:12mm in a hand, checkerboard:9x6:25mm "
                    "fixed in the world.")
-@click.option("--joint-offsets-deg", default=3.0, show_default=True,
+@click.option("--joint-offsets", "joint_offsets_deg", default=3.0, show_default=True, metavar="DEG",
               help="True joint zero offsets: uniform within +- this [deg], on every joint moving the camera or a board.")
-@click.option("--length-sigma-mm", default=0.0, show_default=True, help="Spread of true link lengths [mm].")
+@click.option("--length-sigma", "length_sigma_mm", default=0.0, show_default=True, metavar="MM",
+              help="Spread of true link lengths [mm].")
 @click.option("--joint-noise", "joint_noise_deg", default=0.05, show_default=True, metavar="DEG", help="Joint reading noise per log row [deg].")
 @click.option("--partial-fraction", default=0.1, show_default=True,
               help="Extra images per chain showing the board only partly, as a fraction of --images-per-chain.")
-@click.option("--board-bow-mm", default=0.0, show_default=True,
+@click.option("--board-bow", "board_bow_mm", default=0.0, show_default=True, metavar="MM",
               help="Bend the board: its middle this far out of the plane of its ends [mm] (a flat-board model "
                    "does not contain it; 0.4 mm moves NAO corners by ~2 px).")
-@click.option("--clock-offset-s", default=0.035, show_default=True,
+@click.option("--clock-offset", "clock_offset_s", default=0.035, show_default=True, metavar="S",
               help="Camera clock minus robot clock [s] (frames.csv vs joint_log.csv).")
-@click.option("--jitter-s", default=0.004, show_default=True, help="Capture time jitter [s].")
-@click.option("--log-rate-hz", default=20.0, show_default=True, help="Joint log sampling rate [Hz].")
+@click.option("--jitter", "jitter_s", default=0.004, show_default=True, metavar="S", help="Capture time jitter [s].")
+@click.option("--log-rate", "log_rate_hz", default=20.0, show_default=True, metavar="HZ",
+              help="Joint log sampling rate [Hz].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the truth, the poses, the noise and the images.")
 @click.option("--overwrite", is_flag=True, help="Replace the files of an earlier run in the folder.")
 def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint_offsets_deg, length_sigma_mm,
@@ -138,7 +144,7 @@ def simulate_self_calibration_cmd(robot, out_dir, n_images, chains, board, joint
     if n_images < 1:
         raise click.ClickException(f"--images-per-chain must be at least 1, got {n_images}")
     if log_rate_hz <= 0:
-        raise click.ClickException(f"--log-rate-hz must be positive, got {log_rate_hz}")
+        raise click.ClickException(f"--log-rate must be positive [Hz], got {log_rate_hz}")
     chain_list = None if chains is None else tuple(c.strip() for c in chains.split(",") if c.strip())
     try:
         r = simulate_self_calibration_files(

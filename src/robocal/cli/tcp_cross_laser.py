@@ -33,8 +33,8 @@ barrier state change: the motion id, the controller time [s] of the I/O sample t
 the barrier (x|y), the new state (blocked|clear) and the flange position the controller
 reported then (mm, base frame; needed for the step-4 moves, may be nan elsewhere).
 Required roles: circle1, circle2 (steps 1-2, same orientation, dz apart), circle3 (step 3,
-axis re-aligned) and down, up (step 4 vertical moves). `robocal tcp simulate --events-out`
-writes such a file.
+axis re-aligned) and down, up (step 4 vertical moves). `robocal tcp simulate --out DIR`
+writes such a file (DIR/events.csv).
 
 SENSOR is the JSON of `robocal tcp calibrate-sensor --json` (keys T_base_sensor, beta_deg,
 gap_mm used).
@@ -166,14 +166,18 @@ def _echo_result(res, out, settings, sensor, convention) -> None:
 @click.option("--io-rate", "io_rate_hz", default=1000.0, show_default=True, type=float, help="Controller I/O rate [Hz].")
 @click.option("--tool-radius", "tool_radius_mm", default=3.0, show_default=True, type=float, help="Tool radius [mm].")
 @click.argument("robot", default="ur10", required=False)
-@click.option("--events-out", type=click.Path(dir_okay=False), default=None,
-              help="Write the first recalibration's barrier events (robocal-barrier-events/1) here.")
-@click.option("--sensor-out", type=click.Path(dir_okay=False), default=None,
-              help="Write the simulated sensor calibration (JSON, as `robocal tcp calibrate-sensor --json`) here.")
-@click.option("--overwrite", is_flag=True, help="Replace existing --events-out / --sensor-out files.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None,
+              help="Folder for events.csv (the first recalibration's barrier events, robocal-barrier-events/1) and "
+                   "sensor.json (the simulated sensor calibration, as `robocal tcp calibrate-sensor --json`); "
+                   "optional (created if needed).")
+@click.option("--events-out", type=click.Path(dir_okay=False), default=None, hidden=True,
+              help="Deprecated: write the barrier events to this file; use --out DIR.")
+@click.option("--sensor-out", type=click.Path(dir_okay=False), default=None, hidden=True,
+              help="Deprecated: write the sensor calibration to this file; use --out DIR.")
+@click.option("--overwrite", is_flag=True, help="Replace existing events.csv / sensor.json.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repeatability_mm, io_rate_hz, tool_radius_mm,
-                 robot, events_out, sensor_out, overwrite, as_json):
+                 robot, out_dir, events_out, sensor_out, overwrite, as_json):
     """Simulated tool-recalibration study: random collisions, cross-laser recalibration, truth comparison.
 
     ROBOT (default ur10; 'none' skips it) is checked for reaching the motions.
@@ -190,11 +194,18 @@ def simulate_cmd(collisions, seed, no_beta_correction, beta_deg, tilt_deg, repea
     from ._progress import Progress
 
     variants = {k: v for k, v in DEFAULT_VARIANTS.items() if not no_beta_correction or v.get("beta_correction") is False}
+    if out_dir is not None:
+        if events_out or sensor_out:
+            raise click.UsageError("give --out DIR (the deprecated --events-out/--sensor-out FILE are its older "
+                                   "form), not both")
+        events_out, sensor_out = str(Path(out_dir) / "events.csv"), str(Path(out_dir) / "sensor.json")
     if events_out and sensor_out and Path(events_out).resolve() == Path(sensor_out).resolve():
         raise click.ClickException(f"--events-out and --sensor-out are the same file {events_out}")
     try:
-        check_outputs([events_out, sensor_out], {"--robot": None if robot.lower() == "none" else robot},
+        check_outputs([events_out, sensor_out], {"ROBOT": None if robot.lower() == "none" else robot},
                       overwrite=overwrite)
+        if out_dir is not None:
+            Path(out_dir).mkdir(parents=True, exist_ok=True)
         with Progress("recalibrations", collisions * len(variants)) as bar:
             res = tcp_repeatability_study(collisions=collisions, seed=seed, beta_deg=beta_deg, tilt_deg=tilt_deg,
                                           repeatability_mm=repeatability_mm, io_rate_hz=io_rate_hz,

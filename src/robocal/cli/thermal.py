@@ -218,7 +218,7 @@ def _wrapped(prefix, text, width=110):
 @click.argument("robot", **OPTIONAL_ROBOT)
 @click.argument("run_dir", type=click.Path(path_type=str))
 @click.option("--keep", "n_keep", default=8, show_default=True, help="Parameters to keep.")
-@click.option("--threshold-mm", "threshold_mm", default=0.1, show_default=True,
+@click.option("--threshold", "threshold_mm", default=0.1, show_default=True, metavar="MM",
               help="lambda: share of monitored directions with residual below this [mm].")
 @click.option("--statistic", type=click.Choice(["rms", "max", "mean_abs"]), default="rms", show_default=True,
               help="How a direction's residual over the cycles is summarised.")

@@ -1,5 +1,5 @@
 """Pairing an image folder with a flange-pose file by name (issue 14, ``robocal handeye solve
---poses POSES.csv --images DIR``).
+IMAGES_DIR --poses POSES.csv``).
 
 The pose file is a flange-pose CSV (:func:`robocal.io.tcp_files.read_flange_poses_csv`: declared
 orientation convention and units); each row's ``pose`` label names its image: the image file's

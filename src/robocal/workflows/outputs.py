@@ -20,7 +20,8 @@ import shutil
 import tempfile
 from pathlib import Path
 
-__all__ = ["OutputError", "check_outputs_free", "ensure_writable_dir", "staged_outputs", "describe_os_error"]
+__all__ = ["OutputError", "check_output_folder", "check_outputs_free", "ensure_writable_dir", "staged_outputs",
+           "describe_os_error"]
 
 
 class OutputError(RobocalError, OSError):
@@ -48,6 +49,20 @@ def check_outputs_free(out_dir, names, overwrite: bool) -> None:
         p = out / name
         if p.exists():
             raise OutputExistsError(f"{p}: output file exists; pass --overwrite to replace it")
+
+
+def check_output_folder(out_dir, names, inputs, overwrite: bool) -> None:
+    """The rules of an output folder (docs/cli.md), before any work: the folder and each of
+    ``out_dir / names`` must not be one of the command's ``inputs`` (a path, a list or ``{what:
+    path}``; refused even with ``overwrite``, :class:`~robocal.io.output_paths.OutputIsInputError`),
+    then :func:`check_outputs_free`."""
+    from ..io.output_paths import check_not_inputs
+
+    out = Path(out_dir)
+    if isinstance(inputs, dict):  # only paths (a robot may be given as a model object)
+        inputs = {k: v for k, v in inputs.items() if isinstance(v, (str, os.PathLike))}
+    check_not_inputs([out] + [out / n for n in names], inputs)
+    check_outputs_free(out, names, overwrite)
 
 
 def ensure_writable_dir(out_dir) -> Path:

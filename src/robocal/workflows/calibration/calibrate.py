@@ -52,7 +52,7 @@ from ...robots import load_robot, save_robot
 from .calibrate_swarm import check_method, convergence_plots, identify, swarm_record
 from .calibrate_setup import build_problems, split_by_ids, tool_frame_summary
 from ..convergence import Convergence
-from ..outputs import check_outputs_free, ensure_writable_dir, staged_outputs
+from ..outputs import check_output_folder, check_outputs_free, ensure_writable_dir, staged_outputs
 from ..progress import solver_progress
 
 __all__ = ["CalibrationInputError", "OUTPUT_FILES", "output_paths", "split_poses", "select_free", "run_calibration",
@@ -337,14 +337,16 @@ def write_calibration(computed: dict, out_dir, *, overwrite: bool = False, repor
             "files": files, "notes": notes}
 
 
-def check_calibration_outputs(out_dir, *, overwrite: bool = False, report: bool = True) -> list:
-    """Refuse an output folder that is a file, or holds outputs of an earlier run without
-    ``overwrite`` (``OutputExistsError``); the names of the files a calibration writes there."""
+def check_calibration_outputs(out_dir, *, overwrite: bool = False, report: bool = True, inputs=None) -> list:
+    """Refuse an output folder that is a file, an output that is one of ``inputs`` (a path, a list
+    or ``{what: path}``: the robot file, the measurements; even with ``overwrite``), or outputs of
+    an earlier run without ``overwrite`` (``OutputExistsError``); the names of the files a
+    calibration writes there."""
     out = Path(out_dir)
     names = [n for k, n in OUTPUT_FILES.items() if report or k != "report"]
     if out.exists() and not out.is_dir():
         raise CalibrationInputError(f"{out}: exists and is not a folder")
-    check_outputs_free(out, names, overwrite)
+    check_output_folder(out, names, inputs, overwrite)
     return names
 
 

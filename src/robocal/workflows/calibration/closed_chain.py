@@ -48,7 +48,7 @@ from ...sim.closed_chain import ClosedChainCell, JointReadout, LaserPointer, def
 from ...sim.closed_chain_effects import CellEffects
 from .calibrate import OUTPUT_FILES, CalibrationInputError, output_paths, select_free
 from ..convergence import Convergence, record_fit
-from ..outputs import check_outputs_free, ensure_writable_dir, staged_outputs
+from ..outputs import check_output_folder, ensure_writable_dir, staged_outputs
 from .simulate import check_simulation_outputs
 
 __all__ = ["simulate_closed_chain", "run_closed_chain_calibration", "split_spots", "make_cell", "calibrate_held_spots", "DEFAULT_JOINT_RESOLUTION_DEG"]
@@ -214,7 +214,7 @@ def run_closed_chain_calibration(robot, spots_file, out_dir, *, target_spacing_m
     step = progress or (lambda i, n, text: None)
     out = Path(out_dir)
     names = [n for k, n in OUTPUT_FILES.items() if report or k != "report"]
-    check_outputs_free(out, names, overwrite)
+    check_output_folder(out, names, {"ROBOT": robot, "SPOTS": spots_file}, overwrite)
     nominal = load_robot(robot)
     spots = read_spots(spots_file, robot=nominal)
     spots = spots.subset(canonical_order(spots))  # the same data in any row order gives the same result

@@ -22,7 +22,7 @@ from ...io.images import list_images
 from ...report.camera_report import write_camera_report
 from .camera_common import backprojection, detect_set, identifiability_lines, image_rows, overlay_figures
 from ..convergence import Convergence
-from ..outputs import check_outputs_free, staged_outputs
+from ..outputs import check_output_folder, staged_outputs
 
 __all__ = ["calibrate_camera_images", "CAMERA_OUTPUTS", "camera_summary"]
 
@@ -74,7 +74,7 @@ def calibrate_camera_images(images_dir, board: str, *, out_dir=None, model: str 
 
     b = parse_board(board)
     if out_dir is not None:
-        check_outputs_free(out_dir, CAMERA_OUTPUTS, overwrite)
+        check_output_folder(out_dir, CAMERA_OUTPUTS, {"the images": images_dir}, overwrite)
     detected = detect_set(list_images(images_dir), b, progress=progress)
     detected.require(3, "camera calibration")
     used = detected.used

@@ -1,8 +1,9 @@
 """``robocal handeye solve``: the hand-eye transform from images and flange poses (issue 14 item 7).
 
-Inputs, either
-* ``--poses POSES.csv --images DIR --board SPEC``: a flange-pose CSV in a named convention paired
+Inputs (the command line: ``robocal handeye solve [ROBOT] DATA``, docs/cli.md), either
+* ``IMAGES_DIR --poses POSES.csv --board SPEC``: a flange-pose CSV in a named convention paired
   by name with the images (:mod:`robocal.io.image_poses`), or
+* ``ROBOT IMAGES_DIR --joints JOINTS.csv --board SPEC``: the flange poses from the robot's joints, or
 * ``path/to/cal_data.yaml``: the ROS-Industrial layout (:mod:`robocal.io.ros_calibration`: board,
   intrinsics, set-up from ``static_camera``).
 
@@ -50,7 +51,7 @@ from .camera_common import (
 )
 from ..convergence import Convergence
 from .handeye_gate import chain_T_camera_target, handeye_gate, pairing_causes
-from ..outputs import check_outputs_free, staged_outputs
+from ..outputs import check_output_folder, staged_outputs
 
 __all__ = ["solve_handeye", "HANDEYE_OUTPUTS", "chain_T_camera_target"]
 
@@ -127,7 +128,7 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
     threshold, joints or None, robot model or None)."""
     if cal_data is not None:
         if poses is not None or images is not None or joints_file is not None:
-            raise ValueError("give either cal_data.yaml or --poses/--joints with --images, not both")
+            raise ValueError("give either cal_data.yaml or --poses/--joints with the images' folder, not both")
         d = read_cal_data(cal_data)
         b = parse_board(board) if board else d.board
         if setup is not None and setup != d.setup:
@@ -137,7 +138,7 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
         return (d.image_paths, d.labels, d.T_base_flange, b, d.blob_settings, cam, d.setup, str(d.path),
                 d.homography_threshold, None, None)
     if (poses is None) == (joints_file is None) or images is None or board is None:
-        raise ValueError("need --poses POSES.csv or --joints JOINTS.csv --robot ROBOT, with --images DIR and "
+        raise ValueError("need --poses POSES.csv or ROBOT and --joints JOINTS.csv, with the images' folder and "
                          "--board SPEC (or a cal_data.yaml)")
     b = parse_board(board)
     cam = read_camera(camera_file) if camera_file else None
@@ -147,7 +148,7 @@ def _inputs(cal_data, poses, images, board, setup, camera_file, joints_file=None
         return (pairs.image_paths, pairs.labels, pairs.T_base_flange, b, None, cam, setup, f"{poses} + {images}",
                 None, None, None)
     if robot is None:
-        raise ValueError("--joints needs --robot (a shipped robot name or a robot file)")
+        raise ValueError("--joints needs ROBOT (a shipped robot name or a robot file)")
     model = load_robot(robot)
     program = read_joint_program(joints_file, model)
     paths, idx = pair_images_with_labels(images, program.names, joints_file)
@@ -187,10 +188,12 @@ def solve_handeye(*, cal_data=None, poses=None, images=None, board: str | None =
     paths, labels, F, b, blobs, camera, setup, source, file_threshold, q, model = _inputs(
         cal_data, poses, images, board, setup, camera_file, joints, robot, length_unit)
     if joint_offsets and q is None:
-        raise ValueError("--joint-offsets needs --joints JOINTS.csv and --robot ROBOT")
+        raise ValueError("--joint-offsets needs ROBOT and --joints JOINTS.csv")
     threshold = file_threshold if homography_threshold is None else homography_threshold
     if out_dir is not None:
-        check_outputs_free(out_dir, HANDEYE_OUTPUTS, overwrite)
+        check_output_folder(out_dir, HANDEYE_OUTPUTS, {"the cal_data.yaml": cal_data, "--poses": poses,
+                                                       "the images": images, "--joints": joints, "ROBOT": robot,
+                                                       "--camera": camera_file}, overwrite)
     detected = detect_set(paths, b, blob_settings=blobs, homography_threshold=threshold, progress=progress)
     detected.require(3, "hand-eye calibration")
     used = detected.used

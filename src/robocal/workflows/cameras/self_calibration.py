@@ -38,7 +38,7 @@ from ...robots import load_robot
 from ...robots.writer import save_robot
 from .camera_common import DetectedSet, identifiability_lines, overlay_figures
 from ..convergence import Convergence
-from ..outputs import check_outputs_free, staged_outputs
+from ..outputs import check_output_folder, staged_outputs
 from .self_calibration_gate import clock_reasons, estimate_joint_noise
 
 __all__ = ["self_calibrate", "SELF_CALIBRATION_OUTPUTS"]
@@ -100,7 +100,8 @@ def self_calibrate(robot, *, images, joints, frames, board: str, camera_end_effe
     model = load_robot(robot)
     b = parse_board(board)
     if out_dir is not None:
-        check_outputs_free(out_dir, SELF_CALIBRATION_OUTPUTS, overwrite)
+        check_output_folder(out_dir, SELF_CALIBRATION_OUTPUTS, {"ROBOT": robot, "--images": images, "--joints": joints,
+                                                                "--frames": frames, "--camera": camera_file}, overwrite)
     carriers = [board_on] if isinstance(board_on, str) else list(board_on)
     if not carriers:
         raise ValueError("say which end effector holds the board (--board-on; 'world' for a fixed board)")

@@ -307,7 +307,7 @@ def screen_run(run_dir, *, n_keep: int = 8, threshold_mm: float = 0.1, statistic
     from ...thermal.screening import traditional_parameters
 
     if not (threshold_mm > 0 and math.isfinite(threshold_mm)):
-        raise ValueError(f"--threshold-mm must be a positive number, got {threshold_mm}")
+        raise ValueError(f"--threshold must be a positive number [mm], got {threshold_mm}")
     given = list(params)
     run, prob, sensor_src = _load_screening_problem(run_dir, robot, sensor_file, setup_file, progress)
     model = run["model"]
