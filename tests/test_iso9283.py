@@ -338,3 +338,17 @@ def test_evaluate_gate_names_an_unregistered_instrument(iso_run, tmp_path):
     res = json.loads(r.stdout)["runs"][0]
     assert res["status"] == "failed" and any("not registered to the robot's base frame" in x for x in res["reasons"])
     assert json.loads((d / "ev-run.csv" / "iso9283.json").read_text())["runs"][0]["status"] == "ok"
+
+
+def test_plan_refuses_to_write_over_its_own_cell_file(tmp_path):
+    """An output that is one of the command's inputs is refused even with --overwrite (docs/cli.md):
+    a cell file saved where the plan writes program.csv stays as it was."""
+    out = tmp_path / "o"
+    out.mkdir()
+    cell = out / "program.csv"
+    cell.write_text('format = "robocal-cell/1"\n', encoding="utf-8")
+    r = CliRunner().invoke(main, ["iso9283", "plan", "ur10", "--out", str(out), "--cell", str(cell), "--overwrite"])
+    assert r.exit_code == 1
+    assert "is an input of this command (--cell)" in r.output
+    assert cell.read_text(encoding="utf-8") == 'format = "robocal-cell/1"\n'
+    assert not (out / "protocol.json").exists()

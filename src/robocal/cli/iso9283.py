@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import sys
+from pathlib import Path
 
 import click
 
@@ -125,7 +126,8 @@ def plan_cmd(robot, out_dir, tool, cycles, path_cycles, drift_hours, load, speed
         plan = build_iso_plan(model, T_flange_tool=T_tool, cycles=cycles, path_cycles=path_cycles,
                               drift_hours=drift_hours, load=load, speed_percent=speed_percent,
                               min_height_mm=min_height_mm, cell=cell)
-        files = write_iso_plan(out_dir, plan, model, overwrite=overwrite, language=language)
+        files = write_iso_plan(out_dir, plan, model, overwrite=overwrite, language=language,
+                               inputs={"ROBOT": robot, "--cell": cell_file})
     except (ValueError, OSError) as exc:
         raise _user_error(exc) from None
     cube = plan["cube"]
@@ -192,7 +194,9 @@ def evaluate_cmd(plan, measurements, after, out_dir, mpe, instrument_at, as_json
                   "conditions": protocol.get("conditions")}
         if after:
             result["comparison"] = compare_runs(runs[0], runs[1])
-        files = write_iso_outputs(out_dir, result, overwrite=overwrite)
+        plan_file = Path(plan) / "protocol.json" if Path(plan).is_dir() else Path(plan)
+        files = write_iso_outputs(out_dir, result, overwrite=overwrite,
+                                  inputs={"PLAN": plan_file, "MEASUREMENTS": measurements, "AFTER": after})
         if db is not None:
             from ..workflows.performance.iso9283_history import record_iso_run
 

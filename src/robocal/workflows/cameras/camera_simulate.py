@@ -33,7 +33,7 @@ from ...sim import VirtualRobot
 from ...sim.cameras.camera_cell import SETUPS, default_camera, reachable, robot_joints, simulate_hand_eye_poses
 from ...sim.cameras.camera_render import BoardRenderer, RenderSettings
 from ...transforms import rotvec_from_matrix
-from ..outputs import staged_outputs
+from ..outputs import check_output_folder, staged_outputs
 
 __all__ = ["simulate_camera", "DEFAULT_BOARD", "OUTPUT_NAMES"]
 
@@ -115,6 +115,7 @@ def simulate_camera(out_dir, *, board: str = DEFAULT_BOARD, setup: str = "eye_in
                         "joints_file": "joints.csv: the joints the controller reports; the robot file's flange "
                                        "pose at them differs from T_base_flange_true by the true joint offsets"}
     out = Path(out_dir)
+    check_output_folder(out, OUTPUT_NAMES, {"ROBOT": robot} if isinstance(robot, (str, Path)) else {}, overwrite)
     with staged_outputs(out, OUTPUT_NAMES, overwrite=overwrite) as stage:
         (stage / "images").mkdir()
         for i, (label, T) in enumerate(zip(labels, truth.T_camera_target), 1):

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from ...robots import load_robot
 from ...sim.cameras.self_calibration import OUTPUT_NAMES, simulate_self_calibration
-from ..outputs import staged_outputs
+from ..outputs import check_output_folder, staged_outputs
 
 __all__ = ["simulate_self_calibration_files"]
 
@@ -32,6 +32,7 @@ def simulate_self_calibration_files(robot, out_dir, *, chains=None, overwrite: b
             raise ValueError(f"robot {model.name}: name the board-holding end effectors with chains=; "
                              f"it has {names}")
     out = Path(out_dir)
+    check_output_folder(out, OUTPUT_NAMES, {"ROBOT": robot} if isinstance(robot, (str, Path)) else {}, overwrite)
     with staged_outputs(out, OUTPUT_NAMES, overwrite=overwrite) as stage:
         run = simulate_self_calibration(model, chains=tuple(chains), out_dir=stage, progress=progress, **options)
         old_images = out / "images"

@@ -199,19 +199,21 @@ def _program_rows(protocol: dict) -> tuple[list, list]:
     return names, q
 
 
-def write_iso_plan(out_dir, protocol: dict, model, *, overwrite: bool = False, language: str | None = None) -> dict:
+def write_iso_plan(out_dir, protocol: dict, model, *, overwrite: bool = False, language: str | None = None,
+                   inputs=None) -> dict:
     """Write ``protocol.json`` and the joint program ``program.csv`` into ``out_dir`` (atomically);
     with ``language`` (krl, rapid, tp, urscript) also the test as a robot program (``iso9283.<suffix>``:
-    joint targets in driving order, a wait/trigger comment at each point)."""
+    joint targets in driving order, a wait/trigger comment at each point). ``inputs``: the command's
+    input paths (``{option: path}``); an output that is one of them is refused even with ``overwrite``."""
     from ...io.programs.campaign import CAMPAIGN_LANGUAGES, write_campaign_program
-    from ..outputs import check_outputs_free, ensure_writable_dir
+    from ..outputs import check_output_folder, ensure_writable_dir
 
     out = Path(out_dir)
     program_names = []
     if language is not None:
         suffix = CAMPAIGN_LANGUAGES[language][1]
         program_names = [f"iso9283{suffix}"] + (["iso9283.src"] if language == "krl" else [])
-    check_outputs_free(out, ["protocol.json", "program.csv"] + program_names, overwrite)
+    check_output_folder(out, ["protocol.json", "program.csv"] + program_names, inputs or {}, overwrite)
     ensure_writable_dir(out)
     names, q = _program_rows(protocol)
     files = {}

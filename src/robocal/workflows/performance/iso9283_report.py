@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ...report.iso9283_figures import iso_figures
 from .iso9283_evaluate import iso_table_lines
-from ..outputs import ensure_writable_dir, staged_outputs
+from ..outputs import check_output_folder, ensure_writable_dir, staged_outputs
 
 __all__ = ["write_iso_outputs"]
 
@@ -50,8 +50,10 @@ def _html(result: dict) -> str:
     return "\n".join(parts) + "\n"
 
 
-def write_iso_outputs(out_dir, result: dict, *, overwrite: bool = False) -> dict:
-    """Write the three outputs (all or nothing); returns their paths."""
+def write_iso_outputs(out_dir, result: dict, *, overwrite: bool = False, inputs=None) -> dict:
+    """Write the three outputs (all or nothing); returns their paths. ``inputs``: the command's input
+    paths (``{argument: path}``); an output that is one of them is refused even with ``overwrite``."""
+    check_output_folder(out_dir, NAMES, inputs or {}, overwrite)
     out = ensure_writable_dir(out_dir) if not Path(out_dir).exists() else Path(out_dir)
     with staged_outputs(out, NAMES, overwrite=overwrite) as stage:
         (stage / "iso9283.json").write_text(json.dumps(result, indent=1, default=float) + "\n", encoding="utf-8")
