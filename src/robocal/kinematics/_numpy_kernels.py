@@ -26,77 +26,81 @@ def _model_joints(q, n_model, cpl_ptr, cpl_idx, cpl_coef):
 
 
 def _apply_op(M, code, value, ax):
-    """Right-multiply the affine frames M (N, 3, 4) in place by one elementary operation;
-    ``value`` a scalar or (N,) [mm | rad]."""
+    """Right-multiply the affine frames M (3, 4, N) (component-major: ``M[i, j]`` is a contiguous
+    (N,) row) in place by one elementary operation; ``value`` a scalar or (N,) [mm | rad]."""
     if OP_TX <= code <= OP_TZ:
-        M[:, :, 3] += (value[:, None] if np.ndim(value) else value) * M[:, :, code - OP_TX]
+        M[:, 3] += value * M[:, code - OP_TX]
     elif code == OP_TU:
-        d = M[:, :, :3] @ np.asarray(ax, dtype=float)
-        M[:, :, 3] += (value[:, None] if np.ndim(value) else value) * d
+        M[:, 3] += value * (ax[0] * M[:, 0] + ax[1] * M[:, 1] + ax[2] * M[:, 2])
     elif code == OP_RU:
         c, s = np.cos(value), np.sin(value)
         v = 1.0 - c
         x, y, z = ax[0], ax[1], ax[2]
-        R = np.empty(np.shape(value) + (3, 3))
-        R[..., 0, 0] = c + x * x * v
-        R[..., 0, 1] = x * y * v - z * s
-        R[..., 0, 2] = x * z * v + y * s
-        R[..., 1, 0] = y * x * v + z * s
-        R[..., 1, 1] = c + y * y * v
-        R[..., 1, 2] = y * z * v - x * s
-        R[..., 2, 0] = z * x * v - y * s
-        R[..., 2, 1] = z * y * v + x * s
-        R[..., 2, 2] = c + z * z * v
-        M[:, :, :3] = M[:, :, :3] @ R
+        R = ((c + x * x * v, x * y * v - z * s, x * z * v + y * s),
+             (y * x * v + z * s, c + y * y * v, y * z * v - x * s),
+             (z * x * v - y * s, z * y * v + x * s, c + z * z * v))
+        m0, m1, m2 = M[:, 0].copy(), M[:, 1].copy(), M[:, 2].copy()
+        for col in range(3):
+            M[:, col] = m0 * R[0][col] + m1 * R[1][col] + m2 * R[2][col]
     else:  # rotation about a coordinate axis: columns j, k mix
         a = code - OP_RX
         j, k = (a + 1) % 3, (a + 2) % 3
         c, s = np.cos(value), np.sin(value)
-        if np.ndim(value):
-            c, s = c[:, None], s[:, None]
-        mj = M[:, :, j].copy()
-        mk = M[:, :, k]
-        M[:, :, j] = c * mj + s * mk
-        M[:, :, k] = c * mk - s * mj
+        mj = M[:, j].copy()
+        M[:, j] *= c
+        M[:, j] += s * M[:, k]
+        M[:, k] *= c
+        M[:, k] -= s * mj
 
 
-def _op_twist(M, code, ax):
-    """Spatial twists (N, 6) (omega, v) of an elementary operation acting at frames M (N, 3, 4)."""
-    w = M[:, :, :3] @ np.asarray(ax, dtype=float)
+def _op_twist(M, code, ax, w_out, v_out):
+    """Spatial twist (omega into ``w_out``, v into ``v_out``, each (3, N)) of an elementary
+    operation acting at frames M (3, 4, N)."""
+    np.multiply(M[:, 0], ax[0], out=w_out)
+    w_out += ax[1] * M[:, 1]
+    w_out += ax[2] * M[:, 2]
     if code in _ROTATIONS:
-        return np.concatenate([w, np.cross(M[:, :, 3], w)], axis=1)
-    return np.concatenate([np.zeros_like(w), w], axis=1)
+        o = M[:, 3]
+        v_out[0] = o[1] * w_out[2] - o[2] * w_out[1]
+        v_out[1] = o[2] * w_out[0] - o[0] * w_out[2]
+        v_out[2] = o[0] * w_out[1] - o[1] * w_out[0]
+    else:
+        v_out[...] = w_out
+        w_out[...] = 0.0
 
 
-def _run_operations(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
+def _run_operations(q, op_link, op_code, op_axis, op_value, op_joint, link_parent, root,
                     cpl_ptr, cpl_idx, cpl_coef, on_op):
     """Walk the operation program for all poses at once; ``on_op(t, M)`` is called before operation
-    ``t`` acts on its link's frames M (N, 3, 4). Returns the link frames (n_links, N, 3, 4)."""
+    ``t`` acts on its link's frames M (3, 4, N). Returns the link frames (n_links, 3, 4, N)."""
     N = q.shape[0]
     n_links = link_parent.shape[0]
-    n_model = len(cpl_ptr) - 1
-    qm = _model_joints(q, n_model, cpl_ptr, cpl_idx, cpl_coef)
-    frames = np.empty((n_links, N, 3, 4))
+    qm = _model_joints(q, len(cpl_ptr) - 1, cpl_ptr, cpl_idx, cpl_coef).T.copy()  # (n_model, N)
+    frames = np.empty((n_links, 3, 4, N))
+    root_cols = np.asarray(root, dtype=float)[:, :, None]
     M = None
     cur = -1
     for t in range(op_code.shape[0]):
         L = int(op_link[t])
         if L != cur:
-            if cur >= 0:
-                frames[cur] = M
             cur = L
             p = link_parent[L]
-            M = np.empty((N, 3, 4))
-            M[:] = root if p < 0 else frames[p]
+            M = frames[L]
+            M[...] = root_cols if p < 0 else frames[p]
         value = op_value[t]
         jm = op_joint[t]
         if jm >= 0:
-            value = value + qm[:, jm]
+            value = value + qm[jm]
         on_op(t, M)
         _apply_op(M, int(op_code[t]), value, op_axis[t])
-    if cur >= 0:
-        frames[cur] = M
     return frames
+
+
+def _affine_cols(F, T):
+    """F (3, 4, N) composed with the constant affine T (3, 4): rotation (3, 3, N), origin (3, N)."""
+    R = np.einsum("irn,rc->icn", F[:, :3], T[:, :3])
+    o = np.einsum("irn,r->in", F[:, :3], T[:, 3]) + F[:, 3]
+    return R, o
 
 
 def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
@@ -105,41 +109,42 @@ def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, li
     p (N, K, 3), R (N, K, 3, 3), J (N, K, 3, n_free) (size 0 unless ``want_jac``)."""
     N = q.shape[0]
     K = target_link.shape[0]
-    tw = np.zeros((n_free, N, 6))
+    w = np.zeros((n_free, 3, N))
+    v = np.zeros((n_free, 3, N))
     tw_link = np.full(n_free, -1, dtype=np.int64)
 
     def on_op(t, M):
         col = free_col[op_param[t]]
         if want_jac and col >= 0:
             tw_link[col] = op_link[t]
-            tw[col] = _op_twist(M, int(op_code[t]), op_axis[t])
+            _op_twist(M, int(op_code[t]), op_axis[t], w[col], v[col])
 
-    frames = _run_operations(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
+    frames = _run_operations(q, op_link, op_code, op_axis, op_value, op_joint, link_parent, root,
                              cpl_ptr, cpl_idx, cpl_coef, on_op)
     pts = np.empty((N, K, 3))
     rot = np.empty((N, K, 3, 3))
     J = np.zeros((N if want_jac else 0, K, 3, n_free))
-    w = np.ascontiguousarray(tw[:, :, :3].transpose(1, 2, 0))  # (N, 3, n_free)
-    v = np.ascontiguousarray(tw[:, :, 3:].transpose(1, 2, 0))
+    root_cols = np.broadcast_to(np.asarray(root, dtype=float)[:, :, None], (3, 4, N))
     for k in range(K):
         L = target_link[k]
-        F = np.broadcast_to(root, (N, 3, 4)) if L < 0 else frames[L]
-        T = target_T[k]
-        R = F[:, :, :3] @ T[:, :3]
-        o = F[:, :, :3] @ T[:, 3] + F[:, :, 3]
-        p = R @ target_p[k] + o
-        pts[:, k] = p
-        rot[:, k] = R
+        R, o = _affine_cols(root_cols if L < 0 else frames[L], target_T[k])
+        p = np.einsum("icn,c->in", R, target_p[k]) + o
+        pts[:, k] = p.T
+        rot[:, k] = R.transpose(2, 0, 1)
         if want_jac:
-            cols = (tw_link >= 0) & target_anc[k, np.maximum(tw_link, 0)]
-            if not cols.any():
+            cols = np.flatnonzero((tw_link >= 0) & target_anc[k, np.maximum(tw_link, 0)])
+            if not len(cols):
                 continue
-            px, py, pz = p[:, 0:1], p[:, 1:2], p[:, 2:3]
-            Jk = J[:, k]
-            Jk[:, 0] = w[:, 1] * pz - w[:, 2] * py + v[:, 0]
-            Jk[:, 1] = w[:, 2] * px - w[:, 0] * pz + v[:, 1]
-            Jk[:, 2] = w[:, 0] * py - w[:, 1] * px + v[:, 2]
-            Jk[:, :, ~cols] = 0.0
+            wc, vc = w[cols], v[cols]  # (C, 3, N)
+            px, py, pz = p[0], p[1], p[2]
+            Jk = np.empty((3, len(cols), N))
+            Jk[0] = wc[:, 1] * pz - wc[:, 2] * py + vc[:, 0]
+            Jk[1] = wc[:, 2] * px - wc[:, 0] * pz + vc[:, 1]
+            Jk[2] = wc[:, 0] * py - wc[:, 1] * px + vc[:, 2]
+            if len(cols) == n_free:
+                J[:, k] = Jk.transpose(2, 0, 1)
+            else:
+                J[:, k][:, :, cols] = Jk.transpose(2, 0, 1)
     return pts, rot, J
 
 
@@ -149,21 +154,22 @@ def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_p
     ``param_twists`` (N, 6, n_params), ``joint_twists`` (N, 6, n_model_joints), ``frames``
     (N, n_links, 3, 4)."""
     N = q.shape[0]
-    ptw = np.zeros((N, 6, n_params))
-    jtw = np.zeros((N, 6, n_model_joints))
+    ptw = np.zeros((n_params, 2, 3, N))
+    jtw = np.zeros((n_model_joints, 2, 3, N))
 
     def on_op(t, M):
         pi, jm = op_param[t], op_joint[t]
         if pi >= 0 or jm >= 0:
-            tw = _op_twist(M, int(op_code[t]), op_axis[t])
-            if pi >= 0:
-                ptw[:, :, pi] = tw
-            if jm >= 0:
-                jtw[:, :, jm] = tw
+            tw = ptw[pi] if pi >= 0 else jtw[jm]
+            _op_twist(M, int(op_code[t]), op_axis[t], tw[0], tw[1])
+            if pi >= 0 and jm >= 0:
+                jtw[jm] = tw
 
-    frames = _run_operations(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
+    frames = _run_operations(q, op_link, op_code, op_axis, op_value, op_joint, link_parent, root,
                              cpl_ptr, cpl_idx, cpl_coef, on_op)
-    return ptw, jtw, np.ascontiguousarray(frames.transpose(1, 0, 2, 3))
+    return (np.ascontiguousarray(ptw.reshape(n_params, 6, N).transpose(2, 1, 0)),
+            np.ascontiguousarray(jtw.reshape(n_model_joints, 6, N).transpose(2, 1, 0)),
+            np.ascontiguousarray(frames.transpose(3, 0, 1, 2)))
 
 
 def _unpack(ints, floats):
