@@ -115,7 +115,7 @@ def main() -> None:
             print(f"{prefix}marginal memory per pose (calibrate --no-report, {a.small} -> {a.poses} poses): {slope:.2f} "
                   f"KiB   {'ok  ' if slope <= 1.0 else 'MISS'} <= 1 KiB per pose (the fixed part not counted)")
         print(f"load avg at end {os.getloadavg()[0]:.2f}")
-        out = work / "out00"
+        out = work / "out000"
         print("files written by calibrate (with report):")
         for f in sorted(out.iterdir()):
             print(f"  {f.name:28s}{f.stat().st_size / 1e6:10.3f} MB")
