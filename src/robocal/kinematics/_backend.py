@@ -34,7 +34,7 @@ NUMPY_COST_S = {
 #: A call estimated to take longer than this in numpy runs compiled (and the kernel stays compiled).
 CALL_MAX_S = 0.01
 #: Estimated numpy seconds a kernel may take in one process before it is compiled (or loaded).
-BUDGET_S = 0.25
+BUDGET_S = 0.15
 
 _MODES = ("auto", "compiled", "numpy")
 _mode = os.environ.get("ROBOCAL_KERNELS", "auto").strip().lower() or "auto"
