@@ -83,6 +83,7 @@ def test_a_kernel_switches_to_compiled_when_the_work_pays(kernels_mode, monkeypa
     per_call = sum(_backend.NUMPY_COST_S["op_twists"])
     assert calls == pytest.approx(_backend.BUDGET_S / per_call, abs=1)
     assert _backend.compiled_kernels() == {"target_points", "op_twists"}
+    assert _backend.use_compiled("op_twists") and not _backend.use_compiled("fk_fused_into", 10)
     with pytest.raises(ValueError):
         _backend.set_kernels("fast")
 

@@ -52,18 +52,25 @@ def set_kernels(mode: str) -> None:
     _mode = mode
 
 
-def kernel(name: str, work: int = 1):
-    """The implementation of kernel ``name`` to run for a call of ``work`` poses x points."""
+def use_compiled(name: str, work: int = 1) -> bool:
+    """True when a call of kernel ``name`` over ``work`` poses x points runs compiled (this counts the
+    call). A compiled caller of the kernel (a loop around it) asks this first, so that a small
+    problem compiles nothing."""
     if _mode == "compiled" or name in _switched:
-        return getattr(_compiled, name)
+        return True
     if _mode == "auto":
         per_call, per_unit = NUMPY_COST_S[name]
         cost = per_call + per_unit * work
         if cost > CALL_MAX_S or _spent[name] + cost > BUDGET_S:
             _switched.add(name)
-            return getattr(_compiled, name)
+            return True
         _spent[name] += cost
-    return getattr(_numpy_kernels, name)
+    return False
+
+
+def kernel(name: str, work: int = 1):
+    """The implementation of kernel ``name`` to run for a call of ``work`` poses x points."""
+    return getattr(_compiled if use_compiled(name, work) else _numpy_kernels, name)
 
 
 def compiled_kernels() -> frozenset:
