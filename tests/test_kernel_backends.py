@@ -58,6 +58,18 @@ def test_numpy_kernels_equal_compiled(name, kernels_mode):
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-9)
 
 
+def test_numpy_kernels_in_blocks_equal_one_block(kernels_mode, monkeypatch):
+    from robocal.kinematics import _numpy_kernels
+
+    model = load_robot("dlr_justin19")
+    kernels_mode("numpy")
+    whole = _everything(model, np.random.default_rng(5))
+    monkeypatch.setattr(_numpy_kernels, "BLOCK", 7)  # 23 poses: blocks of 7, 7, 7, 2
+    blocked = _everything(model, np.random.default_rng(5))
+    for a, b in zip(whole, blocked):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-12)
+
+
 def test_one_pose_fk_refuses_a_non_finite_joint_in_both(kernels_mode):
     model = load_robot("ur10")
     q = np.array([0.1, np.nan, 0.3, 0.0, 0.2, 0.0])

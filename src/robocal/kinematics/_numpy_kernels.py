@@ -14,6 +14,8 @@ import numpy as np
 from .links import OP_RU, OP_RX, OP_RY, OP_RZ, OP_TU, OP_TX, OP_TZ
 
 _ROTATIONS = (OP_RX, OP_RY, OP_RZ, OP_RU)
+#: Poses per block of the batched kernels (working arrays of a few MB).
+BLOCK = 4096
 
 
 def _model_joints(q, n_model, cpl_ptr, cpl_idx, cpl_coef):
@@ -106,7 +108,29 @@ def _affine_cols(F, T):
 def target_points(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
                   cpl_ptr, cpl_idx, cpl_coef, target_link, target_T, target_p, target_anc, free_col, n_free, want_jac):
     """:func:`robocal.kinematics._kernels.target_points` in numpy (same arguments and results):
-    p (N, K, 3), R (N, K, 3, 3), J (N, K, 3, n_free) (size 0 unless ``want_jac``)."""
+    p (N, K, 3), R (N, K, 3, 3), J (N, K, 3, n_free) (size 0 unless ``want_jac``). Runs in blocks of
+    :data:`BLOCK` poses (the working arrays stay small on a big campaign)."""
+    N = q.shape[0]
+    args = (op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root, cpl_ptr, cpl_idx, cpl_coef,
+            target_link, target_T, target_p, target_anc, free_col, n_free, want_jac)
+    if N <= BLOCK:
+        return _target_points_block(q, *args)
+    K = target_link.shape[0]
+    pts = np.empty((N, K, 3))
+    rot = np.empty((N, K, 3, 3))
+    J = np.empty((N if want_jac else 0, K, 3, n_free))
+    for first in range(0, N, BLOCK):
+        last = min(first + BLOCK, N)
+        p, R, Jb = _target_points_block(q[first:last], *args)
+        pts[first:last], rot[first:last] = p, R
+        if want_jac:
+            J[first:last] = Jb
+    return pts, rot, J
+
+
+def _target_points_block(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_parent, root,
+                         cpl_ptr, cpl_idx, cpl_coef, target_link, target_T, target_p, target_anc, free_col, n_free,
+                         want_jac):
     N = q.shape[0]
     K = target_link.shape[0]
     w = np.zeros((n_free, 3, N))
@@ -212,6 +236,10 @@ def fk_fused_into(q, ints, floats, e, out, links, start, stop):
     """:func:`robocal.kinematics._kernels.fk_fused_into` in numpy: poses of end effector ``e`` for
     ``q[start:stop]`` into ``out[start:stop]`` (N, 4, 4) [mm], and the moving links' frames into
     ``links[start:stop]`` unless ``links`` has no rows."""
+    if stop - start > BLOCK:  # in blocks: the working arrays stay small on a big batch
+        for first in range(start, stop, BLOCK):
+            fk_fused_into(q, ints, floats, e, out, links, first, min(first + BLOCK, stop))
+        return
     n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
     qs = q[start:stop]
     qm = _model_joints(qs, n_m, cpl_ptr, cpl_idx, cpl_coef)
