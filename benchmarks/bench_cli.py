@@ -8,7 +8,10 @@ given as its median and as a ratio to ``python -c "import numpy"`` measured in t
 * cold: a fresh, empty numba cache directory for every run (``NUMBA_CACHE_DIR``), as on the first
   run after installing; only the commands that use kernels differ from warm.
 
-Usage: ``python benchmarks/bench_cli.py [--repeat 5] [--cold-repeat 2] [--quick]``.
+Usage: ``python benchmarks/bench_cli.py [--repeat 5] [--cold-repeat 2] [--quick] [--before SRC]``;
+``--before SRC`` adds, interleaved, each command that uses kernels run from the sources in SRC (the
+code before a change, e.g. ``git archive`` of the old commit: ``PYTHONPATH=SRC``), for before/after
+ratios from one run.
 It is a script, not a test: nothing fails on a slow machine.
 """
 
@@ -34,9 +37,9 @@ def _run(cmd, env, cwd) -> float:
     return time.perf_counter() - t
 
 
-def _rows(work: Path) -> list:
+def _rows(work: Path, before: str | None = None) -> list:
     data = str(work / "m100.csv")
-    return [
+    rows = [
         ("python -c 'import numpy'", [sys.executable, "-c", "import numpy"], False),
         ("robocal --help", [ROBOCAL, "--help"], False),
         ("robocal robots", [ROBOCAL, "robots"], False),
@@ -46,19 +49,25 @@ def _rows(work: Path) -> list:
         ("robocal calibrate 100 poses (with report)",
          [ROBOCAL, "calibrate", "abb_irb140", data, "--out", str(work / "b"), "--overwrite"], True),
     ]
+    rows = [(label, cmd, kernels, None) for label, cmd, kernels in rows]
+    if before:
+        rows += [(f"  before: {label}", cmd, True, before) for label, cmd, kernels, _ in rows if kernels]
+    return rows
 
 
 def _measure(rows, repeat: int, cold: bool, work: Path) -> dict:
-    times = {label: [] for label, _, _ in rows}
+    times = {label: [] for label, _, _, _ in rows}
     for _ in range(repeat):
-        for label, cmd, kernels in rows:
+        for label, cmd, kernels, src in rows:
             env = dict(os.environ)
+            if src:
+                env["PYTHONPATH"] = src
             cache = None
             if cold and kernels:
                 cache = tempfile.mkdtemp(prefix="robocal-numba-cold-")
                 env["NUMBA_CACHE_DIR"] = cache
             elif kernels:
-                env["NUMBA_CACHE_DIR"] = str(work / "numba-warm")
+                env["NUMBA_CACHE_DIR"] = str(work / ("numba-warm-before" if src else "numba-warm"))
             try:
                 times[label].append(_run(cmd, env, work))
             finally:
@@ -92,6 +101,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5, help="warm runs per row (median)")
     ap.add_argument("--cold-repeat", type=int, default=2, help="cold runs per row (0: skip)")
     ap.add_argument("--quick", action="store_true", help="3 warm runs, 1 cold")
+    ap.add_argument("--before", metavar="SRC", help="also run the kernel commands from these sources (PYTHONPATH)")
     args = ap.parse_args()
     if args.quick:
         args.repeat, args.cold_repeat = 3, 1
@@ -99,10 +109,10 @@ def main() -> None:
         work = Path(tmp)
         subprocess.run([ROBOCAL, "simulate", "tracker", "abb_irb140", "--poses", "100", "--out", "m100.csv"],
                        cwd=work, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        rows = _rows(work)
+        rows = _rows(work, args.before)
         print(f"robocal CLI wall time; python {sys.version.split()[0]}; load avg {os.getloadavg()[0]:.2f} "
               f"{os.getloadavg()[1]:.2f} (1/5 min) at start; {os.cpu_count()} CPUs")
-        _measure(rows[3:4], 1, False, work)  # fill the warm cache
+        _measure([r for r in rows if r[2]], 1, False, work)  # fill the warm caches
         _print(f"warm (kernels cached), {args.repeat} runs per row, interleaved", _measure(rows, args.repeat, False, work))
         if args.cold_repeat:
             cold_rows = [r for r in rows if r[2] or r[0].startswith("python")]

@@ -61,28 +61,33 @@ def joint_coverage(model, q_train, q_holdout=None) -> list:
     return rows
 
 
+#: Poses per block in :func:`_levers` (two FK results of a block: ~2 MB).
+_LEVER_BLOCK = 8192
+
+
 def _levers(model, q, targets_mm, ee_of_target) -> np.ndarray:
     """(n_ctrl,) median over poses of the largest target displacement per unit joint motion [mm/rad | mm/mm]."""
     eps = 1e-6
     m = model.replace(T_world_base=np.eye(4))
     n = model.n_joints
-    base = [m.fk(q, e) for e in sorted(set(ee_of_target))]
-    lever = np.zeros(n)
     ees = sorted(set(ee_of_target))
-    for k in range(n):
-        dq = q.copy()
-        dq[:, k] += eps
-        worst = np.zeros(len(q))
-        for j, e in enumerate(ees):
-            T0, T1 = base[j], m.fk(dq, e)
-            for t, ee in zip(targets_mm, ee_of_target):
-                if ee != e:
-                    continue
-                p0 = T0[:, :3, 3] + T0[:, :3, :3] @ t
-                p1 = T1[:, :3, 3] + T1[:, :3, :3] @ t
-                worst = np.maximum(worst, np.linalg.norm(p1 - p0, axis=1) / eps)
-        lever[k] = float(np.median(worst))
-    return lever
+    worst = np.zeros((n, len(q)))
+    for first in range(0, len(q), _LEVER_BLOCK):  # blocks of poses: bounded memory on a big campaign
+        qb = q[first:first + _LEVER_BLOCK]
+        base = [m.fk(qb, e) for e in ees]
+        for k in range(n):
+            dq = qb.copy()
+            dq[:, k] += eps
+            w = worst[k, first:first + len(qb)]
+            for j, e in enumerate(ees):
+                T0, T1 = base[j], m.fk(dq, e)
+                for t, ee in zip(targets_mm, ee_of_target):
+                    if ee != e:
+                        continue
+                    p0 = T0[:, :3, 3] + T0[:, :3, :3] @ t
+                    p1 = T1[:, :3, 3] + T1[:, :3, :3] @ t
+                    np.maximum(w, np.linalg.norm(p1 - p0, axis=1) / eps, out=w)
+    return np.array([float(np.median(worst[k])) for k in range(n)])
 
 
 def coverage_verdict(model, q_train, q_holdout=None, *, targets_mm=((0.0, 0.0, 0.0),), ee_of_target=(0,),

@@ -41,6 +41,8 @@ def json_ready(obj):
     if isinstance(obj, (list, tuple)):
         return [json_ready(v) for v in obj]
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "biu" or (obj.dtype.kind == "f" and np.isfinite(obj).all()):
+            return obj.tolist()  # already plain numbers (a big campaign's per-pose arrays: no walk per element)
         return json_ready(obj.tolist())
     if isinstance(obj, (np.bool_, bool)):
         return bool(obj)

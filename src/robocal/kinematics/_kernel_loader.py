@@ -4,15 +4,16 @@
 about a second before anything is computed. :data:`kernels` stands in for the module
 :mod:`robocal.kinematics._kernels`; its first attribute access imports it (numba then loads the
 compiled machine code from its cache, or compiles it: the first time after installing, or after
-the kernels' source changed). A compile takes tens of seconds, so it is announced once per process
-on the terminal's stderr instead of a silent pause.
+the kernels' source changed). A compile takes 1-2 s of CPU per kernel, so it is announced once per
+process on the terminal's stderr instead of a silent pause. Small problems do not get here: the
+kernels run in numpy until the work pays for a compile (:mod:`robocal.kinematics._backend`).
 """
 
 from __future__ import annotations
 
 import sys
 
-NOTICE = "robocal: compiling kernels, once per install (about a minute; later runs load them from cache)..."
+NOTICE = "robocal: compiling kernels, once per install (a few seconds; later runs load them from cache)..."
 
 
 class _Kernels:

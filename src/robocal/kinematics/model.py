@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..transforms import invert_transforms
+from ._backend import kernel as _kernel
 from ._kernel_loader import kernels as _kernels
 from ._packing import pack_fused
 from ._threads import run_ranges
@@ -362,7 +363,7 @@ class RobotModel:
         if (out is None and end_effector is None and type(q) is np.ndarray and q.shape == self._one_q
                 and q.dtype == _F64):
             pose = _empty44((4, 4))
-            if _kernels.fk_fused_single_checked(q, self._fused_ints, self._fused_floats, pose):
+            if _kernel("fk_fused_single_checked")(q, self._fused_ints, self._fused_floats, pose):
                 return pose
         q2, single = self._as_joints(q)
         e = self.end_effector_index(end_effector)
@@ -372,7 +373,7 @@ class RobotModel:
         elif (not isinstance(out, np.ndarray) or out.shape != shape or out.dtype != _F64
               or not out.flags.c_contiguous or not out.flags.writeable):
             raise ValueError(f"{self.name}: out must be a writeable C-contiguous float64 array of shape {shape}")
-        run_ranges(_kernels.fk_fused_into, len(q2), q2, self._fused_ints, self._fused_floats, e,
+        run_ranges(_kernel("fk_fused_into", len(q2)), len(q2), q2, self._fused_ints, self._fused_floats, e,
                    out.reshape(len(q2), 4, 4), self._no_links)
         return out
 
@@ -390,7 +391,7 @@ class RobotModel:
         q2, single = self._as_joints(q)
         links = np.empty((len(q2), len(self.moving), 4, 4))
         # fk()'s kernel, writing the link frames too: one FK kernel to compile, not two
-        run_ranges(_kernels.fk_fused_into, len(q2), q2, self._fused_ints, self._fused_floats, 0,
+        run_ranges(_kernel("fk_fused_into", 2 * len(q2)), len(q2), q2, self._fused_ints, self._fused_floats, 0,
                    np.empty((len(q2), 4, 4)), links)
         return links[0] if single else links
 
@@ -434,7 +435,7 @@ class RobotModel:
         (N, n_links, 3, 4). The velocity of a world point p is ``omega x p + v``.
         """
         q2, _ = self._as_joints(q)
-        return _kernels.op_twists(q2, self._op_link, self._op_code, self._op_axis, self._op_value,
+        return _kernel("op_twists", len(q2))(q2, self._op_link, self._op_code, self._op_axis, self._op_value,
                                   self._op_param, self._op_joint, self._link_parent, self._root_affine,
                                   *self._cpl, len(self.params), self.n_model_joints)
 
@@ -450,7 +451,7 @@ class RobotModel:
         q2, _ = self._as_joints(q)
         values = self._op_value if params is None else np.asarray(params, dtype=float)[self._op_param]
         root = self._root_affine if T_world_base is None else np.ascontiguousarray(np.asarray(T_world_base, float)[:3])
-        ptw, jtw, frames = _kernels.op_twists(q2, self._op_link, self._op_code, self._op_axis, values,
+        ptw, jtw, frames = _kernel("op_twists", len(q2))(q2, self._op_link, self._op_code, self._op_axis, values,
                                               self._op_param, self._op_joint, self._link_parent, root,
                                               *self._cpl, len(self.params), self.n_model_joints)
         ees = range(len(self.end_effectors)) if end_effectors is None else end_effectors
@@ -496,7 +497,7 @@ class RobotModel:
             cached = self._target_cache[key] = (tl, tT, anc, free_col, len(free_index))
         tl, tT, anc, free_col, n_free = cached
         root3 = self._identity_root if root is None else np.ascontiguousarray(np.asarray(root, dtype=float)[:3])
-        return _kernels.target_points(q2, self._op_link, self._op_code, self._op_axis, params[self._op_param],
+        return _kernel("target_points", len(q2) * len(tl))(q2, self._op_link, self._op_code, self._op_axis, params[self._op_param],
                                       self._op_param, self._op_joint, self._link_parent, root3,
                                       *self._cpl, tl, tT, np.ascontiguousarray(points_in_ee, dtype=float).reshape(-1, 3),
                                       anc, free_col, n_free, bool(want_jacobian))

@@ -484,6 +484,10 @@ def _validate(setup, res0, result, meas, hold):
     }
 
 
+#: The accuracy map's per-pose entries (written to accuracy_map.csv, not to result.json).
+_PER_POSE_MAP = ("pose_ids", "flange_position_base_mm", "predicted_std_mm")
+
+
 def _accuracy_map(problem, result, meas) -> dict:
     """Predicted uncertainty over every pose of the file (the report's accuracy map)."""
     std_pts = predicted_point_std(problem, result, meas.joints)  # (N, K)
@@ -509,7 +513,9 @@ def _result_dict(setup, nominal, res0, result, meas, train, validation, accuracy
         "description": "nominal geometry with best-fit base frame and target point(s) (the 'before' state)",
         "iterations": res0.iterations, "converged": res0.converged, "reason": res0.reason,
         "rms_mm": res0.rms_after, "T_instrument_base": res0.state.bases[0], "targets_mm": res0.state.targets})
-    rdict["accuracy_map"] = json_ready(accuracy)
+    # the per-pose arrays stay arrays: they go to accuracy_map.csv, not into result.json (as lists they
+    # cost ~30 MiB at 100 000 poses, the big campaign's peak)
+    rdict["accuracy_map"] = {k: v if k in _PER_POSE_MAP else json_ready(v) for k, v in accuracy.items()}
     rdict["six_d"] = bool(setup["six_d"])
     _name_parallel_axes(rdict, nominal)
     rdict["tool_frame"] = json_ready(tool_frame_summary(result, problem))
