@@ -58,12 +58,17 @@ class FlangeReprojectionResidual(ReprojectionResidual):
     arguments as :class:`ReprojectionResidual` (no ``links``). ``target_end_effector``: the end
     effector that carries the target (``T`` is then the target in that end effector's frame and
     ``end_effector`` the one that carries the camera, ``invert`` must be True, no corrections).
+    ``compact_corrections``: return the corrections' Jacobian as (M, 6), each row's derivative by
+    its own image's correction (``correction_frame_of_row`` (M,) says which), instead of
+    (M, 6 N) mostly zeros -- for the structured solver (:mod:`robocal.calib.schur`), not for
+    :meth:`Problem.evaluate`.
     """
 
     def __init__(self, camera, camera_poses, target_poses, image_points, target_points, *, model=None, q=None,
                  geometry=None, flange_poses=None, corrections=None, end_effector=None, invert: bool = True,
                  camera_index=None, target_index=None, sigma: float | None = None, target_end_effector=None,
-                 joint_corrections=None, correction_columns=None, correction_params=None):
+                 joint_corrections=None, correction_columns=None, correction_params=None,
+                 compact_corrections: bool = False):
         super().__init__(camera, camera_poses, target_poses, image_points, target_points,
                          camera_index=camera_index, target_index=target_index, sigma=sigma)
         N = len(self.image_points)
@@ -105,6 +110,8 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             if corrections.n_frames != N:
                 raise ProblemError(f"flange reprojection: {corrections.n_frames} correction frames for {N} images")
             extra += (corrections,)
+        self.compact_corrections = bool(compact_corrections) and corrections is not None
+        self.correction_frame_of_row = np.repeat(self.image_of_row, 2)
         self.parameter_blocks = self.parameter_blocks + extra
 
     def _flange(self, ev):
@@ -174,10 +181,12 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             else:
                 e = np.einsum("nij,nj->ni", E[:, :3, :3], y) + E[:, :3, 3]
                 dp = (RCt @ F[:, :3, :3]) @ _frame_rows(e)
-            n_frames = self.corrections.n_frames
-            J = np.zeros((len(p), 2, n_frames, 6))
-            J[np.arange(len(p)), :, img, :] = d_point @ dp
-            jac[self.corrections] = J.reshape(len(r), -1) * w
+            if self.compact_corrections:
+                jac[self.corrections] = (d_point @ dp).reshape(len(r), 6) * w
+            else:
+                J = np.zeros((len(p), 2, self.corrections.n_frames, 6))
+                J[np.arange(len(p)), :, img, :] = d_point @ dp
+                jac[self.corrections] = J.reshape(len(r), -1) * w
         return r, jac
 
     @classmethod
