@@ -52,11 +52,44 @@ def _compact_frames(residual, local_block):
     return None
 
 
+class _Segment:
+    """Consecutive rows [r0, r1) sorted by their frame, each frame seen: per-frame products in a
+    zero-padded (n_frames, most rows of a frame) layout, one batched matrix product."""
+
+    def __init__(self, frame, n_frames, r0):
+        frame = np.asarray(frame, dtype=int)
+        if len(frame) and np.any(np.diff(frame) < 0):
+            raise StructureError("rows must be grouped by target frame, every frame seen")
+        counts = np.bincount(frame, minlength=n_frames)
+        if len(counts) != n_frames or np.any(counts == 0):
+            raise StructureError("rows must be grouped by target frame, every frame seen")
+        self.r0, self.r1, self.n_frames = r0, r0 + len(frame), n_frames
+        self.starts = np.flatnonzero(np.r_[True, np.diff(frame) != 0])
+        self.rows_max = int(counts.max(initial=0))
+        self.slot = frame * self.rows_max + (np.arange(len(frame)) - self.starts[frame])
+        self.dense_slots = bool(np.all(counts == self.rows_max))
+
+    def padded(self, Z):
+        """Z (rows, k) in the zero-padded (n_frames, rows_max, k) layout."""
+        k = Z.shape[1]
+        if not self.dense_slots:
+            Zp = np.zeros((self.n_frames * self.rows_max, k))
+            Zp[self.slot] = Z
+            Z = Zp
+        return Z.reshape(self.n_frames, self.rows_max, k)
+
+    def product(self, X, C):
+        if self.dense_slots:
+            return (X.reshape(self.n_frames, self.rows_max, -1) @ C).reshape(len(X), -1)
+        return (self.padded(X) @ C).reshape(-1, C.shape[2])[self.slot]
+
+
 class _Layout:
     """Columns of a problem with one block of per-frame (6-dof) unknowns: one reprojection residual
     block whose Jacobian by those frames is compact, and optionally Gaussian priors on the frames
     (:class:`~robocal.calib.residuals.PosePriorResidual`: 6 rows per frame, each frame's rows
-    depending on that frame only, e.g. the hand-eye flange corrections)."""
+    depending on that frame only, e.g. the hand-eye flange corrections). The rows of each block are
+    one segment sorted by frame (the per-frame products are sums over the segments)."""
 
     def __init__(self, problem, local_block):
         from .residuals.prior import PriorResidual
@@ -83,32 +116,43 @@ class _Layout:
         for blk, (c0, c1, loc) in problem._plan.items():
             if blk is not local_block:
                 self.global_plan.append((blk, int(np.searchsorted(self.gcols, c0)), loc, c1 - c0))
-        frame = np.concatenate([np.asarray(frame, dtype=int)] + [np.arange(6 * self.n_frames) // 6
-                                                                 for _ in self.priors])
-        counts = np.bincount(frame, minlength=self.n_frames)
-        if len(frame) and (len(counts) != self.n_frames or np.any(counts == 0)):
-            raise StructureError("every eliminated frame must be seen by some rows")
-        self.frame_of_row = frame
-        self.sorted_rows = bool(np.all(np.diff(frame) >= 0))
-        # each row's slot in a zero-padded (n_frames, most rows of a frame) layout: the per-frame
-        # products become one batched matrix product
-        order = np.argsort(frame, kind="stable")
-        starts = np.r_[0, np.cumsum(counts)[:-1]]
-        rank = np.empty(len(frame), dtype=int)
-        rank[order] = np.arange(len(frame)) - starts[frame[order]]
-        self.starts = starts
-        self.rows_max = int(counts.max(initial=0))
-        self.slot = frame * self.rows_max + rank
-        self.dense_slots = self.sorted_rows and bool(np.all(counts == self.rows_max))
+        self.segments = [_Segment(frame, self.n_frames, 0)]
+        prior_frames = np.arange(6 * self.n_frames) // 6
+        for _ in self.priors:
+            self.segments.append(_Segment(prior_frames, self.n_frames, self.segments[-1].r1))
+        self.frame_of_row = np.concatenate([np.asarray(frame, dtype=int)] + [prior_frames for _ in self.priors])
+
+    def _prior(self, rb, ev, jacobian):
+        """``(r (6N,), J (6N, 6) or None)`` of a prior on the frames: each row's derivative by its own
+        frame (the diagonal blocks of its (6N, 6N) Jacobian)."""
+        from ..transforms import skew, so3_log
+        from .blocks.manifolds import FramesBlock, so3_right_jacobian_inverse
+
+        N = self.n_frames
+        if isinstance(self.local, FramesBlock):  # FramesBlock.prior_error, its diagonal blocks only
+            value, mean = ev[self.local], rb.mean
+            R, t = value[:, :3, :3], value[:, :3, 3]
+            e_rot = so3_log(mean[:, :3, :3] @ np.swapaxes(R, 1, 2))
+            r = np.concatenate([e_rot, mean[:, :3, 3] - t], axis=1).ravel() * rb.row_weight
+            if not jacobian:
+                return r, None
+            D = np.zeros((N, 6, 6))
+            D[:, :3, :3] = so3_right_jacobian_inverse(e_rot)
+            D[:, 3:, :3] = -skew(t)
+            D[:, 3:, 3:] = np.eye(3)
+            return r, D.reshape(6 * N, 6) * rb.row_weight[:, None]
+        r, jac = rb.evaluate(ev, jacobian)
+        if not jacobian:
+            return r, None
+        idx = np.arange(N)
+        return r, jac[self.local].reshape(N, 6, N, 6)[idx, :, idx, :].reshape(6 * N, 6)
 
     def evaluate(self, state, jacobian=True):
         """``(r (M,), (Jg (M, g), Jl (M, 6)) or None)``."""
         p = self.problem
         ev = Evaluation(dict(zip(p.parameter_blocks, state)), jacobian, p._wanted)
         r, jac = self.residual.evaluate(ev, jacobian)
-        parts = []
-        for rb in self.priors:
-            parts.append(rb.evaluate(ev, jacobian))
+        parts = [self._prior(rb, ev, jacobian) for rb in self.priors]
         if parts:
             r = np.concatenate([r] + [rp for rp, _ in parts])
         if not jacobian:
@@ -120,12 +164,7 @@ class _Layout:
             Jg[:m0, o:o + w] = Jb if loc is None else Jb[:, loc]
         if not parts:
             return r, (Jg, jac[self.local])
-        N = self.n_frames
-        idx = np.arange(N)
-        Jl = [jac[self.local]]
-        for _, jp in parts:  # the prior's (6N, 6N) Jacobian is block diagonal: its (6N, 6) diagonal blocks
-            Jl.append(jp[self.local].reshape(N, 6, N, 6)[idx, :, idx, :].reshape(6 * N, 6))
-        return r, (Jg, np.concatenate(Jl))
+        return r, (Jg, np.concatenate([jac[self.local]] + [jp for _, jp in parts]))
 
     def frame_gram(self, *columns):
         """Per frame ``Z_i^T Z_i`` (n_frames, k, k) of the row-wise concatenation Z (M, k) of
@@ -133,32 +172,28 @@ class _Layout:
         cols = [c[:, None] if c.ndim == 1 else c for c in columns]
         return self.gram_rows(np.concatenate(cols, axis=1))
 
-    def _padded(self, Z):
-        """Z (M, k) in the zero-padded (n_frames, rows_max, k) layout."""
-        k = Z.shape[1]
-        if not self.dense_slots:
-            Zp = np.zeros((self.n_frames * self.rows_max, k))
-            Zp[self.slot] = Z
-            Z = Zp
-        return Z.reshape(self.n_frames, self.rows_max, k)
-
     def gram_rows(self, Z):
         """Per frame ``Z_i^T Z_i`` (n_frames, k, k) of Z (M, k), rows of frame i only."""
-        Z = self._padded(Z)
-        return np.swapaxes(Z, 1, 2) @ Z
+        out = None
+        for seg in self.segments:
+            Zs = seg.padded(Z[seg.r0:seg.r1])
+            G = np.swapaxes(Zs, 1, 2) @ Zs
+            out = G if out is None else out + G
+        return out
 
     def frame_product(self, X, C):
         """Rows ``X_r C_{frame(r)}`` (M, j) of X (M, k) times per-frame matrices C (n_frames, k, j)."""
-        if self.dense_slots:
-            return (X.reshape(self.n_frames, self.rows_max, -1) @ C).reshape(len(X), -1)
-        return (self._padded(X) @ C).reshape(-1, C.shape[2])[self.slot]
+        if len(self.segments) == 1:
+            return self.segments[0].product(X, C)
+        return np.concatenate([seg.product(X[seg.r0:seg.r1], C) for seg in self.segments])
 
     def per_frame(self, X):
         """Sums of the rows of X (M, ...) per frame: (n_frames, ...)."""
-        if self.sorted_rows:
-            return np.add.reduceat(X, self.starts, axis=0)
-        shape = X.shape[1:]
-        return self._padded(X.reshape(len(X), -1)).sum(axis=1).reshape((self.n_frames,) + shape)
+        out = None
+        for seg in self.segments:
+            S = np.add.reduceat(X[seg.r0:seg.r1], seg.starts, axis=0)
+            out = S if out is None else out + S
+        return out
 
 
 def _pose_blocks_sound(D, tol=IDENTIFIABILITY_TOL):
