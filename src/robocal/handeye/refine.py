@@ -231,7 +231,7 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
                     method: str = "shah", refine_intrinsics=False, joints=None, robot=None,
                     joint_offsets: bool = False, loss: str = "linear", min_points: int = 6,
                     end_effector=None, robot_pose_sigma=(0.05, 0.01), pixel_sigma=None,
-                    variance_rounds: int = 10) -> HandEyeRefinement:
+                    variance_rounds: int = 10, pnp=None) -> HandEyeRefinement:
     """The hand-eye transform refined on the reprojection error of all corners (module docstring).
 
     T_base_flange (N, 4, 4) [mm]: the controller's flange poses; image_points (N, P, 2) [px], NaN
@@ -253,7 +253,10 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     fitted, the one predicting held-out images better kept, systematic disagreement in ``warnings``,
     :mod:`.pose_noise`; with ``joint_offsets`` the poses from forward kinematics are taken as exact); pixel_sigma [px]: the corner noise per coordinate
     (default: from the per-image PnP residuals); variance_rounds: at most this many re-solves of the
-    variance-component estimate.
+    variance-component estimate; pnp: optional ``(T_camera_target (N, 4, 4) [mm], reasons (N,))`` of
+    :func:`~robocal.handeye.pnp.solve_pnp` on these images with this camera and ``min_points``
+    (NaN poses and a reason for images without one), instead of solving it here (cross-validation
+    reuses the full set's).
 
     Raises :class:`HandEyeError` naming the problem for mismatched counts, fewer than 3 usable
     images, pure translations or rotations about one axis only, or a robot model whose forward
@@ -272,7 +275,12 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
                            joint_offsets=joint_offsets, loss=loss, min_points=min_points, end_effector=end_effector)
     F_all, uv_all, X = _check_inputs(T_base_flange, image_points, target_points, setup)
     N = len(F_all)
-    C_all, _, reasons = solve_pnp(camera, X, uv_all, min_points=min_points)
+    if pnp is None:
+        C_all, _, reasons = solve_pnp(camera, X, uv_all, min_points=min_points)
+    else:
+        C_all, reasons = np.asarray(pnp[0], dtype=float), list(pnp[1])
+        if C_all.shape != (N, 4, 4) or len(reasons) != N:
+            raise HandEyeError(f"pnp: expected ({N}, 4, 4) poses and {N} reasons, got {C_all.shape} and {len(reasons)}")
     good = np.all(np.isfinite(C_all), axis=(1, 2))
     skipped = {int(i): reasons[i] or "no pose of the target found in this image" for i in np.flatnonzero(~good)}
     if good.sum() < 3:
