@@ -85,3 +85,27 @@ def test_linear_starts_are_solved_on_first_access_with_the_same_values():
 
     np.testing.assert_allclose(X_park, solve_hand_eye(sim.T_base_flange, C, method="park"), atol=1e-12)
     np.testing.assert_allclose(res.linear["shah"][0], solve_robot_world_hand_eye(sim.T_base_flange, C)[0], atol=1e-12)
+
+
+@pytest.mark.parametrize("loss", ["huber", "cauchy"])
+def test_a_rejected_image_is_handled_as_by_the_dense_solve(loss, monkeypatch):
+    """A robust loss drops an image with a wrong flange pose (its corner rows and its correction's
+    prior rows get weight 0: a frame with no information): same outlier, camera pose and sigmas."""
+    from robocal.transforms import so3_exp
+
+    sim = simulate_hand_eye(4, n_images=14)
+    F = sim.T_base_flange.copy()
+    F[3, :3, 3] += [5.0, -3.0, 2.0]  # a wrong robot reading: 6 mm and 1.1 deg
+    F[3, :3, :3] = so3_exp(np.array([[0.02, 0.0, 0.0]]))[0] @ F[3, :3, :3]
+    args = (F, sim.image_points, sim.target_points, sim.camera)
+    fast = refine_hand_eye(*args, loss=loss)
+
+    def refuse(*_a, **_k):
+        raise StructureError("forced dense")
+
+    monkeypatch.setattr(refine_module, "solve_schur", refuse)
+    dense = refine_hand_eye(*args, loss=loss)
+    assert set(fast.outliers) == set(dense.outliers) == {3}
+    assert np.max(np.abs(fast.camera_pose - dense.camera_pose)) < 1e-8
+    np.testing.assert_allclose(fast.sigma_translation_mm, dense.sigma_translation_mm, rtol=1e-6)
+    assert fast.message == dense.message
