@@ -193,26 +193,26 @@ class FlangeReprojectionResidual(ReprojectionResidual):
         m = len(r)
         if wants_cam:
             jac[self.camera] = np.concatenate([proj.d_intrinsics, proj.d_distortion], axis=2).reshape(m, -1) * w
-        e_C = proj.d_point @ RC.T  # (n, 2, 3): d u / d q
+        e_C = (proj.d_point.reshape(-1, 3) @ RC.T).reshape(-1, 2, 3)  # (n, 2, 3): d u / d q, one product
         if ev.wants(self.camera_poses):
-            jac[self.camera_poses] = cross_rows(q, e_C, -1.0).reshape(m, 6) * w
+            jac[self.camera_poses] = cross_rows(q, e_C, -w).reshape(m, 6)  # the weight folded into the sign
         if ev.wants(self.target_poses):
             e_T = self._per_image(e_C, M[:, :3, :3])
-            jac[self.target_poses] = cross_rows(y0[self._point_of_row], e_T, 1.0).reshape(m, 6) * w
+            jac[self.target_poses] = cross_rows(y0[self._point_of_row], e_T, w).reshape(m, 6)
         if E is not None and ev.wants(self.corrections):
             F = self.flange_poses
             if self.invert:  # g = F^-1 y in the reported flange frame; rows -(e_C R_E^T) [-[g]x | I]
                 G = y0 @ np.swapaxes(self._F_inv[:, :3, :3], 1, 2) + self._F_inv[:, None, :3, 3]
-                d = cross_rows(G[self.mask], self._per_image(e_C, np.swapaxes(E[:, :3, :3], 1, 2)), -1.0)
+                d = cross_rows(G[self.mask], self._per_image(e_C, np.swapaxes(E[:, :3, :3], 1, 2)), -w)
             else:  # e = E y in the flange frame; rows (e_C R_F) [-[e]x | I]
                 G = y0 @ np.swapaxes(E[:, :3, :3], 1, 2) + E[:, None, :3, 3]
-                d = cross_rows(G[self.mask], self._per_image(e_C, F[:, :3, :3]), 1.0)
+                d = cross_rows(G[self.mask], self._per_image(e_C, F[:, :3, :3]), w)
             if self.compact_corrections:
-                jac[self.corrections] = d.reshape(m, 6) * w
+                jac[self.corrections] = d.reshape(m, 6)
             else:
                 J = np.zeros((len(p), 2, self.corrections.n_frames, 6))
                 J[np.arange(len(p)), :, self.image_of_row, :] = d
-                jac[self.corrections] = J.reshape(m, -1) * w
+                jac[self.corrections] = J.reshape(m, -1)
         return r, jac
 
     def evaluate(self, ev, jacobian):
