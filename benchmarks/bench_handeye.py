@@ -15,6 +15,19 @@ BLAS thread):
 
 Ratios are robocal time / OpenCV time (how many times slower the full refinement is than a
 linear solve). Run: ``python benchmarks/bench_handeye.py [--runs 7]``.
+
+The verdict table (issue 34 item 1, ``--fair-only`` prints it alone): the refinement against its
+fair peer, OpenCV ``solvePnP`` once per image, OpenCV's SHAH (``calibrateRobotWorldHandEye``) as
+the start and ``scipy.optimize.least_squares(method="lm")`` over the 12 unknowns (camera and target
+pose) on every corner through ``cv2.projectPoints`` (the configuration of
+``handeye_fair_comparison.py``), timed interleaved with robocal's default ``refine_hand_eye``
+(per-image flange corrections under the 0.05 mm / 0.01 deg prior) and ``robot_pose_sigma=None``
+(``--exact-poses``: the same 12 unknowns), each from the same corners, at ``--images`` (30 and 100);
+medians, the ratio of medians and the median of per-repeat ratios, and the camera pose difference
+between robocal's exact-pose fit and the peer's (the same least-squares problem).
+Run: ``python benchmarks/bench_handeye.py --fair-only [--images 30 100] [--repeat 7] [--auto]``
+(``--auto`` adds ``robot_pose_sigma="auto"``, the command line's default: both noise models and a
+5-fold cross-validation, about 12 fits).
 """
 
 from __future__ import annotations
@@ -62,12 +75,85 @@ def _T(R, t):
     return T
 
 
+def opencv_scipy_refinement(F, uv, X, camera):
+    """The fair peer: ``T_flange_camera`` (4, 4) by OpenCV solvePnP per image, OpenCV SHAH and SciPy
+    LM over the 12 unknowns (module docstring; eye-in-hand)."""
+    from handeye_fair_comparison import _pnp, scipy_refinement
+
+    K, D = camera.matrix, np.array(camera.distortion)
+    C = _pnp(uv, X, K, D)
+    B = invert_transforms(F)
+    R_bw, t_bw, R_gc, t_gc = cv2.calibrateRobotWorldHandEye(list(C[:, :3, :3]), list(C[:, :3, 3]), list(B[:, :3, :3]),
+                                                            list(B[:, :3, 3]), method=cv2.CALIB_ROBOT_WORLD_HAND_EYE_SHAH)
+    cam0 = invert_transforms(_T(R_gc, t_gc)[None])[0]
+    target0 = invert_transforms(_T(R_bw, t_bw)[None])[0]
+    return scipy_refinement(F, uv, X, K, D, cam0, target0)
+
+
+def fair(n_images: int, repeat: int, auto: bool = False, seed: int = 0) -> dict:
+    """Interleaved timings of robocal (default, exact poses[, auto]) and the fair peer: medians [s],
+    paired ratios robocal / peer and the exact fit's difference from the peer's."""
+    import warnings
+
+    sim = simulate_hand_eye(seed, n_images=n_images)
+    F, uv, X, cam = sim.T_base_flange, sim.image_points, sim.target_points, sim.camera
+    runs = {"default": lambda: refine_hand_eye(F, uv, X, cam),
+            "exact": lambda: refine_hand_eye(F, uv, X, cam, robot_pose_sigma=None),
+            "peer": lambda: opencv_scipy_refinement(F, uv, X, cam)}
+    if auto:
+        runs["auto"] = lambda: refine_hand_eye(F, uv, X, cam, robot_pose_sigma="auto")
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for k, fn in runs.items():  # warm-up (imports, caches)
+            out[k] = fn()
+        times = {k: [] for k in runs}
+        for _ in range(repeat):
+            for k, fn in runs.items():
+                t = time.perf_counter()
+                fn()
+                times[k].append(time.perf_counter() - t)
+    peer = np.array(times["peer"])
+    res = {"images": n_images, "median": {k: statistics.median(v) for k, v in times.items()},
+           "paired": {k: float(np.median(np.array(v) / peer)) for k, v in times.items() if k != "peer"},
+           "exact_vs_peer_mm": float(np.linalg.norm(out["exact"].camera_pose[:3, 3] - out["peer"][:3, 3])),
+           "exact_vs_peer_deg": rotation_error_deg(out["exact"].camera_pose, out["peer"]),
+           "iterations": {k: out[k].message.split(" iterations")[0].split()[-1] for k in runs if k != "peer"}}
+    return res
+
+
+def print_fair(rows) -> None:
+    print("| images | robocal default (flange corrections, prior) | robocal exact poses (12 unknowns) | "
+          "OpenCV solvePnP + SHAH + SciPy LM (12 unknowns) | default / peer (paired) | exact / peer (paired) | "
+          "exact vs peer camera pose |" + (" robocal auto (CLI default) / peer |" if "auto" in rows[0]["median"] else ""))
+    print("|---:|---:|---:|---:|---:|---:|---:|" + ("---:|" if "auto" in rows[0]["median"] else ""))
+    for r in rows:
+        m, p = r["median"], r["paired"]
+        line = (f"| {r['images']} | {m['default'] * 1e3:.1f} ms | {m['exact'] * 1e3:.1f} ms | {m['peer'] * 1e3:.1f} ms | "
+                f"x{m['default'] / m['peer']:.2f} (x{p['default']:.2f}) | x{m['exact'] / m['peer']:.2f} "
+                f"(x{p['exact']:.2f}) | {r['exact_vs_peer_mm']:.1e} mm / {r['exact_vs_peer_deg']:.1e} deg |")
+        if "auto" in m:
+            line += f" {m['auto'] * 1e3:.0f} ms, x{m['auto'] / m['peer']:.1f} (x{p['auto']:.1f}) |"
+        print(line)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=7)
+    ap.add_argument("--fair-only", action="store_true", help="only the verdict table against the fair peer")
+    ap.add_argument("--images", type=int, nargs="+", default=[30, 100], help="image counts of the verdict table")
+    ap.add_argument("--repeat", type=int, default=7, help="interleaved repeats of the verdict table")
+    ap.add_argument("--auto", action="store_true", help="add robot_pose_sigma='auto' (the CLI default) to the table")
     args = ap.parse_args(argv)
     if machine_info:
         print("\n".join(machine_info([f"opencv      {cv2.__version__}"])))
+    print(f"load average at start: {os.getloadavg()[0]:.1f}\n")
+    rows = [fair(n, args.repeat, args.auto) for n in args.images]
+    print_fair(rows)
+    print(f"\n{args.repeat} interleaved repeats, medians; paired = median of per-repeat ratios; load average at the "
+          f"end {os.getloadavg()[0]:.1f}\n")
+    if args.fair_only:
+        return
     sim = simulate_hand_eye(0, n_images=30)
     F, uv, X, cam, truth = sim.T_base_flange, sim.image_points, sim.target_points, sim.camera, sim.camera_pose
     print(f"data        {uv.shape[0]} images x {uv.shape[1]} corners ({int(np.isfinite(uv[..., 0]).sum())} detected)")

@@ -88,7 +88,11 @@ def undistort_normalized(xd, distortion, model: str = "brown", *, iterations: in
     step = np.full(len(x), np.inf)
     for _ in range(iterations):
         f, J, _ = brown_distort(x, distortion, True, coefficients=False)  # the division model returned above
-        d = np.linalg.solve(J, (xd - f)[:, :, None])[..., 0]
+        e = xd - f  # the 2 x 2 systems J d = e by Cramer's rule (one batched LAPACK call per point is slower)
+        det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+        d = np.empty_like(e)
+        d[:, 0] = (J[:, 1, 1] * e[:, 0] - J[:, 0, 1] * e[:, 1]) / det
+        d[:, 1] = (J[:, 0, 0] * e[:, 1] - J[:, 1, 0] * e[:, 0]) / det
         x += d
         step = np.max(np.abs(d), axis=1)
         if np.all(step < tol):

@@ -160,22 +160,26 @@ def refine_poses(camera, target_points, image_points, T0, *, mask=None, iteratio
     active = np.ones(N, bool)
     for _ in range(iterations):
         idx = np.flatnonzero(active)  # only the images still iterating are evaluated
-        Jr = J[idx].reshape(len(idx), -1, 6)
+        every = len(idx) == N  # all of them: no copies by index
+        Jr = (J if every else J[idx]).reshape(len(idx), -1, 6)
         JrT = np.swapaxes(Jr, 1, 2)
         H = JrT @ Jr
-        g = (JrT @ r[idx].reshape(len(idx), -1, 1))[..., 0]
+        g = (JrT @ (r if every else r[idx]).reshape(len(idx), -1, 1))[..., 0]
         damping = np.einsum("nii->ni", H)[:, :, None] * np.eye(6) + 1e-12 * np.eye(6)
         d = np.linalg.solve(H + lam[idx, None, None] * damping, g[..., None])[..., 0]
-        Tn = T[idx].copy()
+        Tn = T[idx]  # a copy (index array)
         R = so3_exp(d[:, :3])
         Tn[:, :3, :3] = R @ Tn[:, :3, :3]
         Tn[:, :3, 3] = (R @ Tn[:, :3, 3, None])[..., 0] + d[:, 3:]
-        rn, Jn = _residuals(camera, X, uv[idx], mask[idx], Tn, True)
+        rn, Jn = _residuals(camera, X, uv if every else uv[idx], mask if every else mask[idx], Tn, True)
         cn = np.einsum("npk,npk->n", rn, rn)
         c0 = cost[idx]
         better = cn <= c0
         up = idx[better]
-        T[up], r[up], J[up], cost[up] = Tn[better], rn[better], Jn[better], cn[better]
+        if every and better.all():
+            T, r, J, cost = Tn, rn, Jn, cn
+        else:
+            T[up], r[up], J[up], cost[up] = Tn[better], rn[better], Jn[better], cn[better]
         small = better & (c0 - cn <= tol * np.maximum(c0, 1e-30)) | (np.abs(d).max(1) < 1e-12)
         # a refused step whose predicted reduction is at the rounding level: a stationary point
         small |= ~better & (np.einsum("ni,ni->n", g, d) <= tol * np.maximum(c0, 1e-30))

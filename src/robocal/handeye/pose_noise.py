@@ -55,10 +55,12 @@ def _predict_rms_sq(res, F, uv, X, setup) -> tuple:
     return float(np.sum(r[ok] ** 2)), int(ok.sum())
 
 
-def cross_validated_rms_px(fit, F, uv, X, setup, folds: int = 5, joints=None) -> float:
+def cross_validated_rms_px(fit, F, uv, X, setup, folds: int = 5, joints=None, per_image=None) -> float:
     """Held-out back-projection RMS per corner [px] of ``fit(F_train, uv_train, joints_train)`` (a
     :class:`~robocal.handeye.refine.HandEyeRefinement`), K-fold over the images (image ``i`` in fold
-    ``i mod K``). F (N, 4, 4) [mm], uv (N, P, 2) [px], X (P, 3) [mm]. NaN when N < 4."""
+    ``i mod K``). F (N, 4, 4) [mm], uv (N, P, 2) [px], X (P, 3) [mm]. NaN when N < 4.
+    ``per_image`` (N, ...): optional data per image, its training rows passed to ``fit`` as a fourth
+    argument (the per-image PnP poses, which do not depend on the other images)."""
     N = len(F)
     K = min(folds, N)
     if N < 4:
@@ -67,8 +69,9 @@ def cross_validated_rms_px(fit, F, uv, X, setup, folds: int = 5, joints=None) ->
     fold = np.arange(N) % K
     for k in range(K):
         train = fold != k
+        extra = () if per_image is None else (per_image[train],)
         try:
-            res = fit(F[train], uv[train], None if joints is None else joints[train])
+            res = fit(F[train], uv[train], None if joints is None else joints[train], *extra)
         except (HandEyeError, ValueError, np.linalg.LinAlgError):  # a fold too small or degenerate
             return float("nan")
         s, c = _predict_rms_sq(res, F[~train], uv[~train], X, setup)
@@ -105,7 +108,9 @@ def refine_auto(refine, F, uv, X, camera, *, setup, joints=None, folds: int = FO
     jkw = {} if joints is None else {"joints": joints}
     exact = refine(F, uv, X, camera, setup=setup, robot_pose_sigma=None, **jkw, **kw)
     try:
-        est = refine(F, uv, X, camera, setup=setup, robot_pose_sigma="estimate", variance_rounds=6, **jkw, **kw)
+        pnp = (exact.T_camera_target, [(exact.skipped or {}).get(i) for i in range(len(exact.T_camera_target))])
+        est = refine(F, uv, X, camera, setup=setup, robot_pose_sigma="estimate", variance_rounds=6, pnp=pnp, **jkw,
+                     **kw)
     except (HandEyeError, ValueError, np.linalg.LinAlgError) as exc:  # keep the exact fit, say why
         return replace(exact, noise_estimate={"choice": "exact", "cv_rms_px": {},
                                               "reason": f"the noise could not be estimated: {exc}"})
@@ -113,21 +118,22 @@ def refine_auto(refine, F, uv, X, camera, *, setup, joints=None, folds: int = FO
     sigma_pose = noise.get("robot_pose_sigma")
     sigma_px = noise.get("pixel_sigma_px")
 
-    def fit_exact(Ft, uvt, qt):
-        return refine(Ft, uvt, X, camera, setup=setup, robot_pose_sigma=None,
+    # the folds reuse the full set's per-image PnP poses (each image's pose depends on that image only)
+    def fit_exact(Ft, uvt, qt, Ct):
+        return refine(Ft, uvt, X, camera, setup=setup, robot_pose_sigma=None, pnp=(Ct, [None] * len(Ct)),
                       **({} if qt is None else {"joints": qt}), **kw)
 
-    def fit_estimated(Ft, uvt, qt):
+    def fit_estimated(Ft, uvt, qt, Ct):
         return refine(Ft, uvt, X, camera, setup=setup, robot_pose_sigma=sigma_pose, pixel_sigma=sigma_px,
-                      **({} if qt is None else {"joints": qt}), **kw)
+                      pnp=(Ct, [None] * len(Ct)), **({} if qt is None else {"joints": qt}), **kw)
 
     used = np.ones(len(F), dtype=bool)
     for i in list((exact.skipped or {}).keys()):
         used[i] = False
     q = None if joints is None else np.asarray(joints)[used]
-    # both in one pass: one PnP + linear start per fold would be shared, but the fits are the cost
-    cv = {"exact": cross_validated_rms_px(fit_exact, F[used], uv[used], X, setup, folds, q)}
-    cv["estimated"] = (cross_validated_rms_px(fit_estimated, F[used], uv[used], X, setup, folds, q)
+    C = exact.T_camera_target[used]
+    cv = {"exact": cross_validated_rms_px(fit_exact, F[used], uv[used], X, setup, folds, q, per_image=C)}
+    cv["estimated"] = (cross_validated_rms_px(fit_estimated, F[used], uv[used], X, setup, folds, q, per_image=C)
                        if sigma_pose is not None else float("nan"))
     better = bool(np.isfinite(cv["estimated"]) and cv["estimated"] <= (1.0 + CV_MARGIN) * cv["exact"])
     chosen, other = (est, exact) if better else (exact, est)

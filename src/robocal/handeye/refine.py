@@ -26,6 +26,7 @@ METHODS.md section 3, "Hand-eye": linear first, then refine, then show the back-
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +34,7 @@ import numpy as np
 from ..calib import Problem, solve
 from ..calib.blocks import CameraIntrinsics, FramesBlock, RobotGeometry
 from ..calib.residuals import FlangeReprojectionResidual, PosePriorResidual
+from ..calib.schur import StructureError, solve_schur
 from ..calib.solve import NotConvergedWarning
 from ..camera import Camera
 from ..kinematics.links import link_operations
@@ -61,7 +63,8 @@ class HandEyeRefinement:
     1-sigma of the camera pose's rotation (small rotation about the parent frame's axes);
     sigma_translation_mm (3,); covariance over ``variable_names`` (the core's units: rad, mm, px,
     1); identifiability: the core's report (``dropped`` names what the poses cannot determine);
-    linear: {method: (camera_pose, target_pose)} of every linear solver on the same PnP poses;
+    linear: {method: (camera_pose, target_pose)} of every linear solver on the same PnP poses (a
+    :class:`LinearSolutions` mapping: each solved on first access);
     joint_offsets_rad: the joint-offset corrections (rad; mm for a prismatic joint) in the order of
     ``joint_offset_names``, 0 for held ones, or None; converged; message; T_camera_target (N, 4, 4)
     the per-image PnP poses (NaN for skipped images); skipped: {image index: reason};
@@ -145,18 +148,42 @@ def _check_inputs(T_base_flange, image_points, target_points, setup):
     return F, uv, X
 
 
-def _linear_solutions(F, C, setup) -> dict:
-    """{method: (camera_pose, target_pose)} of every linear solver."""
-    out = {}
-    Finv = invert_transforms(F)
-    for m in AX_XB_METHODS:
-        Xc = solve_hand_eye(F, C, setup=setup, method=m)
-        if setup == "eye_in_hand":  # T_base_target = F_i X C_i
-            out[m] = (Xc, mean_transform(F @ Xc @ C))
-        else:  # T_flange_target = F_i^-1 X C_i
-            out[m] = (Xc, mean_transform(Finv @ Xc @ C))
-    out["shah"] = solve_robot_world_hand_eye(F, C, setup=setup)
-    return out
+class LinearSolutions(Mapping):
+    """{method: (camera_pose, target_pose)} of every linear solver (:data:`LINEAR_METHODS`) on the
+    same flange poses F (N, 4, 4) and PnP poses C (N, 4, 4) [mm], each solved on first access (the
+    refinement needs one start; the others are for the report)."""
+
+    def __init__(self, F, C, setup):
+        self._F, self._C, self._setup, self._done = F, C, setup, {}
+
+    def __getitem__(self, method):
+        if method not in self._done:
+            if method not in LINEAR_METHODS:
+                raise KeyError(method)
+            F, C, setup = self._F, self._C, self._setup
+            if method == "shah":
+                self._done[method] = solve_robot_world_hand_eye(F, C, setup=setup)
+            else:
+                Xc = solve_hand_eye(F, C, setup=setup, method=method)
+                if setup == "eye_in_hand":  # T_base_target = F_i X C_i
+                    self._done[method] = (Xc, mean_transform(F @ Xc @ C))
+                else:  # T_flange_target = F_i^-1 X C_i
+                    self._done[method] = (Xc, mean_transform(invert_transforms(F) @ Xc @ C))
+        return self._done[method]
+
+    def __iter__(self):
+        return iter(LINEAR_METHODS)
+
+    def __len__(self):
+        return len(LINEAR_METHODS)
+
+    def __repr__(self):
+        return f"LinearSolutions({dict(self)!r})"
+
+
+def _linear_solutions(F, C, setup) -> LinearSolutions:
+    """{method: (camera_pose, target_pose)} of every linear solver, solved on first access."""
+    return LinearSolutions(F, C, setup)
 
 
 def _variance_factors(result, n_pixel_rows) -> np.ndarray:
@@ -165,9 +192,11 @@ def _variance_factors(result, n_pixel_rows) -> np.ndarray:
     group's rows minus their share of the fitted unknowns (the trace of the hat matrix over the
     group; Foerstner's estimate). 1 when the assumed sigmas fit the residuals."""
     r = result.residuals_after
-    ok = np.isfinite(np.diag(result.covariance))
-    J = result.jacobian[:, ok]
-    h = np.einsum("ij,jk,ik->i", J, result.covariance[np.ix_(ok, ok)], J)  # hat-matrix diagonal
+    h = getattr(result, "leverage", None)  # hat-matrix diagonal (the structured solve gives it)
+    if h is None:
+        ok = np.isfinite(np.diag(result.covariance))
+        J = result.jacobian[:, ok]
+        h = np.einsum("ij,jk,ik->i", J, result.covariance[np.ix_(ok, ok)], J)
     rows = np.arange(len(r))
     prior = rows >= n_pixel_rows
     groups = (~prior, prior & ((rows - n_pixel_rows) % 6 < 3), prior & ((rows - n_pixel_rows) % 6 >= 3))
@@ -202,7 +231,7 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
                     method: str = "shah", refine_intrinsics=False, joints=None, robot=None,
                     joint_offsets: bool = False, loss: str = "linear", min_points: int = 6,
                     end_effector=None, robot_pose_sigma=(0.05, 0.01), pixel_sigma=None,
-                    variance_rounds: int = 10) -> HandEyeRefinement:
+                    variance_rounds: int = 10, pnp=None) -> HandEyeRefinement:
     """The hand-eye transform refined on the reprojection error of all corners (module docstring).
 
     T_base_flange (N, 4, 4) [mm]: the controller's flange poses; image_points (N, P, 2) [px], NaN
@@ -224,7 +253,10 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     fitted, the one predicting held-out images better kept, systematic disagreement in ``warnings``,
     :mod:`.pose_noise`; with ``joint_offsets`` the poses from forward kinematics are taken as exact); pixel_sigma [px]: the corner noise per coordinate
     (default: from the per-image PnP residuals); variance_rounds: at most this many re-solves of the
-    variance-component estimate.
+    variance-component estimate; pnp: optional ``(T_camera_target (N, 4, 4) [mm], reasons (N,))`` of
+    :func:`~robocal.handeye.pnp.solve_pnp` on these images with this camera and ``min_points``
+    (NaN poses and a reason for images without one), instead of solving it here (cross-validation
+    reuses the full set's).
 
     Raises :class:`HandEyeError` naming the problem for mismatched counts, fewer than 3 usable
     images, pure translations or rotations about one axis only, or a robot model whose forward
@@ -243,7 +275,12 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
                            joint_offsets=joint_offsets, loss=loss, min_points=min_points, end_effector=end_effector)
     F_all, uv_all, X = _check_inputs(T_base_flange, image_points, target_points, setup)
     N = len(F_all)
-    C_all, _, reasons = solve_pnp(camera, X, uv_all, min_points=min_points)
+    if pnp is None:
+        C_all, _, reasons = solve_pnp(camera, X, uv_all, min_points=min_points)
+    else:
+        C_all, reasons = np.asarray(pnp[0], dtype=float), list(pnp[1])
+        if C_all.shape != (N, 4, 4) or len(reasons) != N:
+            raise HandEyeError(f"pnp: expected ({N}, 4, 4) poses and {N} reasons, got {C_all.shape} and {len(reasons)}")
     good = np.all(np.isfinite(C_all), axis=(1, 2))
     skipped = {int(i): reasons[i] or "no pose of the target found in this image" for i in np.flatnonzero(~good)}
     if good.sum() < 3:
@@ -276,6 +313,8 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
     if pose_sigma is not None:
         sigma = _pixel_sigma(uv, C, camera, X) if pixel_sigma is None else float(pixel_sigma)
 
+    structured = [True]  # the flange corrections eliminated per image (Schur complement) until that fails
+
     def build(pose_sigma, sigma):
         """The problem (and its blocks) for these noise levels."""
         blocks, extra, kw = list(base_blocks), [], dict(flange)
@@ -284,11 +323,14 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
             blocks.append(corrections)
             extra.append(prior)
             kw["corrections"] = corrections
+            kw["compact_corrections"] = structured[0]
         residual = FlangeReprojectionResidual(cam, cam_block, target_block, uv, X, invert=eye_in_hand, sigma=sigma,
                                               **kw)
         return Problem(blocks, [residual, *extra], n_poses=len(uv)), blocks
 
-    def run(problem, sigma, state0=None, auto_identifiable=True):
+    def run(problem, blocks, sigma, pose_sigma, state0=None, auto_identifiable=True):
+        """``(result, problem, blocks)``: the corrections eliminated per image when there are any
+        (:func:`~robocal.calib.schur.solve_schur`, the same steps as the dense solve), else dense."""
         f_scale = None
         if loss != "linear" and sigma is not None:
             # weighted rows are ~unit: an image's norm is ~sqrt(its rows); twice that marks a bad image
@@ -296,10 +338,18 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
             f_scale = 2.0 * float(np.sqrt(np.median(np.bincount(labels[labels >= 0]))))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotConvergedWarning)
-            return solve(problem, loss=loss, f_scale=f_scale, state0=state0, auto_identifiable=auto_identifiable)
+            if pose_sigma is not None and structured[0]:
+                try:
+                    return (solve_schur(problem, blocks[-1], loss=loss, f_scale=f_scale, state0=state0,
+                                        auto_identifiable=auto_identifiable, frames_last=True), problem, blocks)
+                except StructureError:
+                    structured[0] = False
+                    problem, blocks = build(pose_sigma, sigma)
+            return (solve(problem, loss=loss, f_scale=f_scale, state0=state0, auto_identifiable=auto_identifiable),
+                    problem, blocks)
 
     problem, blocks = build(pose_sigma, sigma)
-    result = run(problem, sigma)
+    result, problem, blocks = run(problem, blocks, sigma, pose_sigma)
     noise = None
     if estimate:  # variance components: pixels, robot rotation, robot translation
         # the identifiable set does not change with the weights: analysed once (the rounds stay cheap)
@@ -310,7 +360,8 @@ def refine_hand_eye(T_base_flange, image_points, target_points, camera: Camera, 
                 break
             sigma, pose_sigma = sigma * factors[0], (pose_sigma[0] * factors[2], pose_sigma[1] * factors[1])
             problem, blocks = build(pose_sigma, sigma)
-            result = run(problem, sigma, result.state, auto_identifiable=not full_rank)
+            result, problem, blocks = run(problem, blocks, sigma, pose_sigma, result.state,
+                                          auto_identifiable=not full_rank)
         noise = {"pixel_sigma_px": float(sigma), "robot_pose_sigma": tuple(float(v) for v in pose_sigma),
                  "converged": bool(np.all(np.abs(factors - 1.0) < 0.05))}
 

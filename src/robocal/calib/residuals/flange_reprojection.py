@@ -36,9 +36,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...camera.projection import project_points
 from ...transforms import invert_transforms, skew, so3_exp
+from ..blocks.camera import CameraIntrinsics
 from ..errors import ProblemError
-from .reprojection import ReprojectionResidual
+from .reprojection import ReprojectionResidual, cross_rows
 
 __all__ = ["FlangeReprojectionResidual"]
 
@@ -58,12 +60,17 @@ class FlangeReprojectionResidual(ReprojectionResidual):
     arguments as :class:`ReprojectionResidual` (no ``links``). ``target_end_effector``: the end
     effector that carries the target (``T`` is then the target in that end effector's frame and
     ``end_effector`` the one that carries the camera, ``invert`` must be True, no corrections).
+    ``compact_corrections``: return the corrections' Jacobian as (M, 6), each row's derivative by
+    its own image's correction (``correction_frame_of_row`` (M,) says which), instead of
+    (M, 6 N) mostly zeros -- for the structured solver (:mod:`robocal.calib.schur`), not for
+    :meth:`Problem.evaluate`.
     """
 
     def __init__(self, camera, camera_poses, target_poses, image_points, target_points, *, model=None, q=None,
                  geometry=None, flange_poses=None, corrections=None, end_effector=None, invert: bool = True,
                  camera_index=None, target_index=None, sigma: float | None = None, target_end_effector=None,
-                 joint_corrections=None, correction_columns=None, correction_params=None):
+                 joint_corrections=None, correction_columns=None, correction_params=None,
+                 compact_corrections: bool = False):
         super().__init__(camera, camera_poses, target_poses, image_points, target_points,
                          camera_index=camera_index, target_index=target_index, sigma=sigma)
         N = len(self.image_points)
@@ -105,6 +112,15 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             if corrections.n_frames != N:
                 raise ProblemError(f"flange reprojection: {corrections.n_frames} correction frames for {N} images")
             extra += (corrections,)
+        self.compact_corrections = bool(compact_corrections) and corrections is not None
+        self.correction_frame_of_row = np.repeat(self.image_of_row, 2)
+        # given flange poses, one camera and one target frame (hand-eye): the per-image chain is
+        # composed first and every point moved by one batched product (:meth:`_evaluate_fixed`)
+        self._fixed = (self.model is None and camera_poses.n_frames == 1 and target_poses.n_frames == 1)
+        if self._fixed:
+            self._point_of_row = np.nonzero(self.mask)[1]
+            self._all_detected = bool(self.mask.all())
+            self._F_inv = invert_transforms(self.flange_poses)
         self.parameter_blocks = self.parameter_blocks + extra
 
     def _flange(self, ev):
@@ -140,7 +156,68 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             F = F @ ev[self.corrections]
         return invert_transforms(F) if self.invert else F
 
+    def _per_image(self, rows, R):
+        """``rows`` (n, 2, 3) of the detected points times their image's matrix R (N, 3, 3): (n, 2, 3)."""
+        N, P = self.mask.shape
+        if self._all_detected:
+            return (rows.reshape(N, 2 * P, 3) @ R).reshape(-1, 2, 3)
+        full = np.zeros((N, P, 2, 3))
+        full[self.mask] = rows
+        return (full.reshape(N, 2 * P, 3) @ R).reshape(N, P, 2, 3)[self.mask]
+
+    def _evaluate_fixed(self, ev, jacobian):
+        """:meth:`evaluate` for given flange poses, one camera frame and one target frame: the same
+        residuals and derivatives (module docstring), with the per-image links composed first and the
+        points moved per image by one batched product instead of a 3 x 3 product per point."""
+        T = ev[self.target_poses][0]
+        Cf = ev[self.camera_poses][0]
+        RC, c = Cf[:3, :3], Cf[:3, 3]
+        y0 = self.target_points @ T[:3, :3].T + T[:3, 3]  # (P, 3): the target's points in its parent frame
+        E = ev[self.corrections] if self.corrections is not None else None
+        if self.invert:  # M_i = (F_i E_i)^-1 = E_i^-1 F_i^-1
+            M = self._F_inv if E is None else invert_transforms(E) @ self._F_inv
+        else:
+            M = self.flange_poses if E is None else self.flange_poses @ E
+        q = (y0 @ np.swapaxes(M[:, :3, :3], 1, 2) + M[:, None, :3, 3])[self.mask]  # (n, 3) in C's parent frame
+        p = (q - c) @ RC
+        intr, dist = CameraIntrinsics.split(ev[self.camera])
+        wants_cam = jacobian and ev.wants(self.camera)
+        proj = project_points(p, intr, dist, self.camera.model, jacobian, point_only=jacobian and not wants_cam)
+        w = self.weight
+        r = (self._detected - proj.pixels).ravel()
+        if w != 1.0:
+            r *= w
+        if not jacobian:
+            return r, None
+        jac = {}
+        m = len(r)
+        if wants_cam:
+            jac[self.camera] = np.concatenate([proj.d_intrinsics, proj.d_distortion], axis=2).reshape(m, -1) * w
+        e_C = (proj.d_point.reshape(-1, 3) @ RC.T).reshape(-1, 2, 3)  # (n, 2, 3): d u / d q, one product
+        if ev.wants(self.camera_poses):
+            jac[self.camera_poses] = cross_rows(q, e_C, -w).reshape(m, 6)  # the weight folded into the sign
+        if ev.wants(self.target_poses):
+            e_T = self._per_image(e_C, M[:, :3, :3])
+            jac[self.target_poses] = cross_rows(y0[self._point_of_row], e_T, w).reshape(m, 6)
+        if E is not None and ev.wants(self.corrections):
+            F = self.flange_poses
+            if self.invert:  # g = F^-1 y in the reported flange frame; rows -(e_C R_E^T) [-[g]x | I]
+                G = y0 @ np.swapaxes(self._F_inv[:, :3, :3], 1, 2) + self._F_inv[:, None, :3, 3]
+                d = cross_rows(G[self.mask], self._per_image(e_C, np.swapaxes(E[:, :3, :3], 1, 2)), -w)
+            else:  # e = E y in the flange frame; rows (e_C R_F) [-[e]x | I]
+                G = y0 @ np.swapaxes(E[:, :3, :3], 1, 2) + E[:, None, :3, 3]
+                d = cross_rows(G[self.mask], self._per_image(e_C, F[:, :3, :3]), w)
+            if self.compact_corrections:
+                jac[self.corrections] = d.reshape(m, 6)
+            else:
+                J = np.zeros((len(p), 2, self.corrections.n_frames, 6))
+                J[np.arange(len(p)), :, self.image_of_row, :] = d
+                jac[self.corrections] = J.reshape(m, -1)
+        return r, jac
+
     def evaluate(self, ev, jacobian):
+        if self._fixed:
+            return self._evaluate_fixed(ev, jacobian)
         r, jac, (y, q, p, RC, RM, img, d_point) = self._evaluate(ev, jacobian)
         if not jacobian:
             return r, jac
@@ -174,10 +251,12 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             else:
                 e = np.einsum("nij,nj->ni", E[:, :3, :3], y) + E[:, :3, 3]
                 dp = (RCt @ F[:, :3, :3]) @ _frame_rows(e)
-            n_frames = self.corrections.n_frames
-            J = np.zeros((len(p), 2, n_frames, 6))
-            J[np.arange(len(p)), :, img, :] = d_point @ dp
-            jac[self.corrections] = J.reshape(len(r), -1) * w
+            if self.compact_corrections:
+                jac[self.corrections] = (d_point @ dp).reshape(len(r), 6) * w
+            else:
+                J = np.zeros((len(p), 2, self.corrections.n_frames, 6))
+                J[np.arange(len(p)), :, img, :] = d_point @ dp
+                jac[self.corrections] = J.reshape(len(r), -1) * w
         return r, jac
 
     @classmethod
@@ -214,6 +293,36 @@ class FlangeReprojectionResidual(ReprojectionResidual):
             out.append(cls(cam, FramesBlock("camera", C), FramesBlock("target", T), uv, X, invert=invert,
                            corrections=FramesBlock("corrections", E), target_index=np.arange(N), sigma=0.3, **kw))
         out.append(cls._two_end_effector_example(rng))
+        out += cls._hand_eye_examples(rng)
+        return out
+
+    @classmethod
+    def _hand_eye_examples(cls, rng):
+        """Given flange poses, one camera frame and one target frame, with per-image corrections
+        (eye-in-hand and eye-to-hand; the hand-eye refinement's set-up)."""
+        from ..blocks import CameraIntrinsics, FramesBlock
+        from .examples import example_frames
+
+        grid = np.stack(np.meshgrid(np.arange(4.0), np.arange(3.0)), -1).reshape(-1, 2) * 30.0
+        X = np.column_stack([grid - 45.0, np.zeros(len(grid))])
+        out = []
+        for invert in (True, False):
+            N = 4
+            E = np.tile(np.eye(4), (N, 1, 1))
+            E[:, :3, :3] = so3_exp(rng.normal(0, 0.02, (N, 3)))
+            E[:, :3, 3] = rng.normal(0, 1.0, (N, 3))
+            T_ct = example_frames(rng, N)
+            T_ct[:, :3, 3] = np.column_stack([rng.normal(0, 40, (N, 2)), rng.uniform(400, 700, N)])
+            C, T = example_frames(rng, 1), example_frames(rng, 1)
+            # flange poses that put the target in view: T_ct = C^-1 M_i T with M_i = (F_i E_i)^-1 or F_i E_i
+            M = C @ T_ct @ invert_transforms(T)
+            F = (invert_transforms(M) if invert else M) @ invert_transforms(E)
+            cam = CameraIntrinsics(rng.uniform([900, 900, 600, 450], [1100, 1100, 700, 550]),
+                                   rng.normal(0, [0.1, 0.05, 0.002, 0.002, 0.02]))
+            uv = np.full((N, len(X), 2), 500.0) + rng.normal(0, 50, (N, len(X), 2))
+            uv[1, 4] = np.nan
+            out.append(cls(cam, FramesBlock("camera", C), FramesBlock("target", T), uv, X, invert=invert,
+                           flange_poses=F, corrections=FramesBlock("corrections", E), sigma=0.3))
         return out
 
     @classmethod
