@@ -162,10 +162,16 @@ class DampedGaussNewton:
     def _scaled_system(self):
         """Scaled, weighted active Jacobian Ja and residuals ra."""
         active, cs = self.active, self.col_scale
-        if self.weighted:
+        if self.weighted and not np.all(self.w_rows == 1.0):
             sw = np.sqrt(self.w_rows)
             return (self.J[:, active] * sw[:, None]) / cs[active], self.r * sw
-        return (self.J[:, active] if not self.all_active else self.J) / cs[active], self.r
+        # every row of weight 1 (e.g. only a prior made the problem "weighted"): multiplying by 1 changes
+        # no bit, so skip it; the column selection is a copy already, scaled in place
+        if self.all_active:
+            return self.J / cs, self.r
+        Ja = self.J[:, active]
+        Ja /= cs[active]
+        return Ja, self.r
 
     def _normal_system(self):
         """Scaled, weighted normal matrix G = Ja^T Ja (n_a, n_a) and gradient g = Ja^T ra (n_a,)."""

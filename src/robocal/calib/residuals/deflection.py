@@ -163,12 +163,12 @@ class Deflection:
         jac = {b: Q @ Jb for b, Jb in jac.items()}
         if want.get(lat, False) or want.get(self.gravity, False):
             ExR = np.cross(E[:, :, :, None, :], r[:, :, None, :, :])  # (N, n_l, 2, K, 3)
-            ExR = ExR * A[None, :, None, :, None]
-            if R_base is not None:  # the lateral columns rotated with the points' other columns
-                ExR = ExR @ np.swapaxes(R_base, 1, 2)[:, None, None]
+            ExR *= A[None, :, None, :, None]
+            Rb4 = None if R_base is None else R_base[:, None]  # (N, 1, 3, 3)
             if want.get(lat, False):
                 Jl = 1e-6 * M[:, :, :, None, None] * ExR  # (N, n_l, 2, K, 3)
-                jac[lat] = np.moveaxis(Jl.reshape(Jl.shape[0], -1, *Jl.shape[3:]), 1, -1)  # (N, K, 3, 2 n_l)
+                Jl = np.moveaxis(Jl.reshape(Jl.shape[0], -1, *Jl.shape[3:]), 1, -1)  # (N, K, 3, 2 n_l)
+                jac[lat] = Jl if Rb4 is None else Rb4 @ Jl
             if want.get(self.gravity, False):
                 # Jg[n,k,i,b,v] = sum_{j,a} 1e-6 c_ja ExR[n,j,a,k,i] L[n,j,a,b,v] (L = the lateral basis
                 # (N, n_l, 2, B, 4)): one batched matrix product per pose, the compliances applied to the
@@ -178,5 +178,7 @@ class Deflection:
                 ExRc = (ExR * (1e-6 * c_lat)[None, :, :, None, None]).reshape(N_, nj * na, K_ * 3)
                 Jg = np.matmul(ExRc.transpose(0, 2, 1), self._lateral_basis(gt))  # (N, K * 3, V)
                 Jg = Jg.reshape(N_, K_, 3, -1)
+                if Rb4 is not None:
+                    Jg = Rb4 @ Jg
                 jac[self.gravity] = jac[self.gravity] + Jg if self.gravity in jac else Jg
         return pts + dp, jac, R_ee
