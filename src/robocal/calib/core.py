@@ -48,7 +48,7 @@ class Problem:
     attribute, :mod:`robocal.calib._iterate`): ``"tenfold"`` (/10 after a taken step, x10 after a
     refused one) or ``"gain"`` (Nielsen's rule, from the ratio of the actual to the predicted cost
     reduction; for problems whose steps the linear model predicts poorly, e.g. the bilinear lumped
-    elastic model).
+    elastic model of a large data set: set it on the instance, docs/elastic.md).
     """
 
     #: damping update of the LM solve: "tenfold" or "gain" (see the class docstring)

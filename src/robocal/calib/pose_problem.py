@@ -139,8 +139,6 @@ class PoseCalibrationProblem(Problem):
             from .elastic import build_deflection
 
             self.deflection = build_deflection(model, q, elastic, [t.end_effector for t in self.targets])
-            if self.deflection.bilinear:
-                self.damping = "gain"  # Nielsen's rule: the bilinear model's steps are poorly predicted
         blocks, residuals = self._blocks(geometry, frames, tool)
         blocks += [] if self.deflection is None else list(self.deflection.blocks)
         super().__init__(blocks, residuals, n_poses=N, kinds=("point", "rotation", "prior"))

@@ -225,8 +225,6 @@ class CalibrationProblem(Problem):
             from .elastic import build_deflection
 
             self.deflection = build_deflection(model, q, self.elastic, [t.end_effector for t in self.targets])
-            if self.deflection.bilinear:
-                self.damping = "gain"  # Nielsen's rule: the bilinear model's steps are poorly predicted
         self.chain = TargetChain(model, q, geometry, frames, targets, stations=self.stations,
                                  deflection=self.deflection)
         sigma = self.point_sigma

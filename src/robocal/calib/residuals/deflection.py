@@ -79,14 +79,6 @@ class Deflection:
         return out
 
     @property
-    def bilinear(self) -> bool:
-        """Whether the deflection is a product of two identified blocks (compliances times lumped
-        gravity parameters identified from the data): then the Gauss-Newton model misses the
-        cross curvature of the product and the LM uses the damping rule that measures how well its
-        steps are predicted (``Problem.damping = "gain"``)."""
-        return bool(self.gravity.n_free)
-
-    @property
     def blocks(self) -> tuple:
         """(compliance, gravity[, lateral]): the parameter blocks the deflection reads."""
         return (self.compliance, self.gravity) + (() if self.lateral is None else (self.lateral,))
