@@ -104,10 +104,15 @@ class Deflection:
         """``(dq (N, n_model) [rad | mm], gt, tau_sel (N, n_c))`` for compliance values ``c`` and
         gravity-block value ``grav``."""
         gt = self.torques_at(q, payload, gravity)
-        tau = gt.torques(self.gravity.theta(grav))
-        tau_sel = tau[:, self.compliance.joints]
-        dq = np.zeros(tau.shape)
-        dq[:, self.compliance.joints] = tau_sel * (self.compliance.scale * c)
+        joints = self.compliance.joints
+        if gt is self._own:  # the compliant joints' rows only, from the basis the Jacobian reads too
+            Tv = self._torsion_basis(gt)  # (N, n_c, V)
+            tau_sel = (Tv.reshape(-1, Tv.shape[-1]) @ np.asarray(grav, dtype=float)).reshape(Tv.shape[:2])
+            tau_sel += gt.payload[:, joints]
+        else:
+            tau_sel = gt.torques(self.gravity.theta(grav))[:, joints]
+        dq = np.zeros(gt.payload.shape)
+        dq[:, joints] = tau_sel * (self.compliance.scale * c)
         return dq, gt, tau_sel
 
     def jacobians(self, J_joint, gt, tau_sel, c, want_c, want_g) -> dict:
@@ -137,7 +142,12 @@ class Deflection:
         lat = self.lateral
         c_lat = values[lat].reshape(-1, 2)  # (n_l, 2)
         jl = lat.joints
-        M = gt.lateral_moments(self.gravity.theta(grav))[:, jl]  # (N, n_l, 2) [N m]
+        if gt is self._own:  # the lateral joints' rows only, from the basis the Jacobian reads too
+            Lv = self._lateral_basis(gt)  # (N, 2 n_l, V)
+            M = (Lv.reshape(-1, Lv.shape[-1]) @ np.asarray(grav, dtype=float)).reshape(len(Lv), -1, 2)
+            M += gt.lateral_payload[:, jl]  # (N, n_l, 2) [N m]
+        else:
+            M = gt.lateral_moments(self.gravity.theta(grav))[:, jl]  # (N, n_l, 2) [N m]
         E = gt.lateral_axes[:, jl]  # (N, n_l, 2, 3)
         o = gt.joint_origin[:, jl]  # (N, n_l, 3) [mm]
         A = self._carries_ee[ee_of_target].T.astype(float)  # (n_l, K)
