@@ -5,6 +5,13 @@ on the geometry and a second, plain phase after dropping outliers.
 Columns are scaled by the norms of the initial Jacobian's columns; the step is solved on the
 identifiable (``active``) columns only. Internal module: the public entry is ``solve``.
 
+Damping (LM): ``problem.damping`` (:class:`robocal.calib.core.Problem`) chooses its update:
+``"tenfold"`` divides it by 10 after a taken step and multiplies it by 10 after a refused one;
+``"gain"`` is Nielsen's rule (Madsen, Nielsen & Tingleff, *Methods for non-linear least squares
+problems*, 2004, sec. 3.2): after a taken step ``lam *= max(1/3, 1 - (2 rho - 1)^3)`` with ``rho``
+the actual over the predicted cost reduction, after a refused one ``lam *= nu, nu *= 2`` (``nu``
+reset to 2 by a taken step). The stop rules below are the same for both.
+
 Convergence policy (the one of every solver in robocal): a solve has converged when one stated
 criterion was met after an accepted step -- relative cost change below ``ftol``, chi-square change
 below ``chi2_tol`` residual variances, scaled step below ``xtol`` -- or at a first-order stationary
@@ -82,6 +89,11 @@ class DampedGaussNewton:
         self.weighted = self.robust or bool(prior_weight)
         self.cost = self._cost(r)
         self.lam = 1e-3
+        damping = getattr(problem, "damping", "tenfold")
+        if damping not in ("tenfold", "gain"):
+            raise ValueError(f"problem.damping must be 'tenfold' or 'gain', got {damping!r}")
+        self.gain_damping = damping == "gain"
+        self._nu, self._gain = 2.0, None  # Nielsen's growth factor; the gain ratio of the step taken
         self.reason, self.converged, self.it = MAX_ITERATIONS_REASON, False, 0
         self.all_active = bool(active.all())
         self.n_active = int(active.sum())
@@ -150,10 +162,16 @@ class DampedGaussNewton:
     def _scaled_system(self):
         """Scaled, weighted active Jacobian Ja and residuals ra."""
         active, cs = self.active, self.col_scale
-        if self.weighted:
+        if self.weighted and not np.all(self.w_rows == 1.0):
             sw = np.sqrt(self.w_rows)
             return (self.J[:, active] * sw[:, None]) / cs[active], self.r * sw
-        return (self.J[:, active] if not self.all_active else self.J) / cs[active], self.r
+        # every row of weight 1 (e.g. only a prior made the problem "weighted"): multiplying by 1 changes
+        # no bit, so skip it; the column selection is a copy already, scaled in place
+        if self.all_active:
+            return self.J / cs, self.r
+        Ja = self.J[:, active]
+        Ja /= cs[active]
+        return Ja, self.r
 
     def _normal_system(self):
         """Scaled, weighted normal matrix G = Ja^T Ja (n_a, n_a) and gradient g = Ja^T ra (n_a,)."""
@@ -210,11 +228,27 @@ class DampedGaussNewton:
             self.weights[:self.n_poses] = robust_weights(pose_norm, self.loss, self.f_scale)
             self.w_rows = self.row_weights()
         new_cost = self._cost(self.r)
-        self.lam = max(self.lam / 10.0, 1e-12)
+        self._lower_damping()
         if self.progress:
             self.progress(it, new_cost)
         dcost, self.cost = self.cost - new_cost, new_cost
         return self._converged_after_step(dcost, step_s)
+
+    def _lower_damping(self) -> None:
+        """After a taken step: /10 (``tenfold``) or Nielsen's factor of its gain ratio (``gain``)."""
+        if self.gain_damping and self._gain is not None:
+            self.lam = max(self.lam * max(1.0 / 3.0, 1.0 - (2.0 * self._gain - 1.0) ** 3), 1e-12)
+            self._nu = 2.0
+        else:
+            self.lam = max(self.lam / 10.0, 1e-12)
+
+    def _raise_damping(self) -> None:
+        """After a refused trial (or a matrix that is not positive definite): x10, or x nu (nu doubles)."""
+        if self.gain_damping:
+            self.lam *= self._nu
+            self._nu *= 2.0
+        else:
+            self.lam *= 10.0
 
     def _predicted_reduction(self, G, g, g_max) -> float:
         """Cost reduction 0.5 g^T G^-1 g the (barely damped) Gauss-Newton step predicts (inf if singular)."""
@@ -231,7 +265,7 @@ class DampedGaussNewton:
                 try:  # G + lam * max(diag G) * I: only the diagonal changes
                     step_s = self._damped_solve(G, self.lam * g_max, g)
                 except np.linalg.LinAlgError:
-                    self.lam *= 10.0
+                    self._raise_damping()
                     continue
             if self.all_active:
                 step = step_s / self.col_scale
@@ -247,11 +281,15 @@ class DampedGaussNewton:
                 if lazy:
                     r_t, J_t = self.augmented(trial)
                 self._refused_last = attempt > 0
+                if self.gain_damping and self.method == "lm":
+                    # the LM step solves (G + mu I) s = g: its model predicts 0.5 s^T (g + mu s)
+                    predicted = 0.5 * float(step_s @ (g + (self.lam * g_max) * step_s))
+                    self._gain = (self.cost - c_t) / predicted if predicted > 0 else None
                 return trial, r_t, J_t, step_s
             if self.method == "svd":
                 step_s = 0.5 * step_s  # backtracking
             else:
-                self.lam *= 10.0
+                self._raise_damping()
         return None
 
     def _converged_after_step(self, dcost, step_s) -> bool:
@@ -286,6 +324,6 @@ class DampedGaussNewton:
         self.weights = (~self.rejected).astype(float)
         self.w_rows = self.row_weights()
         self.cost = self._cost(self.r)
-        self.lam = 1e-3
+        self.lam, self._nu = 1e-3, 2.0
         self.reason, self.converged = MAX_ITERATIONS_REASON, False
         return True

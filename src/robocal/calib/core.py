@@ -43,7 +43,16 @@ class Problem:
     reading only those blocks; n_poses: number of poses for per-pose robust weights (default: the
     largest pose label + 1); kinds: order of the kind codes in ``labels`` (default: order of
     first appearance; kinds not listed are appended).
+
+    ``damping``: how the Levenberg-Marquardt solve changes its damping between trials (class
+    attribute, :mod:`robocal.calib._iterate`): ``"tenfold"`` (/10 after a taken step, x10 after a
+    refused one) or ``"gain"`` (Nielsen's rule, from the ratio of the actual to the predicted cost
+    reduction; for problems whose steps the linear model predicts poorly, e.g. the bilinear lumped
+    elastic model of a large data set: set it on the instance, docs/elastic.md).
     """
+
+    #: damping update of the LM solve: "tenfold" or "gain" (see the class docstring)
+    damping = "tenfold"
 
     def __init__(self, parameter_blocks, residual_blocks, *, n_poses: int | None = None, kinds=None):
         self.parameter_blocks = tuple(parameter_blocks)

@@ -152,13 +152,14 @@ class TargetChain:
                 jac[self.geometry] = J[..., g_cols]
             if need_joint:
                 jac.update(d.jacobians(J[..., j_cols], gt, tau_sel, c, want_c, want_m))
-        if d.lateral is not None:
-            pts, jac, R_ee = d.lateral_deflection(pts, jac, R_ee, gt, values, grav, ee, want)
+        Rb = bases[stations, :3, :3] if in_base else None
+        if d.lateral is not None:  # it rotates the Jacobians into the instrument frame too
+            pts, jac, R_ee = d.lateral_deflection(pts, jac, R_ee, gt, values, grav, ee, want, R_base=Rb)
         if in_base:
-            Rb = bases[stations, :3, :3]
             pts = np.einsum("nij,nkj->nki", Rb, pts) + bases[stations, :3, 3][:, None]
-            Rb4 = Rb[:, None]  # (N, 1, 3, 3): a batched product (an einsum here cost ~1.4 ms an evaluation)
-            jac = {b: Rb4 @ Jb for b, Jb in jac.items()}
+            if d.lateral is None:
+                Rb4 = Rb[:, None]  # (N, 1, 3, 3): a batched product (an einsum here cost ~1.4 ms an evaluation)
+                jac = {b: Rb4 @ Jb for b, Jb in jac.items()}
             if want_t:
                 R_ee = np.einsum("nij,nkjl->nkil", Rb, R_ee)
         return self._with_frame_and_target_jacobians(pts, jac, R_ee if want_t else None, stations, want_b)

@@ -55,6 +55,28 @@ class Deflection:
         if lateral is not None:
             anc = model._ee_ancestors  # (n_ee, n_links)
             self._carries_ee = anc[:, model.moving[lateral.joints]]  # (n_ee, n_lateral)
+        self._own_bases = {}  # the bases of the chain's own poses in the product layout, built on first use
+
+    def _torsion_basis(self, gt) -> np.ndarray:
+        """(N, n_c, V): torque of each compliant joint per gravity variable (the block's variable
+        order), contiguous: the gravity Jacobian is then one batched product per pose."""
+        if gt is self._own and "torsion" in self._own_bases:
+            return self._own_bases["torsion"]
+        b = gt.basis[:, self.compliance.joints]  # (N, n_c, B, 4)
+        out = np.ascontiguousarray(self.gravity.variable_jacobian(b))
+        if gt is self._own:
+            self._own_bases["torsion"] = out
+        return out
+
+    def _lateral_basis(self, gt) -> np.ndarray:
+        """(N, 2 n_l, V): bending moment of each lateral axis per gravity variable (variable order)."""
+        if gt is self._own and "lateral" in self._own_bases:
+            return self._own_bases["lateral"]
+        lb = gt.lateral_basis[:, self.lateral.joints]  # (N, n_l, 2, B, 4)
+        out = np.ascontiguousarray(self.gravity.variable_jacobian(lb).reshape(len(lb), -1, self.gravity.size))
+        if gt is self._own:
+            self._own_bases["lateral"] = out
+        return out
 
     @property
     def blocks(self) -> tuple:
@@ -82,10 +104,15 @@ class Deflection:
         """``(dq (N, n_model) [rad | mm], gt, tau_sel (N, n_c))`` for compliance values ``c`` and
         gravity-block value ``grav``."""
         gt = self.torques_at(q, payload, gravity)
-        tau = gt.torques(self.gravity.theta(grav))
-        tau_sel = tau[:, self.compliance.joints]
-        dq = np.zeros(tau.shape)
-        dq[:, self.compliance.joints] = tau_sel * (self.compliance.scale * c)
+        joints = self.compliance.joints
+        if gt is self._own:  # the compliant joints' rows only, from the basis the Jacobian reads too
+            Tv = self._torsion_basis(gt)  # (N, n_c, V)
+            tau_sel = (Tv.reshape(-1, Tv.shape[-1]) @ np.asarray(grav, dtype=float)).reshape(Tv.shape[:2])
+            tau_sel += gt.payload[:, joints]
+        else:
+            tau_sel = gt.torques(self.gravity.theta(grav))[:, joints]
+        dq = np.zeros(gt.payload.shape)
+        dq[:, joints] = tau_sel * (self.compliance.scale * c)
         return dq, gt, tau_sel
 
     def jacobians(self, J_joint, gt, tau_sel, c, want_c, want_g) -> dict:
@@ -96,22 +123,31 @@ class Deflection:
         if want_c:
             jac[self.compliance] = J_joint * (tau_sel * s)[:, None, None, :]
         if want_g:
-            D = gt.basis[:, self.compliance.joints] * (s * c)[None, :, None, None]  # (N, n_c, B, 4)
-            N, n_c = D.shape[:2]
-            Jt = J_joint @ D.reshape(N, 1, n_c, -1)  # (N, K, 3, B * 4)
-            jac[self.gravity] = self.gravity.variable_jacobian(Jt.reshape(Jt.shape[:3] + D.shape[2:]))
+            # dp/dtheta = sum_j (dp/dq_j s_j c_j) T[:, j, :]: the compliances on the smaller factor,
+            # one batched product per pose with the (cached) basis in the variable order
+            N, n_c = J_joint.shape[0], J_joint.shape[-1]
+            Js = (J_joint * (s * c)).reshape(N, -1, n_c)  # (N, K * 3, n_c)
+            Jt = Js @ self._torsion_basis(gt)  # (N, K * 3, V)
+            jac[self.gravity] = Jt.reshape(J_joint.shape[:-1] + (Jt.shape[-1],))
         return jac
 
-    def lateral_deflection(self, pts, jac, R_ee, gt, values, grav, ee_of_target, want):
+    def lateral_deflection(self, pts, jac, R_ee, gt, values, grav, ee_of_target, want, R_base=None):
         """Points (N, K, 3) in the base frame moved by the joints' lateral rotations
         ``dphi_j = 1e-6 sum_a c_ja M_ja e_ja`` about their bearing points ``o_j`` (first order:
         ``dp = sum_j dphi_j x (p - o_j)`` over the joints carrying the point), the Jacobians of the
         blocks moving ``p`` carried along (``(I + [Phi]x) J``), and those of the lateral compliances
-        and the gravity parameters added. Returns (points, jac, R_ee)."""
+        and the gravity parameters added. ``R_base`` (N, 3, 3): optionally rotate the points' Jacobians
+        (not the points) by it in the same pass (the station frames' rotations: one 3 x 3 product per
+        point and block instead of two). Returns (points, jac, R_ee)."""
         lat = self.lateral
         c_lat = values[lat].reshape(-1, 2)  # (n_l, 2)
         jl = lat.joints
-        M = gt.lateral_moments(self.gravity.theta(grav))[:, jl]  # (N, n_l, 2) [N m]
+        if gt is self._own:  # the lateral joints' rows only, from the basis the Jacobian reads too
+            Lv = self._lateral_basis(gt)  # (N, 2 n_l, V)
+            M = (Lv.reshape(-1, Lv.shape[-1]) @ np.asarray(grav, dtype=float)).reshape(len(Lv), -1, 2)
+            M += gt.lateral_payload[:, jl]  # (N, n_l, 2) [N m]
+        else:
+            M = gt.lateral_moments(self.gravity.theta(grav))[:, jl]  # (N, n_l, 2) [N m]
         E = gt.lateral_axes[:, jl]  # (N, n_l, 2, 3)
         o = gt.joint_origin[:, jl]  # (N, n_l, 3) [mm]
         A = self._carries_ee[ee_of_target].T.astype(float)  # (n_l, K)
@@ -123,25 +159,28 @@ class Deflection:
         S[..., 0, 1], S[..., 0, 2] = -Phi[..., 2], Phi[..., 1]
         S[..., 1, 0], S[..., 1, 2] = Phi[..., 2], -Phi[..., 0]
         S[..., 2, 0], S[..., 2, 1] = -Phi[..., 1], Phi[..., 0]
-        jac = {b: Jb + S @ Jb for b, Jb in jac.items()}
-        R_ee = R_ee + S @ R_ee
+        S[..., 0, 0] = S[..., 1, 1] = S[..., 2, 2] = 1.0  # I + [Phi]x
+        R_ee = S @ R_ee
+        Q = S if R_base is None else R_base[:, None] @ S
+        jac = {b: Q @ Jb for b, Jb in jac.items()}
         if want.get(lat, False) or want.get(self.gravity, False):
             ExR = np.cross(E[:, :, :, None, :], r[:, :, None, :, :])  # (N, n_l, 2, K, 3)
-            ExR = ExR * A[None, :, None, :, None]
+            ExR *= A[None, :, None, :, None]
+            Rb4 = None if R_base is None else R_base[:, None]  # (N, 1, 3, 3)
             if want.get(lat, False):
                 Jl = 1e-6 * M[:, :, :, None, None] * ExR  # (N, n_l, 2, K, 3)
-                jac[lat] = np.moveaxis(Jl.reshape(Jl.shape[0], -1, *Jl.shape[3:]), 1, -1)  # (N, K, 3, 2 n_l)
+                Jl = np.moveaxis(Jl.reshape(Jl.shape[0], -1, *Jl.shape[3:]), 1, -1)  # (N, K, 3, 2 n_l)
+                jac[lat] = Jl if Rb4 is None else Rb4 @ Jl
             if want.get(self.gravity, False):
                 # Jg[n,k,i,b,v] = sum_{j,a} 1e-6 c_ja ExR[n,j,a,k,i] L[n,j,a,b,v] (L = the lateral basis
                 # (N, n_l, 2, B, 4)): one batched matrix product per pose, the compliances applied to the
-                # smaller factor, the basis read in place when the joints are a contiguous run (an einsum
+                # smaller factor, the basis (cached for the chain's poses) in the variable order (an einsum
                 # over a scaled copy of the basis was ~50 % of an elastic-full evaluation on DLR Justin)
-                lb = gt.lateral_basis
-                run = len(jl) and np.array_equal(jl, np.arange(jl[0], jl[0] + len(jl)))
-                lb = lb[:, jl[0]:jl[0] + len(jl)] if run else lb[:, jl]
                 N_, nj, na, K_, _ = ExR.shape
                 ExRc = (ExR * (1e-6 * c_lat)[None, :, :, None, None]).reshape(N_, nj * na, K_ * 3)
-                Jg = np.matmul(ExRc.transpose(0, 2, 1), lb.reshape(N_, nj * na, -1))
-                Jg = Jg.reshape((N_, K_, 3) + lb.shape[3:])
-                jac[self.gravity] = jac.get(self.gravity, 0.0) + self.gravity.variable_jacobian(Jg)
+                Jg = np.matmul(ExRc.transpose(0, 2, 1), self._lateral_basis(gt))  # (N, K * 3, V)
+                Jg = Jg.reshape(N_, K_, 3, -1)
+                if Rb4 is not None:
+                    Jg = Rb4 @ Jg
+                jac[self.gravity] = jac[self.gravity] + Jg if self.gravity in jac else Jg
         return pts + dp, jac, R_ee

@@ -46,7 +46,9 @@ class PointResidual(ResidualBlock):
         w = self.weight
         if self._all:
             r = ((self.measured - out.points) * w).ravel()
-            jac = {b: J.reshape(-1, J.shape[-1]) * w for b, J in out.jac.items()} if jacobian else None
+            # weight 1 (no sigma given): the chain's Jacobians as they are (the problem copies them into J)
+            jac = ({b: J.reshape(-1, J.shape[-1]) * w for b, J in out.jac.items()} if w != 1.0 else
+                   {b: J.reshape(-1, J.shape[-1]) for b, J in out.jac.items()}) if jacobian else None
         else:
             m = self.mask
             r = ((self.measured - out.points)[m] * w).ravel()

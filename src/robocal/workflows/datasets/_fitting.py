@@ -76,16 +76,19 @@ def param_names(model, link_names, kinds) -> list:
 
 
 def fit(model, q, targets, points, free, stations=None, base_initial=None, prior=0.0, elastic=None, start=None,
-        **kw):
+        damping=None, **kw):
     """``(problem, result)`` of a calibration of ``free`` parameters plus base frame(s) and targets
     (and the joint compliances of ``elastic``, an :class:`~robocal.calib.elastic.ElasticModel`;
     ``start``: {state field: value} overriding the initial state, e.g. the compliances of a
-    previous level);
+    previous level; ``damping``: the LM damping rule, ``"tenfold"`` (default) or ``"gain"``
+    (:class:`~robocal.calib.core.Problem`));
     the base starts from a rigid fit of the initial model's predictions, per station."""
     if base_initial is None:
         base_initial = "fit"
     prob = CalibrationProblem(model, q, targets, points, free=free, stations=stations, base_initial=base_initial,
                               elastic=elastic)
+    if damping is not None:
+        prob.damping = damping
     if start:
         kw["state0"] = prob.initial_state()._replace(**start)
     kw.setdefault("max_iterations", PROTOCOL_MAX_ITERATIONS)

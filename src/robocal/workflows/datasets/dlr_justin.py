@@ -36,7 +36,7 @@ def calibrate_justin(seed: int = 0, n_train: int = 400, data=None, root=None, pr
     level ``elastic`` = the same geometry + a torsional compliance per joint of the torso and both
     arms with lumped gravity parameters, identified together; ``model="elastic-full"`` the
     level ``full`` instead: the same + two lateral (bending) compliances per joint (LM needs
-    ~170 iterations here: the lumped model is bilinear). Returns ``{level: holdout stats}``
+    ~190 iterations here with Nielsen's damping rule: the lumped model is bilinear). Returns ``{level: holdout stats}``
     plus ``calibrated`` (the last level), ``results`` (per level) and the split."""
     elastic = elastic_model(model)
     extra_level = None if elastic is None else ("full" if elastic.lateral else "elastic")
@@ -53,8 +53,12 @@ def calibrate_justin(seed: int = 0, n_train: int = 400, data=None, root=None, pr
     base, state_targets = None, targets
     for lev in levels:
         el = elastic if lev in ("elastic", "full") else None
+        # the lumped elastic levels (bilinear: compliances x gravity parameters, 214 unknowns, condition
+        # ~1e5-1e6) use Nielsen's damping rule: with the tenfold one nearly every step was refused once
+        # before one was taken (docs/elastic.md)
         p, r = fit(model, ds.joints[tr], state_targets, ds.points[tr], free=free_sets[lev], base_initial=base,
-                   prior=prior if lev in ("all", "elastic", "full") else 0.0, elastic=el)
+                   prior=prior if lev in ("all", "elastic", "full") else 0.0, elastic=el,
+                   damping="gain" if el is not None else None)
         if lev != levels[-1]:
             # next level starts from this solution
             model = r.model.replace(T_world_base=model.T_world_base)
