@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._cholesky import cholesky_factor, cholesky_inverse, cholesky_solve
-from . import _normal
+from . import _lm_compiled, _normal
 from ._iterate import DampedGaussNewton, pose_norms
 from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
@@ -252,15 +252,19 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     # point-only problems: LM on normal equations summed per block of poses (J never formed)
     normal = method == "lm" and loss == "linear" and not prior_weight and _normal.supports(problem)
     evaluator = _normal.PointNormalEquations(problem) if normal else None
+    # ... and, when its kernel is compiled (or worth compiling), the whole loop in compiled code
+    compiled = normal and progress is None and _lm_compiled.use_compiled(problem, evaluator.m_rows // 3)
     labels = problem.labels
     J = None
-    if normal and (ident is not None or not auto_identifiable):
+    if compiled and (ident is not None or not auto_identifiable):
+        r = None  # the compiled loop evaluates the start itself
+    elif normal and (ident is not None or not auto_identifiable):
         r, ne = evaluator.evaluate(state)
     elif normal:  # the identifiability analysis reads the R factor of J's QR, built per block of poses
         r, ne, J = evaluator.r_factor(state)
     else:
         r, J, labels = problem.evaluate(state)
-    M, n = len(r), problem.n_variables
+    M, n = (evaluator.m_rows if r is None else len(r)), problem.n_variables
     if M < n:
         raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
                          f"add poses or fix parameters")
@@ -269,15 +273,20 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
             if auto_identifiable else IdentifiabilityReport.trivial(problem.names)
     ident_set = set(ident.identifiable)
     active = np.array([nm in ident_set for nm in problem.names])
-    r0 = r.copy()
+    r0 = None if r is None else r.copy()
     kw = dict(method=method, loss=loss, f_scale=f_scale, prior_weight=prior_weight, rcond=rcond, ftol=ftol,
               xtol=xtol, chi2_tol=chi2_tol, progress=progress)
-    if normal:
+    if compiled:
+        J = None
+        gn = _lm_compiled.CompiledPointLM(problem, state, labels, active, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol)
+    elif normal:
         J = None
         gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
     else:
         gn = DampedGaussNewton(problem, state, r, J, labels, active, **kw)
     gn.run_phase(1, max_iterations)
+    if r0 is None:
+        r0 = gn.r0
     if gn.robust and reject_outliers and gn.drop_outliers(outlier_threshold):
         # robust phase done: the down-weighted poses dropped, finish by plain least squares
         gn.run_phase(gn.it + 1, max_iterations)

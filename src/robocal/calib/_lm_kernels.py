@@ -1,0 +1,458 @@
+"""Compiled (numba) Levenberg-Marquardt for point-only calibrations: normal equations accumulated
+pose by pose from the kinematic program, and the whole damped Gauss-Newton loop, in machine code.
+
+The driver is :mod:`robocal.calib._lm_compiled`; the iteration, its damping, line search and stop
+rules are those of :class:`robocal.calib._iterate.DampedGaussNewton` (method ``"lm"``, linear loss,
+no prior), written out here so that no Python runs between the first evaluation and the stop.
+
+Per evaluation: the cosines and sines of the operations' parameter values once; per pose the link
+frames by the operation program (a joint's rotation by the angle-sum formula from the pose's joint
+cosines and sines, computed once per solve, instead of a sine and cosine per operation and pose),
+the twist of every free geometry parameter where it acts (``_op_twist`` of the kinematics kernels),
+each measured point, its weighted residual and its three Jacobian rows (geometry from the twists,
+the base frame's left perturbation ``w x p + v``, the target point's end-effector orientation),
+added to ``J^T J`` (upper triangle) and ``J^T r`` as one rank-3 update. J is never stored.
+
+Three compiled functions (one type specialisation each): :func:`_apply_op_cs`, :func:`_evaluate`
+and the loop :func:`lm_points`; scratch arrays come from the caller (no allocation inside).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from numba import njit
+
+from ..kinematics._kernels import _copy34, _mul_affine, _op_twist
+from ..kinematics.links import OP_RU, OP_RX, OP_TU, OP_TX, OP_TY, OP_TZ
+
+_CACHE = True
+
+#: stop codes of :func:`lm_points` (the driver turns them into the Python loop's reasons)
+MAX_ITERATIONS, GRADIENT_ZERO, STATIONARY, NOT_AT_MINIMUM, FTOL, CHI2, XTOL = 0, 1, 2, 3, 4, 5, 6
+#: the same limits as robocal.calib._iterate (GTOL, STALL_RTOL), passed in by the driver
+_LINE_SEARCH_TRIES = 30
+
+
+@njit(cache=_CACHE, inline="always")
+def _apply_op_cs(M, code, value, c, s, ax):
+    """Right-multiply the affine frame M (3x4) in place by one elementary operation whose angle has
+    cosine ``c`` and sine ``s`` (rotations) or whose length is ``value`` [mm] (translations)."""
+    if code == OP_TX or code == OP_TY or code == OP_TZ:
+        k = code - OP_TX
+        for i in range(3):
+            M[i, 3] += value * M[i, k]
+    elif code == OP_TU:
+        for i in range(3):
+            M[i, 3] += value * (M[i, 0] * ax[0] + M[i, 1] * ax[1] + M[i, 2] * ax[2])
+    elif code == OP_RU:
+        v = 1.0 - c
+        x, y, z = ax[0], ax[1], ax[2]
+        R00 = c + x * x * v
+        R01 = x * y * v - z * s
+        R02 = x * z * v + y * s
+        R10 = y * x * v + z * s
+        R11 = c + y * y * v
+        R12 = y * z * v - x * s
+        R20 = z * x * v - y * s
+        R21 = z * y * v + x * s
+        R22 = c + z * z * v
+        for i in range(3):
+            m0, m1, m2 = M[i, 0], M[i, 1], M[i, 2]
+            M[i, 0] = m0 * R00 + m1 * R10 + m2 * R20
+            M[i, 1] = m0 * R01 + m1 * R11 + m2 * R21
+            M[i, 2] = m0 * R02 + m1 * R12 + m2 * R22
+    else:  # rotation about a coordinate axis: columns j, k mix
+        a = code - OP_RX
+        j = (a + 1) % 3
+        k = (a + 2) % 3
+        for i in range(3):
+            mj = M[i, j]
+            mk = M[i, k]
+            M[i, j] = c * mj + s * mk
+            M[i, k] = c * mk - s * mj
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
+def _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base, pts_ee, want_jac,
+              r, JtJ, Jtr, fw, iw, Jb):
+    """Cost 0.5 r.r of the weighted residuals r (M,) = w (measured - predicted), written into r, and
+    with ``want_jac`` J^T J (n, n) and J^T r (n,) of the weighted prediction Jacobian J.
+
+    ip: the int program, rows ``[op_link, op_code, op_param, op_joint]`` padded to one width, then
+    ``link_parent``, ``target_link``, ``free_col`` (P,: column of each model parameter or -1),
+    ``fcol`` (6,: column of each base-frame variable or -1), ``tcol`` (3K,) -- see
+    :func:`robocal.calib._lm_compiled.program`; fw, iw: float and int scratch; Jb (n, m_b): the
+    unweighted Jacobian rows of a block of poses, transposed (a column per residual row), added to
+    J^T J and J^T r by :func:`_accumulate` whenever it is full.
+    """
+    n_ops = op_axis.shape[0]
+    op_link, op_code, op_param, op_joint = ip[0], ip[1], ip[2], ip[3]
+    link_parent, target_link, free_col, fcol, tcol = ip[4], ip[5], ip[6], ip[7], ip[8]
+    n_links = int(ip[9, 0])
+    N, K = measured.shape[0], measured.shape[1]
+    n = Jtr.shape[0]
+    o = 0
+    val = fw[o:o + n_ops]
+    o += n_ops
+    cv = fw[o:o + n_ops]
+    o += n_ops
+    sv = fw[o:o + n_ops]
+    o += n_ops
+    frames = fw[o:o + 12 * n_links].reshape((n_links, 3, 4))
+    o += 12 * n_links
+    tw = fw[o:o + 6 * n].reshape((n, 6))
+    o += 6 * n
+    M = fw[o:o + 12].reshape((3, 4))
+    o += 12
+    T = fw[o:o + 12].reshape((3, 4))
+    tw_link = iw[:n]
+    for t in range(n_ops):
+        v = params[op_param[t]]
+        val[t] = v
+        cv[t] = math.cos(v)
+        sv[t] = math.sin(v)
+    if want_jac:
+        for i in range(n):
+            Jtr[i] = 0.0
+            for j in range(n):
+                JtJ[i, j] = 0.0
+    cost2 = 0.0
+    row = 0
+    row0 = 0  # first residual row of the block in Jb
+    mb = Jb.shape[1]
+    for p in range(N):
+        if want_jac and row - row0 + 3 * K > mb:
+            _accumulate(Jb, r, row0, row, JtJ, Jtr)
+            row0 = row
+        cur = -1
+        for c in range(n):
+            tw_link[c] = -1
+        for t in range(n_ops):
+            L = op_link[t]
+            if L != cur:
+                if cur >= 0:
+                    _copy34(M, frames[cur])
+                cur = L
+                par = link_parent[L]
+                if par < 0:
+                    _copy34(base, M)
+                else:
+                    _copy34(frames[par], M)
+            code = op_code[t]
+            value = val[t]
+            c = cv[t]
+            s = sv[t]
+            jm = op_joint[t]
+            if jm >= 0:  # the joint's angle added: cos(a + q), sin(a + q) from the pose's cos q, sin q
+                value += qm[p, jm]
+                cj = cq[p, jm]
+                sj = sq[p, jm]
+                c, s = c * cj - s * sj, s * cj + c * sj
+            col = free_col[op_param[t]]
+            if want_jac and col >= 0:
+                tw_link[col] = L
+                tw0, tw1, tw2, tw3, tw4, tw5 = _op_twist(M, code, op_axis[t])
+                tw[col, 0] = tw0
+                tw[col, 1] = tw1
+                tw[col, 2] = tw2
+                tw[col, 3] = tw3
+                tw[col, 4] = tw4
+                tw[col, 5] = tw5
+            _apply_op_cs(M, code, value, c, s, op_axis[t])
+        if cur >= 0:
+            _copy34(M, frames[cur])
+        for k in range(K):
+            if not mask[p, k]:
+                continue
+            Lk = target_link[k]
+            _mul_affine(base if Lk < 0 else frames[Lk], tT[k], T)
+            a, b, cc = pts_ee[k, 0], pts_ee[k, 1], pts_ee[k, 2]
+            px = T[0, 0] * a + T[0, 1] * b + T[0, 2] * cc + T[0, 3]
+            py = T[1, 0] * a + T[1, 1] * b + T[1, 2] * cc + T[1, 3]
+            pz = T[2, 0] * a + T[2, 1] * b + T[2, 2] * cc + T[2, 3]
+            rx = w * (measured[p, k, 0] - px)
+            ry = w * (measured[p, k, 1] - py)
+            rz = w * (measured[p, k, 2] - pz)
+            r[row] = rx
+            r[row + 1] = ry
+            r[row + 2] = rz
+            cost2 += rx * rx + ry * ry + rz * rz
+            if want_jac:
+                _point_rows(Jb, row - row0, k, px, py, pz, T, tw, tw_link, anc, fcol, tcol)
+            row += 3
+    if want_jac and row > row0:
+        _accumulate(Jb, r, row0, row, JtJ, Jtr)
+    if want_jac:  # the rows above are unweighted: J = w Jb, and r already carries w
+        w2 = w * w
+        for i in range(n):
+            Jtr[i] *= w
+            for j in range(i, n):
+                JtJ[i, j] *= w2
+                JtJ[j, i] = JtJ[i, j]
+    return 0.5 * cost2
+
+
+@njit(cache=_CACHE, inline="always")
+def _point_rows(Jb, c0, k, px, py, pz, T, tw, tw_link, anc, fcol, tcol):
+    """The unweighted prediction Jacobian rows of point k at p = (px, py, pz) (instrument frame),
+    its end-effector frame T (3x4), into the columns c0, c0 + 1, c0 + 2 of Jb (n, m_b)."""
+    n = Jb.shape[0]
+    for c in range(n):  # geometry: the twist's velocity of the point, where it moves the point
+        Lc = tw_link[c]
+        if Lc < 0 or not anc[k, Lc]:
+            Jb[c, c0] = 0.0
+            Jb[c, c0 + 1] = 0.0
+            Jb[c, c0 + 2] = 0.0
+            continue
+        w0, w1, w2 = tw[c, 0], tw[c, 1], tw[c, 2]
+        Jb[c, c0] = w1 * pz - w2 * py + tw[c, 3]
+        Jb[c, c0 + 1] = w2 * px - w0 * pz + tw[c, 4]
+        Jb[c, c0 + 2] = w0 * py - w1 * px + tw[c, 5]
+    # base frame, left perturbation (w, v): dp = w x p + v
+    if fcol[0] >= 0:
+        Jb[fcol[0], c0 + 1] = -pz
+        Jb[fcol[0], c0 + 2] = py
+    if fcol[1] >= 0:
+        Jb[fcol[1], c0] = pz
+        Jb[fcol[1], c0 + 2] = -px
+    if fcol[2] >= 0:
+        Jb[fcol[2], c0] = -py
+        Jb[fcol[2], c0 + 1] = px
+    for i in range(3):
+        if fcol[3 + i] >= 0:
+            Jb[fcol[3 + i], c0 + i] = 1.0
+    for j in range(3):  # the point in its end-effector frame: moves with that frame's orientation
+        ct = tcol[3 * k + j]
+        if ct >= 0:
+            Jb[ct, c0] = T[0, j]
+            Jb[ct, c0 + 1] = T[1, j]
+            Jb[ct, c0 + 2] = T[2, j]
+
+
+@njit(cache=_CACHE, fastmath={"contract", "reassoc"}, nogil=True)
+def _accumulate(Jb, r, row0, row1, JtJ, Jtr):
+    """Add a block's rows: JtJ (upper triangle) += Jb Jb^T and Jtr += Jb r[row0:row1], with Jb
+    (n, m_b) holding rows row0..row1 of the unweighted Jacobian as columns 0..row1-row0: dot products
+    of contiguous rows, whose summation order is free (``reassoc``) so that they vectorize. The
+    indices are unsigned: a signed one makes numba guard against negative indices, and the guarded
+    loads are compiled as gathers (~2x slower)."""
+    n = Jb.shape[0]
+    m = np.uint64(row1 - row0)
+    rb = r[row0:row1]
+    one = np.uint64(1)
+    for i in range(n):
+        a = Jb[i]
+        acc = 0.0
+        t = np.uint64(0)
+        while t < m:
+            acc += a[t] * rb[t]
+            t += one
+        Jtr[i] += acc
+        for j in range(i, n):
+            b = Jb[j]
+            acc = 0.0
+            t = np.uint64(0)
+            while t < m:
+                acc += a[t] * b[t]
+                t += one
+            JtJ[i, j] += acc
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
+def _damped_solve(G, shift, g, L, x):
+    """x = (G + shift I)^-1 g (n_a,) by Cholesky into L (n_a, n_a); False (x undefined) when the
+    matrix is not positive definite, where LAPACK's ``dpotrf`` fails too (a pivot <= 0 or NaN)."""
+    na = g.shape[0]
+    for j in range(na):
+        d = G[j, j] + shift
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return False
+        d = math.sqrt(d)
+        L[j, j] = d
+        for i in range(j + 1, na):
+            e = G[i, j]
+            for k in range(j):
+                e -= L[i, k] * L[j, k]
+            L[i, j] = e / d
+    for i in range(na):  # L y = g
+        e = g[i]
+        for k in range(i):
+            e -= L[i, k] * x[k]
+        x[i] = e / L[i, i]
+    for i in range(na - 1, -1, -1):  # L^T x = y
+        e = x[i]
+        for k in range(i + 1, na):
+            e -= L[k, i] * x[k]
+        x[i] = e / L[i, i]
+    return True
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
+def _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t):
+    """The trial state (params_t, base_t, pts_t) = the state moved by ``step`` (n,): geometry
+    additive, the base frame by the left perturbation exp(w) (w, v), target points additive."""
+    fcol, tcol = ip[7], ip[8]
+    for i in range(params.shape[0]):
+        params_t[i] = params[i]
+    for c in range(step.shape[0]):
+        if gparam[c] >= 0:
+            params_t[gparam[c]] += step[c]
+    x = step[fcol[0]] if fcol[0] >= 0 else 0.0
+    y = step[fcol[1]] if fcol[1] >= 0 else 0.0
+    z = step[fcol[2]] if fcol[2] >= 0 else 0.0
+    th2 = x * x + y * y + z * z
+    th = math.sqrt(th2)
+    if th < 1e-6:  # robocal.transforms.rodrigues_coefficients
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:
+        a, b = math.sin(th) / th, (1.0 - math.cos(th)) / th2
+    R00, R01, R02 = 1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y
+    R10, R11, R12 = b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x
+    R20, R21, R22 = b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)
+    for j in range(4):
+        b0, b1, b2 = base[0, j], base[1, j], base[2, j]
+        base_t[0, j] = R00 * b0 + R01 * b1 + R02 * b2
+        base_t[1, j] = R10 * b0 + R11 * b1 + R12 * b2
+        base_t[2, j] = R20 * b0 + R21 * b1 + R22 * b2
+    for i in range(3):
+        if fcol[3 + i] >= 0:
+            base_t[i, 3] += step[fcol[3 + i]]
+    for k in range(pts.shape[0]):
+        for j in range(3):
+            ct = tcol[3 * k + j]
+            pts_t[k, j] = pts[k, j] + (step[ct] if ct >= 0 else 0.0)
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
+def lm_points(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, gparam, act, ctl,
+              params, base, pts, params_t, base_t, pts_t, r0, r, rt, JtJ, Jtr, JtJt, Jtrt, col_scale,
+              fw, iw, Jb, la, out):
+    """The damped Gauss-Newton (Levenberg-Marquardt) loop of ``DampedGaussNewton`` on the normal
+    equations of :func:`_evaluate`, from the state (params, base, pts), which ends as the last
+    accepted one; r0 the start's residuals, r and JtJ, Jtr the final ones; col_scale (n,) the
+    column norms of the start's Jacobian (zeros -> 1). Returns ``(last iteration, stop code)``;
+    ``out`` = [cost, optimality, relative predicted reduction (both set when no step reduces the
+    cost), lam].
+
+    ctl: [ftol, xtol, chi2_tol, gtol, stall_rtol, first iteration, max iterations]; act (n_a,): the
+    active columns; the *_t arrays, rt, JtJt, Jtrt: trial buffers; la: linear-algebra scratch.
+    """
+    ftol, xtol, chi2_tol, gtol, stall_rtol = ctl[0], ctl[1], ctl[2], ctl[3], ctl[4]
+    first, max_it = int(ctl[5]), int(ctl[6])
+    n = Jtr.shape[0]
+    na = act.shape[0]
+    M = r.shape[0]
+    G = la[:na * na].reshape((na, na))
+    L = la[na * na:2 * na * na].reshape((na, na))
+    o = 2 * na * na
+    g = la[o:o + na]
+    o += na
+    step_s = la[o:o + na]
+    o += na
+    step = la[o:o + n]
+    # a runtime bool, not the literal True: numba would compile a second _evaluate for a literal
+    with_jac = first >= 0
+    cost = _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base, pts, with_jac, r, JtJ, Jtr,
+                     fw, iw, Jb)
+    for i in range(M):
+        r0[i] = r[i]
+    for i in range(n):
+        d = math.sqrt(max(JtJ[i, i], 0.0))
+        col_scale[i] = d if d != 0.0 else 1.0
+    lam = 1e-3
+    refused_last = False
+    code = MAX_ITERATIONS
+    it = first + max_it - 1
+    out[1] = math.nan
+    out[2] = math.nan
+    for itn in range(first, first + max_it):
+        it = itn
+        g_max = -math.inf
+        g_inf = 0.0
+        for a in range(na):
+            ia = act[a]
+            ca = col_scale[ia]
+            g[a] = Jtr[ia] / ca
+            g_inf = max(g_inf, abs(g[a]))
+            for b in range(na):
+                G[a, b] = JtJ[ia, act[b]] / (ca * col_scale[act[b]])
+            g_max = max(g_max, G[a, a])
+        s_max = math.sqrt(g_max)
+        if g_inf <= 1e-14 * max(1.0, s_max * math.sqrt(2.0 * cost)):
+            code = GRADIENT_ZERO
+            break
+        found = False
+        c_t = cost
+        for attempt in range(_LINE_SEARCH_TRIES):
+            if not _damped_solve(G, lam * g_max, g, L, step_s):
+                lam *= 10.0
+                continue
+            for i in range(n):
+                step[i] = 0.0
+            for a in range(na):
+                step[act[a]] = step_s[a] / col_scale[act[a]]
+            _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t)
+            lazy = refused_last or attempt > 0
+            c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params_t, base_t, pts_t, not lazy,
+                            rt, JtJt, Jtrt, fw, iw, Jb)
+            if c_t < cost:
+                if lazy:
+                    c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params_t, base_t, pts_t,
+                                    with_jac, rt, JtJt, Jtrt, fw, iw, Jb)
+                refused_last = attempt > 0
+                found = True
+                break
+            lam *= 10.0
+        if not found:
+            predicted = math.inf
+            if _damped_solve(G, 1e-12 * g_max, g, L, step_s):
+                predicted = 0.0
+                for a in range(na):
+                    predicted += g[a] * step_s[a]
+                predicted *= 0.5
+            optimality = g_inf / max(s_max * math.sqrt(2.0 * cost), 1e-300)
+            rel = predicted / max(cost, 1e-300)
+            out[1] = optimality
+            out[2] = rel
+            code = STATIONARY if (optimality <= gtol or rel <= stall_rtol) else NOT_AT_MINIMUM
+            break
+        for i in range(params.shape[0]):
+            params[i] = params_t[i]
+        for i in range(3):
+            for j in range(4):
+                base[i, j] = base_t[i, j]
+        for k in range(pts.shape[0]):
+            for j in range(3):
+                pts[k, j] = pts_t[k, j]
+        for i in range(M):
+            r[i] = rt[i]
+        for i in range(n):
+            Jtr[i] = Jtrt[i]
+            for j in range(n):
+                JtJ[i, j] = JtJt[i, j]
+        lam = max(lam / 10.0, 1e-12)
+        dcost = cost - c_t
+        cost = c_t
+        if lam >= 1.0:  # a heavily damped step is short wherever it is: no convergence test
+            continue
+        if abs(dcost) <= ftol * max(cost, 1e-300):
+            code = FTOL
+            break
+        s2 = 2.0 * cost / max(M - na, 1)
+        if 2.0 * abs(dcost) <= chi2_tol * max(s2, 1e-300) and lam <= 1e-3:
+            code = CHI2
+            break
+        ss = 0.0
+        for a in range(na):
+            ss += step_s[a] * step_s[a]
+        if math.sqrt(ss) <= xtol * (1.0 + math.sqrt(2.0 * cost)):
+            code = XTOL
+            break
+    out[0] = cost
+    out[3] = lam
+    return it, code
