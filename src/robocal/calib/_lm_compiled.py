@@ -57,7 +57,7 @@ class _Packed:
         tl = np.array([model.end_effectors[e].link for e in ee], dtype=np.int64)
         self.tT = np.ascontiguousarray(np.array([np.asarray(model.end_effectors[e].T_link_ee, float)[:3] for e in ee],
                                                 dtype=float).reshape(K, 3, 4))
-        self.anc = np.ascontiguousarray(model._ee_ancestors[ee].reshape(K, n_links), dtype=np.bool_)
+        anc = model._ee_ancestors[ee].reshape(K, n_links)
         # column maps: model parameter -> column, column -> model parameter, frame / target variable -> column
         free_col = np.full(P, -1, dtype=np.int64)
         gparam = np.full(n, -1, dtype=np.int64)
@@ -77,8 +77,16 @@ class _Packed:
             tcol[np.arange(3 * K) if loc is None else loc] = np.arange(c0, c1)
         self.gparam = gparam
         n_ops = len(model._op_code)
+        gcols = np.flatnonzero(gparam >= 0)
+        # the link each geometry column's parameter acts on, and which points that link carries
+        col_link = np.full(n, -1, dtype=np.int64)
+        pcol = free_col[model._op_param]
+        col_link[pcol[pcol >= 0]] = model._op_link[pcol >= 0]
+        gmove = np.zeros((K, n), dtype=np.bool_)
+        gmove[:, gcols] = anc[:, col_link[gcols]]
+        self.gmove = np.ascontiguousarray(gmove)
         rows = [model._op_link, model._op_code, model._op_param, model._op_joint, model._link_parent, tl, free_col,
-                fcol, tcol, np.array([n_links])]
+                fcol, tcol, np.array([n_links, len(gcols)]), gcols]
         width = max(len(x) for x in rows)
         ip = np.full((len(rows), width), -1, dtype=np.int64)
         for i, x in enumerate(rows):
@@ -109,11 +117,11 @@ def _kernel_args(pk: _Packed, state, active, ctl):
     params = np.array(state.params, dtype=float)
     base = np.ascontiguousarray(state.bases[0, :3], dtype=float)
     pts = np.array(state.targets, dtype=float).reshape(pk.K, 3)
-    return (pk.ip, pk.op_axis, pk.qm, pk.cq, pk.sq, pk.tT, pk.anc, pk.measured, pk.mask, pk.w, pk.gparam, act, ctl,
+    return (pk.ip, pk.op_axis, pk.qm, pk.cq, pk.sq, pk.tT, pk.gmove, pk.measured, pk.mask, pk.w, pk.gparam, act, ctl,
             params, base, pts, np.empty_like(params), np.empty_like(base), np.empty_like(pts),
             np.empty(M), np.empty(M), np.empty(M), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty(n),
-            np.empty(n), np.empty(pk.fw_size), np.empty(max(n, 1), dtype=np.int64), np.empty((n, pk.block_rows)),
-            np.empty(2 * na * na + 2 * na + n), np.empty(4))
+            np.empty(n), np.empty(pk.fw_size), np.empty((n, pk.block_rows)),
+            np.empty(2 * na * na + 2 * na + n), np.empty((na, na)), np.empty(5))
 
 
 def _ready(dispatcher, args) -> bool:
@@ -148,10 +156,18 @@ def use_compiled(problem, n_points: int) -> bool:
         return True
     from . import _lm_kernels
 
+    if _lm_kernels.lm_points.signatures:  # compiled or loaded in this process
+        return True
+    global _cache_checked
+    if _cache_checked:  # not in the cache at the first look: it is not compiled by looking again
+        return False
+    _cache_checked = True
     pk = _packed(problem)
-    state = problem.initial_state()
     active = np.ones(pk.n, dtype=bool)
-    return _ready(_lm_kernels.lm_points, _kernel_args(pk, state, active, np.zeros(7)))
+    return _ready(_lm_kernels.lm_points, _kernel_args(pk, problem.initial_state(), active, np.zeros(7)))
+
+
+_cache_checked = False
 
 
 class CompiledPointLM:
@@ -184,8 +200,12 @@ class CompiledPointLM:
         self.r0, self.r = args[19], args[20]
         self.J = NormalEquations(args[22], args[23])
         self.col_scale = args[26]
-        cost, optimality, rel, self.lam = args[31]
+        cost, optimality, rel, self.lam, pd = args[31]
         self.cost = float(cost)
+        na = len(args[11])
+        #: the final scaled normal matrix of the active columns and its inverse (None if not positive definite)
+        self.G = args[29][:na * na].reshape(na, na)
+        self.G_inv = args[30] if pd else None
         bases = np.array(self.state0.bases, dtype=float)
         bases[0, :3] = base
         self.state = self.state0._replace(params=params, bases=bases, targets=pts.reshape(np.shape(self.state0.targets)))

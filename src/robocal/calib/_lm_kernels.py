@@ -76,15 +76,17 @@ def _apply_op_cs(M, code, value, c, s, ax):
 
 
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
-def _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base, pts_ee, want_jac,
-              r, JtJ, Jtr, fw, iw, Jb):
+def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, base, pts_ee, want_jac,
+              r, JtJ, Jtr, fw, Jb):
     """Cost 0.5 r.r of the weighted residuals r (M,) = w (measured - predicted), written into r, and
     with ``want_jac`` J^T J (n, n) and J^T r (n,) of the weighted prediction Jacobian J.
 
-    ip: the int program, rows ``[op_link, op_code, op_param, op_joint]`` padded to one width, then
-    ``link_parent``, ``target_link``, ``free_col`` (P,: column of each model parameter or -1),
-    ``fcol`` (6,: column of each base-frame variable or -1), ``tcol`` (3K,) -- see
-    :func:`robocal.calib._lm_compiled.program`; fw, iw: float and int scratch; Jb (n, m_b): the
+    ip: the int program, rows ``op_link, op_code, op_param, op_joint`` (n_ops,) padded to one width,
+    then ``link_parent``, ``target_link`` (K,), ``free_col`` (P,: column of each model parameter or
+    -1), ``fcol`` (6,: column of each base-frame variable or -1), ``tcol`` (3K,: column of each
+    target coordinate or -1), ``[n_links, n_geometry_columns]``, the geometry columns; gmove (K, n):
+    geometry column c moves point k (its parameter acts on a link carrying it) -- see
+    :class:`robocal.calib._lm_compiled._Packed`; fw: float scratch; Jb (n, m_b): the
     unweighted Jacobian rows of a block of poses, transposed (a column per residual row), added to
     J^T J and J^T r by :func:`_accumulate` whenever it is full.
     """
@@ -108,7 +110,8 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base,
     M = fw[o:o + 12].reshape((3, 4))
     o += 12
     T = fw[o:o + 12].reshape((3, 4))
-    tw_link = iw[:n]
+    gcols = ip[10]  # the geometry columns (padded with -1)
+    ng = int(ip[9, 1])
     for t in range(n_ops):
         v = params[op_param[t]]
         val[t] = v
@@ -128,8 +131,6 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base,
             _accumulate(Jb, r, row0, row, JtJ, Jtr)
             row0 = row
         cur = -1
-        for c in range(n):
-            tw_link[c] = -1
         for t in range(n_ops):
             L = op_link[t]
             if L != cur:
@@ -153,7 +154,6 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base,
                 c, s = c * cj - s * sj, s * cj + c * sj
             col = free_col[op_param[t]]
             if want_jac and col >= 0:
-                tw_link[col] = L
                 tw0, tw1, tw2, tw3, tw4, tw5 = _op_twist(M, code, op_axis[t])
                 tw[col, 0] = tw0
                 tw[col, 1] = tw1
@@ -181,7 +181,7 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base,
             r[row + 2] = rz
             cost2 += rx * rx + ry * ry + rz * rz
             if want_jac:
-                _point_rows(Jb, row - row0, k, px, py, pz, T, tw, tw_link, anc, fcol, tcol)
+                _point_rows(Jb, row - row0, k, px, py, pz, T, tw, gcols, ng, gmove, fcol, tcol)
             row += 3
     if want_jac and row > row0:
         _accumulate(Jb, r, row0, row, JtJ, Jtr)
@@ -196,13 +196,13 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base,
 
 
 @njit(cache=_CACHE, inline="always")
-def _point_rows(Jb, c0, k, px, py, pz, T, tw, tw_link, anc, fcol, tcol):
+def _point_rows(Jb, c0, k, px, py, pz, T, tw, gcols, ng, gmove, fcol, tcol):
     """The unweighted prediction Jacobian rows of point k at p = (px, py, pz) (instrument frame),
-    its end-effector frame T (3x4), into the columns c0, c0 + 1, c0 + 2 of Jb (n, m_b)."""
-    n = Jb.shape[0]
-    for c in range(n):  # geometry: the twist's velocity of the point, where it moves the point
-        Lc = tw_link[c]
-        if Lc < 0 or not anc[k, Lc]:
+    its end-effector frame T (3x4), into the columns c0, c0 + 1, c0 + 2 of Jb (n, m_b); every
+    column of the problem is a geometry, base-frame or target column, each written here."""
+    for gi in range(ng):  # geometry: the twist's velocity of the point, where it moves the point
+        c = gcols[gi]
+        if not gmove[k, c]:
             Jb[c, c0] = 0.0
             Jb[c, c0 + 1] = 0.0
             Jb[c, c0 + 2] = 0.0
@@ -212,24 +212,42 @@ def _point_rows(Jb, c0, k, px, py, pz, T, tw, tw_link, anc, fcol, tcol):
         Jb[c, c0 + 1] = w2 * px - w0 * pz + tw[c, 4]
         Jb[c, c0 + 2] = w0 * py - w1 * px + tw[c, 5]
     # base frame, left perturbation (w, v): dp = w x p + v
-    if fcol[0] >= 0:
-        Jb[fcol[0], c0 + 1] = -pz
-        Jb[fcol[0], c0 + 2] = py
-    if fcol[1] >= 0:
-        Jb[fcol[1], c0] = pz
-        Jb[fcol[1], c0 + 2] = -px
-    if fcol[2] >= 0:
-        Jb[fcol[2], c0] = -py
-        Jb[fcol[2], c0 + 1] = px
+    c = fcol[0]
+    if c >= 0:
+        Jb[c, c0] = 0.0
+        Jb[c, c0 + 1] = -pz
+        Jb[c, c0 + 2] = py
+    c = fcol[1]
+    if c >= 0:
+        Jb[c, c0] = pz
+        Jb[c, c0 + 1] = 0.0
+        Jb[c, c0 + 2] = -px
+    c = fcol[2]
+    if c >= 0:
+        Jb[c, c0] = -py
+        Jb[c, c0 + 1] = px
+        Jb[c, c0 + 2] = 0.0
     for i in range(3):
-        if fcol[3 + i] >= 0:
-            Jb[fcol[3 + i], c0 + i] = 1.0
+        c = fcol[3 + i]
+        if c >= 0:
+            Jb[c, c0] = 0.0
+            Jb[c, c0 + 1] = 0.0
+            Jb[c, c0 + 2] = 0.0
+            Jb[c, c0 + i] = 1.0
     for j in range(3):  # the point in its end-effector frame: moves with that frame's orientation
         ct = tcol[3 * k + j]
         if ct >= 0:
             Jb[ct, c0] = T[0, j]
             Jb[ct, c0 + 1] = T[1, j]
             Jb[ct, c0 + 2] = T[2, j]
+    for kk in range(tcol.shape[0] // 3):  # the other points' columns do not move this one
+        if kk != k:
+            for j in range(3):
+                ct = tcol[3 * kk + j]
+                if ct >= 0:
+                    Jb[ct, c0] = 0.0
+                    Jb[ct, c0 + 1] = 0.0
+                    Jb[ct, c0 + 2] = 0.0
 
 
 @njit(cache=_CACHE, fastmath={"contract", "reassoc"}, nogil=True)
@@ -262,10 +280,10 @@ def _accumulate(Jb, r, row0, row1, JtJ, Jtr):
 
 
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
-def _damped_solve(G, shift, g, L, x):
-    """x = (G + shift I)^-1 g (n_a,) by Cholesky into L (n_a, n_a); False (x undefined) when the
-    matrix is not positive definite, where LAPACK's ``dpotrf`` fails too (a pivot <= 0 or NaN)."""
-    na = g.shape[0]
+def _cholesky(G, shift, L):
+    """Lower Cholesky factor L (n_a, n_a) of G + shift I; False when that matrix is not positive
+    definite, where LAPACK's ``dpotrf`` fails too (a pivot <= 0 or NaN)."""
+    na = G.shape[0]
     for j in range(na):
         d = G[j, j] + shift
         for k in range(j):
@@ -279,6 +297,13 @@ def _damped_solve(G, shift, g, L, x):
             for k in range(j):
                 e -= L[i, k] * L[j, k]
             L[i, j] = e / d
+    return True
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
+def _cho_solve(L, g, x):
+    """x = (L L^T)^-1 g (n_a,) from the factor of :func:`_cholesky`."""
+    na = g.shape[0]
     for i in range(na):  # L y = g
         e = g[i]
         for k in range(i):
@@ -289,7 +314,6 @@ def _damped_solve(G, shift, g, L, x):
         for k in range(i + 1, na):
             e -= L[k, i] * x[k]
         x[i] = e / L[i, i]
-    return True
 
 
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
@@ -329,15 +353,16 @@ def _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t):
 
 
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
-def lm_points(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, gparam, act, ctl,
+def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, gparam, act, ctl,
               params, base, pts, params_t, base_t, pts_t, r0, r, rt, JtJ, Jtr, JtJt, Jtrt, col_scale,
-              fw, iw, Jb, la, out):
+              fw, Jb, la, Gi, out):
     """The damped Gauss-Newton (Levenberg-Marquardt) loop of ``DampedGaussNewton`` on the normal
     equations of :func:`_evaluate`, from the state (params, base, pts), which ends as the last
     accepted one; r0 the start's residuals, r and JtJ, Jtr the final ones; col_scale (n,) the
     column norms of the start's Jacobian (zeros -> 1). Returns ``(last iteration, stop code)``;
     ``out`` = [cost, optimality, relative predicted reduction (both set when no step reduces the
-    cost), lam].
+    cost), lam, 1 if the final G is positive definite]; la starts with the final scaled normal
+    matrix G (n_a, n_a) of the active columns, Gi its inverse (when positive definite).
 
     ctl: [ftol, xtol, chi2_tol, gtol, stall_rtol, first iteration, max iterations]; act (n_a,): the
     active columns; the *_t arrays, rt, JtJt, Jtrt: trial buffers; la: linear-algebra scratch.
@@ -357,8 +382,8 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, gparam, act, 
     step = la[o:o + n]
     # a runtime bool, not the literal True: numba would compile a second _evaluate for a literal
     with_jac = first >= 0
-    cost = _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params, base, pts, with_jac, r, JtJ, Jtr,
-                     fw, iw, Jb)
+    cost = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, base, pts, with_jac, r, JtJ, Jtr,
+                     fw, Jb)
     for i in range(M):
         r0[i] = r[i]
     for i in range(n):
@@ -372,16 +397,7 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, gparam, act, 
     out[2] = math.nan
     for itn in range(first, first + max_it):
         it = itn
-        g_max = -math.inf
-        g_inf = 0.0
-        for a in range(na):
-            ia = act[a]
-            ca = col_scale[ia]
-            g[a] = Jtr[ia] / ca
-            g_inf = max(g_inf, abs(g[a]))
-            for b in range(na):
-                G[a, b] = JtJ[ia, act[b]] / (ca * col_scale[act[b]])
-            g_max = max(g_max, G[a, a])
+        g_max, g_inf = _scaled_system(JtJ, Jtr, act, col_scale, G, g)
         s_max = math.sqrt(g_max)
         if g_inf <= 1e-14 * max(1.0, s_max * math.sqrt(2.0 * cost)):
             code = GRADIENT_ZERO
@@ -389,28 +405,30 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, gparam, act, 
         found = False
         c_t = cost
         for attempt in range(_LINE_SEARCH_TRIES):
-            if not _damped_solve(G, lam * g_max, g, L, step_s):
+            if not _cholesky(G, lam * g_max, L):
                 lam *= 10.0
                 continue
+            _cho_solve(L, g, step_s)
             for i in range(n):
                 step[i] = 0.0
             for a in range(na):
                 step[act[a]] = step_s[a] / col_scale[act[a]]
             _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t)
             lazy = refused_last or attempt > 0
-            c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params_t, base_t, pts_t, not lazy,
-                            rt, JtJt, Jtrt, fw, iw, Jb)
+            c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params_t, base_t, pts_t, not lazy,
+                            rt, JtJt, Jtrt, fw, Jb)
             if c_t < cost:
                 if lazy:
-                    c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, params_t, base_t, pts_t,
-                                    with_jac, rt, JtJt, Jtrt, fw, iw, Jb)
+                    c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params_t, base_t, pts_t,
+                                    with_jac, rt, JtJt, Jtrt, fw, Jb)
                 refused_last = attempt > 0
                 found = True
                 break
             lam *= 10.0
         if not found:
             predicted = math.inf
-            if _damped_solve(G, 1e-12 * g_max, g, L, step_s):
+            if _cholesky(G, 1e-12 * g_max, L):
+                _cho_solve(L, g, step_s)
                 predicted = 0.0
                 for a in range(na):
                     predicted += g[a] * step_s[a]
@@ -455,4 +473,34 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, anc, measured, mask, w, gparam, act, 
             break
     out[0] = cost
     out[3] = lam
+    # the final scaled normal matrix G and, when positive definite, its inverse (the covariance's core)
+    _scaled_system(JtJ, Jtr, act, col_scale, G, g)
+    out[4] = 0.0
+    if _cholesky(G, 0.0, L):
+        out[4] = 1.0
+        for j in range(na):
+            for i in range(na):
+                g[i] = 0.0
+            g[j] = 1.0
+            _cho_solve(L, g, step_s)
+            for i in range(na):
+                Gi[i, j] = step_s[i]
     return it, code
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
+def _scaled_system(JtJ, Jtr, act, col_scale, G, g):
+    """G (n_a, n_a) = the active block of JtJ / (s s^T), g (n_a,) = Jtr / s; returns (max diag G,
+    max |g|)."""
+    na = act.shape[0]
+    g_max = -math.inf
+    g_inf = 0.0
+    for a in range(na):
+        ia = act[a]
+        ca = col_scale[ia]
+        g[a] = Jtr[ia] / ca
+        g_inf = max(g_inf, abs(g[a]))
+        for b in range(na):
+            G[a, b] = JtJ[ia, act[b]] / (ca * col_scale[act[b]])
+        g_max = max(g_max, G[a, a])
+    return g_max, g_inf
