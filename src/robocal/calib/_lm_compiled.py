@@ -4,10 +4,13 @@ hands :func:`robocal.calib.solve` the same iteration record as the Python loop.
 
 :func:`robocal.calib.solve` uses it for the problems :func:`robocal.calib._normal.supports` accepts
 (one station, point measurements only, LM, linear loss, no prior, no ``progress`` callback), when
-:func:`use_compiled` says so: the kernels cost ~COMPILE seconds to compile once, so by default they
-run only when they are already compiled (in this process or in numba's on-disk cache) or when the
-problem is large enough that they are worth compiling (:data:`COMPILE_MIN_POINTS` measured points);
-``ROBOCAL_COMPILED_LM=always`` compiles them on first use, ``never`` keeps the Python loop.
+:func:`use_compiled` says so. The kernels take ~6 s of CPU to compile once (3x the calibration's
+``target_points`` kernel), which a first ``robocal calibrate`` must not pay (issue 34 item 2), so by
+default they run only when they are already compiled -- in this process or in numba's on-disk cache --
+or when the problem has at least :data:`COMPILE_MIN_POINTS` measured points.
+``ROBOCAL_COMPILED_LM=always`` compiles them on first use, ``never`` keeps the Python loop, and
+``python -c "from robocal.calib._lm_compiled import compile_kernels; compile_kernels()"`` compiles
+them once ahead (:func:`compile_kernels`).
 
 Same iteration, damping, line search and stop rules as :class:`~robocal.calib._iterate.DampedGaussNewton`
 (the stop reasons are those strings); the normal equations are summed pose by pose in another order
@@ -31,8 +34,9 @@ __all__ = ["CompiledPointLM", "use_compiled", "COMPILE_MIN_POINTS", "ENV"]
 ENV = "ROBOCAL_COMPILED_LM"
 #: poses per block of Jacobian rows kept for the vectorized J^T J sums (n x 3 K x 64 floats)
 POSE_BLOCK = 64
-#: measured points from which ``auto`` compiles the loop when it is not compiled yet
-COMPILE_MIN_POINTS = 20000
+#: measured points from which ``auto`` compiles the loop when it is not compiled yet: there one
+#: solve in the Python loop takes seconds, about the loop's one-time compile (~6 s of CPU)
+COMPILE_MIN_POINTS = 200_000
 
 
 class _Packed:
@@ -47,7 +51,7 @@ class _Packed:
         self.K = K = ch.n_points
         self.P = P = len(model.params)
         self.m_rows = int(res.mask.sum()) * 3
-        self.measured = np.ascontiguousarray(res.measured, dtype=float)
+        self.measured = _read_only(res.measured)
         self.mask = np.ascontiguousarray(res.mask, dtype=np.bool_)
         self.w = float(res.weight)
         qm = np.ascontiguousarray(ch._q_kernel @ model.coupling.T, dtype=float)
@@ -98,6 +102,14 @@ class _Packed:
         self.block_rows = 3 * K * max(1, min(POSE_BLOCK, len(qm)))
         # the problem's fixed arrays, to tell whether this packing still describes it
         self.key = (res.measured, ch._q_kernel, problem._plan)
+
+
+def _read_only(a) -> np.ndarray:
+    """A read-only C-contiguous float view (or copy) of ``a``: one numba type whether the caller's
+    array is writeable or not (a writeable one would need a second compiled specialisation)."""
+    v = np.ascontiguousarray(a, dtype=float).view()
+    v.flags.writeable = False
+    return v
 
 
 def _packed(problem) -> _Packed:
@@ -170,6 +182,28 @@ def use_compiled(problem, n_points: int) -> bool:
 _cache_checked = False
 
 
+def compile_kernels() -> None:
+    """Compile the loop now (~6 s of CPU once; numba caches the machine code on disk, and every later
+    process uses the compiled loop by default)."""
+    from . import _lm_kernels
+
+    pk = _Packed.__new__(_Packed)  # an empty problem of the right array types: nothing is computed
+    pk.n, pk.K, pk.m_rows, pk.w = 1, 1, 0, 1.0
+    pk.ip = np.full((11, 2), -1, dtype=np.int64)
+    pk.ip[9] = 0
+    pk.op_axis = np.zeros((0, 3))
+    pk.qm = pk.cq = pk.sq = np.zeros((0, 1))
+    pk.tT, pk.gmove = np.zeros((1, 3, 4)), np.zeros((1, 1), dtype=np.bool_)
+    pk.measured, pk.mask = _read_only(np.zeros((0, 1, 3))), np.zeros((0, 1), dtype=np.bool_)
+    pk.gparam = np.full(1, -1, dtype=np.int64)
+    pk.fw_size, pk.block_rows = 32, 3
+
+    class _State:
+        params, bases, targets = np.zeros(1), np.eye(4)[None], np.zeros((1, 3))
+
+    _lm_kernels.lm_points(*_kernel_args(pk, _State, np.ones(1, dtype=bool), np.zeros(7)))
+
+
 class CompiledPointLM:
     """The record :func:`robocal.calib.solve` reads from an LM run (``state``, ``r``, ``J`` as
     :class:`~robocal.calib._normal.NormalEquations`, ``col_scale``, ``it``, ``converged``,
@@ -228,3 +262,4 @@ def _reason(code, optimality, rel, chi2_tol):
     if code == lk.CHI2:
         return _iterate.chi2_reason(chi2_tol), True
     return "step below xtol", True
+
