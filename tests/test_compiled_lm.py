@@ -140,3 +140,19 @@ def test_compiled_loop_only_where_it_applies(monkeypatch):
         warnings.simplefilter("ignore")
         huber = solve(problem, auto_identifiable=False, loss="huber")
     assert huber.converged
+
+
+def test_compile_ahead_gives_the_solver_s_specialisation(monkeypatch):
+    # compile_kernels() compiles the loop for the argument types a real solve passes (one
+    # specialisation: a second one would cost another ~6 s compile in the first real solve)
+    from numba import typeof
+
+    from robocal.calib import _lm_kernels
+
+    problem, _, _ = _campaign(n_poses=20, seed=7, identifiable_only=True)
+    pk = _lm_compiled._packed(problem)
+    real = _lm_compiled._kernel_args(pk, problem.initial_state(), np.ones(pk.n, dtype=bool), np.zeros(7))
+    seen = []
+    monkeypatch.setattr(_lm_kernels, "lm_points", lambda *a: seen.append(a))
+    _lm_compiled.compile_kernels()
+    assert [typeof(a) for a in seen[0]] == [typeof(a) for a in real]
