@@ -90,7 +90,7 @@ class _Packed:
         gmove[:, gcols] = anc[:, col_link[gcols]]
         self.gmove = np.ascontiguousarray(gmove)
         rows = [model._op_link, model._op_code, model._op_param, model._op_joint, model._link_parent, tl, free_col,
-                fcol, tcol, np.array([n_links, len(gcols)]), gcols]
+                fcol, tcol, np.array([n_links, len(gcols)]), gcols, pcol]
         width = max(len(x) for x in rows)
         ip = np.full((len(rows), width), -1, dtype=np.int64)
         for i, x in enumerate(rows):
@@ -189,7 +189,7 @@ def compile_kernels() -> None:
 
     pk = _Packed.__new__(_Packed)  # an empty problem of the right array types: nothing is computed
     pk.n, pk.K, pk.m_rows, pk.w = 1, 1, 0, 1.0
-    pk.ip = np.full((11, 2), -1, dtype=np.int64)
+    pk.ip = np.full((12, 2), -1, dtype=np.int64)
     pk.ip[9] = 0
     pk.op_axis = np.zeros((0, 3))
     pk.qm = pk.cq = pk.sq = np.zeros((0, 1))

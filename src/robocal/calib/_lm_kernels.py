@@ -8,7 +8,8 @@ no prior), written out here so that no Python runs between the first evaluation 
 Per evaluation: the cosines and sines of the operations' parameter values once; per pose the link
 frames by the operation program (a joint's rotation by the angle-sum formula from the pose's joint
 cosines and sines, computed once per solve, instead of a sine and cosine per operation and pose),
-the twist of every free geometry parameter where it acts (``_op_twist`` of the kinematics kernels),
+the twist of every free geometry parameter where it acts (as ``_op_twist`` of the kinematics kernels,
+an axis-aligned operation's direction read off M),
 each measured point, its weighted residual and its three Jacobian rows (geometry from the twists,
 the base frame's left perturbation ``w x p + v``, the target point's end-effector orientation),
 added to ``J^T J`` (upper triangle) and ``J^T r`` as one rank-3 update. J is never stored.
@@ -25,7 +26,7 @@ import numpy as np
 
 from numba import njit
 
-from ..kinematics._kernels import _copy34, _mul_affine, _op_twist
+from ..kinematics._kernels import _copy34, _mul_affine
 from ..kinematics.links import OP_RU, OP_RX, OP_TU, OP_TX, OP_TY, OP_TZ
 
 _CACHE = True
@@ -84,7 +85,8 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, bas
     ip: the int program, rows ``op_link, op_code, op_param, op_joint`` (n_ops,) padded to one width,
     then ``link_parent``, ``target_link`` (K,), ``free_col`` (P,: column of each model parameter or
     -1), ``fcol`` (6,: column of each base-frame variable or -1), ``tcol`` (3K,: column of each
-    target coordinate or -1), ``[n_links, n_geometry_columns]``, the geometry columns; gmove (K, n):
+    target coordinate or -1), ``[n_links, n_geometry_columns]``, the geometry columns, the column of
+    each operation's parameter (n_ops,) or -1; gmove (K, n):
     geometry column c moves point k (its parameter acts on a link carrying it) -- see
     :class:`robocal.calib._lm_compiled._Packed`; fw: float scratch; Jb (n, m_b): the
     unweighted Jacobian rows of a block of poses, transposed (a column per residual row), added to
@@ -111,6 +113,7 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, bas
     o += 12
     T = fw[o:o + 12].reshape((3, 4))
     gcols = ip[10]  # the geometry columns (padded with -1)
+    op_col = ip[11]  # the column of each operation's parameter, or -1
     ng = int(ip[9, 1])
     for t in range(n_ops):
         v = params[op_param[t]]
@@ -152,15 +155,31 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, bas
                 cj = cq[p, jm]
                 sj = sq[p, jm]
                 c, s = c * cj - s * sj, s * cj + c * sj
-            col = free_col[op_param[t]]
-            if want_jac and col >= 0:
-                tw0, tw1, tw2, tw3, tw4, tw5 = _op_twist(M, code, op_axis[t])
-                tw[col, 0] = tw0
-                tw[col, 1] = tw1
-                tw[col, 2] = tw2
-                tw[col, 3] = tw3
-                tw[col, 4] = tw4
-                tw[col, 5] = tw5
+            col = op_col[t]
+            if want_jac and col >= 0:  # the operation's spatial twist (omega, v) at M
+                if code < OP_RU:  # about / along a coordinate axis: its direction is a column of M
+                    ia = code % 3
+                    w0, w1, w2 = M[0, ia], M[1, ia], M[2, ia]
+                else:
+                    ax = op_axis[t]
+                    w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
+                    w1 = M[1, 0] * ax[0] + M[1, 1] * ax[1] + M[1, 2] * ax[2]
+                    w2 = M[2, 0] * ax[0] + M[2, 1] * ax[1] + M[2, 2] * ax[2]
+                if code < OP_TX or code == OP_RU:  # a rotation: v = o x omega
+                    ox, oy, oz = M[0, 3], M[1, 3], M[2, 3]
+                    tw[col, 0] = w0
+                    tw[col, 1] = w1
+                    tw[col, 2] = w2
+                    tw[col, 3] = oy * w2 - oz * w1
+                    tw[col, 4] = oz * w0 - ox * w2
+                    tw[col, 5] = ox * w1 - oy * w0
+                else:  # a translation
+                    tw[col, 0] = 0.0
+                    tw[col, 1] = 0.0
+                    tw[col, 2] = 0.0
+                    tw[col, 3] = w0
+                    tw[col, 4] = w1
+                    tw[col, 5] = w2
             _apply_op_cs(M, code, value, c, s, op_axis[t])
         if cur >= 0:
             _copy34(M, frames[cur])
