@@ -94,7 +94,7 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, bas
     """
     n_ops = op_axis.shape[0]
     op_link, op_code, op_param, op_joint = ip[0], ip[1], ip[2], ip[3]
-    link_parent, target_link, free_col, fcol, tcol = ip[4], ip[5], ip[6], ip[7], ip[8]
+    link_parent, target_link, fcol, tcol = ip[4], ip[5], ip[7], ip[8]
     n_links = int(ip[9, 0])
     N, K = measured.shape[0], measured.shape[1]
     n = Jtr.shape[0]
