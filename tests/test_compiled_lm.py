@@ -130,12 +130,17 @@ def test_compiled_loop_only_where_it_applies(monkeypatch):
     assert not _lm_compiled.use_compiled(problem, 40)
     monkeypatch.setenv(_lm_compiled.ENV, "always")
     assert _lm_compiled.use_compiled(problem, 40)
-    # a progress callback or a robust loss keeps the Python loop (per-iteration calls, reweighting)
-    seen = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = solve(problem, auto_identifiable=False, progress=lambda it, cost: seen.append(it))
-    assert seen == list(range(1, res.iterations + 1))
+    # progress(iteration, cost) gets the Python loop's calls (after the compiled loop returns)
+    seen = {}
+    for loop in ("always", "never"):
+        monkeypatch.setenv(_lm_compiled.ENV, loop)
+        calls = seen[loop] = []
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = solve(problem, auto_identifiable=False, progress=lambda it, cost, calls=calls: calls.append((it, cost)))
+        assert [it for it, _ in calls] == list(range(1, res.iterations + 1))
+    np.testing.assert_allclose([c for _, c in seen["always"]], [c for _, c in seen["never"]], rtol=1e-9)
+    # a robust loss keeps the Python loop (reweighting per iteration)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         huber = solve(problem, auto_identifiable=False, loss="huber")

@@ -3,7 +3,7 @@
 hands :func:`robocal.calib.solve` the same iteration record as the Python loop.
 
 :func:`robocal.calib.solve` uses it for the problems :func:`robocal.calib._normal.supports` accepts
-(one station, point measurements only, LM, linear loss, no prior, no ``progress`` callback), when
+(one station, point measurements only, LM, linear loss, no prior), when
 :func:`use_compiled` says so. The kernels take ~6 s of CPU to compile once (3x the calibration's
 ``target_points`` kernel), which a first ``robocal calibrate`` must not pay (issue 34 item 2), so by
 default they run only when they are already compiled -- in this process or in numba's on-disk cache --
@@ -133,7 +133,7 @@ def _kernel_args(pk: _Packed, state, active, ctl):
             params, base, pts, np.empty_like(params), np.empty_like(base), np.empty_like(pts),
             np.empty(M), np.empty(M), np.empty(M), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty(n),
             np.empty(n), np.empty(pk.fw_size), np.empty((n, pk.block_rows)),
-            np.empty(2 * na * na + 2 * na + n), np.empty((na, na)), np.empty(5))
+            np.empty(2 * na * na + 2 * na + n), np.empty((na, na)), np.empty(5), np.full(max(int(ctl[6]), 1), np.nan))
 
 
 def _ready(dispatcher, args) -> bool:
@@ -208,12 +208,15 @@ class CompiledPointLM:
     """The record :func:`robocal.calib.solve` reads from an LM run (``state``, ``r``, ``J`` as
     :class:`~robocal.calib._normal.NormalEquations`, ``col_scale``, ``it``, ``converged``,
     ``reason``, ``weights``, ``rejected``, ``pose_of_row``, ``robust``), the loop run by
-    :func:`robocal.calib._lm_kernels.lm_points` from ``state``; ``r0`` the start's residuals."""
+    :func:`robocal.calib._lm_kernels.lm_points` from ``state``; ``r0`` the start's residuals.
+    ``progress(iteration, cost)`` is called for every accepted step as the Python loop does, but
+    when the compiled loop has returned."""
 
     robust = False
 
-    def __init__(self, problem, state, labels, active, *, ftol, xtol, chi2_tol):
+    def __init__(self, problem, state, labels, active, *, ftol, xtol, chi2_tol, progress=None):
         self.problem, self.state0, self.active = problem, state, np.asarray(active, dtype=bool)
+        self.progress = progress
         self.tol = (ftol, xtol, chi2_tol)
         self.n_poses = problem.n_poses
         self.pose_of_row = np.where(labels[:, 0] < 0, self.n_poses, labels[:, 0])
@@ -245,6 +248,10 @@ class CompiledPointLM:
         self.state = self.state0._replace(params=params, bases=bases, targets=pts.reshape(np.shape(self.state0.targets)))
         self.it = int(it)
         self.reason, self.converged = _reason(int(code), float(optimality), float(rel), self.tol[2])
+        if self.progress is not None:  # the Python loop's calls, after the fact (the loop takes milliseconds)
+            for i, c in enumerate(args[32]):
+                if np.isfinite(c):
+                    self.progress(first_iteration + i, float(c))
 
 
 def _reason(code, optimality, rel, chi2_tol):

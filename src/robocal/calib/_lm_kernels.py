@@ -374,14 +374,15 @@ def _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t):
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
 def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, gparam, act, ctl,
               params, base, pts, params_t, base_t, pts_t, r0, r, rt, JtJ, Jtr, JtJt, Jtrt, col_scale,
-              fw, Jb, la, Gi, out):
+              fw, Jb, la, Gi, out, hist):
     """The damped Gauss-Newton (Levenberg-Marquardt) loop of ``DampedGaussNewton`` on the normal
     equations of :func:`_evaluate`, from the state (params, base, pts), which ends as the last
     accepted one; r0 the start's residuals, r and JtJ, Jtr the final ones; col_scale (n,) the
     column norms of the start's Jacobian (zeros -> 1). Returns ``(last iteration, stop code)``;
     ``out`` = [cost, optimality, relative predicted reduction (both set when no step reduces the
     cost), lam, 1 if the final G is positive definite]; la starts with the final scaled normal
-    matrix G (n_a, n_a) of the active columns, Gi its inverse (when positive definite).
+    matrix G (n_a, n_a) of the active columns, Gi its inverse (when positive definite); hist
+    (max iterations,): the cost after each accepted step (untouched for the others).
 
     ctl: [ftol, xtol, chi2_tol, gtol, stall_rtol, first iteration, max iterations]; act (n_a,): the
     active columns; the *_t arrays, rt, JtJt, Jtrt: trial buffers; la: linear-algebra scratch.
@@ -473,6 +474,7 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, gparam, act
             for j in range(n):
                 JtJ[i, j] = JtJt[i, j]
         lam = max(lam / 10.0, 1e-12)
+        hist[itn - first] = c_t
         dcost = cost - c_t
         cost = c_t
         if lam >= 1.0:  # a heavily damped step is short wherever it is: no convergence test

@@ -254,7 +254,7 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     normal = method == "lm" and loss == "linear" and not prior_weight and _normal.supports(problem)
     evaluator = _normal.PointNormalEquations(problem) if normal else None
     # ... and, when its kernel is compiled (or worth compiling), the whole loop in compiled code
-    compiled = normal and progress is None and _lm_compiled.use_compiled(problem, evaluator.m_rows // 3)
+    compiled = normal and _lm_compiled.use_compiled(problem, evaluator.m_rows // 3)
     labels = problem.labels
     J = None
     if compiled and (ident is not None or not auto_identifiable):
@@ -279,7 +279,8 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
               xtol=xtol, chi2_tol=chi2_tol, progress=progress)
     if compiled:
         J = None
-        gn = _lm_compiled.CompiledPointLM(problem, state, labels, active, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol)
+        gn = _lm_compiled.CompiledPointLM(problem, state, labels, active, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol,
+                                          progress=progress)
     elif normal:
         J = None
         gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
