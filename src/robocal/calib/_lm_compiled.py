@@ -52,9 +52,11 @@ class _Packed:
         self.P = P = len(model.params)
         self.m_rows = int(res.mask.sum()) * 3
         self.measured = _read_only(res.measured)
-        self.mask = np.ascontiguousarray(res.mask, dtype=np.bool_)
+        mask = np.asarray(res.mask, dtype=bool)
+        #: first residual row of each measured point (pose-major, then point), -1 where not measured
+        self.row_of = np.where(mask, 3 * (np.cumsum(mask.ravel()) - 1).reshape(mask.shape), -1).astype(np.int64)
         self.w = float(res.weight)
-        qm = np.ascontiguousarray(ch._q_kernel @ model.coupling.T, dtype=float)
+        qm = np.ascontiguousarray((ch._q_kernel @ model.coupling.T).T, dtype=float)  # (n_model, N)
         self.qm, self.cq, self.sq = qm, np.cos(qm), np.sin(qm)
         ee = ch.ee_of_target
         n_links = len(model.links)
@@ -97,9 +99,10 @@ class _Packed:
             ip[i, :len(x)] = x
         self.ip = ip
         self.op_axis = np.ascontiguousarray(model._op_axis, dtype=float)
-        self.fw_size = 3 * n_ops + 12 * n_links + 6 * n + 24
-        #: residual rows per block of Jb: 3 K rows per pose, up to POSE_BLOCK poses
-        self.block_rows = 3 * K * max(1, min(POSE_BLOCK, len(qm)))
+        B = max(1, min(POSE_BLOCK, qm.shape[1]))
+        #: residual rows per block of Jb: 3 K rows per pose, B poses
+        self.block_rows = 3 * K * B
+        self.fw_size = 3 * n_ops + 12 * B * (n_links + 2) + 6 * B * n + 3 * K * B + 2 * B
         # the problem's fixed arrays, to tell whether this packing still describes it
         self.key = (res.measured, ch._q_kernel, problem._plan)
 
@@ -129,7 +132,7 @@ def _kernel_args(pk: _Packed, state, active, ctl):
     params = np.array(state.params, dtype=float)
     base = np.ascontiguousarray(state.bases[0, :3], dtype=float)
     pts = np.array(state.targets, dtype=float).reshape(pk.K, 3)
-    return (pk.ip, pk.op_axis, pk.qm, pk.cq, pk.sq, pk.tT, pk.gmove, pk.measured, pk.mask, pk.w, pk.gparam, act, ctl,
+    return (pk.ip, pk.op_axis, pk.qm, pk.cq, pk.sq, pk.tT, pk.gmove, pk.measured, pk.row_of, pk.w, pk.gparam, act, ctl,
             params, base, pts, np.empty_like(params), np.empty_like(base), np.empty_like(pts),
             np.empty(M), np.empty(M), np.empty(M), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty(n),
             np.empty(n), np.empty(pk.fw_size), np.empty((n, pk.block_rows)),
@@ -192,11 +195,11 @@ def compile_kernels() -> None:
     pk.ip = np.full((12, 2), -1, dtype=np.int64)
     pk.ip[9] = 0
     pk.op_axis = np.zeros((0, 3))
-    pk.qm = pk.cq = pk.sq = np.zeros((0, 1))
+    pk.qm = pk.cq = pk.sq = np.zeros((1, 0))
     pk.tT, pk.gmove = np.zeros((1, 3, 4)), np.zeros((1, 1), dtype=np.bool_)
-    pk.measured, pk.mask = _read_only(np.zeros((0, 1, 3))), np.zeros((0, 1), dtype=np.bool_)
+    pk.measured, pk.row_of = _read_only(np.zeros((0, 1, 3))), np.zeros((0, 1), dtype=np.int64)
     pk.gparam = np.full(1, -1, dtype=np.int64)
-    pk.fw_size, pk.block_rows = 32, 3
+    pk.fw_size, pk.block_rows = 64, 3
 
     class _State:
         params, bases, targets = np.zeros(1), np.eye(4)[None], np.zeros((1, 3))

@@ -14,8 +14,8 @@ each measured point, its weighted residual and its three Jacobian rows (geometry
 the base frame's left perturbation ``w x p + v``, the target point's end-effector orientation),
 added to ``J^T J`` (upper triangle) and ``J^T r`` as one rank-3 update. J is never stored.
 
-Three compiled functions (one type specialisation each): :func:`_apply_op_cs`, :func:`_evaluate`
-and the loop :func:`lm_points`; scratch arrays come from the caller (no allocation inside).
+One type specialisation of each compiled function; scratch arrays come from the caller (no
+allocation inside).
 """
 
 from __future__ import annotations
@@ -26,7 +26,6 @@ import numpy as np
 
 from numba import njit
 
-from ..kinematics._kernels import _copy34, _mul_affine
 from ..kinematics.links import OP_RU, OP_RX, OP_TU, OP_TX, OP_TY, OP_TZ
 
 _CACHE = True
@@ -37,67 +36,34 @@ MAX_ITERATIONS, GRADIENT_ZERO, STATIONARY, NOT_AT_MINIMUM, FTOL, CHI2, XTOL = 0,
 _LINE_SEARCH_TRIES = 30
 
 
-@njit(cache=_CACHE, inline="always")
-def _apply_op_cs(M, code, value, c, s, ax):
-    """Right-multiply the affine frame M (3x4) in place by one elementary operation whose angle has
-    cosine ``c`` and sine ``s`` (rotations) or whose length is ``value`` [mm] (translations)."""
-    if code == OP_TX or code == OP_TY or code == OP_TZ:
-        k = code - OP_TX
-        for i in range(3):
-            M[i, 3] += value * M[i, k]
-    elif code == OP_TU:
-        for i in range(3):
-            M[i, 3] += value * (M[i, 0] * ax[0] + M[i, 1] * ax[1] + M[i, 2] * ax[2])
-    elif code == OP_RU:
-        v = 1.0 - c
-        x, y, z = ax[0], ax[1], ax[2]
-        R00 = c + x * x * v
-        R01 = x * y * v - z * s
-        R02 = x * z * v + y * s
-        R10 = y * x * v + z * s
-        R11 = c + y * y * v
-        R12 = y * z * v - x * s
-        R20 = z * x * v - y * s
-        R21 = z * y * v + x * s
-        R22 = c + z * z * v
-        for i in range(3):
-            m0, m1, m2 = M[i, 0], M[i, 1], M[i, 2]
-            M[i, 0] = m0 * R00 + m1 * R10 + m2 * R20
-            M[i, 1] = m0 * R01 + m1 * R11 + m2 * R21
-            M[i, 2] = m0 * R02 + m1 * R12 + m2 * R22
-    else:  # rotation about a coordinate axis: columns j, k mix
-        a = code - OP_RX
-        j = (a + 1) % 3
-        k = (a + 2) % 3
-        for i in range(3):
-            mj = M[i, j]
-            mk = M[i, k]
-            M[i, j] = c * mj + s * mk
-            M[i, k] = c * mk - s * mj
-
-
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
-def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, base, pts_ee, want_jac,
+def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, params, base, pts_ee, want_jac,
               r, JtJ, Jtr, fw, Jb):
     """Cost 0.5 r.r of the weighted residuals r (M,) = w (measured - predicted), written into r, and
     with ``want_jac`` J^T J (n, n) and J^T r (n,) of the weighted prediction Jacobian J.
 
-    ip: the int program, rows ``op_link, op_code, op_param, op_joint`` (n_ops,) padded to one width,
-    then ``link_parent``, ``target_link`` (K,), ``free_col`` (P,: column of each model parameter or
-    -1), ``fcol`` (6,: column of each base-frame variable or -1), ``tcol`` (3K,: column of each
-    target coordinate or -1), ``[n_links, n_geometry_columns]``, the geometry columns, the column of
-    each operation's parameter (n_ops,) or -1; gmove (K, n):
-    geometry column c moves point k (its parameter acts on a link carrying it) -- see
-    :class:`robocal.calib._lm_compiled._Packed`; fw: float scratch; Jb (n, m_b): the
-    unweighted Jacobian rows of a block of poses, transposed (a column per residual row), added to
-    J^T J and J^T r by :func:`_accumulate` whenever it is full.
+    Blocks of B poses (B = Jb.shape[1] // (3 K)) at a time, every step a loop over the block's poses
+    (which vectorizes): the frames (12 components x B), the twists, the points, their residuals and
+    Jacobian rows. ip: the int program, rows ``op_link, op_code, op_param, op_joint`` (n_ops,) padded
+    to one width, then ``link_parent``, ``target_link`` (K,), ``free_col`` (P,), ``fcol`` (6,: column
+    of each base-frame variable or -1), ``tcol`` (3K,: column of each target coordinate or -1),
+    ``[n_links, n_geometry_columns]``, the geometry columns, the column of each operation's parameter
+    (n_ops,) or -1 -- see :class:`robocal.calib._lm_compiled._Packed`; qm, cq, sq (n_model, N): the
+    model joints, their cosines and sines; gmove (K, n): geometry column c moves point k; row_of
+    (N, K): the first residual row of each measured point, -1 where not measured; fw: float scratch;
+    Jb (n, 3 K B): the buffer of a block's unweighted Jacobian rows, viewed as (n, 3 K nb) for a
+    block of nb poses, a column per row (segment 3 k + i of nb columns: coordinate i of point k),
+    added to J^T J and J^T r by :func:`_accumulate`.
     """
     n_ops = op_axis.shape[0]
-    op_link, op_code, op_param, op_joint = ip[0], ip[1], ip[2], ip[3]
+    op_link, op_code, op_joint = ip[0], ip[1], ip[3]
     link_parent, target_link, fcol, tcol = ip[4], ip[5], ip[7], ip[8]
-    n_links = int(ip[9, 0])
+    n_links, ng = int(ip[9, 0]), int(ip[9, 1])
+    gcols, op_col = ip[10], ip[11]
+    op_param = ip[2]
     N, K = measured.shape[0], measured.shape[1]
     n = Jtr.shape[0]
+    B = Jb.shape[1] // (3 * K)
     o = 0
     val = fw[o:o + n_ops]
     o += n_ops
@@ -105,16 +71,19 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, bas
     o += n_ops
     sv = fw[o:o + n_ops]
     o += n_ops
-    frames = fw[o:o + 12 * n_links].reshape((n_links, 3, 4))
-    o += 12 * n_links
-    tw = fw[o:o + 6 * n].reshape((n, 6))
-    o += 6 * n
-    M = fw[o:o + 12].reshape((3, 4))
-    o += 12
-    T = fw[o:o + 12].reshape((3, 4))
-    gcols = ip[10]  # the geometry columns (padded with -1)
-    op_col = ip[11]  # the column of each operation's parameter, or -1
-    ng = int(ip[9, 1])
+    frames = fw[o:o + 12 * B * n_links].reshape((n_links, 12, B))
+    o += 12 * B * n_links
+    M = fw[o:o + 12 * B].reshape((12, B))
+    o += 12 * B
+    T = fw[o:o + 12 * B].reshape((12, B))
+    o += 12 * B
+    tw = fw[o:o + 6 * B * n].reshape((n, 6, B))
+    o += 6 * B * n
+    rb = fw[o:o + 3 * K * B]
+    o += 3 * K * B
+    cb = fw[o:o + B]
+    o += B
+    sb = fw[o:o + B]
     for t in range(n_ops):
         v = params[op_param[t]]
         val[t] = v
@@ -126,84 +95,155 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, bas
             for j in range(n):
                 JtJ[i, j] = 0.0
     cost2 = 0.0
-    row = 0
-    row0 = 0  # first residual row of the block in Jb
-    mb = Jb.shape[1]
-    for p in range(N):
-        if want_jac and row - row0 + 3 * K > mb:
-            _accumulate(Jb, r, row0, row, JtJ, Jtr)
-            row0 = row
+    Jflat = Jb.ravel()
+    for p0 in range(0, N, B):
+        nb = min(B, N - p0)
+        W = 3 * K * nb  # the block's rows: segment 3 k + i of nb columns (a last block may be short)
+        Jbv = Jflat[:n * W].reshape((n, W))
         cur = -1
         for t in range(n_ops):
             L = op_link[t]
             if L != cur:
                 if cur >= 0:
-                    _copy34(M, frames[cur])
+                    for e in range(12):
+                        for p in range(nb):
+                            frames[cur, e, p] = M[e, p]
                 cur = L
                 par = link_parent[L]
-                if par < 0:
-                    _copy34(base, M)
-                else:
-                    _copy34(frames[par], M)
+                for e in range(12):
+                    if par < 0:
+                        b0 = base[e // 4, e % 4]
+                        for p in range(nb):
+                            M[e, p] = b0
+                    else:
+                        for p in range(nb):
+                            M[e, p] = frames[par, e, p]
             code = op_code[t]
-            value = val[t]
-            c = cv[t]
-            s = sv[t]
             jm = op_joint[t]
-            if jm >= 0:  # the joint's angle added: cos(a + q), sin(a + q) from the pose's cos q, sin q
-                value += qm[p, jm]
-                cj = cq[p, jm]
-                sj = sq[p, jm]
-                c, s = c * cj - s * sj, s * cj + c * sj
+            ax = op_axis[t]
             col = op_col[t]
             if want_jac and col >= 0:  # the operation's spatial twist (omega, v) at M
-                if code < OP_RU:  # about / along a coordinate axis: its direction is a column of M
-                    ia = code % 3
-                    w0, w1, w2 = M[0, ia], M[1, ia], M[2, ia]
+                for p in range(nb):
+                    if code < OP_RU:  # about / along a coordinate axis: its direction is a column of M
+                        ia = code % 3
+                        w0, w1, w2 = M[ia, p], M[4 + ia, p], M[8 + ia, p]
+                    else:
+                        w0 = M[0, p] * ax[0] + M[1, p] * ax[1] + M[2, p] * ax[2]
+                        w1 = M[4, p] * ax[0] + M[5, p] * ax[1] + M[6, p] * ax[2]
+                        w2 = M[8, p] * ax[0] + M[9, p] * ax[1] + M[10, p] * ax[2]
+                    if code < OP_TX or code == OP_RU:  # a rotation: v = o x omega
+                        ox, oy, oz = M[3, p], M[7, p], M[11, p]
+                        tw[col, 0, p] = w0
+                        tw[col, 1, p] = w1
+                        tw[col, 2, p] = w2
+                        tw[col, 3, p] = oy * w2 - oz * w1
+                        tw[col, 4, p] = oz * w0 - ox * w2
+                        tw[col, 5, p] = ox * w1 - oy * w0
+                    else:
+                        tw[col, 0, p] = 0.0
+                        tw[col, 1, p] = 0.0
+                        tw[col, 2, p] = 0.0
+                        tw[col, 3, p] = w0
+                        tw[col, 4, p] = w1
+                        tw[col, 5, p] = w2
+            if code == OP_TX or code == OP_TY or code == OP_TZ or code == OP_TU:
+                for p in range(nb):  # the length, with a prismatic joint's travel
+                    cb[p] = val[t] + (qm[jm, p0 + p] if jm >= 0 else 0.0)
+                if code == OP_TU:
+                    for i in range(3):
+                        for p in range(nb):
+                            M[4 * i + 3, p] += cb[p] * (M[4 * i, p] * ax[0] + M[4 * i + 1, p] * ax[1]
+                                                        + M[4 * i + 2, p] * ax[2])
                 else:
-                    ax = op_axis[t]
-                    w0 = M[0, 0] * ax[0] + M[0, 1] * ax[1] + M[0, 2] * ax[2]
-                    w1 = M[1, 0] * ax[0] + M[1, 1] * ax[1] + M[1, 2] * ax[2]
-                    w2 = M[2, 0] * ax[0] + M[2, 1] * ax[1] + M[2, 2] * ax[2]
-                if code < OP_TX or code == OP_RU:  # a rotation: v = o x omega
-                    ox, oy, oz = M[0, 3], M[1, 3], M[2, 3]
-                    tw[col, 0] = w0
-                    tw[col, 1] = w1
-                    tw[col, 2] = w2
-                    tw[col, 3] = oy * w2 - oz * w1
-                    tw[col, 4] = oz * w0 - ox * w2
-                    tw[col, 5] = ox * w1 - oy * w0
-                else:  # a translation
-                    tw[col, 0] = 0.0
-                    tw[col, 1] = 0.0
-                    tw[col, 2] = 0.0
-                    tw[col, 3] = w0
-                    tw[col, 4] = w1
-                    tw[col, 5] = w2
-            _apply_op_cs(M, code, value, c, s, op_axis[t])
-        if cur >= 0:
-            _copy34(M, frames[cur])
-        for k in range(K):
-            if not mask[p, k]:
+                    k = code - OP_TX
+                    for i in range(3):
+                        for p in range(nb):
+                            M[4 * i + 3, p] += cb[p] * M[4 * i + k, p]
                 continue
+            c, s = cv[t], sv[t]
+            if jm >= 0:  # the joint's angle added: cos(a + q), sin(a + q) from the pose's cos q, sin q
+                for p in range(nb):
+                    cj = cq[jm, p0 + p]
+                    sj = sq[jm, p0 + p]
+                    cb[p] = c * cj - s * sj
+                    sb[p] = s * cj + c * sj
+            else:
+                for p in range(nb):
+                    cb[p] = c
+                    sb[p] = s
+            if code == OP_RU:
+                x, y, z = ax[0], ax[1], ax[2]
+                for i in range(3):
+                    for p in range(nb):
+                        cc = cb[p]
+                        ss = sb[p]
+                        vv = 1.0 - cc
+                        m0, m1, m2 = M[4 * i, p], M[4 * i + 1, p], M[4 * i + 2, p]
+                        M[4 * i, p] = (m0 * (cc + x * x * vv) + m1 * (y * x * vv + z * ss)
+                                       + m2 * (z * x * vv - y * ss))
+                        M[4 * i + 1, p] = (m0 * (x * y * vv - z * ss) + m1 * (cc + y * y * vv)
+                                           + m2 * (z * y * vv + x * ss))
+                        M[4 * i + 2, p] = (m0 * (x * z * vv + y * ss) + m1 * (y * z * vv - x * ss)
+                                           + m2 * (cc + z * z * vv))
+            else:  # about a coordinate axis: columns j, k mix
+                a = code - OP_RX
+                j = (a + 1) % 3
+                k = (a + 2) % 3
+                for i in range(3):
+                    for p in range(nb):
+                        mj = M[4 * i + j, p]
+                        mk = M[4 * i + k, p]
+                        M[4 * i + j, p] = cb[p] * mj + sb[p] * mk
+                        M[4 * i + k, p] = cb[p] * mk - sb[p] * mj
+        if cur >= 0:
+            for e in range(12):
+                for p in range(nb):
+                    frames[cur, e, p] = M[e, p]
+        for k in range(K):
             Lk = target_link[k]
-            _mul_affine(base if Lk < 0 else frames[Lk], tT[k], T)
+            # T = F tT[k], F the carrying link's frame (or the base), per pose
+            for i in range(3):
+                for jj in range(4):
+                    t0, t1, t2 = tT[k, 0, jj], tT[k, 1, jj], tT[k, 2, jj]
+                    extra = 1.0 if jj == 3 else 0.0
+                    if Lk < 0:
+                        v = base[i, 0] * t0 + base[i, 1] * t1 + base[i, 2] * t2 + base[i, 3] * extra
+                        for p in range(nb):
+                            T[4 * i + jj, p] = v
+                    else:
+                        for p in range(nb):
+                            T[4 * i + jj, p] = (frames[Lk, 4 * i, p] * t0 + frames[Lk, 4 * i + 1, p] * t1
+                                                + frames[Lk, 4 * i + 2, p] * t2 + frames[Lk, 4 * i + 3, p] * extra)
             a, b, cc = pts_ee[k, 0], pts_ee[k, 1], pts_ee[k, 2]
-            px = T[0, 0] * a + T[0, 1] * b + T[0, 2] * cc + T[0, 3]
-            py = T[1, 0] * a + T[1, 1] * b + T[1, 2] * cc + T[1, 3]
-            pz = T[2, 0] * a + T[2, 1] * b + T[2, 2] * cc + T[2, 3]
-            rx = w * (measured[p, k, 0] - px)
-            ry = w * (measured[p, k, 1] - py)
-            rz = w * (measured[p, k, 2] - pz)
-            r[row] = rx
-            r[row + 1] = ry
-            r[row + 2] = rz
-            cost2 += rx * rx + ry * ry + rz * rz
+            sx, sy, sz = 3 * k * nb, (3 * k + 1) * nb, (3 * k + 2) * nb
+            for p in range(nb):
+                px = T[0, p] * a + T[1, p] * b + T[2, p] * cc + T[3, p]
+                py = T[4, p] * a + T[5, p] * b + T[6, p] * cc + T[7, p]
+                pz = T[8, p] * a + T[9, p] * b + T[10, p] * cc + T[11, p]
+                row = row_of[p0 + p, k]
+                if row < 0:  # not measured: a zero row adds nothing
+                    rb[sx + p] = 0.0
+                    rb[sy + p] = 0.0
+                    rb[sz + p] = 0.0
+                else:
+                    rx = w * (measured[p0 + p, k, 0] - px)
+                    ry = w * (measured[p0 + p, k, 1] - py)
+                    rz = w * (measured[p0 + p, k, 2] - pz)
+                    r[row] = rx
+                    r[row + 1] = ry
+                    r[row + 2] = rz
+                    rb[sx + p] = rx
+                    rb[sy + p] = ry
+                    rb[sz + p] = rz
+                    cost2 += rx * rx + ry * ry + rz * rz
+                # the point itself, kept in T's last column for the Jacobian rows below
+                T[3, p] = px
+                T[7, p] = py
+                T[11, p] = pz
             if want_jac:
-                _point_rows(Jb, row - row0, k, px, py, pz, T, tw, gcols, ng, gmove, fcol, tcol)
-            row += 3
-    if want_jac and row > row0:
-        _accumulate(Jb, r, row0, row, JtJ, Jtr)
+                _point_rows(Jbv, k, nb, p0, T, tw, gcols, ng, gmove, fcol, tcol, row_of)
+        if want_jac:
+            _accumulate(Jbv, rb, 0, W, JtJ, Jtr)
     if want_jac:  # the rows above are unweighted: J = w Jb, and r already carries w
         w2 = w * w
         for i in range(n):
@@ -215,58 +255,71 @@ def _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, bas
 
 
 @njit(cache=_CACHE, inline="always")
-def _point_rows(Jb, c0, k, px, py, pz, T, tw, gcols, ng, gmove, fcol, tcol):
-    """The unweighted prediction Jacobian rows of point k at p = (px, py, pz) (instrument frame),
-    its end-effector frame T (3x4), into the columns c0, c0 + 1, c0 + 2 of Jb (n, m_b); every
-    column of the problem is a geometry, base-frame or target column, each written here."""
+def _point_rows(Jb, k, nb, p0, T, tw, gcols, ng, gmove, fcol, tcol, row_of):
+    """The unweighted prediction Jacobian rows of point k over a block of nb poses, into Jb's
+    segments 3k, 3k + 1, 3k + 2; T (12, B): the point's end-effector frame per pose, its translation
+    column replaced by the point (instrument frame). Every column of the problem is written: a
+    geometry, base-frame or target column; zero where a point is not measured."""
+    sx, sy, sz = 3 * k * nb, (3 * k + 1) * nb, (3 * k + 2) * nb
     for gi in range(ng):  # geometry: the twist's velocity of the point, where it moves the point
         c = gcols[gi]
         if not gmove[k, c]:
-            Jb[c, c0] = 0.0
-            Jb[c, c0 + 1] = 0.0
-            Jb[c, c0 + 2] = 0.0
+            for p in range(nb):
+                Jb[c, sx + p] = 0.0
+                Jb[c, sy + p] = 0.0
+                Jb[c, sz + p] = 0.0
             continue
-        w0, w1, w2 = tw[c, 0], tw[c, 1], tw[c, 2]
-        Jb[c, c0] = w1 * pz - w2 * py + tw[c, 3]
-        Jb[c, c0 + 1] = w2 * px - w0 * pz + tw[c, 4]
-        Jb[c, c0 + 2] = w0 * py - w1 * px + tw[c, 5]
+        for p in range(nb):
+            px, py, pz = T[3, p], T[7, p], T[11, p]
+            w0, w1, w2 = tw[c, 0, p], tw[c, 1, p], tw[c, 2, p]
+            Jb[c, sx + p] = w1 * pz - w2 * py + tw[c, 3, p]
+            Jb[c, sy + p] = w2 * px - w0 * pz + tw[c, 4, p]
+            Jb[c, sz + p] = w0 * py - w1 * px + tw[c, 5, p]
     # base frame, left perturbation (w, v): dp = w x p + v
-    c = fcol[0]
-    if c >= 0:
-        Jb[c, c0] = 0.0
-        Jb[c, c0 + 1] = -pz
-        Jb[c, c0 + 2] = py
-    c = fcol[1]
-    if c >= 0:
-        Jb[c, c0] = pz
-        Jb[c, c0 + 1] = 0.0
-        Jb[c, c0 + 2] = -px
-    c = fcol[2]
-    if c >= 0:
-        Jb[c, c0] = -py
-        Jb[c, c0 + 1] = px
-        Jb[c, c0 + 2] = 0.0
-    for i in range(3):
-        c = fcol[3 + i]
+    for p in range(nb):
+        px, py, pz = T[3, p], T[7, p], T[11, p]
+        c = fcol[0]
         if c >= 0:
-            Jb[c, c0] = 0.0
-            Jb[c, c0 + 1] = 0.0
-            Jb[c, c0 + 2] = 0.0
-            Jb[c, c0 + i] = 1.0
-    for j in range(3):  # the point in its end-effector frame: moves with that frame's orientation
-        ct = tcol[3 * k + j]
-        if ct >= 0:
-            Jb[ct, c0] = T[0, j]
-            Jb[ct, c0 + 1] = T[1, j]
-            Jb[ct, c0 + 2] = T[2, j]
-    for kk in range(tcol.shape[0] // 3):  # the other points' columns do not move this one
-        if kk != k:
-            for j in range(3):
-                ct = tcol[3 * kk + j]
-                if ct >= 0:
-                    Jb[ct, c0] = 0.0
-                    Jb[ct, c0 + 1] = 0.0
-                    Jb[ct, c0 + 2] = 0.0
+            Jb[c, sx + p] = 0.0
+            Jb[c, sy + p] = -pz
+            Jb[c, sz + p] = py
+        c = fcol[1]
+        if c >= 0:
+            Jb[c, sx + p] = pz
+            Jb[c, sy + p] = 0.0
+            Jb[c, sz + p] = -px
+        c = fcol[2]
+        if c >= 0:
+            Jb[c, sx + p] = -py
+            Jb[c, sy + p] = px
+            Jb[c, sz + p] = 0.0
+        for i in range(3):
+            c = fcol[3 + i]
+            if c >= 0:
+                Jb[c, sx + p] = 1.0 if i == 0 else 0.0
+                Jb[c, sy + p] = 1.0 if i == 1 else 0.0
+                Jb[c, sz + p] = 1.0 if i == 2 else 0.0
+    for kk in range(tcol.shape[0] // 3):  # a target point moves with its end-effector frame's orientation
+        for j in range(3):
+            ct = tcol[3 * kk + j]
+            if ct < 0:
+                continue
+            if kk == k:
+                for p in range(nb):
+                    Jb[ct, sx + p] = T[j, p]
+                    Jb[ct, sy + p] = T[4 + j, p]
+                    Jb[ct, sz + p] = T[8 + j, p]
+            else:
+                for p in range(nb):
+                    Jb[ct, sx + p] = 0.0
+                    Jb[ct, sy + p] = 0.0
+                    Jb[ct, sz + p] = 0.0
+    for p in range(nb):  # a point not measured at this pose: no rows
+        if row_of[p0 + p, k] < 0:
+            for c in range(Jb.shape[0]):
+                Jb[c, sx + p] = 0.0
+                Jb[c, sy + p] = 0.0
+                Jb[c, sz + p] = 0.0
 
 
 @njit(cache=_CACHE, fastmath={"contract", "reassoc"}, nogil=True)
@@ -372,7 +425,7 @@ def _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t):
 
 
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
-def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, gparam, act, ctl,
+def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, gparam, act, ctl,
               params, base, pts, params_t, base_t, pts_t, r0, r, rt, JtJ, Jtr, JtJt, Jtrt, col_scale,
               fw, Jb, la, Gi, out, hist):
     """The damped Gauss-Newton (Levenberg-Marquardt) loop of ``DampedGaussNewton`` on the normal
@@ -402,7 +455,7 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, gparam, act
     step = la[o:o + n]
     # a runtime bool, not the literal True: numba would compile a second _evaluate for a literal
     with_jac = first >= 0
-    cost = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params, base, pts, with_jac, r, JtJ, Jtr,
+    cost = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, params, base, pts, with_jac, r, JtJ, Jtr,
                      fw, Jb)
     for i in range(M):
         r0[i] = r[i]
@@ -435,11 +488,11 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, gparam, act
                 step[act[a]] = step_s[a] / col_scale[act[a]]
             _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t)
             lazy = refused_last or attempt > 0
-            c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params_t, base_t, pts_t, not lazy,
+            c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, params_t, base_t, pts_t, not lazy,
                             rt, JtJt, Jtrt, fw, Jb)
             if c_t < cost:
                 if lazy:
-                    c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, mask, w, params_t, base_t, pts_t,
+                    c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, params_t, base_t, pts_t,
                                     with_jac, rt, JtJt, Jtrt, fw, Jb)
                 refused_last = attempt > 0
                 found = True
