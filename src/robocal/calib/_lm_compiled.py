@@ -4,7 +4,7 @@ hands :func:`robocal.calib.solve` the same iteration record as the Python loop.
 
 :func:`robocal.calib.solve` uses it for the problems :func:`robocal.calib._normal.supports` accepts
 (one station, point measurements only, LM, linear loss, no prior), when
-:func:`use_compiled` says so. The kernels take ~6 s of CPU to compile once (3x the calibration's
+:func:`use_compiled` says so. The kernels take ~10 s of CPU to compile once (5x the calibration's
 ``target_points`` kernel), which a first ``robocal calibrate`` must not pay (issue 34 item 2), so by
 default they run only when they are already compiled -- in this process or in numba's on-disk cache --
 or when the problem has at least :data:`COMPILE_MIN_POINTS` measured points.
@@ -35,7 +35,7 @@ ENV = "ROBOCAL_COMPILED_LM"
 #: poses per block of Jacobian rows kept for the vectorized J^T J sums (n x 3 K x 64 floats)
 POSE_BLOCK = 64
 #: measured points from which ``auto`` compiles the loop when it is not compiled yet: there one
-#: solve in the Python loop takes seconds, about the loop's one-time compile (~6 s of CPU)
+#: solve in the Python loop takes seconds, comparable with the loop's one-time compile (~10 s of CPU)
 COMPILE_MIN_POINTS = 200_000
 
 
@@ -186,7 +186,7 @@ _cache_checked = False
 
 
 def compile_kernels() -> None:
-    """Compile the loop now (~6 s of CPU once; numba caches the machine code on disk, and every later
+    """Compile the loop now (~10 s of CPU once; numba caches the machine code on disk, and every later
     process uses the compiled loop by default)."""
     from . import _lm_kernels
 
