@@ -11,6 +11,8 @@ Run from the repository root (robocal installed in the environment)::
     python benchmarks/bench_calibration.py            # full run (~1.5 min with pybotics)
     python benchmarks/bench_calibration.py --quick    # 3 repeats, slow rows once or skipped (~15 s)
     python benchmarks/bench_calibration.py --robot ur10
+    python benchmarks/bench_calibration.py --fair-only [--poses 5000 --repeat 5]   # issue 34 item 5's ratio
+    python benchmarks/bench_calibration.py --fair-only --python-loop   # robocal's Python LM loop instead
     python benchmarks/bench_calibration.py --peers-path /tmp/peers   # pybotics installed there
     python benchmarks/bench_calibration.py --old-core 8135766 --core-only --repeat 15
                                           # the calibration core of an older commit vs this one
