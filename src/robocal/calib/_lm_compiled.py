@@ -13,9 +13,9 @@ or when the problem has at least :data:`COMPILE_MIN_POINTS` measured points.
 them once ahead (:func:`compile_kernels`).
 
 Same iteration, damping, line search and stop rules as :class:`~robocal.calib._iterate.DampedGaussNewton`
-(the stop reasons are those strings); the normal equations are summed pose by pose in another order
-than the Python loop's block products, so the numbers agree to rounding (~1e-15 relative), not bit
-for bit.
+(the stop reasons are those strings); the normal equations are summed in another order than the
+Python loop's block products, so the numbers agree to rounding (~1e-15 relative), not bit for bit
+(docs/calibration.md "The compiled LM loop").
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from . import _iterate
 from ._iterate import MAX_ITERATIONS_REASON, GTOL, STALL_RTOL
 from ._normal import NormalEquations
 
-__all__ = ["CompiledPointLM", "use_compiled", "COMPILE_MIN_POINTS", "ENV"]
+__all__ = ["CompiledPointLM", "use_compiled", "compile_kernels", "COMPILE_MIN_POINTS", "ENV"]
 
 #: environment variable: ``auto`` (default), ``always`` or ``never``
 ENV = "ROBOCAL_COMPILED_LM"

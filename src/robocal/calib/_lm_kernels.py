@@ -5,14 +5,15 @@ The driver is :mod:`robocal.calib._lm_compiled`; the iteration, its damping, lin
 rules are those of :class:`robocal.calib._iterate.DampedGaussNewton` (method ``"lm"``, linear loss,
 no prior), written out here so that no Python runs between the first evaluation and the stop.
 
-Per evaluation: the cosines and sines of the operations' parameter values once; per pose the link
-frames by the operation program (a joint's rotation by the angle-sum formula from the pose's joint
-cosines and sines, computed once per solve, instead of a sine and cosine per operation and pose),
-the twist of every free geometry parameter where it acts (as ``_op_twist`` of the kinematics kernels,
-an axis-aligned operation's direction read off M),
-each measured point, its weighted residual and its three Jacobian rows (geometry from the twists,
-the base frame's left perturbation ``w x p + v``, the target point's end-effector orientation),
-added to ``J^T J`` (upper triangle) and ``J^T r`` as one rank-3 update. J is never stored.
+Per evaluation: the cosines and sines of the operations' parameter values once; then the poses in
+blocks of 64, every step a loop over the block's poses (which vectorizes): the link frames by the
+operation program (a joint's rotation by the angle-sum formula from the pose's joint cosines and
+sines, computed once per solve, instead of a sine and cosine per operation and pose), the twist of
+every free geometry parameter where it acts (as ``_op_twist`` of the kinematics kernels; an
+axis-aligned operation's direction read off the frame), each measured point, its weighted residual
+and its three Jacobian rows (geometry from the twists, the base frame's left perturbation
+``w x p + v``, the target point's end-effector orientation) in a block buffer, added to ``J^T J``
+(upper triangle) and ``J^T r`` by dot products over the block. J is never stored.
 
 One type specialisation of each compiled function; scratch arrays come from the caller (no
 allocation inside).
@@ -32,7 +33,7 @@ _CACHE = True
 
 #: stop codes of :func:`lm_points` (the driver turns them into the Python loop's reasons)
 MAX_ITERATIONS, GRADIENT_ZERO, STATIONARY, NOT_AT_MINIMUM, FTOL, CHI2, XTOL = 0, 1, 2, 3, 4, 5, 6
-#: the same limits as robocal.calib._iterate (GTOL, STALL_RTOL), passed in by the driver
+#: trial steps per iteration before "no step reduces the cost" (robocal.calib._iterate's line search)
 _LINE_SEARCH_TRIES = 30
 
 
