@@ -488,13 +488,17 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, gparam, a
             for a in range(na):
                 step[act[a]] = step_s[a] / col_scale[act[a]]
             _retract(ip, gparam, params, base, pts, step, params_t, base_t, pts_t)
-            lazy = refused_last or attempt > 0
-            c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, params_t, base_t, pts_t, not lazy,
-                            rt, JtJt, Jtrt, fw, Jb)
+            # with the Jacobian unless steps are being refused; a lazy trial that lowers the cost is
+            # evaluated again with it (one call site: each one is compiled again inside this loop)
+            jac = not (refused_last or attempt > 0)
+            while True:
+                c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, params_t, base_t, pts_t, jac,
+                                rt, JtJt, Jtrt, fw, Jb)
+                if c_t < cost and not jac:
+                    jac = with_jac
+                    continue
+                break
             if c_t < cost:
-                if lazy:
-                    c_t = _evaluate(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, params_t, base_t, pts_t,
-                                    with_jac, rt, JtJt, Jtrt, fw, Jb)
                 refused_last = attempt > 0
                 found = True
                 break
