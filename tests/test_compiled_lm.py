@@ -205,3 +205,25 @@ def test_compiled_loop_on_a_urdf_robot(monkeypatch):
     ok = np.isfinite(python.std)
     assert np.all(np.abs(compiled.values - python.values)[ok] <= 1e-3 * python.std[ok])
     assert compiled.rms_after == pytest.approx(python.rms_after, rel=1e-9)
+
+
+@pytest.mark.parametrize("case", ["base fixed", "no geometry", "targets fixed"])
+def test_compiled_loop_with_blocks_held(monkeypatch, case):
+    # the column map without a base frame, without geometry, or with the target points known
+    nominal = load_robot("ur10")
+    vr = VirtualRobot.perturbed(nominal, 3, joint_noise_deg=0.0)
+    rng = np.random.default_rng(3)
+    tracker = LaserTracker.placed(3, 3, sigma_mm=0.02)
+    q = vr.random_configurations(50, rng, margin=0.1)
+    pts = np.array(tracker.measure(vr, q, rng).points)
+    T = tracker.T_tracker_world @ vr.true_model.T_world_base
+    known = case == "targets fixed"
+    targets = [Target(f"r{k}", None, tuple(tracker.reflectors[k] + (0.0 if known else 2.0)), free=not known)
+               for k in range(3)]
+    kw = {"base fixed": dict(estimate_base=False, base_initial=T), "no geometry": dict(free=[], base_initial="fit"),
+          "targets fixed": dict(base_initial="fit")}[case]
+    problem = CalibrationProblem(nominal, q, targets, pts, point_sigma_mm=0.02, **kw)
+    compiled, _ = _solve(problem, monkeypatch, "compiled")
+    python, _ = _solve(problem, monkeypatch, "python")
+    assert python.converged
+    _assert_same(compiled, python)
