@@ -41,6 +41,20 @@ GTOL = 1e-6
 STALL_RTOL = 1e-6
 
 
+def no_step_reason(optimality: float, rel: float) -> tuple[str, bool]:
+    """(reason, converged) when no trial step lowers the cost: converged only at a stationary point
+    (scaled gradient ``optimality`` <= GTOL or predicted relative reduction ``rel`` <= STALL_RTOL)."""
+    what = f"gradient {optimality:.1e} of |J| |r|, the Gauss-Newton step would lower the cost by {rel:.1e} of it"
+    if optimality <= GTOL or rel <= STALL_RTOL:
+        return f"no step reduces the cost at a stationary point ({what}: numerical precision reached)", True
+    return (f"no step reduces the cost, but not at a minimum ({what}; limits {GTOL:g} and {STALL_RTOL:g}): "
+            "inconsistent Jacobian or discontinuous cost", False)
+
+
+def chi2_reason(chi2_tol: float) -> str:
+    return f"chi-square change below {chi2_tol:g} residual variances"
+
+
 def robust_weights(r_pose, loss, f_scale):
     """Per-pose IRLS weights (N,) for ``huber`` / ``cauchy`` from pose residual norms (N,)."""
     z = r_pose / f_scale
@@ -214,13 +228,7 @@ class DampedGaussNewton:
                 predicted = self._predicted_reduction(G, g, g_max)
             optimality = g_inf / max(s_max * math.sqrt(2 * self.cost), 1e-300)
             rel = predicted / max(self.cost, 1e-300)
-            what = (f"gradient {optimality:.1e} of |J| |r|, the Gauss-Newton step would lower the cost by "
-                    f"{rel:.1e} of it")
-            if optimality <= GTOL or rel <= STALL_RTOL:
-                return self._stop(f"no step reduces the cost at a stationary point ({what}: numerical precision "
-                                  "reached)")
-            return self._stop(f"no step reduces the cost, but not at a minimum ({what}; limits {GTOL:g} and "
-                              f"{STALL_RTOL:g}): inconsistent Jacobian or discontinuous cost", converged=False)
+            return self._stop(*no_step_reason(optimality, rel))
         trial, r_t, J_t, step_s = found
         self.state, self.r, self.J = trial, r_t, J_t
         if self.robust:
@@ -305,7 +313,7 @@ class DampedGaussNewton:
         # the optimum (Gauss-Newton converges quadratically: the next change is smaller still)
         s2 = 2.0 * cost / max(len(self.r) - self.n_active, 1)
         if 2.0 * abs(dcost) <= self.chi2_tol * max(s2, 1e-300) and self.lam <= 1e-3:
-            return self._stop(f"chi-square change below {self.chi2_tol:g} residual variances")
+            return self._stop(chi2_reason(self.chi2_tol))
         if math.sqrt(float(step_s @ step_s)) <= self.xtol * (1.0 + math.sqrt(2.0 * cost)):
             return self._stop("step below xtol")
         return False

@@ -19,9 +19,10 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg.lapack import dsyev
 
 from ._cholesky import cholesky_factor, cholesky_inverse, cholesky_solve
-from . import _normal
+from . import _lm_compiled, _normal
 from ._iterate import DampedGaussNewton, pose_norms
 from .core import Problem
 from .identifiability import IdentifiabilityReport, analyse_identifiability
@@ -252,15 +253,19 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     # point-only problems: LM on normal equations summed per block of poses (J never formed)
     normal = method == "lm" and loss == "linear" and not prior_weight and _normal.supports(problem)
     evaluator = _normal.PointNormalEquations(problem) if normal else None
+    # ... and, when its kernel is compiled (or worth compiling), the whole loop in compiled code
+    compiled = normal and _lm_compiled.use_compiled(problem, evaluator.m_rows // 3)
     labels = problem.labels
     J = None
-    if normal and (ident is not None or not auto_identifiable):
+    if compiled and (ident is not None or not auto_identifiable):
+        r = None  # the compiled loop evaluates the start itself
+    elif normal and (ident is not None or not auto_identifiable):
         r, ne = evaluator.evaluate(state)
     elif normal:  # the identifiability analysis reads the R factor of J's QR, built per block of poses
         r, ne, J = evaluator.r_factor(state)
     else:
         r, J, labels = problem.evaluate(state)
-    M, n = len(r), problem.n_variables
+    M, n = (evaluator.m_rows if r is None else len(r)), problem.n_variables
     if M < n:
         raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
                          f"add poses or fix parameters")
@@ -269,21 +274,31 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
             if auto_identifiable else IdentifiabilityReport.trivial(problem.names)
     ident_set = set(ident.identifiable)
     active = np.array([nm in ident_set for nm in problem.names])
-    r0 = r.copy()
+    r0 = None if r is None else r.copy()
     kw = dict(method=method, loss=loss, f_scale=f_scale, prior_weight=prior_weight, rcond=rcond, ftol=ftol,
               xtol=xtol, chi2_tol=chi2_tol, progress=progress)
-    if normal:
+    if compiled:
+        J = None
+        gn = _lm_compiled.CompiledPointLM(problem, state, labels, active, ftol=ftol, xtol=xtol, chi2_tol=chi2_tol,
+                                          progress=progress)
+    elif normal:
         J = None
         gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
     else:
         gn = DampedGaussNewton(problem, state, r, J, labels, active, **kw)
     gn.run_phase(1, max_iterations)
+    if r0 is None:
+        r0 = gn.r0
     if gn.robust and reject_outliers and gn.drop_outliers(outlier_threshold):
         # robust phase done: the down-weighted poses dropped, finish by plain least squares
         gn.run_phase(gn.it + 1, max_iterations)
     n_rows = len(gn.pose_of_row)
     weights = gn.weights if not gn.rejected.any() else np.where(gn.rejected, gn.robust_weights, 1.0)
-    if normal:
+    if compiled:
+        state, r, J = gn.state, gn.r, None
+        cov, std, rank, cond, sigma0 = _covariance_from_normal(problem, gn.J.JtJ, r, active, gn.col_scale, rcond,
+                                                               gn.G, gn.G_inv)
+    elif normal:
         state, r, J = gn.state, gn.r, None
         cov, std, rank, cond, sigma0 = _covariance_from_normal(problem, gn.J.JtJ, r, active, gn.col_scale, rcond)
     else:
@@ -318,25 +333,37 @@ def _covariance(problem: Problem, J, r, row_weights, active, col_scale, rcond):
     return _covariance_tail(problem, Js.T @ Js, sigma0, active, col_scale, rcond, n)
 
 
-def _covariance_from_normal(problem: Problem, JtJ, r, active, col_scale, rcond):
+def _covariance_from_normal(problem: Problem, JtJ, r, active, col_scale, rcond, G=None, G_inv=None):
     """:func:`_covariance` from the unweighted-by-robust-loss normal matrix ``JtJ`` (n, n) = J^T J of
-    the weighted Jacobian and the residuals r (M,) (all rows weight 1)."""
+    the weighted Jacobian and the residuals r (M,) (all rows weight 1). ``G`` (n_a, n_a): its scaled
+    active block if already formed, ``G_inv`` that block's inverse (the compiled LM loop gives both)."""
     n = len(JtJ)
     dof = max(len(r) - int(active.sum()), 1)
     sigma0 = math.sqrt(float(r @ r) / dof)
-    ca = col_scale[active]
-    G = (JtJ if active.all() else JtJ[np.ix_(active, active)]) / np.outer(ca, ca)
-    return _covariance_tail(problem, G, sigma0, active, col_scale, rcond, n)
+    if G is None:
+        ca = col_scale[active]
+        G = (JtJ if active.all() else JtJ[np.ix_(active, active)]) / np.outer(ca, ca)
+    return _covariance_tail(problem, G, sigma0, active, col_scale, rcond, n, G_inv)
 
 
-def _covariance_tail(problem: Problem, G, sigma0, active, col_scale, rcond, n):
-    """Covariance, std, rank, condition and sigma0 from the scaled normal matrix G (n_a, n_a)."""
+def _eigenvalues(G) -> np.ndarray:
+    """Eigenvalues (n,) of the symmetric G (n, n), ascending (LAPACK ``dsyev`` directly: numpy's
+    ``eigvalsh`` wraps the same work in ~40 us of checks on a ~1 ms solve)."""
+    w, _, info = dsyev(G, compute_v=0)
+    return w if info == 0 else np.linalg.eigvalsh(G)
+
+
+def _covariance_tail(problem: Problem, G, sigma0, active, col_scale, rcond, n, G_inv=None):
+    """Covariance, std, rank, condition and sigma0 from the scaled normal matrix G (n_a, n_a)
+    (``G_inv``: its inverse when known)."""
     # singular values from the (small, scaled) normal matrix: s_i^2 are its eigenvalues
-    s = np.sqrt(np.maximum(np.linalg.eigvalsh(G)[::-1], 0.0))
+    s = np.sqrt(np.maximum(_eigenvalues(G)[::-1], 0.0))
     keep = s > max(rcond, 1e-7) * s[0] if s.size else s > 0  # squared: rcond below ~1e-8 is noise
     rank = int(np.sum(keep))
     cond = float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
-    if rank == len(s):
+    if rank == len(s) and G_inv is not None:
+        cov_s = G_inv
+    elif rank == len(s):
         cov_s = cholesky_inverse(G)
     else:  # rank deficient (auto_identifiable off): pseudo-inverse on the resolvable directions
         ev, V = np.linalg.eigh(G)
