@@ -8,6 +8,8 @@ import functools
 import re
 from pathlib import Path
 
+from .figure_producers_cli import CLI_PRODUCERS
+
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
 
 
@@ -486,6 +488,7 @@ def _iso_cube(robot: str) -> dict:
 
 
 PRODUCERS = {
+    **CLI_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),

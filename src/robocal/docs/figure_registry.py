@@ -374,3 +374,74 @@ for _label, _m in (("**robocal `refine_hand_eye`**", "robocal"), ("`cv2.calibrat
 
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
+
+
+# calibration.md "Coverage gates": the degenerate campaigns of tests/test_coverage_gates.py through
+# ``robocal calibrate --force`` (robocal.docs.figure_producers_cli.coverage_gates)
+_COVERAGE = {"full (every joint spread)": "full", "A4 never moved": "a4_fixed", "A2 and A3 fixed": "a2_a3_fixed",
+             "only A1 moved": "only_a1"}
+FIGURES += _table("docs/calibration.md", _COVERAGE, "calibration/coverage_gates",
+                  [(0, 0, "holdout_rms_mm"), (1, 0, "n_identified"), (2, 0, "true_rms_mm")],
+                  prefix="calibration:coverage ", rel_tol=0.01)
+FIGURES += [Figure(f"calibration:coverage {label} parameters missing", "docs/calibration.md",
+                   r"(?m)^\| " + re.escape(label) + r" \|[^\n]*?[ ,]" + _N + r" parameters missing",
+                   "calibration/coverage_gates", f"{key}.n_missing", rel_tol=0.0)
+            for label, key in _COVERAGE.items() if key != "full"]
+
+# robot-programs.md "Measured: KRL on a KR 150 and a UR10" and "With effects the model lacks": the
+# page's commands on docs/examples/programs (robocal.docs.figure_producers_cli.programs_at_robot)
+_KR_T, _UR_T = ("XP1", "XP2", "XP3", "XP4"), ("movel@4", "movel@5", "movel@7", "movel@9")
+_RP = "docs/robot-programs.md"
+_PROG_AFTER = "TCP position error of the true robot [mm]"
+for _label, _key, _targets in (
+        ("KRL `cell.dat` XP1 / XP2 (wrist flipped) / XP3 / XP4 (arm back) | 250 mm gripper", "kr.tool", _KR_T),
+        ("UR `pick.script` movel@4 / @5 / @7 (wrist flipped) / @9 (turned back) | 200 mm `set_tcp`", "ur.tool", _UR_T)):
+    FIGURES += _table(_RP, {_label: _key}, "programs/at_robot",
+                      [(0, k, f"before.{t}") for k, t in enumerate(_targets)]
+                      + [(1, k, f"after.{t}") for k, t in enumerate(_targets)] + [(2, 0, "sigma.min")],
+                      prefix="robot-programs:", rel_tol=0.01, after=_PROG_AFTER)
+FIGURES += _table(_RP, {"KRL, same targets | identified r1": "kr.r1"}, "programs/at_robot",
+                  [(0, 0, "before.mean"), (0, 1, "before.max")] + [(1, k, f"after.{t}") for k, t in enumerate(_KR_T)]
+                  + [(2, 0, "sigma.min"), (2, 1, "sigma.max")], prefix="robot-programs:", rel_tol=0.01,
+                  after=_PROG_AFTER)
+FIGURES += _table(_RP, {"UR, same poses | identified r1": "ur.r1"}, "programs/at_robot",
+                  [(0, 0, "before.mean"), (0, 1, "before.max"), (1, 0, "after.max"), (1, 1, "after.mean"),
+                   (2, 0, "sigma.min"), (2, 1, "sigma.max")], prefix="robot-programs:", rel_tol=0.01,
+                  after=_PROG_AFTER)
+FIGURES += [
+    Figure("robot-programs:kr last link unknown", _RP, r"Warning: last link unknown \(" + _N, "programs/at_robot",
+           "kr.tool.sigma.max", rel_tol=0.01),
+    Figure("robot-programs:ur true d6 error", _RP, r"the true d6, a6 are off by " + _N, "programs/at_robot",
+           "ur.true.d6_error_mm", rel_tol=0.01),
+    Figure("robot-programs:ur true a6 error", _RP, r"the true d6, a6 are off by [−-]?[0-9.]+, \+?" + _N,
+           "programs/at_robot", "ur.true.a6_error_mm", rel_tol=0.01),
+    Figure("robot-programs:ur wrist-flipped J5", _RP, r"wrist-flipped target at J5 = " + _N, "programs/at_robot",
+           "ur.joint.movel@7.J5", rel_tol=0.0),
+    Figure("robot-programs:ur turned-back J1", _RP, r"turned-back one at J1 = " + _N, "programs/at_robot",
+           "ur.joint.movel@9.J1", rel_tol=0.0),
+    Figure("robot-programs:kr orientation after", _RP, r"Orientations: up\s+to " + _N, "programs/at_robot",
+           "kr.r1.after_deg.max", rel_tol=0.05),
+    Figure("robot-programs:ur orientation after", _RP, r"Orientations: up\s+to [0-9.]+° remain on the KR 150 and " + _N,
+           "programs/at_robot", "ur.r1.after_deg.max", rel_tol=0.05),
+    *(Figure(f"robot-programs:kr identified r1 {c}", _RP, r"TOOL_DATA\[1\]=\{X " + r"[0-9.−-]+,[YZ] " * k + _N,
+             "programs/at_robot", f"kr.r1_identified.{c}", rel_tol=0.0) for k, c in enumerate("xyz")),
+    *(Figure(f"robot-programs:ur identified r1 {c} [m]", _RP, r"set_tcp\(p\[" + r"[0-9.−-]+, " * k + _N,
+             "programs/at_robot", f"ur.r1_identified_m.{c}", rel_tol=0.0) for k, c in enumerate("xyz")),
+]
+for _preset in ("ideal", "realistic"):
+    FIGURES += _table(_RP, {f"`{_preset}`": "kr"}, f"programs/effects_{_preset}",
+                      [(0, 0, "before.mean"), (0, 1, "before.max")] + [(1, k, f"after.{t}") for k, t in enumerate(_KR_T)]
+                      + [(2, 0, "sigma.min"), (2, 1, "sigma.max")], prefix=f"robot-programs:effects {_preset} ",
+                      rel_tol=0.01, after="| preset | before [mm] |")
+    FIGURES.append(Figure(f"robot-programs:effects {_preset} holdout rms", _RP,
+                          _cell(f"`{_preset}`", 3, 0, after="| preset | before [mm] |"), f"programs/effects_{_preset}",
+                          "holdout_rms_mm", rel_tol=0.01))
+FIGURES += [
+    Figure("robot-programs:effects realistic removed percent", _RP, r"The correction still removes " + _N + " %",
+           "programs/effects_realistic", "removed_percent", rel_tol=0.0),
+    Figure("robot-programs:effects realistic bias min", _RP, r"the effects leave a bias of " + _N,
+           "programs/effects_realistic", "kr.after.min", rel_tol=0.0),
+    Figure("robot-programs:effects realistic bias max", _RP, r"the effects leave a bias of [0-9.]+–" + _N,
+           "programs/effects_realistic", "kr.after.max", rel_tol=0.0),
+]
+FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
