@@ -337,12 +337,30 @@ for _label, _fit in (("head_j1 offset, both arms together", "both"), ("head_j1 o
 
 
 
-# iso9283.md: the worn / healthy IRB 140, three tests each (the fleet-status trend depends on the day
-# it is run: not checked)
+# iso9283.md: the worn / healthy IRB 140, three tests each, and ``fleet status --at 2026-11-27T00:00Z``
+# (a fixed date: the trend at "now" would depend on the day it is run)
 for _robot in ("worn", "healthy"):
     for _k, _date in enumerate(("2026-01-02", "2026-03-02", "2026-05-02")):
         FIGURES += _table("docs/iso9283.md", {f"{_robot} | {_date}": f"{_robot}.{_k}"}, "iso9283/wear",
                           [(0, 0, "AP"), (1, 0, "RP"), (1, 1, "U")], prefix="iso9283:", rel_tol=0.0)
+
+
+_FS = r"`fleet status` judged at 2026-11-27T00:00Z(?s:.*?)"
+FIGURES += [
+    Figure("iso9283:fleet status worn RP trend", "docs/iso9283.md", _FS + r"RP trend " + _N + " mm now", "iso9283/wear",
+           "status.worn.RP.trend_now_mm", rel_tol=0.001),
+    Figure("iso9283:fleet status worn RP last", "docs/iso9283.md", _FS + r"\(last test\s+" + _N, "iso9283/wear",
+           "status.worn.RP.last_mm", rel_tol=0.001),
+    Figure("iso9283:fleet status worn RP slope", "docs/iso9283.md", _FS + r"slope \+" + _N + r" mm per 30 days",
+           "iso9283/wear", "status.worn.RP.slope_mm_per_30_days", rel_tol=0.01),
+    Figure("iso9283:fleet status healthy RP trend", "docs/iso9283.md", _FS + r"`healthy`'s RP trend is\s+" + _N,
+           "iso9283/wear", "status.healthy.RP.trend_now_mm", rel_tol=0.01),
+    Figure("iso9283:fleet status healthy RP slope", "docs/iso9283.md", _FS + r"`healthy`'s RP trend is\s+[0-9.]+ mm \(slope "
+           + _N, "iso9283/wear", "status.healthy.RP.slope_mm_per_30_days", rel_tol=0.0),
+    Figure("iso9283:fleet status AP low", "docs/iso9283.md", _FS + r"AP stays at " + _N, "iso9283/wear", "AP.min"),
+    Figure("iso9283:fleet status AP trend high", "docs/iso9283.md", _FS + r"AP stays at [0-9.]+–" + _N, "iso9283/wear",
+           "status.AP.trend_now_mm.max"),
+]
 
 
 # tcp.md (4-30): the error when beta is ignored (a formula: exact to the printed digit)
@@ -373,7 +391,6 @@ for _label, _m in (("**robocal `refine_hand_eye`**", "robocal"), ("`cv2.calibrat
                                                      ("eye_to_hand", "rot_deg"), ("eye_to_hand", "trans_mm")))]
 
 
-FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
 
 
 # calibration.md "Coverage gates": the degenerate campaigns of tests/test_coverage_gates.py through
@@ -444,4 +461,14 @@ FIGURES += [
     Figure("robot-programs:effects realistic bias max", _RP, r"the effects leave a bias of [0-9.]+–" + _N,
            "programs/effects_realistic", "kr.after.max", rel_tol=0.0),
 ]
+# handeye.md "The paper's study": ``python benchmarks/handeye_study.py --seeds 16`` (slow, ~4 min)
+for _kind, _after in (("refined", "Refined (`refine_hand_eye`, intrinsics of the model refined jointly):"),
+                      ("linear", "Linear (Tsai–Lenz) on the PnP poses of the same calibrated cameras:")):
+    for _n in (3, 4, 5, 6, 8, 10, 15, 20, 30):
+        FIGURES += [Figure(f"handeye:study {_kind} {_n} images {_m} {_w}", "docs/handeye.md", _cell(str(_n), 2 * k + j, 0, after=_after),
+                           "handeye/study", f"{_m}.{_n}.{_kind}.{_w}", rel_tol=0.02)
+                    for k, _m in enumerate(("none", "radial", "brown", "division"))
+                    for j, _w in enumerate(("rot_deg", "trans_mm"))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
