@@ -10,6 +10,7 @@ import re
 import tempfile
 from pathlib import Path
 
+from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
@@ -518,6 +519,7 @@ def _iso_cube(robot: str) -> dict:
 
 PRODUCERS = {
     **CLI_PRODUCERS,
+    **BENCH_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -571,6 +573,6 @@ def datasets_needed(producer: str) -> tuple:
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
-                  "handeye/fair_comparison", "handeye/study",
+                  "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

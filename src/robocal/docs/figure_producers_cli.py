@@ -232,6 +232,29 @@ def program_with_effects(effects: str) -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def ik_train_example() -> dict:
+    """docs/kinematics.md "Command line": ``robocal ik-train abb_irb140 --samples 20000 --seed 0``
+    and ``robocal ik abb_irb140 513.1 119.1 441.8 -166.5 5.4 154.6 --deg --seed-net ... --json``:
+    ``centres``, ``validation.{joint_deg|position_mm}`` (medians), ``seed.position_error_mm``,
+    ``seed.ok`` (1 when the seed's status is ok), ``solution.max_joint_error_deg`` (against
+    J = (10, 20, 10, 30, 60, -20) deg)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        net = Path(tmp) / "irb140.iknet.npz"
+        text = run_cli("ik-train", "abb_irb140", "--samples", 20000, "--seed", 0, "--out", net)
+        doc = json.loads(run_cli("ik", "abb_irb140", 513.1, 119.1, 441.8, -166.5, 5.4, 154.6, "--deg", "--seed-net", net,
+                                 "--json"))
+    out = {"centres": float(re.search(r"(\d+) centres, trained", text).group(1)),
+           "validation.joint_deg": float(re.search(r"joint error \[deg\]\s+([0-9.]+)", text).group(1)),
+           "validation.position_mm": float(re.search(r"position error \[mm\]\s+([0-9.]+)", text).group(1)),
+           "seed.position_error_mm": float(doc["seed"]["position_error_mm"]),
+           "seed.ok": float(doc["seed"]["status"] == "ok")}
+    target = (10.0, 20.0, 10.0, 30.0, 60.0, -20.0)
+    out["solution.max_joint_error_deg"] = min(max(abs(a - b) for a, b in zip(s["joints"], target))
+                                              for s in doc["solutions"])
+    return out
+
+
 def repository_root_examples() -> Path:
     """``docs/examples/programs`` of the repository."""
     from .figure_producers import repository_root
@@ -244,4 +267,5 @@ CLI_PRODUCERS = {
     "programs/at_robot": programs_at_robot,
     "programs/effects_ideal": lambda: program_with_effects("ideal"),
     "programs/effects_realistic": lambda: program_with_effects("realistic"),
+    "ik_net/cli_example": ik_train_example,
 }

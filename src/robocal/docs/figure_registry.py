@@ -471,4 +471,72 @@ for _kind, _after in (("refined", "Refined (`refine_hand_eye`, intrinsics of the
                     for j, _w in enumerate(("rot_deg", "trans_mm"))]
 
 
+# kinematics.md "Measured": ``python benchmarks/bench_ik_seed.py`` (seed 1; the accuracy figures, not
+# the times)
+_KM = "docs/kinematics.md"
+_IKCOL = {"irb140": 0, "tilted": 1, "ur10": 2}
+FIGURES += [Figure(f"kinematics:ik seed irb140 {f}", _KM, _cell("chosen structure", 0, k), "ik_seed/irb140", f,
+                   rel_tol=0.0) for k, f in enumerate(("K", "width", "lam", "weight"))]
+for _r, _c in _IKCOL.items():
+    FIGURES += _table(_KM, {"GA: validation RMS joint error, generation 0 -> 5": ""}, f"ik_seed/{_r}",
+                      [(_c, 0, "ga.first"), (_c, 1, "ga.last")], prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+    for _label, _what in (("raw joint error, worst joint per pose: median / p95 / max [deg]", "joint"),
+                          ("raw position error: median / p95 / max [mm]", "position"),
+                          ("raw rotation error: median / p95 / max [deg]", "rotation")):
+        FIGURES += _table(_KM, {_label: ""}, f"ik_seed/{_r}",
+                          [(_c, k, f"raw.{_what}.{q}") for k, q in enumerate(("median", "p95", "max"))],
+                          prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+    FIGURES += _table(_KM, {"domain check passes: branch poses / poses needing J1 = 175 deg": ""}, f"ik_seed/{_r}",
+                      [(_c, 0, "domain.branch_percent"), (_c, 1, "domain.back_percent")],
+                      prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+    _starts = [("GA-RBF network seed", "network"), ('middle of the joint ranges ("nominal")', "middle")]
+    _starts += [("zero joints", "zero")] if _r != "ur10" else [("middle of the branch's joint box", "box")]
+    for _label, _key in _starts:
+        FIGURES += _table(_KM, {_label: ""}, f"ik_seed/{_r}",
+                          [(_c, k, f"ik.{_key}.{f}") for k, f in enumerate(("converged", "on_branch", "median_it",
+                                                                              "p95_it"))],
+                          prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+FIGURES += _table(_KM, {"closed form, branch 0": ""}, "ik_seed/irb140",
+                  [(0, k, f"ik.closed_form.{f}") for k, f in enumerate(("converged", "on_branch", "median_it"))],
+                  prefix="kinematics:ik seed irb140 ", rel_tol=0.0)
+FIGURES += _table(_KM, {"closed form, branch 0": ""}, "ik_seed/tilted",
+                  [(1, k + 1, f"ik.closed_form.{f}") for k, f in enumerate(("converged", "on_branch", "median_it",
+                                                                              "p95_it"))],
+                  prefix="kinematics:ik seed tilted ", rel_tol=0.0)
+
+
+FIGURES += [
+    Figure("kinematics:ik seed prose GA gain first", _KM, r"Measured gain of the GA over the default: validation RMS joint error "
+           + _N, "ik_seed/irb140", "ga.first", rel_tol=0.01),
+    Figure("kinematics:ik seed prose GA gain last", _KM, r"Measured gain of the GA over the default: validation RMS joint error "
+           r"[0-9.]+ deg ->\s+" + _N, "ik_seed/irb140", "ga.last", rel_tol=0.01),
+    Figure("kinematics:ik seed prose domain branch", _KM, r"about " + _N + r" % of poses on the branch", "ik_seed/irb140",
+           "domain.branch_percent", rel_tol=0.02),
+    Figure("kinematics:ik seed prose domain back", _KM, r"about " + _N + r" % of poses that need J1", "ik_seed/irb140",
+           "domain.back_percent", rel_tol=0.05),
+    Figure("kinematics:ik seed prose ur10 box converged", _KM, r"joint box \(UR10\) is\s+worse: " + _N + " % converged",
+           "ik_seed/ur10", "ik.box.converged", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 box on branch", _KM, r"% converged, only " + _N + " % in the wanted", "ik_seed/ur10",
+           "ik.box.on_branch", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 network converged", _KM, r"no closed form in robocal; " + _N + " % vs",
+           "ik_seed/ur10", "ik.network.converged", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 middle converged", _KM, r"no closed form in robocal; [0-9]+ % vs " + _N,
+           "ik_seed/ur10", "ik.middle.converged", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 domain back", _KM, r"the domain check passes " + _N + " % of the J1 = 175",
+           "ik_seed/ur10", "domain.back_percent", rel_tol=0.02),
+]
+
+
+_IKT = r"for the first command, on this machine: [0-9.]+ s, the GA chose "
+FIGURES += [
+    Figure("kinematics:ik-train centres", _KM, _IKT + _N + " centres", "ik_net/cli_example", "centres", rel_tol=0.0),
+    Figure("kinematics:ik-train validation position", _KM, _IKT + r"[0-9]+ centres, validation median\s+position error "
+           + _N, "ik_net/cli_example", "validation.position_mm", rel_tol=0.01),
+    Figure("kinematics:ik-train validation joint", _KM, r"position error [0-9.]+ mm, joint error " + _N + " deg",
+           "ik_net/cli_example", "validation.joint_deg", rel_tol=0.01),
+    Figure("kinematics:ik seed of the example pose", _KM, r"gets a seed " + _N + " mm off", "ik_net/cli_example",
+           "seed.position_error_mm", rel_tol=0.01),
+]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
