@@ -16,7 +16,7 @@ It is *exempt* (not a result) when it is
 * an input or a bound: followed by ``noise``, ``tolerance``, ``limit``, ``box``, ``margin``, ...,
   or after ``<``, ``>``, ``±`` (not a value's ``± U``), ``within``, ``below``, ``up to``, ``noise``;
 * in a table column whose header names a time, a speed or a memory size or a cited source
-  (README, source, thesis, paper, published, reference), or in a row's first
+  (README, source, thesis, paper, published, reference) or in such a row, or in a row's first
   cell or the header row (labels: the set-up measured);
 * a reference (after ``section``, ``table``, ``figure``, ``eq.``, ``issue``, ``item``, ``chapter``,
   ``step``, ``§``, ``(thesis``), a version (after ``Python``, ``numpy``, ``>=``, ``v``), a default
@@ -157,6 +157,9 @@ def _timing_column(lines: list, line_no: int, col: int) -> bool:
     cell = line[:col].count("|") - 1
     if cell == 0 or k == line_no:
         return True  # a row's label or the header (the set-up measured: an input)
+    label = line.strip().strip("|").split("|")[0]
+    if _CITED_HEADER.search(label):
+        return True  # a row of a cited source (the thesis's runs, a README's reference fit)
     return 0 <= cell < len(header) and bool(_TIMING_HEADER.search(header[cell]) or _CITED_HEADER.search(header[cell]))
 
 

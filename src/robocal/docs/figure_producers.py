@@ -12,6 +12,7 @@ from pathlib import Path
 
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
+from .figure_producers_setups import SETUP_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
 
@@ -520,6 +521,7 @@ def _iso_cube(robot: str) -> dict:
 PRODUCERS = {
     **CLI_PRODUCERS,
     **BENCH_PRODUCERS,
+    **SETUP_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),

@@ -233,6 +233,31 @@ def program_with_effects(effects: str) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def thermal_seed_2024(preset: str) -> dict:
+    """docs/thermal.md "simulate" and "screen": ``robocal thermal simulate --seed 2024 --cycles 90
+    --preset PRESET`` (per run ``run{k}.{hours|tcp_3h_mm|tcp_end_mm|tcp_max_mm}``), ``robocal thermal
+    screen RUN1 --json`` and ``--params`` (the set screened on run 1) on runs 2 and 3: λ [%] as
+    ``run{k}.lambda.{before|traditional|screened}``."""
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp) / "cell"
+        text = run_cli("thermal", "simulate", "--out", d, "--seed", 2024, "--cycles", 90, "--preset", preset)
+        for k, hours, t3, end, mx in re.findall(r"(?m)^\s+([123])\s+\w+\s+\d+\s+([0-9.]+)\s+([0-9.]+|-)\s+([0-9.]+)\s+"
+                                                r"([0-9.]+)\s", text):
+            out.update({f"run{k}.hours": float(hours), f"run{k}.tcp_end_mm": float(end), f"run{k}.tcp_max_mm": float(mx)})
+            if t3 != "-":
+                out[f"run{k}.tcp_3h_mm"] = float(t3)
+        first = json.loads(run_cli("thermal", "screen", d / "run1", "--json"))
+        runs = {1: first}
+        for k in (2, 3):
+            runs[k] = json.loads(run_cli("thermal", "screen", d / f"run{k}", "--params", ",".join(first["selected"]),
+                                         "--json"))
+    for k, r in runs.items():
+        out.update({f"run{k}.lambda.{m}": float(v) for m, v in r["lambda_percent"].items() if v is not None})
+    return out
+
+
+@functools.lru_cache(maxsize=None)
 def ik_train_example() -> dict:
     """docs/kinematics.md "Command line": ``robocal ik-train abb_irb140 --samples 20000 --seed 0``
     and ``robocal ik abb_irb140 513.1 119.1 441.8 -166.5 5.4 154.6 --deg --seed-net ... --json``:
@@ -268,4 +293,5 @@ CLI_PRODUCERS = {
     "programs/effects_ideal": lambda: program_with_effects("ideal"),
     "programs/effects_realistic": lambda: program_with_effects("realistic"),
     "ik_net/cli_example": ik_train_example,
+    **{f"thermal_cli/{p}": functools.partial(thermal_seed_2024, p) for p in ("realistic", "ideal")},
 }

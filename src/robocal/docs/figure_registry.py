@@ -539,4 +539,34 @@ FIGURES += [
 ]
 
 
+# thermal.md "Measured accuracy": the system calibration on the set-up of tests/test_thermal_core.py
+_SYS = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+for _label, _m in (("least squares", "ls"), ("thesis penalty", "thesis")):
+    FIGURES += _table("docs/thermal.md", {f"{_label}, seeds 0–7": ""}, "system_calibration/thermal",
+                      [(c, k, f"{_m}.{stat}.{key}") for c, key in enumerate(_SYS)
+                       for k, stat in enumerate(("seeds8_mean", "seeds8_max"))], prefix="thermal:system ", rel_tol=0.01)
+    FIGURES += _table("docs/thermal.md", {f"{_label}, seeds 0–19": ""}, "system_calibration/thermal",
+                      [(c, 0, f"{_m}.seeds20_mean.{key}") for c, key in enumerate(_SYS)], prefix="thermal:system ",
+                      rel_tol=0.01)
+FIGURES += _table("docs/thermal.md", {"seeds (of 20) where least squares is better": ""}, "system_calibration/thermal",
+                  [(c, 0, f"wins.{key}") for c, key in enumerate(_SYS)], prefix="thermal:system ", rel_tol=0.0)
+
+
+# thermal.md "simulate" and "screen" on seed 2024 (robocal thermal simulate / screen through the command line)
+_SIM = r"Measured, seed 2024, 90 cycles: "
+_sep = r"\s*/\s*"
+FIGURES += [Figure(f"thermal:seed 2024 run{k + 1} hours", "docs/thermal.md", _SIM + r"(?:[0-9.]+ / )" * k + _N,
+                   "thermal_cli/realistic", f"run{k + 1}.hours", rel_tol=0.0) for k in range(3)]
+for _preset, _lead in (("realistic", r"realistic: TCP drift after 3 h "), ("ideal", r"ideal: ")):
+    for _what, _mid in (("tcp_3h_mm", ""), ("tcp_max_mm", r"[0-9.]+" + _sep + r"[0-9.]+" + _sep + r"[0-9.]+ mm,\s+maximum\s+")):
+        FIGURES += [Figure(f"thermal:seed 2024 {_preset} run{k + 1} {_what}", "docs/thermal.md",
+                           _SIM + r"(?s:.*?)" + _lead + _mid + (r"[0-9.]+" + _sep) * k + _N, f"thermal_cli/{_preset}",
+                           f"run{k + 1}.{_what}", rel_tol=0.01) for k in range(3)]
+for _preset, _set in (("realistic", "θ2, a2, α2, β2, θ3, d4, a4, d6"), ("ideal", "a1, a2, β2, θ3, d4, α4, d6, a6")):
+    FIGURES += _table("docs/thermal.md", {f"{_preset} | {_set}": ""}, f"thermal_cli/{_preset}",
+                      [(c, k, f"run{c + 1}.lambda.{m}") for c in range(3)
+                       for k, m in enumerate(("before", "traditional", "screened"))],
+                      prefix=f"thermal:seed 2024 screen {_preset} ", rel_tol=0.0, short=False)
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
