@@ -569,4 +569,44 @@ for _preset, _set in (("realistic", "θ2, a2, α2, β2, θ3, d4, a4, d6"), ("ide
                       prefix=f"thermal:seed 2024 screen {_preset} ", rel_tol=0.0, short=False)
 
 
+# handeye.md "Acceptance on rendered images" (the set-up of tests/test_handeye_images.py)
+_REND = ("robocal", "TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS", "RW_SHAH", "RW_LI")
+for _label, _setup, _what in (("eye-in-hand, rotation [deg]", "eye_in_hand", "rot_deg"),
+                              ("eye-in-hand, translation [mm]", "eye_in_hand", "trans_mm"),
+                              ("eye-to-hand, rotation [deg]", "eye_to_hand", "rot_deg"),
+                              ("eye-to-hand, translation [mm]", "eye_to_hand", "trans_mm")):
+    FIGURES += _table("docs/handeye.md", {_label: ""}, "handeye/rendered",
+                      [(c, 0, f"{_setup}.{m}.{_what}") for c, m in enumerate(_REND)], prefix="handeye:rendered ",
+                      rel_tol=0.02, short=False, after="## Acceptance on rendered images")
+FIGURES.append(Figure("handeye:rendered detection rms", "docs/handeye.md", r"\(seed 5\), detected \(" + _N + " px",
+                      "handeye/rendered", "detection_rms_px", rel_tol=0.05))
+
+
+# self-calibration.md "Industrial variant": compare_with_tracker over seeds 0-4
+FIGURES += _table("docs/self-calibration.md", {str(k): str(k) for k in range(5)}, "self_calibration/industrial",
+                  [(c, 0, f) for c, f in enumerate(("nominal_mm", "self_calibration_mm", "tracker_same_poses_mm",
+                                                    "tracker_random_poses_mm", "ratio_same_poses", "ratio_random_poses"))],
+                  prefix="self-calibration:industrial seed ", rel_tol=0.01, after="| seed | nominal | self-calibration |")
+_IND = r"Reading: images alone remove "
+FIGURES += [
+    Figure("self-calibration:industrial removed min", "docs/self-calibration.md", _IND + _N, "self_calibration/industrial",
+           "min.removed_percent", rel_tol=0.01),
+    Figure("self-calibration:industrial removed max", "docs/self-calibration.md", _IND + r"[0-9]+-" + _N,
+           "self_calibration/industrial", "max.removed_percent", rel_tol=0.01),
+    Figure("self-calibration:industrial selfcal min", "docs/self-calibration.md", _IND + r"(?s:.*?)\(to " + _N,
+           "self_calibration/industrial", "min.self_calibration_mm", rel_tol=0.01),
+    Figure("self-calibration:industrial selfcal max", "docs/self-calibration.md", _IND + r"(?s:.*?)\(to [0-9.]+-" + _N,
+           "self_calibration/industrial", "max.self_calibration_mm", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio same min", "docs/self-calibration.md", _IND + r"(?s:.*?)\(ratio\s+" + _N,
+           "self_calibration/industrial", "min.ratio_same_poses", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio same max", "docs/self-calibration.md",
+           _IND + r"(?s:.*?)\(ratio\s+[0-9.]+-" + _N, "self_calibration/industrial", "max.ratio_same_poses", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio random min", "docs/self-calibration.md", _IND + r"(?s:.*?), and " + _N + "-",
+           "self_calibration/industrial", "min.ratio_random_poses", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio random max", "docs/self-calibration.md",
+           _IND + r"(?s:.*?), and [0-9]+-" + _N + "x worse", "self_calibration/industrial", "max.ratio_random_poses",
+           rel_tol=0.01),
+]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
