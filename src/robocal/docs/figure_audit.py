@@ -50,7 +50,7 @@ _TIMING = re.compile(r"\s?(?:s|ms|us|µs|ns|min|h|seconds?|minutes?|hours?)\b(?!
 _SPEED = re.compile(r"\s?[x×]\b")
 _BEFORE_REF = re.compile(r"(?<!\w)(?:section|sections|table|tables|figure|figures|fig\.|eq\.|eqs\.|equation|issue|issues|item|"
                          r"items|chapter|step|steps|page|§|thesis|line|lines|column|columns|row|rows|rule|level|"
-                         r"generation|generations|python|numpy|scipy|numba|opencv|deap|dask|version|v|>=|<=|==|"
+                         r"generation|generations|source|target|python|numpy|scipy|numba|opencv|deap|dask|version|v|>=|<=|==|"
                          r"default|defaults|seed|seeds|cycle|cycles|iso|din|en|vdi|rfc|pep|class|format)"
                          r"[\s(:]*(?:[0-9.]+(?:[-–,/]|\s(?:and|to|or)\s)\s?)*$", re.I)
 _DATE = re.compile(r"\d{4}-\d{2}-\d{2}|\d{1,2}:\d{2}(?::\d{2})?(?:\s?UTC)?")

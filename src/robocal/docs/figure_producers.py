@@ -47,6 +47,10 @@ def _dataset(name: str, model: str) -> dict:
 
     r = run_dataset(name, model)
     out = _flat(r)
+    train = [v for k, v in out.items() if re.fullmatch(r"train_rms_mm\.\d+", k)]
+    if train:  # per-seed training RMS: their range and mean
+        out.update({"train_rms_mm.min": min(train), "train_rms_mm.max": max(train),
+                    "train_rms_mm.mean": sum(train) / len(train)})
     for s in r.get("sets", []):
         out[f"{s['set']}.holdout_rms_mm"] = s["holdout_rms_mm"]
     return out

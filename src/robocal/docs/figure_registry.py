@@ -609,4 +609,32 @@ FIGURES += [
 ]
 
 
+# elastic.md's prose: training RMS and the Justin figures; datasets.md's boby calibrated RMS
+_TR = r"Training RMS: Justin [0-9.]+ → [0-9.]+ \(joint\) → [0-9.]+ mm \(full\); "
+FIGURES += [
+    Figure("elastic:boby train rms geometric min", "docs/elastic.md", _TR + r"boby " + _N, "boby_fanuc/geometric",
+           "train_rms_mm.min", rel_tol=0.01),
+    Figure("elastic:boby train rms geometric max", "docs/elastic.md", _TR + r"boby [0-9.]+-" + _N, "boby_fanuc/geometric",
+           "train_rms_mm.max", rel_tol=0.01),
+    Figure("elastic:boby train rms joint mean", "docs/elastic.md", _TR + r"boby [0-9.]+-[0-9.]+ → " + _N,
+           "boby_fanuc/elastic-joint", "train_rms_mm.mean", rel_tol=0.01),
+    Figure("elastic:hilti train rms geometric", "docs/elastic.md", _TR + r"(?s:.*?)Hilti " + _N, "hilti_trailblazer/geometric",
+           "train_rms_mm", rel_tol=0.01),
+    Figure("elastic:hilti train rms joint", "docs/elastic.md", _TR + r"(?s:.*?)Hilti [0-9.]+ → " + _N,
+           "hilti_trailblazer/elastic-joint", "train_rms_mm", rel_tol=0.01),
+    Figure("elastic:hilti train rms full", "docs/elastic.md", _TR + r"(?s:.*?)Hilti [0-9.]+ → [0-9.]+ \(joint\) → ~" + _N,
+           "hilti_trailblazer/elastic-full", "train_rms_mm", rel_tol=0.03),
+    Figure("elastic:justin joint mean (prose)", "docs/elastic.md", r"joint compliance reaches " + _N + " mm mean",
+           "dlr_justin/elastic-joint", "holdout_mean_mm", rel_tol=0.01),
+    Figure("elastic:justin full mean (prose)", "docs/elastic.md", r"the full\s+model " + _N + " mm mean",
+           "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01),
+    Figure("elastic:boby training range joint min", "docs/elastic.md", r"0\.338 mm; training " + _N, "boby_fanuc/elastic-joint",
+           "train_rms_mm.min", rel_tol=0.01),
+    Figure("elastic:boby training range joint max", "docs/elastic.md", r"0\.338 mm; training [0-9.]+-" + _N,
+           "boby_fanuc/elastic-joint", "train_rms_mm.max", rel_tol=0.01),
+]
+FIGURES += _table("docs/datasets.md", {"calibrated (robocal)": "geometric"}, "boby_fanuc/geometric", [(0, 0, "rms")],
+                  prefix="datasets:boby table ")
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
