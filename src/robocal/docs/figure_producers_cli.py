@@ -280,6 +280,22 @@ def ik_train_example() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def tutorial() -> dict:
+    """docs/tutorial.md: ``robocal simulate tracker ur10 --poses 80 --noise 0.02 --seed 5``, then
+    ``robocal.calibrate`` with ``CalibrationOptions(holdout=0.25, seed=3, noise_mm=0.02)``: the
+    held-out RMS ``holdout.{before|after}`` [mm]."""
+    import robocal
+
+    with tempfile.TemporaryDirectory() as tmp:
+        csv = Path(tmp) / "campaign.csv"
+        run_cli("simulate", "tracker", "ur10", "--poses", 80, "--noise", 0.02, "--seed", 5, "--out", csv)
+        robot = robocal.load_robot("ur10")
+        result = robocal.calibrate(robot, robocal.read_measurements(str(csv), robot),
+                                   options=robocal.CalibrationOptions(holdout=0.25, seed=3, noise_mm=0.02))
+    return {"holdout.before": float(result.holdout["before"]["rms"]), "holdout.after": float(result.holdout["after"]["rms"])}
+
+
 def repository_root_examples() -> Path:
     """``docs/examples/programs`` of the repository."""
     from .figure_producers import repository_root
@@ -293,5 +309,6 @@ CLI_PRODUCERS = {
     "programs/effects_ideal": lambda: program_with_effects("ideal"),
     "programs/effects_realistic": lambda: program_with_effects("realistic"),
     "ik_net/cli_example": ik_train_example,
+    "tutorial/calibrate": tutorial,
     **{f"thermal_cli/{p}": functools.partial(thermal_seed_2024, p) for p in ("realistic", "ideal")},
 }

@@ -637,4 +637,11 @@ FIGURES += _table("docs/datasets.md", {"calibrated (robocal)": "geometric"}, "bo
                   prefix="datasets:boby table ")
 
 
+# tutorial.md: the held-out RMS of its calibration (the page also runs as tests/test_tutorial.py)
+FIGURES += [Figure("tutorial:holdout before", "docs/tutorial.md", r"what calibration gains:\s+" + _N + " mm before",
+                   "tutorial/calibrate", "holdout.before", rel_tol=0.005),
+            Figure("tutorial:holdout after", "docs/tutorial.md", r"mm before, " + _N + " mm after", "tutorial/calibrate",
+                   "holdout.after", rel_tol=0.01)]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
