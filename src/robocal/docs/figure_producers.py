@@ -573,7 +573,8 @@ def datasets_needed(producer: str) -> tuple:
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
     return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
-            "ros_industrial_positioner": ("ros_industrial_handeye",)}.get(head, ())
+            "ros_industrial_positioner": ("ros_industrial_handeye",),
+            "ros_handeye": ("ros_industrial_handeye",)}.get(head, ())
 
 
 

@@ -296,6 +296,25 @@ def tutorial() -> dict:
     return {"holdout.before": float(result.holdout["before"]["rms"]), "holdout.after": float(result.holdout["after"]["rms"])}
 
 
+@functools.lru_cache(maxsize=None)
+def ros_handeye(test_set: str) -> dict:
+    """docs/datasets.md "ros_industrial_handeye": ``robocal handeye solve
+    <datasets>/ros_industrial_handeye/raw/TEST_SET/cal_data.yaml --exact-poses --json``: ``rms_px``,
+    ``n_images_used``, ``n_corners``, the camera pose ``position_mm.{0,1,2}``, ``sigma_position_mm.{0,1,2}``,
+    ``rotation_vector_deg.{0,1,2}``, ``sigma_rotation_deg.max``."""
+    from ..io.datasets import datasets_root
+
+    src = datasets_root() / "ros_industrial_handeye" / "raw" / test_set / "cal_data.yaml"
+    with tempfile.TemporaryDirectory() as tmp:
+        d = json.loads(run_cli("handeye", "solve", src, "--exact-poses", "--out", Path(tmp) / "out", "--json"))
+    pose = d["camera_pose"]
+    out = {"rms_px": float(d["reprojection_rms_px"]), "n_images_used": float(d["n_images_used"]),
+           "n_corners": float(d["n_corners"]), "sigma_rotation_deg.max": float(max(pose["sigma_rotation_deg"]))}
+    for key in ("position_mm", "sigma_position_mm", "rotation_vector_deg"):
+        out.update({f"{key}.{k}": float(v) for k, v in enumerate(pose[key])})
+    return out
+
+
 def repository_root_examples() -> Path:
     """``docs/examples/programs`` of the repository."""
     from .figure_producers import repository_root
@@ -310,5 +329,6 @@ CLI_PRODUCERS = {
     "programs/effects_realistic": lambda: program_with_effects("realistic"),
     "ik_net/cli_example": ik_train_example,
     "tutorial/calibrate": tutorial,
+    **{f"ros_handeye/{t}": functools.partial(ros_handeye, t) for t in ("test_set_charuco", "test_set_10x10")},
     **{f"thermal_cli/{p}": functools.partial(thermal_seed_2024, p) for p in ("realistic", "ideal")},
 }

@@ -644,4 +644,29 @@ FIGURES += [Figure("tutorial:holdout before", "docs/tutorial.md", r"what calibra
                    "holdout.after", rel_tol=0.01)]
 
 
+# datasets.md "ros_industrial_handeye": robocal handeye solve --exact-poses on both sets (the bold column
+# and the camera poses)
+_RH = "Reprojection RMS per corner [px]"
+for _label, _set in (("ChArUco, eye-to-hand", "test_set_charuco"), ("circle grid, eye-in-hand", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: ""}, f"ros_handeye/{_set}",
+                      [(0, 0, "n_images_used"), (1, 0, "n_corners"), (2, 0, "rms_px")], prefix="datasets:ros handeye ",
+                      rel_tol=0.002, after=_RH, short=False)
+for _lead, _set in ((r"ChArUco `T_base_camera` position \(", "test_set_charuco"),
+                    (r"Circle grid `T_flange_camera` position \(", "test_set_10x10")):
+    _sep = r",\s*"
+    for _k in range(3):
+        FIGURES += [
+            Figure(f"datasets:ros handeye {_set} position {_k}", "docs/datasets.md", _lead + (r"[−0-9.-]+" + _sep) * _k + _N,
+                   f"ros_handeye/{_set}", f"position_mm.{_k}", rel_tol=0.0),
+            Figure(f"datasets:ros handeye {_set} sigma position {_k}", "docs/datasets.md",
+                   _lead + r"[^)]*\) mm \+- \(" + (r"[0-9.]+" + _sep) * _k + _N, f"ros_handeye/{_set}",
+                   f"sigma_position_mm.{_k}", rel_tol=0.02),
+            Figure(f"datasets:ros handeye {_set} rotation {_k}", "docs/datasets.md",
+                   _lead + r"[^)]*\) mm \+- \([^)]*\),\s+rotation\s+vector \(" + (r"[−0-9.-]+" + _sep) * _k + _N,
+                   f"ros_handeye/{_set}", f"rotation_vector_deg.{_k}", rel_tol=0.0)]
+    FIGURES.append(Figure(f"datasets:ros handeye {_set} sigma rotation", "docs/datasets.md",
+                          _lead + r"[^)]*\) mm \+- \([^)]*\),\s+rotation\s+vector \([^)]*\) deg \+- " + _N,
+                          f"ros_handeye/{_set}", "sigma_rotation_deg.max", rel_tol=0.05))
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
