@@ -67,7 +67,12 @@ def _closed_chain(n_seeds: int, plates: int, known_spacing: bool) -> dict:
     out = _flat(rows)
     for k in ("closed_chain", "tracker", "nominal"):
         out[f"median.{k}"] = float(np.median([r["workspace_rms_mm"][k] for r in rows]))
-    out["median.ratio"] = float(np.median([r["ratio_closed_chain_to_tracker"] for r in rows]))
+    for k in ("closed_chain", "tracker", "nominal", "true_model"):
+        vals = [r["workspace_rms_mm"][k] for r in rows]
+        out[f"median.{k}"], out[f"min.{k}"], out[f"max.{k}"] = float(np.median(vals)), min(vals), max(vals)
+    ratios = [r["ratio_closed_chain_to_tracker"] for r in rows]
+    out["median.ratio"], out["min.ratio"], out["max.ratio"] = float(np.median(ratios)), min(ratios), max(ratios)
+    out["removed_percent"] = 100.0 * (1.0 - out["median.closed_chain"] / out["median.nominal"])
     out["median.max_abs_z"] = float(np.median([r["max_abs_z"] for r in rows]))
     out["max.max_abs_z"] = float(max(r["max_abs_z"] for r in rows))
     out["n_not_converged"] = float(sum(r["n_not_converged"] for r in rows))
@@ -574,7 +579,7 @@ def datasets_needed(producer: str) -> tuple:
         return (head,)
     return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
             "ros_industrial_positioner": ("ros_industrial_handeye",),
-            "ros_handeye": ("ros_industrial_handeye",)}.get(head, ())
+            "ros_handeye": ("ros_industrial_handeye",), "camera": ("ros_industrial_handeye",)}.get(head, ())
 
 
 

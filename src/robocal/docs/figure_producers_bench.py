@@ -10,7 +10,7 @@ import importlib.util
 import io
 import re
 
-__all__ = ["BENCH_PRODUCERS", "ik_seed"]
+__all__ = ["BENCH_PRODUCERS", "camera_calibration", "ik_seed"]
 
 _F = r"([0-9.]+(?:e[+-]?[0-9]+)?)"
 
@@ -78,4 +78,25 @@ def ik_seed(robot: str) -> dict:
     return out
 
 
-BENCH_PRODUCERS = {f"ik_seed/{r}": functools.partial(ik_seed, r) for r in ("irb140", "tilted", "ur10")}
+@functools.lru_cache(maxsize=None)
+def camera_calibration(seeds: int = 3) -> dict:
+    """docs/handeye.md "Side by side with OpenCV": ``python benchmarks/bench_camera_calibration.py
+    --seeds SEEDS``'s two tables (rendered images against the truth; the ROS-Industrial real images
+    when the data set is present), as ``"{board} | {pipeline}|{col}|{pos}"`` (the numbers of each
+    table cell, :func:`robocal.docs.figure_producers._markdown_rows` with two label cells; the real
+    table's rows have one label cell and are keyed ``"{set}|{col}|{pos}"``)."""
+    from .figure_producers import _markdown_rows
+
+    bench = _bench_module("bench_camera_calibration.py")
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        bench.rendered(list(range(seeds)))
+    rendered = _markdown_rows(buf.getvalue(), label_cells=2)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        bench.real()
+    return {**rendered, **_markdown_rows(buf.getvalue(), label_cells=1)}
+
+
+BENCH_PRODUCERS = {"camera/bench_calibration": camera_calibration,
+                   **{f"ik_seed/{r}": functools.partial(ik_seed, r) for r in ("irb140", "tilted", "ur10")}}

@@ -669,4 +669,45 @@ for _lead, _set in ((r"ChArUco `T_base_camera` position \(", "test_set_charuco")
                           f"ros_handeye/{_set}", "sigma_rotation_deg.max", rel_tol=0.05))
 
 
+# closed-chain.md's prose on the study and the variants
+_CC = r"\*\*Median ratio closed chain / tracker: [0-9.]+\*\* \("
+FIGURES += [
+    Figure("closed-chain:ratio min", "docs/closed-chain.md", _CC + _N, "closed_chain/study", "min.ratio", rel_tol=0.01),
+    Figure("closed-chain:ratio max", "docs/closed-chain.md", _CC + r"[0-9.]+–" + _N, "closed_chain/study", "max.ratio",
+           rel_tol=0.01),
+    Figure("closed-chain:removed percent", "docs/closed-chain.md", r"the closed chain removes ~" + _N + " %",
+           "closed_chain/study", "removed_percent", rel_tol=0.02),
+    Figure("closed-chain:nominal median", "docs/closed-chain.md", r"of the nominal error\s+\(" + _N + " mm →",
+           "closed_chain/study", "median.nominal", rel_tol=0.05),
+    Figure("closed-chain:closed chain min", "docs/closed-chain.md", r"of the nominal error\s+\([0-9.]+ mm → " + _N,
+           "closed_chain/study", "min.closed_chain", rel_tol=0.02),
+    Figure("closed-chain:closed chain max", "docs/closed-chain.md", r"of the nominal error\s+\([0-9.]+ mm → [0-9.]+–" + _N,
+           "closed_chain/study", "max.closed_chain", rel_tol=0.02),
+    Figure("closed-chain:tracker min", "docs/closed-chain.md", r"as many poses reaches " + _N, "closed_chain/study",
+           "min.tracker", rel_tol=0.02),
+    Figure("closed-chain:tracker max", "docs/closed-chain.md", r"as many poses reaches [0-9.]+–" + _N, "closed_chain/study",
+           "max.tracker", rel_tol=0.02),
+    Figure("closed-chain:true model", "docs/closed-chain.md", r"\(the true model: " + _N + " mm\)", "closed_chain/study",
+           "median.true_model", rel_tol=0.02),
+    Figure("closed-chain:no spacing ratio (prose)", "docs/closed-chain.md", r"the workspace error is " + _N + "× the tracker",
+           "closed_chain/2-free", "median.ratio", rel_tol=0.01),
+    Figure("closed-chain:one plate (prose)", "docs/closed-chain.md", r"\(table below: " + _N + " mm →", "closed_chain/1-spacing",
+           "median.closed_chain", rel_tol=0.01),
+    Figure("closed-chain:two plates (prose)", "docs/closed-chain.md", r"\(table below: [0-9.]+ mm → " + _N + " mm median",
+           "closed_chain/2-spacing", "median.closed_chain", rel_tol=0.01),
+]
+
+
+# handeye.md "Side by side with OpenCV": python benchmarks/bench_camera_calibration.py --seeds 3 (slow)
+_CAMB = "### Side by side with OpenCV"
+for _label in ("checkerboard | **robocal**", "checkerboard | OpenCV classic + cornerSubPix", "checkerboard | OpenCV SB",
+               "charuco | **robocal**", "charuco | OpenCV CharucoDetector", "charuco | OpenCV + cornerSubPix"):
+    FIGURES += [Figure(f"handeye:camera bench {_label.replace('*', '')} {c}", "docs/handeye.md", _cell(_label, c, 0, after=_CAMB),
+                       "camera/bench_calibration", f"{_label}|{c}|0", rel_tol=0.02) for c in range(9)]
+for _label, _spec in (("ChArUco", ((0, 0), (1, 0), (1, 3), (2, 0), (3, 0))), ("circle grid", ((0, 0), (1, 0), (1, 3), (2, 0)))):
+    FIGURES += [Figure(f"handeye:camera bench real {_label} {c}.{k}", "docs/handeye.md",
+                       _cell(_label, c, k, after="ROS-Industrial real images, RMS [px]"), "camera/bench_calibration",
+                       f"{_label}|{c}|{k}", rel_tol=0.005) for c, k in _spec]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
