@@ -687,7 +687,7 @@ FIGURES += [
            "min.tracker", rel_tol=0.02),
     Figure("closed-chain:tracker max", "docs/closed-chain.md", r"as many poses reaches [0-9.]+–" + _N, "closed_chain/study",
            "max.tracker", rel_tol=0.02),
-    Figure("closed-chain:true model", "docs/closed-chain.md", r"\(the true model: " + _N + " mm\)", "closed_chain/study",
+    Figure("closed-chain:true model", "docs/closed-chain.md", r"\(the true model: " + _N + r" mm\)", "closed_chain/study",
            "median.true_model", rel_tol=0.02),
     Figure("closed-chain:no spacing ratio (prose)", "docs/closed-chain.md", r"the workspace error is " + _N + "× the tracker",
            "closed_chain/2-free", "median.ratio", rel_tol=0.01),
