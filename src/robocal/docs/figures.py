@@ -12,9 +12,13 @@ Usage::
     python -m robocal.docs.figures              # print the table (fast figures)
     python -m robocal.docs.figures --check      # exit 1 when a figure drifted beyond its tolerance
     python -m robocal.docs.figures --all        # include the slow ones (elastic-full on Justin, Hilti)
+    python -m robocal.docs.figures --all --only kinematics:   # one page or figure (keys contain the text)
+    python -m robocal.docs.figures --audit      # the numbers of README.md and docs/ no figure checks
+    python -m robocal.docs.figures --audit --check            # exit 1 when a page has more than its baseline
 
 The fast figures also run in the test suite (``tests/test_doc_figures.py``); the slow ones run there
-when ``ROBOCAL_SLOW=1`` is set (before each release).
+when ``ROBOCAL_SLOW=1`` is set (before each release). The audit (:mod:`robocal.docs.figure_audit`)
+runs in ``tests/test_doc_figure_audit.py``.
 """
 
 
