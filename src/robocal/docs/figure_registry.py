@@ -712,4 +712,32 @@ for _label, _row, _spec in (("ChArUco", "test_set_charuco", ((0, 0), (1, 0), (1,
                        f"{_row}|{c}|{k}", rel_tol=0.005) for c, k in _spec]
 
 
+# handeye.md "Where robocal's default wins and where not": the prose on the fair comparison's table
+_FC = "handeye/fair_comparison"
+_D, _B = "**robocal default (auto)**", "solvePnP + SciPy least_squares (12 unknowns)"
+_WIN = r"Where robocal's default wins and where not:(?s:.*?)"
+FIGURES += [Figure(f"handeye:fair prose {k}", "docs/handeye.md", _WIN + pat, _FC, field, rel_tol=0.01)
+            for k, pat, field in (
+                ("none default", r"baseline without robot noise \(" + _N, f"none (0 / 0) | {_D}|0|0"),
+                ("none baseline", r"baseline without robot noise \([0-9.]+ against " + _N, f"none (0 / 0) | {_B}|0|0"),
+                ("0.02 default", r"with 0\.02 mm noise \(" + _N, f"0.02 mm / 0.004 deg | {_D}|0|0"),
+                ("0.02 baseline", r"with 0\.02 mm noise \([0-9.]+ against " + _N, f"0.02 mm / 0.004 deg | {_B}|0|0"),
+                ("0.2 default mm", r"the default \(" + _N + " mm, ", f"0.2 mm / 0.03 deg | {_D}|0|0"),
+                ("0.2 default deg", r"the default \([0-9.]+ mm, " + _N + " deg", f"0.2 mm / 0.03 deg | {_D}|1|0"),
+                ("0.2 baseline mm", r"beats the reprojection baseline \(" + _N + " mm,", f"0.2 mm / 0.03 deg | {_B}|0|0"),
+                ("0.2 baseline deg", r"beats the reprojection baseline \([0-9.]+ mm,\s+" + _N + " deg",
+                 f"0.2 mm / 0.03 deg | {_B}|1|0"),
+                ("0.2 prior", r"median position error \(" + _N + r" mm\)",
+                 "0.2 mm / 0.03 deg | robocal prior 0.05 mm / 0.01 deg|0|0"),
+                ("1 DANIILIDIS", r"OpenCV DANIILIDIS \(" + _N + r" mm\)", "1 mm / 0.1 deg | OpenCV DANIILIDIS|0|0"),
+                ("1 TSAI", r"mm\), TSAI\s+\(" + _N + r"\)", "1 mm / 0.1 deg | OpenCV TSAI|0|0"),
+                ("1 HORAUD", r"HORAUD \(" + _N + r"\) and PARK", "1 mm / 0.1 deg | OpenCV HORAUD|0|0"),
+                ("1 PARK", r"and PARK \(" + _N + r"\) have", "1 mm / 0.1 deg | OpenCV PARK|0|0"),
+                ("1 default mm", r"than the default's " + _N + " mm", f"1 mm / 0.1 deg | {_D}|0|0"),
+                ("1 default deg", r"It wins in rotation \(" + _N + " deg", f"1 mm / 0.1 deg | {_D}|1|0"),
+                ("1 baseline mm", r"against the reprojection baseline \(" + _N + " mm", f"1 mm / 0.1 deg | {_B}|0|0"),
+                ("1 baseline deg", r"against the reprojection baseline \([0-9.]+ mm / " + _N + " deg", f"1 mm / 0.1 deg | {_B}|1|0"),
+                ("1 prior", r"the former prior \(" + _N + r" mm\)", "1 mm / 0.1 deg | robocal prior 0.05 mm / 0.01 deg|0|0"))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
