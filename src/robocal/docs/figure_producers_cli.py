@@ -237,7 +237,9 @@ def thermal_seed_2024(preset: str) -> dict:
     """docs/thermal.md "simulate" and "screen": ``robocal thermal simulate --seed 2024 --cycles 90
     --preset PRESET`` (per run ``run{k}.{hours|tcp_3h_mm|tcp_end_mm|tcp_max_mm}``), ``robocal thermal
     screen RUN1 --json`` and ``--params`` (the set screened on run 1) on runs 2 and 3: λ [%] as
-    ``run{k}.lambda.{before|traditional|screened}``."""
+    ``run{k}.lambda.{before|traditional|screened}``; ``robocal thermal calibrate-sensor`` with the
+    nominal model on run 1's cold spheres, ``--truth``: ``sensor.residual_rms_mm`` and the errors
+    ``sensor.{rotation_deg|at_point_mm|P_e_mm|...}``."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "cell"
@@ -247,6 +249,10 @@ def thermal_seed_2024(preset: str) -> dict:
             out.update({f"run{k}.hours": float(hours), f"run{k}.tcp_end_mm": float(end), f"run{k}.tcp_max_mm": float(mx)})
             if t3 != "-":
                 out[f"run{k}.tcp_3h_mm"] = float(t3)
+        cal = json.loads(run_cli("thermal", "calibrate-sensor", "kuka_kr150_r3100", d / "run1" / "sphere_cold.csv",
+                                 "--truth", d / "run1" / "truth.json", "--json"))
+        out["sensor.residual_rms_mm"] = float(cal["results"][0]["residual_rms_mm"])
+        out.update({f"sensor.{k}": float(v) for k, v in cal["errors"]["least-squares"].items()})
         first = json.loads(run_cli("thermal", "screen", d / "run1", "--json"))
         runs = {1: first}
         for k in (2, 3):

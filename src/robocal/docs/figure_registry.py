@@ -740,4 +740,13 @@ FIGURES += [Figure(f"handeye:fair prose {k}", "docs/handeye.md", _WIN + pat, _FC
                 ("1 prior", r"the former prior \(" + _N + r" mm\)", "1 mm / 0.1 deg | robocal prior 0.05 mm / 0.01 deg|0|0"))]
 
 
+_CS = r"on the simulated cell \(seed 2024, realistic;(?s:.*?)"
+FIGURES += [Figure(f"thermal:calibrate-sensor nominal model {k}", "docs/thermal.md", _CS + pat, "thermal_cli/realistic",
+                   field, rel_tol=0.02)
+            for k, pat, field in (("residual rms", r"the residual RMS is " + _N, "sensor.residual_rms_mm"),
+                                  ("frame", r"the frame is " + _N + " mm", "sensor.at_point_mm"),
+                                  ("rotation", r"the frame is [0-9.]+ mm \(" + _N + "°", "sensor.rotation_deg"),
+                                  ("P_e", r"and `P_e` " + _N + " mm from the truth", "sensor.P_e_mm"))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
