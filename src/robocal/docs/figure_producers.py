@@ -586,5 +586,6 @@ def datasets_needed(producer: str) -> tuple:
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
+                  "thermal_cli/compensate",  # ~3 s, slow only to keep the suite's added CPU under 20 s
                   "tcp/realistic", "tcp/ideal", "tcp/budget",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

@@ -264,6 +264,46 @@ def thermal_seed_2024(preset: str) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def thermal_compensate() -> dict:
+    """docs/thermal.md "compensate" (the set-up of ``tests/test_thermal_cli.py``): ``robocal thermal
+    simulate --seed 2024 --cycles 20 --preset ideal``, ``screen`` run 1, ``calibrate-sensor`` on run
+    1's cold spheres, ``compensate`` run 2 after cycle 20 with the screened set from its 6 online
+    poses and their cold reference, the 34-point program. Fields ``residual_rms_{before|after}_mm``,
+    ``condition_number`` and, on the true simulated robot (warm at cycle 20 against cold at the
+    taught joints), ``true.{before_max|after_max|after_mean}_mm``."""
+    import numpy as np
+
+    from ..io.programs.joint_table import read_joint_program
+    from ..robots import load_robot
+
+    robot, cycles = "kuka_kr150_r3100", 20
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp) / "cell"
+        run_cli("thermal", "simulate", "--seed", 2024, "--cycles", cycles, "--preset", "ideal", "--out", d)
+        screen = json.loads(run_cli("thermal", "screen", d / "run1", "--json"))
+        sensor = Path(tmp) / "sensor.json"
+        run_cli("thermal", "calibrate-sensor", robot, d / "run1" / "sphere_cold.csv", "--out", sensor)
+        run2 = d / "run2"
+        poses = ",".join(f"c{cycles:03d}-{p}" for p in screen["online_poses"]["screened"])
+        out = Path(tmp) / "corrected.csv"
+        r = json.loads(run_cli("thermal", "compensate", robot, "--sensor", sensor, "--sphere", run2 / "sphere.csv",
+                               "--poses", poses, "--cold", run2 / "sphere_cold.csv", "--params",
+                               ",".join(screen["selected"]), "--program", d / "program.csv", "--out", out, "--json"))
+        truth = json.loads((run2 / "truth.json").read_text())
+        model = load_robot(robot)
+        taught, corrected = read_joint_program(d / "program.csv", model), read_joint_program(out, model)
+    true = model.with_params([truth["true_parameters"][n] for n in model.params.names])
+    warm = true.with_params(true.params.values + np.array(truth["delta_true"][cycles - 1]))
+    cold = true.fk(taught.joints)[:, :3, 3]
+    before = np.linalg.norm(warm.fk(taught.joints)[:, :3, 3] - cold, axis=1)
+    after = np.linalg.norm(warm.fk(corrected.joints)[:, :3, 3] - cold, axis=1)
+    return {"residual_rms_before_mm": float(r["residual_rms_before_mm"]),
+            "residual_rms_after_mm": float(r["residual_rms_after_mm"]), "condition_number": float(r["condition_number"]),
+            "true.before_max_mm": float(before.max()), "true.after_max_mm": float(after.max()),
+            "true.after_mean_mm": float(after.mean())}
+
+
+@functools.lru_cache(maxsize=None)
 def ik_train_example() -> dict:
     """docs/kinematics.md "Command line": ``robocal ik-train abb_irb140 --samples 20000 --seed 0``
     and ``robocal ik abb_irb140 513.1 119.1 441.8 -166.5 5.4 154.6 --deg --seed-net ... --json``:
@@ -335,6 +375,7 @@ CLI_PRODUCERS = {
     "programs/effects_realistic": lambda: program_with_effects("realistic"),
     "ik_net/cli_example": ik_train_example,
     "tutorial/calibrate": tutorial,
+    "thermal_cli/compensate": thermal_compensate,
     **{f"ros_handeye/{t}": functools.partial(ros_handeye, t) for t in ("test_set_charuco", "test_set_10x10")},
     **{f"thermal_cli/{p}": functools.partial(thermal_seed_2024, p) for p in ("realistic", "ideal")},
 }

@@ -749,4 +749,14 @@ FIGURES += [Figure(f"thermal:calibrate-sensor nominal model {k}", "docs/thermal.
                                   ("P_e", r"and `P_e` " + _N + " mm from the truth", "sensor.P_e_mm"))]
 
 
+_TC = r"Measured \(the test: ideal preset, seed 2024, 20 cycles(?s:.*?)"
+FIGURES += [Figure(f"thermal:compensate {k}", "docs/thermal.md", _TC + pat, "thermal_cli/compensate", field, rel_tol=0.01)
+            for k, pat, field in (("residual before", r"sphere RMS " + _N, "residual_rms_before_mm"),
+                                  ("residual after", r"sphere RMS [0-9.]+ → " + _N, "residual_rms_after_mm"),
+                                  ("condition", r"mm, condition " + _N, "condition_number"),
+                                  ("true after max", r"is within " + _N + " mm", "true.after_max_mm"),
+                                  ("true after mean", r"\(mean " + _N + r" mm\)", "true.after_mean_mm"),
+                                  ("true before max", r"against " + _N + r" mm \(max\) without", "true.before_max_mm"))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
