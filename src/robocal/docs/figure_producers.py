@@ -586,6 +586,7 @@ def datasets_needed(producer: str) -> tuple:
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
-                  "thermal_cli/compensate",  # ~3 s, slow only to keep the suite's added CPU under 20 s
+                  # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
+                  "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}
