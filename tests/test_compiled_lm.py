@@ -109,7 +109,9 @@ def test_compiled_loop_at_the_precision_floor(monkeypatch, tols):
     for res in (compiled, python):
         assert res.converged
         assert res.reason == "step below xtol" or res.reason.startswith("no step reduces the cost at a stationary")
-    assert abs(compiled.iterations - python.iterations) <= 2
+    # the Python loop's kernels may run in numpy or compiled (robocal.kinematics._backend): a third
+    # rounding path, so the last few rounding-level steps may differ by a few iterations
+    assert abs(compiled.iterations - python.iterations) <= 4
     ok = np.isfinite(python.std)
     assert np.all(np.abs(compiled.values - python.values)[ok] <= 1e-8 * python.std[ok])
 
@@ -227,3 +229,21 @@ def test_compiled_loop_with_blocks_held(monkeypatch, case):
     python, _ = _solve(problem, monkeypatch, "python")
     assert python.converged
     _assert_same(compiled, python)
+
+
+def test_auto_compiles_once_the_process_has_solved_enough_points(monkeypatch):
+    """``auto``: a study of many small solves switches to the compiled loop once the points it solved in
+    the Python loop are worth the loop's compile (counted, so every machine takes the same path)."""
+    from robocal.calib import _lm_compiled
+
+    monkeypatch.delenv(_lm_compiled.ENV, raising=False)
+    monkeypatch.setattr(_lm_compiled, "_points_solved", _lm_compiled.COMPILE_AFTER_POINTS - 150)
+    monkeypatch.setattr(_lm_compiled, "_cache_checked", True)  # not in the cache (no compile here)
+    from robocal.calib import _lm_kernels
+
+    if _lm_kernels.lm_points.signatures:
+        pytest.skip("the loop is compiled in this process already: auto uses it anyway")
+    assert not _lm_compiled.use_compiled(None, 100)  # 100 short of the sum
+    assert _lm_compiled.use_compiled(None, 100)  # the sum reached
+    monkeypatch.setenv(_lm_compiled.ENV, "never")
+    assert not _lm_compiled.use_compiled(None, 10**9)

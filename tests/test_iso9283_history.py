@@ -193,6 +193,27 @@ def test_fleet_status_flags_the_robot_whose_rp_trend_crosses_the_tolerance(fleet
     assert "last verification -" in r.output
 
 
+def test_fleet_status_at_a_fixed_time_gives_the_trend_line_there(fleet_db):
+    """``--at``: the trend is the least-squares line through the three tests (times 2026-01-02,
+    03-02, 05-02 08:00Z), evaluated at the given time, whatever day the command runs; a time
+    without a zone is refused (exit 1)."""
+    import numpy as np
+
+    _, db, results = fleet_db
+    rp = [results["worn", k]["runs"][0]["summary"]["RP_mm"] for k in range(3)]
+    days = np.array([0.0, 59.0, 120.0])  # 2026-01-02, 03-02, 05-02
+    b, a = np.polyfit(days, rp, 1)
+    at_days = 328.0 + 16.0 / 24.0  # 2026-11-27T00:00Z after 2026-01-02T08:00Z
+    r = _run(["fleet", "status", "--db", db, "--rp-tolerance", 0.15, "--no-plots", "--json", "--at",
+              "2026-11-27T00:00Z"])
+    assert r.exit_code == 3, r.output
+    worn = {row["robot"]: row for row in json.loads(r.output)["robots"]}["worn"]
+    assert worn["iso"]["RP"]["trend_now_mm"] == pytest.approx(a + b * at_days, rel=1e-9)
+    assert worn["age_days"] == pytest.approx(330.0, abs=1e-9)  # the calibration of 2026-01-01T00:00Z
+    r = _run(["fleet", "status", "--db", db, "--no-plots", "--at", "2026-11-27T00:00"])
+    assert r.exit_code == 1 and "Error:" in r.output and "time zone" in r.output, r.output
+
+
 def test_history_lists_and_plots_ap_rp_over_time(fleet_db, tmp_path):
     _, db, results = fleet_db
     r = _run(["history", "worn", "--db", db, "--plots", tmp_path])

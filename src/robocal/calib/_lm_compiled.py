@@ -7,7 +7,8 @@ hands :func:`robocal.calib.solve` the same iteration record as the Python loop.
 :func:`use_compiled` says so. The kernels take ~10 s of CPU to compile once (5x the calibration's
 ``target_points`` kernel), which a first ``robocal calibrate`` must not pay (issue 34 item 2), so by
 default they run only when they are already compiled -- in this process or in numba's on-disk cache --
-or when the problem has at least :data:`COMPILE_MIN_POINTS` measured points.
+or when the problem has at least :data:`COMPILE_MIN_POINTS` measured points, or once the process has
+solved :data:`COMPILE_AFTER_POINTS` points in the Python loop (a Monte Carlo study, a fleet worker).
 ``ROBOCAL_COMPILED_LM=always`` compiles them on first use, ``never`` keeps the Python loop, and
 ``python -c "from robocal.calib._lm_compiled import compile_kernels; compile_kernels()"`` compiles
 them once ahead (:func:`compile_kernels`).
@@ -28,7 +29,7 @@ from . import _iterate
 from ._iterate import MAX_ITERATIONS_REASON, GTOL, STALL_RTOL
 from ._normal import NormalEquations
 
-__all__ = ["CompiledPointLM", "use_compiled", "compile_kernels", "COMPILE_MIN_POINTS", "ENV"]
+__all__ = ["CompiledPointLM", "use_compiled", "compile_kernels", "COMPILE_MIN_POINTS", "COMPILE_AFTER_POINTS", "ENV"]
 
 #: environment variable: ``auto`` (default), ``always`` or ``never``
 ENV = "ROBOCAL_COMPILED_LM"
@@ -37,6 +38,12 @@ POSE_BLOCK = 64
 #: measured points from which ``auto`` compiles the loop when it is not compiled yet: there one
 #: solve in the Python loop takes seconds, comparable with the loop's one-time compile (~10 s of CPU)
 COMPILE_MIN_POINTS = 200_000
+#: measured points summed over the point-only solves of one process from which ``auto`` compiles the
+#: loop (the work pays for the compile): ~1.5 M points are ~10 s of the Python loop (a 100-pose solve
+#: takes ~1 ms, a 5 000-pose one ~30 ms), the loop's one-time compile. Counted, not timed, so a study
+#: takes the same path on any machine and load.
+COMPILE_AFTER_POINTS = 1_500_000
+_points_solved = 0
 
 
 class _Packed:
@@ -163,11 +170,14 @@ def _ready(dispatcher, args) -> bool:
 def use_compiled(problem, n_points: int) -> bool:
     """Whether :func:`robocal.calib.solve` runs this problem's LM in compiled code (see the module
     docstring): ``ROBOCAL_COMPILED_LM`` = ``always`` / ``never``, else (``auto``) when the kernel is
-    compiled already or ``n_points`` >= :data:`COMPILE_MIN_POINTS`."""
+    compiled already, ``n_points`` >= :data:`COMPILE_MIN_POINTS`, or this process has solved
+    :data:`COMPILE_AFTER_POINTS` measured points in the Python loop (a study, a fleet worker)."""
+    global _points_solved
     mode = os.environ.get(ENV, "auto").strip().lower()
     if mode == "never":
         return False
-    if mode == "always" or n_points >= COMPILE_MIN_POINTS:
+    _points_solved += int(n_points)
+    if mode == "always" or n_points >= COMPILE_MIN_POINTS or _points_solved >= COMPILE_AFTER_POINTS:
         return True
     from . import _lm_kernels
 

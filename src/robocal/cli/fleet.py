@@ -187,9 +187,12 @@ def _exit_on_failures(failed, total) -> None:
               help="Flag a robot whose ISO 9283 AP trend (worst pose, line through its tests, at now) exceeds this [mm].")
 @click.option("--rp-tolerance", "rp_tolerance_mm", type=float, default=None, metavar="MM",
               help="Flag a robot whose ISO 9283 RP trend exceeds this [mm].")
+@click.option("--at", "at_time", default=None, metavar="ISO_TIME",
+              help="Judge ages and trends at this time (ISO 8601 with a zone, e.g. 2026-11-27T00:00Z) instead of now: "
+                   "a result that does not depend on the day it is run.")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
 def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no_plots, ap_tolerance_mm,
-               rp_tolerance_mm, as_json):
+               rp_tolerance_mm, at_time, as_json):
     """Robots whose last calibration is older than --max-age, whose drift trend crosses the
     tolerance, whose ISO 9283 AP/RP trend crosses --ap-tolerance/--rp-tolerance or whose last
     verification was not ok, from the history database (SQLite or PostgreSQL); each robot's last
@@ -197,11 +200,13 @@ def status_cmd(db, max_age_days, tolerance_mm, tolerance_deg, kind, plot_dir, no
     import json
 
     from ..store import HistoryError
+    from ..store._validate import parse_time
     from ..workflows.fleet.status import fleet_status
 
     try:
+        now = None if at_time is None else parse_time(at_time, "--at")
         r = fleet_status(db, max_age_days=max_age_days, tolerance_mm=tolerance_mm, tolerance_deg=tolerance_deg,
-                         kind=kind, plot_dir=None if no_plots else plot_dir, ap_tolerance_mm=ap_tolerance_mm,
+                         kind=kind, now=now, plot_dir=None if no_plots else plot_dir, ap_tolerance_mm=ap_tolerance_mm,
                          rp_tolerance_mm=rp_tolerance_mm)
     except (ValueError, OSError, HistoryError) as exc:
         raise _user_error(exc) from None

@@ -5,8 +5,14 @@ numbers as a flat ``{field: value}`` dict. Cached: figures that share a run comp
 from __future__ import annotations
 
 import functools
+import json
 import re
+import tempfile
 from pathlib import Path
+
+from .figure_producers_bench import BENCH_PRODUCERS
+from .figure_producers_cli import CLI_PRODUCERS
+from .figure_producers_setups import SETUP_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
 
@@ -41,6 +47,10 @@ def _dataset(name: str, model: str) -> dict:
 
     r = run_dataset(name, model)
     out = _flat(r)
+    train = [v for k, v in out.items() if re.fullmatch(r"train_rms_mm\.\d+", k)]
+    if train:  # per-seed training RMS: their range and mean
+        out.update({"train_rms_mm.min": min(train), "train_rms_mm.max": max(train),
+                    "train_rms_mm.mean": sum(train) / len(train)})
     for s in r.get("sets", []):
         out[f"{s['set']}.holdout_rms_mm"] = s["holdout_rms_mm"]
     return out
@@ -57,7 +67,12 @@ def _closed_chain(n_seeds: int, plates: int, known_spacing: bool) -> dict:
     out = _flat(rows)
     for k in ("closed_chain", "tracker", "nominal"):
         out[f"median.{k}"] = float(np.median([r["workspace_rms_mm"][k] for r in rows]))
-    out["median.ratio"] = float(np.median([r["ratio_closed_chain_to_tracker"] for r in rows]))
+    for k in ("closed_chain", "tracker", "nominal", "true_model"):
+        vals = [r["workspace_rms_mm"][k] for r in rows]
+        out[f"median.{k}"], out[f"min.{k}"], out[f"max.{k}"] = float(np.median(vals)), min(vals), max(vals)
+    ratios = [r["ratio_closed_chain_to_tracker"] for r in rows]
+    out["median.ratio"], out["min.ratio"], out["max.ratio"] = float(np.median(ratios)), min(ratios), max(ratios)
+    out["removed_percent"] = 100.0 * (1.0 - out["median.closed_chain"] / out["median.nominal"])
     out["median.max_abs_z"] = float(np.median([r["max_abs_z"] for r in rows]))
     out["max.max_abs_z"] = float(max(r["max_abs_z"] for r in rows))
     out["n_not_converged"] = float(sum(r["n_not_converged"] for r in rows))
@@ -192,6 +207,28 @@ def _benchmark_table(script: str, *args) -> dict:
     with contextlib.redirect_stdout(buf):
         module.run(*(list(a) if isinstance(a, tuple) else a for a in args))
     return _markdown_rows(buf.getvalue(), label_cells=2)
+
+
+@functools.lru_cache(maxsize=None)
+def _handeye_study(seeds: int) -> dict:
+    """docs/handeye.md "The paper's study": ``python benchmarks/handeye_study.py --seeds SEEDS``'s
+    medians as ``{model}.{images}.{refined|linear}.{rot_deg|trans_mm}`` (the script's ``study``;
+    its progress lines on stderr are dropped)."""
+    import contextlib
+    import importlib.util
+    import io
+
+    path = repository_root() / "benchmarks" / "handeye_study.py"
+    spec = importlib.util.spec_from_file_location("_robocal_figures_handeye_study", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    with contextlib.redirect_stderr(io.StringIO()):
+        res = module.study(seeds)
+    out = {}
+    for (model, n), v in res.items():
+        for k, field in enumerate(("refined.rot_deg", "refined.trans_mm", "linear.rot_deg", "linear.trans_mm")):
+            out[f"{model}.{n}.{field}"] = float(v[k])
+    return out
 
 
 @functools.lru_cache(maxsize=None)
@@ -364,19 +401,11 @@ def _justin_self_calibration() -> dict:
 @functools.lru_cache(maxsize=None)
 def _iso_wear() -> dict:
     """docs/iso9283.md: the worn / healthy IRB 140 (the page's commands through the command line, in
-    a temporary folder): ``{worn|healthy}.{k}.{AP|RP|U}`` [mm] for the tests k = 0, 1, 2."""
-    import json
-    import tempfile
-
-    from click.testing import CliRunner
-
-    from ..cli import main as cli
-
-    def run(*args):
-        r = CliRunner().invoke(cli, [str(a) for a in args], catch_exceptions=False)
-        if r.exit_code != 0:
-            raise RuntimeError(f"robocal {' '.join(map(str, args))}: exit {r.exit_code}: {r.output[-500:]}")
-        return r.stdout
+    a temporary folder): ``{worn|healthy}.{k}.{AP|RP|U}`` [mm] for the tests k = 0, 1, 2, recorded in
+    a history database, and ``robocal fleet status --at 2026-11-27T00:00Z``'s ISO trends
+    ``status.{robot}.{AP|RP}.{trend_now_mm|last_mm|slope_mm_per_30_days}`` (a fixed date: the trend
+    at "now" would depend on the day it is run)."""
+    from .figure_producers_cli import run_cli as run
 
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -389,11 +418,24 @@ def _iso_wear() -> dict:
                 run("simulate", "iso9283", "abb_irb140", d / "plan", "--seed", 10 + k, "--truth", d / "c.truth.json",
                     "--out", csv, "--joint-noise", jn, "--instrument-at", "3500,0,300")
                 res = json.loads(run("iso9283", "evaluate", d / "plan", csv, "--out", d / f"ev-{robot}{k}", "--mpe",
-                                     "15um+6um/m", "--instrument-at", "3500,0,300", "--json"))["runs"][0]
+                                     "15um+6um/m", "--instrument-at", "3500,0,300", "--db", d / "h.sqlite",
+                                     "--robot-id", robot, "--time", f"2026-0{1 + 2 * k}-02T08:00Z", "--temperature",
+                                     21 + k, "--instrument", "AT960", "--json"))["runs"][0]
                 s = res["summary"]
                 pose = max(res["pose"], key=lambda p: res["pose"][p]["RP_mm"])
                 out.update({f"{robot}.{k}.AP": s["AP_mm"], f"{robot}.{k}.RP": s["RP_mm"],
                             f"{robot}.{k}.U": res["adequacy"][f"RP_mm.{pose}"]["U_mm"]})
+        status = json.loads(run("fleet", "status", "--db", d / "h.sqlite", "--rp-tolerance", 0.15, "--ap-tolerance", 2,
+                                "--no-plots", "--at", "2026-11-27T00:00Z", "--json", ok=(0, 3)))
+    for row in status["robots"]:
+        for sym, item in row.get("iso", {}).items():
+            out[f"status.{row['robot']}.{sym}.trend_now_mm"] = item["trend_now_mm"]
+            out[f"status.{row['robot']}.{sym}.last_mm"] = item["last_mm"]
+            out[f"status.{row['robot']}.{sym}.slope_mm_per_30_days"] = 30.0 * item["slope_mm_per_day"]
+    ap = [v for k, v in out.items() if k.startswith("status.") and k.endswith("AP.trend_now_mm")]
+    out["status.AP.trend_now_mm.min"], out["status.AP.trend_now_mm.max"] = min(ap), max(ap)
+    out["status.flagged"] = float(len(status["flagged"]))
+    out["AP.min"] = min(v for k, v in out.items() if k.count(".") == 2 and k.endswith(".AP"))
     return out
 
 
@@ -486,6 +528,9 @@ def _iso_cube(robot: str) -> dict:
 
 
 PRODUCERS = {
+    **CLI_PRODUCERS,
+    **BENCH_PRODUCERS,
+    **SETUP_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -502,6 +547,7 @@ PRODUCERS = {
     "iso9283/wear": _iso_wear,
     "handeye/fair_comparison": lambda: _benchmark_table("handeye_fair_comparison.py", tuple(range(20))),
     "fleet/pose_sets": _fleet_pose_sets,
+    "handeye/study": lambda: _handeye_study(16),
     "ur_import/ur10": lambda: _ur_import("ur10_driver_test.conf", "ur10"),
     "ur_import/ur10e_a": lambda: _ur_import("ur10e_driver_test_a.conf", "ur10e"),
     "ur_import/ur10e_b": lambda: _ur_import("ur10e_driver_test_b.conf", "ur10e"),
@@ -532,12 +578,15 @@ def datasets_needed(producer: str) -> tuple:
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
     return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
-            "ros_industrial_positioner": ("ros_industrial_handeye",)}.get(head, ())
+            "ros_industrial_positioner": ("ros_industrial_handeye",),
+            "ros_handeye": ("ros_industrial_handeye",), "camera": ("ros_industrial_handeye",)}.get(head, ())
 
 
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
-                  "handeye/fair_comparison",
+                  "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
+                  # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
+                  "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

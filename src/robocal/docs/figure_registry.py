@@ -337,12 +337,30 @@ for _label, _fit in (("head_j1 offset, both arms together", "both"), ("head_j1 o
 
 
 
-# iso9283.md: the worn / healthy IRB 140, three tests each (the fleet-status trend depends on the day
-# it is run: not checked)
+# iso9283.md: the worn / healthy IRB 140, three tests each, and ``fleet status --at 2026-11-27T00:00Z``
+# (a fixed date: the trend at "now" would depend on the day it is run)
 for _robot in ("worn", "healthy"):
     for _k, _date in enumerate(("2026-01-02", "2026-03-02", "2026-05-02")):
         FIGURES += _table("docs/iso9283.md", {f"{_robot} | {_date}": f"{_robot}.{_k}"}, "iso9283/wear",
                           [(0, 0, "AP"), (1, 0, "RP"), (1, 1, "U")], prefix="iso9283:", rel_tol=0.0)
+
+
+_FS = r"`fleet status` judged at 2026-11-27T00:00Z(?s:.*?)"
+FIGURES += [
+    Figure("iso9283:fleet status worn RP trend", "docs/iso9283.md", _FS + r"RP trend " + _N + " mm now", "iso9283/wear",
+           "status.worn.RP.trend_now_mm", rel_tol=0.001),
+    Figure("iso9283:fleet status worn RP last", "docs/iso9283.md", _FS + r"\(last test\s+" + _N, "iso9283/wear",
+           "status.worn.RP.last_mm", rel_tol=0.001),
+    Figure("iso9283:fleet status worn RP slope", "docs/iso9283.md", _FS + r"slope \+" + _N + r" mm per 30 days",
+           "iso9283/wear", "status.worn.RP.slope_mm_per_30_days", rel_tol=0.01),
+    Figure("iso9283:fleet status healthy RP trend", "docs/iso9283.md", _FS + r"`healthy`'s RP trend is\s+" + _N,
+           "iso9283/wear", "status.healthy.RP.trend_now_mm", rel_tol=0.01),
+    Figure("iso9283:fleet status healthy RP slope", "docs/iso9283.md", _FS + r"`healthy`'s RP trend is\s+[0-9.]+ mm \(slope "
+           + _N, "iso9283/wear", "status.healthy.RP.slope_mm_per_30_days", rel_tol=0.0),
+    Figure("iso9283:fleet status AP low", "docs/iso9283.md", _FS + r"AP stays at " + _N, "iso9283/wear", "AP.min"),
+    Figure("iso9283:fleet status AP trend high", "docs/iso9283.md", _FS + r"AP stays at [0-9.]+–" + _N, "iso9283/wear",
+           "status.AP.trend_now_mm.max"),
+]
 
 
 # tcp.md (4-30): the error when beta is ignored (a formula: exact to the printed digit)
@@ -371,6 +389,374 @@ for _label, _m in (("**robocal `refine_hand_eye`**", "robocal"), ("`cv2.calibrat
                        f"{setup}.{_m}.{what}", rel_tol=0.02)
                 for col, (setup, what) in enumerate((("eye_in_hand", "rot_deg"), ("eye_in_hand", "trans_mm"),
                                                      ("eye_to_hand", "rot_deg"), ("eye_to_hand", "trans_mm")))]
+
+
+
+
+# calibration.md "Coverage gates": the degenerate campaigns of tests/test_coverage_gates.py through
+# ``robocal calibrate --force`` (robocal.docs.figure_producers_cli.coverage_gates)
+_COVERAGE = {"full (every joint spread)": "full", "A4 never moved": "a4_fixed", "A2 and A3 fixed": "a2_a3_fixed",
+             "only A1 moved": "only_a1"}
+FIGURES += _table("docs/calibration.md", _COVERAGE, "calibration/coverage_gates",
+                  [(0, 0, "holdout_rms_mm"), (1, 0, "n_identified"), (2, 0, "true_rms_mm")],
+                  prefix="calibration:coverage ", rel_tol=0.01)
+FIGURES += [Figure(f"calibration:coverage {label} parameters missing", "docs/calibration.md",
+                   r"(?m)^\| " + re.escape(label) + r" \|[^\n]*?[ ,]" + _N + r" parameters missing",
+                   "calibration/coverage_gates", f"{key}.n_missing", rel_tol=0.0)
+            for label, key in _COVERAGE.items() if key != "full"]
+
+# robot-programs.md "Measured: KRL on a KR 150 and a UR10" and "With effects the model lacks": the
+# page's commands on docs/examples/programs (robocal.docs.figure_producers_cli.programs_at_robot)
+_KR_T, _UR_T = ("XP1", "XP2", "XP3", "XP4"), ("movel@4", "movel@5", "movel@7", "movel@9")
+_RP = "docs/robot-programs.md"
+_PROG_AFTER = "TCP position error of the true robot [mm]"
+for _label, _key, _targets in (
+        ("KRL `cell.dat` XP1 / XP2 (wrist flipped) / XP3 / XP4 (arm back) | 250 mm gripper", "kr.tool", _KR_T),
+        ("UR `pick.script` movel@4 / @5 / @7 (wrist flipped) / @9 (turned back) | 200 mm `set_tcp`", "ur.tool", _UR_T)):
+    FIGURES += _table(_RP, {_label: _key}, "programs/at_robot",
+                      [(0, k, f"before.{t}") for k, t in enumerate(_targets)]
+                      + [(1, k, f"after.{t}") for k, t in enumerate(_targets)] + [(2, 0, "sigma.min")],
+                      prefix="robot-programs:", rel_tol=0.01, after=_PROG_AFTER)
+FIGURES += _table(_RP, {"KRL, same targets | identified r1": "kr.r1"}, "programs/at_robot",
+                  [(0, 0, "before.mean"), (0, 1, "before.max")] + [(1, k, f"after.{t}") for k, t in enumerate(_KR_T)]
+                  + [(2, 0, "sigma.min"), (2, 1, "sigma.max")], prefix="robot-programs:", rel_tol=0.01,
+                  after=_PROG_AFTER)
+FIGURES += _table(_RP, {"UR, same poses | identified r1": "ur.r1"}, "programs/at_robot",
+                  [(0, 0, "before.mean"), (0, 1, "before.max"), (1, 0, "after.max"), (1, 1, "after.mean"),
+                   (2, 0, "sigma.min"), (2, 1, "sigma.max")], prefix="robot-programs:", rel_tol=0.01,
+                  after=_PROG_AFTER)
+FIGURES += [
+    Figure("robot-programs:kr last link unknown", _RP, r"Warning: last link unknown \(" + _N, "programs/at_robot",
+           "kr.tool.sigma.max", rel_tol=0.01),
+    Figure("robot-programs:ur true d6 error", _RP, r"the true d6, a6 are off by " + _N, "programs/at_robot",
+           "ur.true.d6_error_mm", rel_tol=0.01),
+    Figure("robot-programs:ur true a6 error", _RP, r"the true d6, a6 are off by [−-]?[0-9.]+, \+?" + _N,
+           "programs/at_robot", "ur.true.a6_error_mm", rel_tol=0.01),
+    Figure("robot-programs:ur wrist-flipped J5", _RP, r"wrist-flipped target at J5 = " + _N, "programs/at_robot",
+           "ur.joint.movel@7.J5", rel_tol=0.0),
+    Figure("robot-programs:ur turned-back J1", _RP, r"turned-back one at J1 = " + _N, "programs/at_robot",
+           "ur.joint.movel@9.J1", rel_tol=0.0),
+    Figure("robot-programs:kr orientation after", _RP, r"Orientations: up\s+to " + _N, "programs/at_robot",
+           "kr.r1.after_deg.max", rel_tol=0.05),
+    Figure("robot-programs:ur orientation after", _RP, r"Orientations: up\s+to [0-9.]+° remain on the KR 150 and " + _N,
+           "programs/at_robot", "ur.r1.after_deg.max", rel_tol=0.05),
+    *(Figure(f"robot-programs:kr identified r1 {c}", _RP, r"TOOL_DATA\[1\]=\{X " + r"[0-9.−-]+,[YZ] " * k + _N,
+             "programs/at_robot", f"kr.r1_identified.{c}", rel_tol=0.0) for k, c in enumerate("xyz")),
+    *(Figure(f"robot-programs:ur identified r1 {c} [m]", _RP, r"set_tcp\(p\[" + r"[0-9.−-]+, " * k + _N,
+             "programs/at_robot", f"ur.r1_identified_m.{c}", rel_tol=0.0) for k, c in enumerate("xyz")),
+]
+for _preset in ("ideal", "realistic"):
+    FIGURES += _table(_RP, {f"`{_preset}`": "kr"}, f"programs/effects_{_preset}",
+                      [(0, 0, "before.mean"), (0, 1, "before.max")] + [(1, k, f"after.{t}") for k, t in enumerate(_KR_T)]
+                      + [(2, 0, "sigma.min"), (2, 1, "sigma.max")], prefix=f"robot-programs:effects {_preset} ",
+                      rel_tol=0.01, after="| preset | before [mm] |")
+    FIGURES.append(Figure(f"robot-programs:effects {_preset} holdout rms", _RP,
+                          _cell(f"`{_preset}`", 3, 0, after="| preset | before [mm] |"), f"programs/effects_{_preset}",
+                          "holdout_rms_mm", rel_tol=0.01))
+FIGURES += [
+    Figure("robot-programs:effects realistic removed percent", _RP, r"The correction still removes " + _N + " %",
+           "programs/effects_realistic", "removed_percent", rel_tol=0.0),
+    Figure("robot-programs:effects realistic bias min", _RP, r"the effects leave a bias of " + _N,
+           "programs/effects_realistic", "kr.after.min", rel_tol=0.0),
+    Figure("robot-programs:effects realistic bias max", _RP, r"the effects leave a bias of [0-9.]+–" + _N,
+           "programs/effects_realistic", "kr.after.max", rel_tol=0.0),
+]
+# handeye.md "The paper's study": ``python benchmarks/handeye_study.py --seeds 16`` (slow, ~4 min)
+for _kind, _after in (("refined", "Refined (`refine_hand_eye`, intrinsics of the model refined jointly):"),
+                      ("linear", "Linear (Tsai–Lenz) on the PnP poses of the same calibrated cameras:")):
+    for _n in (3, 4, 5, 6, 8, 10, 15, 20, 30):
+        FIGURES += [Figure(f"handeye:study {_kind} {_n} images {_m} {_w}", "docs/handeye.md", _cell(str(_n), 2 * k + j, 0, after=_after),
+                           "handeye/study", f"{_m}.{_n}.{_kind}.{_w}", rel_tol=0.02)
+                    for k, _m in enumerate(("none", "radial", "brown", "division"))
+                    for j, _w in enumerate(("rot_deg", "trans_mm"))]
+
+
+# kinematics.md "Measured": ``python benchmarks/bench_ik_seed.py`` (seed 1; the accuracy figures, not
+# the times)
+_KM = "docs/kinematics.md"
+_IKCOL = {"irb140": 0, "tilted": 1, "ur10": 2}
+FIGURES += [Figure(f"kinematics:ik seed irb140 {f}", _KM, _cell("chosen structure", 0, k), "ik_seed/irb140", f,
+                   rel_tol=0.0) for k, f in enumerate(("K", "width", "lam", "weight"))]
+for _r, _c in _IKCOL.items():
+    FIGURES += _table(_KM, {"GA: validation RMS joint error, generation 0 -> 5": ""}, f"ik_seed/{_r}",
+                      [(_c, 0, "ga.first"), (_c, 1, "ga.last")], prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+    for _label, _what in (("raw joint error, worst joint per pose: median / p95 / max [deg]", "joint"),
+                          ("raw position error: median / p95 / max [mm]", "position"),
+                          ("raw rotation error: median / p95 / max [deg]", "rotation")):
+        FIGURES += _table(_KM, {_label: ""}, f"ik_seed/{_r}",
+                          [(_c, k, f"raw.{_what}.{q}") for k, q in enumerate(("median", "p95", "max"))],
+                          prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+    FIGURES += _table(_KM, {"domain check passes: branch poses / poses needing J1 = 175 deg": ""}, f"ik_seed/{_r}",
+                      [(_c, 0, "domain.branch_percent"), (_c, 1, "domain.back_percent")],
+                      prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+    _starts = [("GA-RBF network seed", "network"), ('middle of the joint ranges ("nominal")', "middle")]
+    _starts += [("zero joints", "zero")] if _r != "ur10" else [("middle of the branch's joint box", "box")]
+    for _label, _key in _starts:
+        FIGURES += _table(_KM, {_label: ""}, f"ik_seed/{_r}",
+                          [(_c, k, f"ik.{_key}.{f}") for k, f in enumerate(("converged", "on_branch", "median_it",
+                                                                              "p95_it"))],
+                          prefix=f"kinematics:ik seed {_r} ", rel_tol=0.01)
+FIGURES += _table(_KM, {"closed form, branch 0": ""}, "ik_seed/irb140",
+                  [(0, k, f"ik.closed_form.{f}") for k, f in enumerate(("converged", "on_branch", "median_it"))],
+                  prefix="kinematics:ik seed irb140 ", rel_tol=0.0)
+FIGURES += _table(_KM, {"closed form, branch 0": ""}, "ik_seed/tilted",
+                  [(1, k + 1, f"ik.closed_form.{f}") for k, f in enumerate(("converged", "on_branch", "median_it",
+                                                                              "p95_it"))],
+                  prefix="kinematics:ik seed tilted ", rel_tol=0.0)
+
+
+FIGURES += [
+    Figure("kinematics:ik seed prose GA gain first", _KM, r"Measured gain of the GA over the default: validation RMS joint error "
+           + _N, "ik_seed/irb140", "ga.first", rel_tol=0.01),
+    Figure("kinematics:ik seed prose GA gain last", _KM, r"Measured gain of the GA over the default: validation RMS joint error "
+           r"[0-9.]+ deg ->\s+" + _N, "ik_seed/irb140", "ga.last", rel_tol=0.01),
+    Figure("kinematics:ik seed prose domain branch", _KM, r"about " + _N + r" % of poses on the branch", "ik_seed/irb140",
+           "domain.branch_percent", rel_tol=0.02),
+    Figure("kinematics:ik seed prose domain back", _KM, r"about " + _N + r" % of poses that need J1", "ik_seed/irb140",
+           "domain.back_percent", rel_tol=0.05),
+    Figure("kinematics:ik seed prose ur10 box converged", _KM, r"joint box \(UR10\) is\s+worse: " + _N + " % converged",
+           "ik_seed/ur10", "ik.box.converged", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 box on branch", _KM, r"% converged, only " + _N + " % in the wanted", "ik_seed/ur10",
+           "ik.box.on_branch", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 network converged", _KM, r"no closed form in robocal; " + _N + " % vs",
+           "ik_seed/ur10", "ik.network.converged", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 middle converged", _KM, r"no closed form in robocal; [0-9]+ % vs " + _N,
+           "ik_seed/ur10", "ik.middle.converged", rel_tol=0.01),
+    Figure("kinematics:ik seed prose ur10 domain back", _KM, r"the domain check passes " + _N + " % of the J1 = 175",
+           "ik_seed/ur10", "domain.back_percent", rel_tol=0.02),
+]
+
+
+_IKT = r"for the first command, on this machine: [0-9.]+ s, the GA chose "
+FIGURES += [
+    Figure("kinematics:ik-train centres", _KM, _IKT + _N + " centres", "ik_net/cli_example", "centres", rel_tol=0.0),
+    Figure("kinematics:ik-train validation position", _KM, _IKT + r"[0-9]+ centres, validation median\s+position error "
+           + _N, "ik_net/cli_example", "validation.position_mm", rel_tol=0.01),
+    Figure("kinematics:ik-train validation joint", _KM, r"position error [0-9.]+ mm, joint error " + _N + " deg",
+           "ik_net/cli_example", "validation.joint_deg", rel_tol=0.01),
+    Figure("kinematics:ik seed of the example pose", _KM, r"gets a seed " + _N + " mm off", "ik_net/cli_example",
+           "seed.position_error_mm", rel_tol=0.01),
+]
+
+
+# thermal.md "Measured accuracy": the system calibration on the set-up of tests/test_thermal_core.py
+_SYS = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+for _label, _m in (("least squares", "ls"), ("thesis penalty", "thesis")):
+    FIGURES += _table("docs/thermal.md", {f"{_label}, seeds 0–7": ""}, "system_calibration/thermal",
+                      [(c, k, f"{_m}.{stat}.{key}") for c, key in enumerate(_SYS)
+                       for k, stat in enumerate(("seeds8_mean", "seeds8_max"))], prefix="thermal:system ", rel_tol=0.01)
+    FIGURES += _table("docs/thermal.md", {f"{_label}, seeds 0–19": ""}, "system_calibration/thermal",
+                      [(c, 0, f"{_m}.seeds20_mean.{key}") for c, key in enumerate(_SYS)], prefix="thermal:system ",
+                      rel_tol=0.01)
+FIGURES += _table("docs/thermal.md", {"seeds (of 20) where least squares is better": ""}, "system_calibration/thermal",
+                  [(c, 0, f"wins.{key}") for c, key in enumerate(_SYS)], prefix="thermal:system ", rel_tol=0.0)
+
+
+# thermal.md "simulate" and "screen" on seed 2024 (robocal thermal simulate / screen through the command line)
+_SIM = r"Measured, seed 2024, 90 cycles: "
+_sep = r"\s*/\s*"
+FIGURES += [Figure(f"thermal:seed 2024 run{k + 1} hours", "docs/thermal.md", _SIM + r"(?:[0-9.]+ / )" * k + _N,
+                   "thermal_cli/realistic", f"run{k + 1}.hours", rel_tol=0.0) for k in range(3)]
+for _preset, _lead in (("realistic", r"realistic: TCP drift after 3 h "), ("ideal", r"ideal: ")):
+    for _what, _mid in (("tcp_3h_mm", ""), ("tcp_max_mm", r"[0-9.]+" + _sep + r"[0-9.]+" + _sep + r"[0-9.]+ mm,\s+maximum\s+")):
+        FIGURES += [Figure(f"thermal:seed 2024 {_preset} run{k + 1} {_what}", "docs/thermal.md",
+                           _SIM + r"(?s:.*?)" + _lead + _mid + (r"[0-9.]+" + _sep) * k + _N, f"thermal_cli/{_preset}",
+                           f"run{k + 1}.{_what}", rel_tol=0.01) for k in range(3)]
+for _preset, _set in (("realistic", "θ2, a2, α2, β2, θ3, d4, a4, d6"), ("ideal", "a1, a2, β2, θ3, d4, α4, d6, a6")):
+    FIGURES += _table("docs/thermal.md", {f"{_preset} | {_set}": ""}, f"thermal_cli/{_preset}",
+                      [(c, k, f"run{c + 1}.lambda.{m}") for c in range(3)
+                       for k, m in enumerate(("before", "traditional", "screened"))],
+                      prefix=f"thermal:seed 2024 screen {_preset} ", rel_tol=0.0, short=False)
+
+
+# handeye.md "Acceptance on rendered images" (the set-up of tests/test_handeye_images.py)
+_REND = ("robocal", "TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS", "RW_SHAH", "RW_LI")
+for _label, _setup, _what in (("eye-in-hand, rotation [deg]", "eye_in_hand", "rot_deg"),
+                              ("eye-in-hand, translation [mm]", "eye_in_hand", "trans_mm"),
+                              ("eye-to-hand, rotation [deg]", "eye_to_hand", "rot_deg"),
+                              ("eye-to-hand, translation [mm]", "eye_to_hand", "trans_mm")):
+    FIGURES += _table("docs/handeye.md", {_label: ""}, "handeye/rendered",
+                      [(c, 0, f"{_setup}.{m}.{_what}") for c, m in enumerate(_REND)], prefix="handeye:rendered ",
+                      rel_tol=0.02, short=False, after="## Acceptance on rendered images")
+FIGURES.append(Figure("handeye:rendered detection rms", "docs/handeye.md", r"\(seed 5\), detected \(" + _N + " px",
+                      "handeye/rendered", "detection_rms_px", rel_tol=0.05))
+
+
+# self-calibration.md "Industrial variant": compare_with_tracker over seeds 0-4
+FIGURES += _table("docs/self-calibration.md", {str(k): str(k) for k in range(5)}, "self_calibration/industrial",
+                  [(c, 0, f) for c, f in enumerate(("nominal_mm", "self_calibration_mm", "tracker_same_poses_mm",
+                                                    "tracker_random_poses_mm", "ratio_same_poses", "ratio_random_poses"))],
+                  prefix="self-calibration:industrial seed ", rel_tol=0.01, after="| seed | nominal | self-calibration |")
+_IND = r"Reading: images alone remove "
+FIGURES += [
+    Figure("self-calibration:industrial removed min", "docs/self-calibration.md", _IND + _N, "self_calibration/industrial",
+           "min.removed_percent", rel_tol=0.01),
+    Figure("self-calibration:industrial removed max", "docs/self-calibration.md", _IND + r"[0-9]+-" + _N,
+           "self_calibration/industrial", "max.removed_percent", rel_tol=0.01),
+    Figure("self-calibration:industrial selfcal min", "docs/self-calibration.md", _IND + r"(?s:.*?)\(to " + _N,
+           "self_calibration/industrial", "min.self_calibration_mm", rel_tol=0.01),
+    Figure("self-calibration:industrial selfcal max", "docs/self-calibration.md", _IND + r"(?s:.*?)\(to [0-9.]+-" + _N,
+           "self_calibration/industrial", "max.self_calibration_mm", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio same min", "docs/self-calibration.md", _IND + r"(?s:.*?)\(ratio\s+" + _N,
+           "self_calibration/industrial", "min.ratio_same_poses", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio same max", "docs/self-calibration.md",
+           _IND + r"(?s:.*?)\(ratio\s+[0-9.]+-" + _N, "self_calibration/industrial", "max.ratio_same_poses", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio random min", "docs/self-calibration.md", _IND + r"(?s:.*?), and " + _N + "-",
+           "self_calibration/industrial", "min.ratio_random_poses", rel_tol=0.01),
+    Figure("self-calibration:industrial ratio random max", "docs/self-calibration.md",
+           _IND + r"(?s:.*?), and [0-9]+-" + _N + "x worse", "self_calibration/industrial", "max.ratio_random_poses",
+           rel_tol=0.01),
+]
+
+
+# elastic.md's prose: training RMS and the Justin figures; datasets.md's boby calibrated RMS
+_TR = r"Training RMS: Justin [0-9.]+ → [0-9.]+ \(joint\) → [0-9.]+ mm \(full\); "
+FIGURES += [
+    Figure("elastic:boby train rms geometric min", "docs/elastic.md", _TR + r"boby " + _N, "boby_fanuc/geometric",
+           "train_rms_mm.min", rel_tol=0.01),
+    Figure("elastic:boby train rms geometric max", "docs/elastic.md", _TR + r"boby [0-9.]+-" + _N, "boby_fanuc/geometric",
+           "train_rms_mm.max", rel_tol=0.01),
+    Figure("elastic:boby train rms joint mean", "docs/elastic.md", _TR + r"boby [0-9.]+-[0-9.]+ → " + _N,
+           "boby_fanuc/elastic-joint", "train_rms_mm.mean", rel_tol=0.01),
+    Figure("elastic:hilti train rms geometric", "docs/elastic.md", _TR + r"(?s:.*?)Hilti " + _N, "hilti_trailblazer/geometric",
+           "train_rms_mm", rel_tol=0.01),
+    Figure("elastic:hilti train rms joint", "docs/elastic.md", _TR + r"(?s:.*?)Hilti [0-9.]+ → " + _N,
+           "hilti_trailblazer/elastic-joint", "train_rms_mm", rel_tol=0.01),
+    Figure("elastic:hilti train rms full", "docs/elastic.md", _TR + r"(?s:.*?)Hilti [0-9.]+ → [0-9.]+ \(joint\) → ~" + _N,
+           "hilti_trailblazer/elastic-full", "train_rms_mm", rel_tol=0.03),
+    Figure("elastic:justin joint mean (prose)", "docs/elastic.md", r"joint compliance reaches " + _N + " mm mean",
+           "dlr_justin/elastic-joint", "holdout_mean_mm", rel_tol=0.01),
+    Figure("elastic:justin full mean (prose)", "docs/elastic.md", r"the full\s+model " + _N + " mm mean",
+           "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01),
+    Figure("elastic:boby training range joint min", "docs/elastic.md", r"0\.338 mm; training " + _N, "boby_fanuc/elastic-joint",
+           "train_rms_mm.min", rel_tol=0.01),
+    Figure("elastic:boby training range joint max", "docs/elastic.md", r"0\.338 mm; training [0-9.]+-" + _N,
+           "boby_fanuc/elastic-joint", "train_rms_mm.max", rel_tol=0.01),
+]
+FIGURES += _table("docs/datasets.md", {"calibrated (robocal)": "geometric"}, "boby_fanuc/geometric", [(0, 0, "rms")],
+                  prefix="datasets:boby table ")
+
+
+# tutorial.md: the held-out RMS of its calibration (the page also runs as tests/test_tutorial.py)
+FIGURES += [Figure("tutorial:holdout before", "docs/tutorial.md", r"what calibration gains:\s+" + _N + " mm before",
+                   "tutorial/calibrate", "holdout.before", rel_tol=0.005),
+            Figure("tutorial:holdout after", "docs/tutorial.md", r"mm before, " + _N + " mm after", "tutorial/calibrate",
+                   "holdout.after", rel_tol=0.01)]
+
+
+# datasets.md "ros_industrial_handeye": robocal handeye solve --exact-poses on both sets (the bold column
+# and the camera poses)
+_RH = "Reprojection RMS per corner [px]"
+for _label, _set in (("ChArUco, eye-to-hand", "test_set_charuco"), ("circle grid, eye-in-hand", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: ""}, f"ros_handeye/{_set}",
+                      [(0, 0, "n_images_used"), (1, 0, "n_corners"), (2, 0, "rms_px")], prefix="datasets:ros handeye ",
+                      rel_tol=0.002, after=_RH, short=False)
+for _lead, _set in ((r"ChArUco `T_base_camera` position \(", "test_set_charuco"),
+                    (r"Circle grid `T_flange_camera` position \(", "test_set_10x10")):
+    _sep = r",\s*"
+    for _k in range(3):
+        FIGURES += [
+            Figure(f"datasets:ros handeye {_set} position {_k}", "docs/datasets.md", _lead + (r"[−0-9.-]+" + _sep) * _k + _N,
+                   f"ros_handeye/{_set}", f"position_mm.{_k}", rel_tol=0.0),
+            Figure(f"datasets:ros handeye {_set} sigma position {_k}", "docs/datasets.md",
+                   _lead + r"[^)]*\) mm \+- \(" + (r"[0-9.]+" + _sep) * _k + _N, f"ros_handeye/{_set}",
+                   f"sigma_position_mm.{_k}", rel_tol=0.02),
+            Figure(f"datasets:ros handeye {_set} rotation {_k}", "docs/datasets.md",
+                   _lead + r"[^)]*\) mm \+- \([^)]*\),\s+rotation\s+vector \(" + (r"[−0-9.-]+" + _sep) * _k + _N,
+                   f"ros_handeye/{_set}", f"rotation_vector_deg.{_k}", rel_tol=0.0)]
+    FIGURES.append(Figure(f"datasets:ros handeye {_set} sigma rotation", "docs/datasets.md",
+                          _lead + r"[^)]*\) mm \+- \([^)]*\),\s+rotation\s+vector \([^)]*\) deg \+- " + _N,
+                          f"ros_handeye/{_set}", "sigma_rotation_deg.max", rel_tol=0.05))
+
+
+# closed-chain.md's prose on the study and the variants
+_CC = r"\*\*Median ratio closed chain / tracker: [0-9.]+\*\* \("
+FIGURES += [
+    Figure("closed-chain:ratio min", "docs/closed-chain.md", _CC + _N, "closed_chain/study", "min.ratio", rel_tol=0.01),
+    Figure("closed-chain:ratio max", "docs/closed-chain.md", _CC + r"[0-9.]+–" + _N, "closed_chain/study", "max.ratio",
+           rel_tol=0.01),
+    Figure("closed-chain:removed percent", "docs/closed-chain.md", r"the closed chain removes ~" + _N + " %",
+           "closed_chain/study", "removed_percent", rel_tol=0.02),
+    Figure("closed-chain:nominal median", "docs/closed-chain.md", r"of the nominal error\s+\(" + _N + " mm →",
+           "closed_chain/study", "median.nominal", rel_tol=0.05),
+    Figure("closed-chain:closed chain min", "docs/closed-chain.md", r"of the nominal error\s+\([0-9.]+ mm → " + _N,
+           "closed_chain/study", "min.closed_chain", rel_tol=0.02),
+    Figure("closed-chain:closed chain max", "docs/closed-chain.md", r"of the nominal error\s+\([0-9.]+ mm → [0-9.]+–" + _N,
+           "closed_chain/study", "max.closed_chain", rel_tol=0.02),
+    Figure("closed-chain:tracker min", "docs/closed-chain.md", r"as many poses reaches " + _N, "closed_chain/study",
+           "min.tracker", rel_tol=0.02),
+    Figure("closed-chain:tracker max", "docs/closed-chain.md", r"as many poses reaches [0-9.]+–" + _N, "closed_chain/study",
+           "max.tracker", rel_tol=0.02),
+    Figure("closed-chain:true model", "docs/closed-chain.md", r"\(the true model: " + _N + r" mm\)", "closed_chain/study",
+           "median.true_model", rel_tol=0.02),
+    Figure("closed-chain:no spacing ratio (prose)", "docs/closed-chain.md", r"the workspace error is " + _N + "× the tracker",
+           "closed_chain/2-free", "median.ratio", rel_tol=0.01),
+    Figure("closed-chain:one plate (prose)", "docs/closed-chain.md", r"\(table below: " + _N + " mm →", "closed_chain/1-spacing",
+           "median.closed_chain", rel_tol=0.01),
+    Figure("closed-chain:two plates (prose)", "docs/closed-chain.md", r"\(table below: [0-9.]+ mm → " + _N + " mm median",
+           "closed_chain/2-spacing", "median.closed_chain", rel_tol=0.01),
+]
+
+
+# handeye.md "Side by side with OpenCV": python benchmarks/bench_camera_calibration.py --seeds 3 (slow)
+_CAMB = "### Side by side with OpenCV"
+for _label, _row in (("checkerboard | **robocal**", ""), ("checkerboard | OpenCV classic + cornerSubPix", ""),
+                     ("checkerboard | OpenCV SB", ""), ("charuco | **robocal**", ""),
+                     ("charuco | OpenCV CharucoDetector", ""), ("charuco | OpenCV + cornerSubPix", "charuco | OpenCV cornerSubPix")):
+    FIGURES += [Figure(f"handeye:camera bench {_label.replace('*', '')} {c}", "docs/handeye.md", _cell(_label, c, 0, after=_CAMB),
+                       "camera/bench_calibration", f"{_row or _label}|{c}|0", rel_tol=0.02) for c in range(9)]
+for _label, _row, _spec in (("ChArUco", "test_set_charuco", ((0, 0), (1, 0), (1, 3), (2, 0), (3, 0))),
+                            ("circle grid", "test_set_10x10", ((0, 0), (1, 0), (1, 3), (2, 0)))):
+    FIGURES += [Figure(f"handeye:camera bench real {_label} {c}.{k}", "docs/handeye.md",
+                       _cell(_label, c, k, after="ROS-Industrial real images, RMS [px]"), "camera/bench_calibration",
+                       f"{_row}|{c}|{k}", rel_tol=0.005) for c, k in _spec]
+
+
+# handeye.md "Where robocal's default wins and where not": the prose on the fair comparison's table
+_FC = "handeye/fair_comparison"
+_D, _B = "**robocal default (auto)**", "solvePnP + SciPy least_squares (12 unknowns)"
+_WIN = r"Where robocal's default wins and where not:(?s:.*?)"
+FIGURES += [Figure(f"handeye:fair prose {k}", "docs/handeye.md", _WIN + pat, _FC, field, rel_tol=0.01)
+            for k, pat, field in (
+                ("none default", r"baseline without robot noise \(" + _N, f"none (0 / 0) | {_D}|0|0"),
+                ("none baseline", r"baseline without robot noise \([0-9.]+ against " + _N, f"none (0 / 0) | {_B}|0|0"),
+                ("0.02 default", r"with 0\.02 mm noise \(" + _N, f"0.02 mm / 0.004 deg | {_D}|0|0"),
+                ("0.02 baseline", r"with 0\.02 mm noise \([0-9.]+ against " + _N, f"0.02 mm / 0.004 deg | {_B}|0|0"),
+                ("0.2 default mm", r"the default \(" + _N + " mm, ", f"0.2 mm / 0.03 deg | {_D}|0|0"),
+                ("0.2 default deg", r"the default \([0-9.]+ mm, " + _N + " deg", f"0.2 mm / 0.03 deg | {_D}|1|0"),
+                ("0.2 baseline mm", r"beats the reprojection baseline \(" + _N + " mm,", f"0.2 mm / 0.03 deg | {_B}|0|0"),
+                ("0.2 baseline deg", r"beats the reprojection baseline \([0-9.]+ mm,\s+" + _N + " deg",
+                 f"0.2 mm / 0.03 deg | {_B}|1|0"),
+                ("0.2 prior", r"median position error \(" + _N + r" mm\)",
+                 "0.2 mm / 0.03 deg | robocal prior 0.05 mm / 0.01 deg|0|0"),
+                ("1 DANIILIDIS", r"OpenCV DANIILIDIS \(" + _N + r" mm\)", "1 mm / 0.1 deg | OpenCV DANIILIDIS|0|0"),
+                ("1 TSAI", r"mm\), TSAI\s+\(" + _N + r"\)", "1 mm / 0.1 deg | OpenCV TSAI|0|0"),
+                ("1 HORAUD", r"HORAUD \(" + _N + r"\) and PARK", "1 mm / 0.1 deg | OpenCV HORAUD|0|0"),
+                ("1 PARK", r"and PARK \(" + _N + r"\) have", "1 mm / 0.1 deg | OpenCV PARK|0|0"),
+                ("1 default mm", r"than the default's " + _N + " mm", f"1 mm / 0.1 deg | {_D}|0|0"),
+                ("1 default deg", r"It wins in rotation \(" + _N + " deg", f"1 mm / 0.1 deg | {_D}|1|0"),
+                ("1 baseline mm", r"against the reprojection baseline \(" + _N + " mm", f"1 mm / 0.1 deg | {_B}|0|0"),
+                ("1 baseline deg", r"against the reprojection baseline \([0-9.]+ mm / " + _N + " deg", f"1 mm / 0.1 deg | {_B}|1|0"),
+                ("1 prior", r"the former prior \(" + _N + r" mm\)", "1 mm / 0.1 deg | robocal prior 0.05 mm / 0.01 deg|0|0"))]
+
+
+_CS = r"on the simulated cell \(seed 2024, realistic;(?s:.*?)"
+FIGURES += [Figure(f"thermal:calibrate-sensor nominal model {k}", "docs/thermal.md", _CS + pat, "thermal_cli/realistic",
+                   field, rel_tol=0.02)
+            for k, pat, field in (("residual rms", r"the residual RMS is " + _N, "sensor.residual_rms_mm"),
+                                  ("frame", r"the frame is " + _N + " mm", "sensor.at_point_mm"),
+                                  ("rotation", r"the frame is [0-9.]+ mm \(" + _N + "°", "sensor.rotation_deg"),
+                                  ("P_e", r"and `P_e` " + _N + " mm from the truth", "sensor.P_e_mm"))]
+
+
+_TC = r"Measured \(the test: ideal preset, seed 2024, 20 cycles(?s:.*?)"
+FIGURES += [Figure(f"thermal:compensate {k}", "docs/thermal.md", _TC + pat, "thermal_cli/compensate", field, rel_tol=0.01)
+            for k, pat, field in (("residual before", r"sphere RMS " + _N, "residual_rms_before_mm"),
+                                  ("residual after", r"sphere RMS [0-9.]+ → " + _N, "residual_rms_after_mm"),
+                                  ("condition", r"mm, condition " + _N, "condition_number"),
+                                  ("true after max", r"is within " + _N + " mm", "true.after_max_mm"),
+                                  ("true after mean", r"\(mean " + _N + r" mm\)", "true.after_mean_mm"),
+                                  ("true before max", r"against " + _N + r" mm \(max\) without", "true.before_max_mm"))]
 
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

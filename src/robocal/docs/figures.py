@@ -12,9 +12,13 @@ Usage::
     python -m robocal.docs.figures              # print the table (fast figures)
     python -m robocal.docs.figures --check      # exit 1 when a figure drifted beyond its tolerance
     python -m robocal.docs.figures --all        # include the slow ones (elastic-full on Justin, Hilti)
+    python -m robocal.docs.figures --all --only kinematics:   # one page or figure (keys contain the text)
+    python -m robocal.docs.figures --audit      # the numbers of README.md and docs/ no figure checks
+    python -m robocal.docs.figures --audit --check            # exit 1 when a page has more than its baseline
 
 The fast figures also run in the test suite (``tests/test_doc_figures.py``); the slow ones run there
-when ``ROBOCAL_SLOW=1`` is set (before each release).
+when ``ROBOCAL_SLOW=1`` is set (before each release). The audit (:mod:`robocal.docs.figure_audit`)
+runs in ``tests/test_doc_figure_audit.py``.
 """
 
 
@@ -75,7 +79,13 @@ def main(argv=None) -> int:
     ap.add_argument("--check", action="store_true", help="exit 1 when a figure drifted beyond its tolerance")
     ap.add_argument("--all", action="store_true", help="include the slow figures")
     ap.add_argument("--only", action="append", help="only figures whose key contains this text")
+    ap.add_argument("--audit", action="store_true",
+                    help="list the numbers of README.md and docs/*.md that no figure checks (robocal.docs.figure_audit); "
+                         "with --check: exit 1 when a page has more than its baseline")
+    ap.add_argument("--write-baseline", action="store_true", help="with --audit: store the counts as the new baseline")
     a = ap.parse_args(argv)
+    if a.audit:
+        return _audit(a.check, a.write_baseline)
     rows = []
     for fig in FIGURES:
         if (fig.slow and not a.all) or (a.only and not any(o in fig.key for o in a.only)):
@@ -94,6 +104,25 @@ def main(argv=None) -> int:
     if bad:
         print(f"{len(bad)} figure(s) drifted: {', '.join(r['key'] for r in bad)}", file=sys.stderr)
     return 1 if (a.check and bad) else 0
+
+
+def _audit(check: bool, write: bool) -> int:
+    """``--audit``: print the uncovered numbers per page and the counts against the baseline."""
+    from .figure_audit import audit, baseline, uncovered_counts, write_baseline
+
+    numbers = audit()
+    for n in numbers:
+        print(f"{n.file}:{n.line}: {n.text:<10} {n.context[:110]}")
+    counts, base = uncovered_counts(numbers), baseline()
+    print(f"\n{'page':<36}{'uncovered':>10}{'baseline':>10}")
+    for f in sorted(set(counts) | set(base)):
+        print(f"{f:<36}{counts.get(f, 0):>10}{base.get(f, 0):>10}" + ("  GREW" if counts.get(f, 0) > base.get(f, 0) else ""))
+    print(f"{'total':<36}{sum(counts.values()):>10}{sum(base.values()):>10}")
+    if write:
+        write_baseline(counts)
+        print("baseline written", file=sys.stderr)
+    grew = [f for f in counts if counts[f] > base.get(f, 0)]
+    return 1 if (check and grew) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,140 @@
+"""Producers of documented figures measured on a test's own set-up (no workflow function runs it):
+the set-up rebuilt here with the library, seeded as in the test (:mod:`robocal.docs.figures`). Each
+returns a flat ``{field: value}`` dict and is cached."""
+
+from __future__ import annotations
+
+import functools
+
+__all__ = ["SETUP_PRODUCERS", "handeye_rendered", "self_calibration_industrial", "thermal_system_calibration"]
+
+
+@functools.lru_cache(maxsize=None)
+def thermal_system_calibration() -> dict:
+    """docs/thermal.md "Measured accuracy" (the set-up of ``tests/test_thermal_core.py``'s
+    ``test_system_calibration_accuracy_at_0_02_mm_noise``): KR150 R3100, a sensor 700 mm below a
+    500 x 400 x 300 mm volume centred at (1900, 300, 700) mm with a random roll and tilt, the sphere
+    at (25, -40, 160) mm on the flange, 9 designed poses (tilts up to 60 deg), 0.02 mm noise, seeds
+    0-19; both methods of ``compare_system_calibrations``.
+
+    Fields ``{ls|thesis}.{seeds8_mean|seeds8_max|seeds20_mean}.{measure}`` and
+    ``wins.{measure}`` (seeds of 20 where least squares is better), measures ``rotation_deg``,
+    ``at_point_mm``, ``sensor_origin_mm``, ``translation_mm``, ``P_e_mm``."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..thermal import compare_system_calibrations, design_sphere_poses, predict_sphere
+    from ..transforms import invert_transforms, rot_x, so3_exp
+
+    kuka = load_robot("kuka_kr150_r3100")
+    P_e = np.array([25.0, -40.0, 160.0])
+    centre = np.array([1900.0, 300.0, 700.0])
+    keys = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+    runs = {"ls": [], "thesis": []}
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        T_bs = np.eye(4)
+        T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
+        T_bs[:3, 3] = centre + [0.0, 0.0, -700.0]
+        T_sb = invert_transforms(T_bs)
+        q = design_sphere_poses(kuka, centre, P_e, 9, rng, spread_mm=(250.0, 200.0, 150.0), tilt_deg=60)
+        P = predict_sphere(kuka, T_sb, P_e, q) + rng.normal(0, 0.02, (9, 3))
+        c = compare_system_calibrations(kuka, q, P, T_sensor_base_true=T_sb, P_e_true=P_e, point_sigma_mm=0.02)
+        runs["ls"].append([c.errors["least-squares"][k] for k in keys])
+        runs["thesis"].append([c.errors["thesis-penalty"][k] for k in keys])
+    out = {}
+    for m, rows in runs.items():
+        a = np.asarray(rows)
+        for stat, v in (("seeds8_mean", a[:8].mean(axis=0)), ("seeds8_max", a[:8].max(axis=0)),
+                        ("seeds20_mean", a.mean(axis=0))):
+            out.update({f"{m}.{stat}.{k}": float(x) for k, x in zip(keys, v)})
+    wins = (np.asarray(runs["ls"]) < np.asarray(runs["thesis"])).sum(axis=0)
+    out.update({f"wins.{k}": float(w) for k, w in zip(keys, wins)})
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def handeye_rendered() -> dict:
+    """docs/handeye.md "Acceptance on rendered images" (the set-up of ``tests/test_handeye_images.py``):
+    15 rendered 1280 x 1024 views of ``charuco:9x7:30mm:22mm:DICT_5X5_100`` (seed 5), detected, 0.3 px
+    corner noise added, 0.05 mm / 0.01 deg robot pose noise; robocal's refined hand-eye and OpenCV
+    end to end on the same detections (``solvePnP``, then every ``calibrateHandEye`` method and
+    ``calibrateRobotWorldHandEye``). Fields ``detection_rms_px`` and
+    ``{eye_in_hand|eye_to_hand}.{robocal|TSAI|PARK|HORAUD|ANDREFF|DANIILIDIS|RW_SHAH|RW_LI}.{rot_deg|trans_mm}``."""
+    import cv2
+    import numpy as np
+
+    from ..handeye import refine_hand_eye
+    from ..io.boards import board_image, parse_board
+    from ..io.detection import detect_board
+    from ..sim.cameras.camera_cell import simulate_hand_eye_poses
+    from ..sim.cameras.camera_render import BoardRenderer
+    from ..transforms import invert_transforms, rotation_angle
+    from ..workflows.cameras.camera_simulate import _texel_mm
+
+    def pose(R, t):
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R, np.ravel(t)
+        return T
+
+    board = parse_board("charuco:9x7:30mm:22mm:DICT_5X5_100")
+    X = board.object_points()
+    truths = {s: simulate_hand_eye_poses(X, setup=s, n_images=15, front_z=board.front_z, seed=5)
+              for s in ("eye_in_hand", "eye_to_hand")}
+    a = truths["eye_in_hand"]
+    texture, affine = board_image(board, _texel_mm(board))
+    renderer = BoardRenderer(a.camera, texture, affine)
+    rng = np.random.default_rng(5)
+    uv = np.array([detect_board(renderer.render(T, rng), board).image_points for T in a.T_camera_target])
+    exact = np.einsum("nij,pj->npi", a.T_camera_target[:, :3, :3], X) + a.T_camera_target[:, None, :3, 3]
+    projected = a.camera.project(exact.reshape(-1, 3)).pixels.reshape(uv.shape)
+    out = {"detection_rms_px": float(np.sqrt(np.nanmean(np.sum((uv - projected) ** 2, axis=2))))}
+    uv = uv + rng.normal(0.0, 0.3, uv.shape)
+    hand_eye = {"TSAI": cv2.CALIB_HAND_EYE_TSAI, "PARK": cv2.CALIB_HAND_EYE_PARK, "HORAUD": cv2.CALIB_HAND_EYE_HORAUD,
+                "ANDREFF": cv2.CALIB_HAND_EYE_ANDREFF, "DANIILIDIS": cv2.CALIB_HAND_EYE_DANIILIDIS}
+    for setup, truth in truths.items():
+        cam, F = truth.camera, truth.T_base_flange
+        C = []
+        for pts in uv:
+            ok = np.isfinite(pts[:, 0])
+            _, r, t = cv2.solvePnP(X[ok], pts[ok], cam.matrix, np.array(cam.distortion))
+            C.append(pose(cv2.Rodrigues(r)[0], t))
+        C = np.array(C)
+        G = F if setup == "eye_in_hand" else invert_transforms(F)
+        found = {"robocal": refine_hand_eye(F, uv, X, cam, setup=setup).camera_pose}
+        found.update({k: pose(*cv2.calibrateHandEye(list(G[:, :3, :3]), list(G[:, :3, 3]), list(C[:, :3, :3]),
+                                                     list(C[:, :3, 3]), method=m)) for k, m in hand_eye.items()})
+        B = invert_transforms(G)
+        for k, m in (("RW_SHAH", cv2.CALIB_ROBOT_WORLD_HAND_EYE_SHAH), ("RW_LI", cv2.CALIB_ROBOT_WORLD_HAND_EYE_LI)):
+            _, _, R_cg, t_cg = cv2.calibrateRobotWorldHandEye(list(C[:, :3, :3]), list(C[:, :3, 3]), list(B[:, :3, :3]),
+                                                              list(B[:, :3, 3]), method=m)
+            found[k] = invert_transforms(pose(R_cg, t_cg))
+        for k, T in found.items():
+            out[f"{setup}.{k}.rot_deg"] = float(np.degrees(rotation_angle(T[:3, :3].T @ truth.camera_pose[:3, :3])))
+            out[f"{setup}.{k}.trans_mm"] = float(np.linalg.norm(T[:3, 3] - truth.camera_pose[:3, 3]))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def self_calibration_industrial() -> dict:
+    """docs/self-calibration.md "Industrial variant": ``compare_with_tracker(KR 150 R3100,
+    n_poses=30, seed=s)`` for s = 0-4, flattened as ``{s}.{field}``, and over the seeds ``min.`` /
+    ``max.`` of ``removed_percent`` (100 (1 - self-calibration / nominal)), ``self_calibration_mm``,
+    ``ratio_same_poses``, ``ratio_random_poses``; ``n_not_converged`` (all fits)."""
+    from ..robots import load_robot
+    from ..sim.cameras.self_calibration_study import compare_with_tracker
+
+    rows = [compare_with_tracker(load_robot("kuka_kr150_r3100"), n_poses=30, seed=s) for s in range(5)]
+    out = {}
+    for r in rows:
+        r = {**r, "removed_percent": 100.0 * (1.0 - r["self_calibration_mm"] / r["nominal_mm"])}
+        out.update({f"{r['seed']}.{k}": float(v) for k, v in r.items() if isinstance(v, (int, float))})
+    for k in ("removed_percent", "self_calibration_mm", "ratio_same_poses", "ratio_random_poses"):
+        vals = [out[f"{s}.{k}"] for s in range(5)]
+        out[f"min.{k}"], out[f"max.{k}"] = min(vals), max(vals)
+    out["n_not_converged"] = float(sum(r["n_not_converged"] for r in rows))
+    return out
+
+
+SETUP_PRODUCERS = {"self_calibration/industrial": self_calibration_industrial,
+                   "system_calibration/thermal": thermal_system_calibration, "handeye/rendered": handeye_rendered}
