@@ -124,5 +124,8 @@ def lm_one_iteration(monkeypatch):
     does not converge, for the tests of the convergence policy (exit code 4, no model file)."""
     from robocal.calib._iterate import DampedGaussNewton
 
+    # the Python loop (the compiled loop's own cap is tested in tests/test_compiled_lm.py)
+    monkeypatch.setenv("ROBOCAL_COMPILED_LM", "never")
+
     run_phase = DampedGaussNewton.run_phase
     monkeypatch.setattr(DampedGaussNewton, "run_phase", lambda self, first, _max: run_phase(self, first, 1))

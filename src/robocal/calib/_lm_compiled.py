@@ -22,6 +22,7 @@ Python loop's block products, so the numbers agree to rounding (~1e-15 relative)
 from __future__ import annotations
 
 import os
+import sys
 
 import numpy as np
 
@@ -170,7 +171,8 @@ def _ready(dispatcher, args) -> bool:
 def use_compiled(problem, n_points: int) -> bool:
     """Whether :func:`robocal.calib.solve` runs this problem's LM in compiled code (see the module
     docstring): ``ROBOCAL_COMPILED_LM`` = ``always`` / ``never``, else (``auto``) when the kernel is
-    compiled already, ``n_points`` >= :data:`COMPILE_MIN_POINTS`, or this process has solved
+    compiled already (and numba is loaded in this process anyway), ``n_points`` >=
+    :data:`COMPILE_MIN_POINTS`, or this process has solved
     :data:`COMPILE_AFTER_POINTS` measured points in the Python loop (a study, a fleet worker)."""
     global _points_solved
     mode = os.environ.get(ENV, "auto").strip().lower()
@@ -179,6 +181,10 @@ def use_compiled(problem, n_points: int) -> bool:
     _points_solved += int(n_points)
     if mode == "always" or n_points >= COMPILE_MIN_POINTS or _points_solved >= COMPILE_AFTER_POINTS:
         return True
+    if "numba" not in sys.modules:
+        # a process that has not loaded numba (a small calibration: robocal.kinematics._backend runs its
+        # kernels in numpy) does not load it (0.1-0.4 s, ~100 MiB) to save ~1 ms of a small solve
+        return False
     from . import _lm_kernels
 
     if _lm_kernels.lm_points.signatures:  # compiled or loaded in this process

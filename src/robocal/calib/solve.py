@@ -254,7 +254,9 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     normal = method == "lm" and loss == "linear" and not prior_weight and _normal.supports(problem)
     evaluator = _normal.PointNormalEquations(problem) if normal else None
     # ... and, when its kernel is compiled (or worth compiling), the whole loop in compiled code
-    compiled = normal and _lm_compiled.use_compiled(problem, evaluator.m_rows // 3)
+    # (the compiled loop has the default tenfold damping rule only)
+    compiled = (normal and getattr(problem, "damping", "tenfold") == "tenfold"
+                and _lm_compiled.use_compiled(problem, evaluator.m_rows // 3))
     labels = problem.labels
     J = None
     if compiled and (ident is not None or not auto_identifiable):
