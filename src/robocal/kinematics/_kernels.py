@@ -290,23 +290,19 @@ def _soa_root(V, Km, nb):
 
 
 @njit(cache=_CACHE, fastmath={"contract"}, inline="always")
-def _soa_store(V, P, out, first, nb):
-    """``out[first + n]`` (4x4) = record 0's frame of ``V`` @ ``P`` (3x4), via record 1's rows."""
-    for i in range(3):
-        r = 4 * i
-        for n in range(nb):
+def _soa_store(V, P, out, j, first, nb):
+    """``out[first + n, j]`` (4x4) = the frame in ``V``'s first 12 rows @ ``P`` (3x4), pose by pose."""
+    for n in range(nb):
+        o = out[first + n, j]
+        for i in range(3):
+            r = 4 * i
             a0 = V[r, n]
             a1 = V[r + 1, n]
             a2 = V[r + 2, n]
-            V[_REC + r, n] = a0 * P[0, 0] + a1 * P[1, 0] + a2 * P[2, 0]
-            V[_REC + r + 1, n] = a0 * P[0, 1] + a1 * P[1, 1] + a2 * P[2, 1]
-            V[_REC + r + 2, n] = a0 * P[0, 2] + a1 * P[1, 2] + a2 * P[2, 2]
-            V[_REC + r + 3, n] = a0 * P[0, 3] + a1 * P[1, 3] + a2 * P[2, 3] + V[r + 3, n]
-    for n in range(nb):
-        o = out[first + n]
-        for i in range(3):
-            for j in range(4):
-                o[i, j] = V[_REC + 4 * i + j, n]
+            o[i, 0] = a0 * P[0, 0] + a1 * P[1, 0] + a2 * P[2, 0]
+            o[i, 1] = a0 * P[0, 1] + a1 * P[1, 1] + a2 * P[2, 1]
+            o[i, 2] = a0 * P[0, 2] + a1 * P[1, 2] + a2 * P[2, 2]
+            o[i, 3] = a0 * P[0, 3] + a1 * P[1, 3] + a2 * P[2, 3] + V[r + 3, n]
         o[3, 0] = 0.0
         o[3, 1] = 0.0
         o[3, 2] = 0.0
@@ -315,8 +311,8 @@ def _soa_store(V, P, out, first, nb):
 
 @njit(cache=_CACHE)
 def _copy_frame_rows(src, dst, nb):
-    """dst[:12, :nb] = src[:12, :nb]: a tree's frames in and out of the records (one compiled copy
-    shared by the call sites: inlined, these loops doubled fk_fused_into's compile time)."""
+    """dst[:12, :nb] = src[:12, :nb]: a tree's frames in and out of the records (one compiled
+    function for the two call sites: inlined, such loops add to fk_fused_into's compile time)."""
     for r in range(12):
         for n in range(nb):
             dst[r, n] = src[r, n]
@@ -336,7 +332,8 @@ def fk_fused_into(q, ints, floats, e, out, links, start, stop):
     """
     n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
     # Records: m + 1 holds joint m; record m also serves as joint m's parent frame, so a joint whose
-    # parent is not the previous joint (a tree) gets its parent's frame copied there from G.
+    # parent is not the previous joint (a tree) gets its parent's frame copied there from G (and
+    # the previous joint's frame, if a later branch needs it, goes to G first).
     F = np.empty(((n_m + 2) * _REC, _ROW))
     anchor = ee_anchor[e]
     Ee = E[e]
@@ -346,9 +343,8 @@ def fk_fused_into(q, ints, floats, e, out, links, start, stop):
         p = mparent[m]
         if p >= 0 and p != m - 1:
             keep[p] = True
-    if 0 <= anchor < n_m - 1:
-        keep[anchor] = True
     G = np.empty((n_m, 12, _ROW))
+    out4 = out.reshape((out.shape[0], 1, 4, 4))  # one inlined store for out and links: same type
     for first in range(start, stop, _BLOCK):
         nb = min(first + _BLOCK, stop) - first
         for m in range(n_m):
@@ -380,16 +376,18 @@ def fk_fused_into(q, ints, floats, e, out, links, start, stop):
                     R[_C, n] = 1.0
             p = mparent[m]
             V = F[_REC * m:]
+            if m > 0 and keep[m - 1]:  # before a branch overwrites it
+                _copy_frame_rows(V, G[m - 1], nb)
+            if p >= 0 and p != m - 1:
+                _copy_frame_rows(G[p], V, nb)
             if p < 0:
                 _soa_root(V, K[m], nb)
             else:
-                if p != m - 1:
-                    _copy_frame_rows(G[p], V, nb)
                 _soa_chain(V, K[m], nb)
-            if keep[m]:
-                _copy_frame_rows(R, G[m], nb)
-            if want_links:
-                _soa_store(R, post[m], links[:, m], first, nb)
+            for j in range(2):  # its link frame and the end effector, while its record is intact
+                if (want_links if j == 0 else m == anchor):
+                    _soa_store(R, post[m] if j == 0 else Ee, links if j == 0 else out4, m if j == 0 else 0,
+                               first, nb)
         if anchor < 0:
             for n in range(nb):
                 o = out[first + n]
@@ -400,11 +398,6 @@ def fk_fused_into(q, ints, floats, e, out, links, start, stop):
                 o[3, 1] = 0.0
                 o[3, 2] = 0.0
                 o[3, 3] = 1.0
-        else:
-            A = F[_REC * (anchor + 1):]
-            if keep[anchor]:  # its record may have served a later branch
-                _copy_frame_rows(G[anchor], A, nb)
-            _soa_store(A, Ee, out, first, nb)
 
 
 @njit(cache=_CACHE, fastmath={"contract"})
