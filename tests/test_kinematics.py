@@ -334,6 +334,17 @@ def test_non_finite_joints_are_refused_with_pose_and_joint():
         m.fk(q)
     with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
         m.fk(np.zeros((5, 7)))
+    # a large batch checks its joints in the threads, range by range: the same error
+    from robocal.kinematics._threads import PARALLEL_MIN
+
+    q = np.zeros((PARALLEL_MIN + 10, 6))
+    q[PARALLEL_MIN + 7, 1] = np.inf
+    with pytest.raises(ValueError, match=f"pose {PARALLEL_MIN + 7}, joint J2 is inf"):
+        m.fk(q, out=np.empty((len(q), 4, 4)))
+    q[PARALLEL_MIN + 7, 1] = 1e300  # finite values whose sum overflows are fine
+    q[PARALLEL_MIN + 8, 1] = 1e308
+    q[PARALLEL_MIN + 9, 1] = 1e308
+    assert np.isfinite(m.fk(q)[:PARALLEL_MIN]).all()
 
 
 def test_unknown_robot_suggests_close_names():
