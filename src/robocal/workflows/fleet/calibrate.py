@@ -38,7 +38,7 @@ from ..outputs import ensure_writable_dir
 __all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "robots_per_task", "task_groups", "run_fleet_calibration"]
 
 #: Largest automatic group of robots per Dask task (a progress step is at most this many robots).
-MAX_ROBOTS_PER_TASK = 4
+MAX_ROBOTS_PER_TASK = 8
 
 SUMMARY_FORMAT = "robocal-fleet-summary/1"
 #: Modified z-score above which a robot's accuracy after calibration is an outlier (Iglewicz and
