@@ -186,12 +186,12 @@ def main():
     print(f"per-task overhead: empty task {1e3 * empty * workers:.2f} ms of a worker; in the fleet run "
           f"{1e3 * per_task_overhead:.1f} ms per robot (wall x workers - time inside the tasks) = "
           f"{100 * per_task_overhead / (per_task_overhead + b / n):.1f} % of a task")
-    from robocal.workflows.fleet.calibrate import robots_per_task
+    from robocal.workflows.fleet.calibrate import task_groups
 
-    size = robots_per_task(n, workers, args.robots_per_task)
+    sizes = [len(g) for g in task_groups(range(n), workers, args.robots_per_task)]
     cc = statistics.median(client_cpu)
     print(f"client process (client + scheduler) CPU in the fleet run: {cc:.2f} s = {1e3 * cc / n:.2f} ms per robot, "
-          f"{1e3 * cc / -(-n // size):.2f} ms per task ({size} robot(s) per task)")
+          f"{1e3 * cc / len(sizes):.2f} ms per task ({len(sizes)} tasks of {min(sizes)}-{max(sizes)} robots)")
     est = 1000 * (b / n + per_task_overhead) / workers
     print(f"estimate for 1,000 robots x {args.poses} poses: {est:.0f} s on {workers} workers here; "
           f"{1000 * (b / n + per_task_overhead) / 32:.0f} s on 32 such workers (4 machines x 8 cores), "

@@ -334,6 +334,17 @@ def test_non_finite_joints_are_refused_with_pose_and_joint():
         m.fk(q)
     with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
         m.fk(np.zeros((5, 7)))
+    # a large batch checks its joints in the threads, range by range: the same error
+    from robocal.kinematics._threads import PARALLEL_MIN
+
+    q = np.zeros((PARALLEL_MIN + 10, 6))
+    q[PARALLEL_MIN + 7, 1] = np.inf
+    with pytest.raises(ValueError, match=f"pose {PARALLEL_MIN + 7}, joint J2 is inf"):
+        m.fk(q, out=np.empty((len(q), 4, 4)))
+    q[PARALLEL_MIN + 7, 1] = 1e300  # finite values whose sum overflows are fine
+    q[PARALLEL_MIN + 8, 1] = 1e308
+    q[PARALLEL_MIN + 9, 1] = 1e308
+    assert np.isfinite(m.fk(q)[:PARALLEL_MIN]).all()
 
 
 def test_unknown_robot_suggests_close_names():
@@ -362,3 +373,53 @@ def test_fk_out_and_threaded_batches_match_the_single_thread_kernel(monkeypatch)
         m.fk(q, out=np.empty((5000, 4, 3)))
     with pytest.raises(ValueError, match="not a finite number"):
         m.fk(np.array([0.0, np.nan, 0, 0, 0, 0]))
+
+
+def _ulps(value, reference):
+    """|value - reference| in units in the last place of the reference."""
+    return np.abs(value - reference) / np.spacing(np.abs(reference))
+
+
+def test_sincos_within_2_ulp_of_numpy_over_the_stated_range():
+    from robocal.kinematics._kernels import _SINCOS_MAX, sincos_array
+
+    rng = np.random.default_rng(11)
+    k = np.arange(-64, 65)
+    quarter_turns = np.concatenate([k * np.pi / 4, k * np.pi / 2, k * np.pi])
+    edges = np.concatenate([
+        quarter_turns, np.nextafter(quarter_turns, np.inf), np.nextafter(quarter_turns, -np.inf),
+        [0.0, -0.0, 5e-324, -5e-324, 1e-300, 1e-8, -1e-8, _SINCOS_MAX, -_SINCOS_MAX],
+    ])
+    x = np.concatenate([rng.uniform(-4, 4, 300_000), rng.uniform(-100, 100, 300_000),
+                        rng.uniform(-_SINCOS_MAX, _SINCOS_MAX, 300_000), edges])
+    s, c = sincos_array(x)
+    assert _ulps(s, np.sin(x)).max() <= 2.0
+    assert _ulps(c, np.cos(x)).max() <= 2.0
+    assert np.all(s[x == 0.0] == 0.0) and np.all(c[x == 0.0] == 1.0)  # (the sign of -0.0 is not kept)
+    # beyond the polynomial's range: libm itself
+    huge = np.array([_SINCOS_MAX * 1.001, -3e5, 1e10, 1e300])
+    s, c = sincos_array(huge)
+    assert np.array_equal(s, np.sin(huge)) and np.array_equal(c, np.cos(huge))
+
+
+@pytest.mark.parametrize("kind", list(FD_MODELS))
+def test_simd_fk_kernel_equals_the_pose_major_kernel(kind):
+    """fk / link_frames (blocked structure-of-arrays kernel) against fk_fused (pose by pose, the same
+    products): equal to 1e-12 mm and 1e-12 in the rotation, for every end effector, with a batch
+    that ends in a partial block and joint angles beyond the polynomial sine's range."""
+    from robocal.kinematics._kernels import fk_fused
+
+    m = FD_MODELS[kind]
+    rng = np.random.default_rng(12)
+    q = random_joints(m, 150, rng)
+    revolute = np.abs(m.limits[:, 1] - m.limits[:, 0]) < 100
+    q[5, revolute] += 3e5  # libm path
+    ref, ref_links = fk_fused(q, m._fused_ints, m._fused_floats, True)
+    tol = np.zeros((4, 4))
+    tol[:3, :3], tol[:3, 3] = 1e-12, 1e-12
+    for e in range(len(m.end_effectors)):
+        assert np.all(np.abs(m.fk(q, e) - ref[:, e]) <= tol)
+        assert np.allclose(m.fk(q[:20], e), m.fk_reference(q[:20], e), atol=1e-9)
+    links = m.link_frames(q)
+    assert links.shape == ref_links.shape
+    assert np.all(np.abs(links - ref_links) <= tol)

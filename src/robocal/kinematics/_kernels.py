@@ -53,24 +53,39 @@ def _model_joint(q_row, m, cpl_ptr, cpl_idx, cpl_coef):
     return acc
 
 
-# Cody-Waite split of pi/2 (fdlibm's pio2_1, pio2_1t) and Taylor coefficients 1/n!.
-_PIO2_HI = 1.57079632673412561417e+00
-_PIO2_LO = 6.07710050650619224932e-11
-_TWO_OVER_PI = 0.63661977236758134308
+# sin and cos of a joint angle without libm, so that loops over poses vectorize (numba has no SVML
+# here: math.sin in a loop is one scalar libm call per value). Cody & Waite's range reduction
+# (Software Manual for the Elementary Functions, 1980): x = k pi/2 + r, |r| <= pi/4, with pi/2
+# split into three parts: the first two carry 33 significant bits, so k * part is exact for
+# |k| < 2**20, the third the next 53 bits (1e-37 rad left over); computed from pi with exact
+# rational arithmetic. Then the Taylor series of sin and cos on [-pi/4, pi/4] (terms to r**17 and
+# r**18: truncation below 1e-19), summed so that the leading term is added last (cos: 1 - z/2
+# with its rounding error carried), and the quadrant chosen by selects, not branches.
+# Within 2 ulp of numpy's sin/cos for |x| <= _SINCOS_MAX (tests/test_kinematics.py).
+_PIO2_1 = 1.5707963267341256
+_PIO2_2 = 6.077100506303966e-11
+_PIO2_3 = 2.0222662487959506e-21
+_TWO_OVER_PI = 0.6366197723675814
+#: |x| [rad] up to which :func:`_sincos` is used; beyond it libm (``math.sin``/``math.cos``).
+_SINCOS_MAX = 1e5
 
 
-@njit(cache=_CACHE, inline="always")
+@njit(cache=_CACHE, fastmath={"contract"}, inline="always")
 def _sincos(x):
-    """sin(x), cos(x) to ~1 ulp for |x| < 1e5 rad; branch-free so loops over it vectorize."""
+    """sin(x), cos(x) within 2 ulp for |x| <= _SINCOS_MAX rad; branch-free so loops over it vectorize."""
     k = np.floor(x * _TWO_OVER_PI + 0.5)
-    r = (x - k * _PIO2_HI) - k * _PIO2_LO
+    r = ((x - k * _PIO2_1) - k * _PIO2_2) - k * _PIO2_3
     z = r * r
-    sp = r * (1.0 + z * (-1.6666666666666666e-01 + z * (8.3333333333333332e-03 + z * (
-        -1.9841269841269841e-04 + z * (2.7557319223985893e-06 + z * (-2.5052108385441720e-08 + z * (
-            1.6059043836821613e-10 + z * (-7.6471637318198164e-13 + z * 2.8114572543455206e-15))))))))
-    cp = 1.0 + z * (-0.5 + z * (4.1666666666666664e-02 + z * (-1.3888888888888889e-03 + z * (
-        2.4801587301587302e-05 + z * (-2.7557319223985888e-07 + z * (2.0876756987868100e-09 + z * (
-            -1.1470745597729725e-11 + z * (4.7794773323873853e-14 + z * -1.5619206968586225e-16))))))))
+    ps = -1.6666666666666666e-01 + z * (8.3333333333333332e-03 + z * (-1.9841269841269841e-04 + z * (
+        2.7557319223985893e-06 + z * (-2.5052108385441720e-08 + z * (1.6059043836821613e-10 + z * (
+            -7.6471637318198164e-13 + z * 2.8114572543455206e-15))))))
+    pc = 4.1666666666666664e-02 + z * (-1.3888888888888889e-03 + z * (2.4801587301587302e-05 + z * (
+        -2.7557319223985888e-07 + z * (2.0876756987868100e-09 + z * (-1.1470745597729725e-11 + z * (
+            4.7794773323873853e-14 + z * -1.5619206968586225e-16))))))
+    sp = r + r * z * ps
+    hz = 0.5 * z
+    w = 1.0 - hz
+    cp = w + (((1.0 - w) - hz) + z * z * pc)
     k4 = k - 4.0 * np.floor(k * 0.25)  # quadrant 0..3 as a float (keeps the loop vectorizable)
     swap = (k4 == 1.0) | (k4 == 3.0)
     s = cp if swap else sp
@@ -80,14 +95,35 @@ def _sincos(x):
     return s, c
 
 
+@njit(cache=_CACHE, fastmath={"contract"}, inline="always")
+def _sincos_any(x):
+    """sin(x), cos(x) for any x: :func:`_sincos`, libm beyond _SINCOS_MAX (a branch: scalar code)."""
+    if abs(x) > _SINCOS_MAX:
+        return math.sin(x), math.cos(x)
+    return _sincos(x)
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, inline="always")
+def _sincos_into(x, s, c, n):
+    """s[:n], c[:n] = sin, cos of x[:n] (1-D arrays): one vectorized pass, libm for huge values."""
+    big = False
+    for i in range(n):
+        s[i], c[i] = _sincos(x[i])
+        big |= abs(x[i]) > _SINCOS_MAX
+    if big:
+        for i in range(n):
+            if abs(x[i]) > _SINCOS_MAX:
+                s[i] = math.sin(x[i])
+                c[i] = math.cos(x[i])
+
+
 @njit(cache=_CACHE)
 def sincos_array(x):
-    """Element-wise (sin, cos) of a contiguous float array (vectorized polynomial)."""
+    """Element-wise (sin, cos) of a contiguous float array (vectorized polynomial, libm for |x| > 1e5)."""
     flat = x.ravel()
     s = np.empty_like(flat)
     c = np.empty_like(flat)
-    for i in range(flat.size):
-        s[i], c[i] = _sincos(flat[i])
+    _sincos_into(flat, s, c, flat.size)
     return s.reshape(x.shape), c.reshape(x.shape)
 
 
@@ -191,8 +227,7 @@ def fk_fused(q, ints, floats, want_links):
         qf = qm.ravel()
         sf = s.ravel()
         cf = c.ravel()
-        for i in range(nb * n_m):
-            sf[i], cf[i] = _sincos(qf[i])
+        _sincos_into(qf, sf, cf, nb * n_m)
         for n in range(nb):
             _chain(n_m, qm[n], c[n], s[n], K, mparent, mtype, G, tmp)
             for e in range(n_e):
@@ -203,44 +238,166 @@ def fk_fused(q, ints, floats, want_links):
     return out, links
 
 
+# Structure-of-arrays blocks for fk_fused_into: the poses of a block run along a row, so every
+# loop over them is one vectorizable stream (the pose-by-pose chain of ``_chain`` vectorizes not).
+# A joint's *record* is _REC rows of one scratch array: its frame (12 rows, row-major 3x4), then
+# cos, sin and the prismatic offset of its motion. Each helper addresses rows at constant distances
+# from one view's start, so LLVM proves the loop free of aliasing and vectorizes it without
+# run-time overlap checks (rows of separate arrays defeated it: the chain stayed scalar).
+_BLOCK = 64  # poses per block: a 6-joint robot's records (~70 KB) stay in L1/L2
+_ROW = _BLOCK + 8  # row length: rows not a multiple of 4 KiB apart (no 4K aliasing)
+_REC = 15
+_C, _S, _D = 12, 13, 14
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, inline="always")
+def _soa_chain(V, Km, nb):
+    """Record 1 of ``V`` (frame rows) = record 0's frame @ ``Km`` @ the motion of record 1."""
+    k00, k01, k02, k03 = Km[0, 0], Km[0, 1], Km[0, 2], Km[0, 3]
+    k10, k11, k12, k13 = Km[1, 0], Km[1, 1], Km[1, 2], Km[1, 3]
+    k20, k21, k22, k23 = Km[2, 0], Km[2, 1], Km[2, 2], Km[2, 3]
+    for i in range(3):
+        r = 4 * i
+        for n in range(nb):
+            a0 = V[r, n]
+            a1 = V[r + 1, n]
+            a2 = V[r + 2, n]
+            t0 = a0 * k00 + a1 * k10 + a2 * k20
+            t1 = a0 * k01 + a1 * k11 + a2 * k21
+            t2 = a0 * k02 + a1 * k12 + a2 * k22
+            t3 = a0 * k03 + a1 * k13 + a2 * k23 + V[r + 3, n]
+            cn = V[_REC + _C, n]
+            sn = V[_REC + _S, n]
+            V[_REC + r, n] = cn * t0 + sn * t1
+            V[_REC + r + 1, n] = cn * t1 - sn * t0
+            V[_REC + r + 2, n] = t2
+            V[_REC + r + 3, n] = t3 + V[_REC + _D, n] * t2
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, inline="always")
+def _soa_root(V, Km, nb):
+    """Record 1 of ``V`` = ``Km`` @ the motion of record 1 (a joint hanging from the base)."""
+    for i in range(3):
+        r = 4 * i
+        t0, t1, t2, t3 = Km[i, 0], Km[i, 1], Km[i, 2], Km[i, 3]
+        for n in range(nb):
+            cn = V[_REC + _C, n]
+            sn = V[_REC + _S, n]
+            V[_REC + r, n] = cn * t0 + sn * t1
+            V[_REC + r + 1, n] = cn * t1 - sn * t0
+            V[_REC + r + 2, n] = t2
+            V[_REC + r + 3, n] = t3 + V[_REC + _D, n] * t2
+
+
+@njit(cache=_CACHE, fastmath={"contract"}, inline="always")
+def _soa_store(V, P, out, j, first, nb):
+    """``out[first + n, j]`` (4x4) = the frame in ``V``'s first 12 rows @ ``P`` (3x4), pose by pose."""
+    for n in range(nb):
+        o = out[first + n, j]
+        for i in range(3):
+            r = 4 * i
+            a0 = V[r, n]
+            a1 = V[r + 1, n]
+            a2 = V[r + 2, n]
+            o[i, 0] = a0 * P[0, 0] + a1 * P[1, 0] + a2 * P[2, 0]
+            o[i, 1] = a0 * P[0, 1] + a1 * P[1, 1] + a2 * P[2, 1]
+            o[i, 2] = a0 * P[0, 2] + a1 * P[1, 2] + a2 * P[2, 2]
+            o[i, 3] = a0 * P[0, 3] + a1 * P[1, 3] + a2 * P[2, 3] + V[r + 3, n]
+        o[3, 0] = 0.0
+        o[3, 1] = 0.0
+        o[3, 2] = 0.0
+        o[3, 3] = 1.0
+
+
+@njit(cache=_CACHE)
+def _copy_frame_rows(src, dst, nb):
+    """dst[:12, :nb] = src[:12, :nb]: a tree's frames in and out of the records (one compiled
+    function for the two call sites: inlined, such loops add to fk_fused_into's compile time)."""
+    for r in range(12):
+        for n in range(nb):
+            dst[r, n] = src[r, n]
+
+
 @njit(cache=_CACHE, fastmath={"contract"}, nogil=True)
 def fk_fused_into(q, ints, floats, e, out, links, start, stop):
     """Poses of end effector ``e`` for the configurations ``q[start:stop]``, into ``out[start:stop]``.
 
     q (N, n_ctrl) controller joints [rad | mm]; out (N, 4, 4) [mm], written in place; links
     (N, n_m, 4, 4) [mm]: the moving links' frames written too, or (0, n_m, 4, 4) for none (one
-    compiled kernel serves ``fk`` and ``link_frames``). The same arithmetic as :func:`fk_fused` in
-    cache-sized blocks of 512 poses (joint values, then their sines and cosines as one vectorized
-    loop, then the chain pose by pose); releases the GIL so that threads can share a batch
+    compiled kernel serves ``fk`` and ``link_frames``). The arithmetic of :func:`fk_fused` (the
+    same products in the same order), organised for SIMD: blocks of 64 poses held as structure of
+    arrays, joint by joint (joint value, its sine and cosine, the frame), each step one loop over
+    the block's poses that LLVM vectorizes. Releases the GIL so that threads can share a batch
     (disjoint ranges).
     """
     n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
-    G = np.empty((n_m, 3, 4))
-    tmp = np.empty((3, 4))
-    B = 512
-    qm = np.empty((B, n_m))
-    s = np.empty((B, n_m))
-    c = np.empty((B, n_m))
+    # Records: m + 1 holds joint m; record m also serves as joint m's parent frame, so a joint whose
+    # parent is not the previous joint (a tree) gets its parent's frame copied there from G (and
+    # the previous joint's frame, if a later branch needs it, goes to G first).
+    F = np.empty(((n_m + 2) * _REC, _ROW))
     anchor = ee_anchor[e]
     Ee = E[e]
     want_links = links.shape[0] > 0
-    for first in range(start, stop, B):
-        last = min(first + B, stop)
-        nb = last - first
-        for n in range(nb):
-            for m in range(n_m):
-                qm[n, m] = _model_joint(q[first + n], m, cpl_ptr, cpl_idx, cpl_coef)
-        qf = qm.ravel()
-        sf = s.ravel()
-        cf = c.ravel()
-        for i in range(nb * n_m):
-            sf[i], cf[i] = _sincos(qf[i])
-        for n in range(nb):
-            _chain(n_m, qm[n], c[n], s[n], K, mparent, mtype, G, tmp)
-            _write_pose(G, anchor, Ee, out[first + n], tmp)
-            if want_links:
-                for m in range(n_m):
-                    _write_pose(G, m, post[m], links[first + n, m], tmp)
+    keep = np.zeros(n_m, dtype=np.bool_)  # frames needed after a branch overwrote their record
+    for m in range(n_m):
+        p = mparent[m]
+        if p >= 0 and p != m - 1:
+            keep[p] = True
+    G = np.empty((n_m, 12, _ROW))
+    out4 = out.reshape((out.shape[0], 1, 4, 4))  # one inlined store for out and links: same type
+    for first in range(start, stop, _BLOCK):
+        nb = min(first + _BLOCK, stop) - first
+        for m in range(n_m):
+            R = F[_REC * (m + 1):]
+            for n in range(nb):
+                R[_D, n] = 0.0
+            for t in range(cpl_ptr[m], cpl_ptr[m + 1]):
+                col = cpl_idx[t]
+                w = cpl_coef[t]
+                for n in range(nb):
+                    R[_D, n] += w * q[first + n, col]
+            if mtype[m] == 0:
+                big = False
+                for n in range(nb):
+                    x = R[_D, n]
+                    R[_S, n], R[_C, n] = _sincos(x)
+                    big |= abs(x) > _SINCOS_MAX
+                if big:  # huge angles: libm
+                    for n in range(nb):
+                        x = R[_D, n]
+                        if abs(x) > _SINCOS_MAX:
+                            R[_S, n] = math.sin(x)
+                            R[_C, n] = math.cos(x)
+                for n in range(nb):
+                    R[_D, n] = 0.0
+            else:
+                for n in range(nb):
+                    R[_S, n] = 0.0
+                    R[_C, n] = 1.0
+            p = mparent[m]
+            V = F[_REC * m:]
+            if m > 0 and keep[m - 1]:  # before a branch overwrites it
+                _copy_frame_rows(V, G[m - 1], nb)
+            if p >= 0 and p != m - 1:
+                _copy_frame_rows(G[p], V, nb)
+            if p < 0:
+                _soa_root(V, K[m], nb)
+            else:
+                _soa_chain(V, K[m], nb)
+            for j in range(2):  # its link frame and the end effector, while its record is intact
+                if (want_links if j == 0 else m == anchor):
+                    _soa_store(R, post[m] if j == 0 else Ee, links if j == 0 else out4, m if j == 0 else 0,
+                               first, nb)
+        if anchor < 0:
+            for n in range(nb):
+                o = out[first + n]
+                for i in range(3):
+                    for j in range(4):
+                        o[i, j] = Ee[i, j]
+                o[3, 0] = 0.0
+                o[3, 1] = 0.0
+                o[3, 2] = 0.0
+                o[3, 3] = 1.0
 
 
 @njit(cache=_CACHE, fastmath={"contract"})
@@ -268,7 +425,7 @@ def fk_fused_single(q, ints, floats, out):
     tmp = scratch[15 * n_m:].reshape((3, 4))
     for m in range(n_m):
         qm[m] = _model_joint(q, m, cpl_ptr, cpl_idx, cpl_coef)
-        s[m], c[m] = _sincos(qm[m])
+        s[m], c[m] = _sincos_any(qm[m])
     _chain(n_m, qm, c, s, K, mparent, mtype, G, tmp)
     _write_pose(G, ee_anchor[0], E[0], out, tmp)
 

@@ -13,7 +13,9 @@ one bad robot never stops the others. See :mod:`robocal.workflows.fleet.robot` f
 Each robot is calibrated on its own (its own inputs, outputs, hash and history cycle); the Dask
 tasks carry a few robots each (:func:`robots_per_task`): a 100-pose calibration takes ~30 ms, and
 the scheduler's and client's work per task (~3.7 ms of CPU in the client process, measured in
-benchmarks/bench_fleet.py) competed with the workers for the same cores.
+benchmarks/bench_fleet.py) competed with the workers for the same cores. The groups shrink towards
+the end of the list (:func:`task_groups`), so that the workers finish together instead of one
+finishing a full group while the others wait.
 """
 
 from __future__ import annotations
@@ -33,10 +35,10 @@ from .cluster import run_tasks
 from .robot import calibrate_entries, failed_row
 from ..outputs import ensure_writable_dir
 
-__all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "robots_per_task", "run_fleet_calibration"]
+__all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "robots_per_task", "task_groups", "run_fleet_calibration"]
 
 #: Largest automatic group of robots per Dask task (a progress step is at most this many robots).
-MAX_ROBOTS_PER_TASK = 4
+MAX_ROBOTS_PER_TASK = 8
 
 SUMMARY_FORMAT = "robocal-fleet-summary/1"
 #: Modified z-score above which a robot's accuracy after calibration is an outlier (Iglewicz and
@@ -86,6 +88,24 @@ def robots_per_task(n_robots: int, n_slots: int, requested: int | None = None) -
     return int(max(1, min(MAX_ROBOTS_PER_TASK, n_robots // max(4 * n_slots, 1))))
 
 
+def task_groups(entries, n_slots: int, requested: int | None = None) -> list:
+    """``entries`` cut into consecutive groups, one Dask task each: all of ``requested`` robots when
+    given; else guided: each group half of the remaining robots' share per worker thread
+    (``n_slots``), between 1 and :func:`robots_per_task`'s size, so the last groups are single robots
+    (Dask starts tasks roughly in submission order: the workers' last tasks are short and they end
+    within one robot of each other)."""
+    entries = list(entries)
+    largest = robots_per_task(len(entries), n_slots, requested)
+    if requested is not None:
+        return [entries[i:i + largest] for i in range(0, len(entries), largest)]
+    groups, i = [], 0
+    while i < len(entries):
+        size = max(1, min(largest, (len(entries) - i) // (2 * max(n_slots, 1))))
+        groups.append(entries[i:i + size])
+        i += size
+    return groups
+
+
 def _worker_threads(client) -> int:
     try:
         return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
@@ -124,8 +144,7 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
         if client is not None and secret is not None:
             os.environ[PASSWORD_ENV] = secret  # in-process workers read it where they open the database
             db_target = strip_credentials(db_target)
-    size = robots_per_task(len(entries), _worker_threads(client) if client is not None else 1, per_task)
-    groups = [entries[i:i + size] for i in range(0, len(entries), size)]
+    groups = task_groups(entries, _worker_threads(client) if client is not None else 1, per_task)
     keys = [f"calibrate-{g[0].id}-{g[0].index}" + (f"-to-{g[-1].id}-{g[-1].index}" if len(g) > 1 else "")
             for g in groups]
     done = [0]

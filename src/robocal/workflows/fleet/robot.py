@@ -19,6 +19,7 @@ Any error becomes the row's ``status: failed`` with the reason; nothing raises o
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import time
@@ -37,7 +38,10 @@ __all__ = ["STAMP_FILE", "input_digest", "calibrate_entry", "calibrate_entries",
 STAMP_FILE = "fleet_inputs.json"
 
 
+@functools.lru_cache(maxsize=1)
 def _robocal_version() -> str:
+    """The installed robocal version (looked up once per process: importlib.metadata scans the
+    installed distributions, ~2 ms of every robot's task before)."""
     try:
         return version("robocal")
     except PackageNotFoundError:  # pragma: no cover - running from a source tree
@@ -184,8 +188,10 @@ def calibrate_entry(entry: FleetEntry, out_dir, *, db=None, report: bool = True)
         except Exception as exc:  # the calibration stands; the robot is retried next run
             return {**row, "status": "failed", "reason": f"history database: {exc}"}
     row["seconds"] = round(time.perf_counter() - t0, 3)
+    # the results above were written durably; the marker need not be (lost in a power cut, the
+    # robot is only calibrated again), which spares each robot one fsync (~10 ms on a VM disk)
     atomic_write_text(robot_dir / STAMP_FILE, json.dumps({"input_sha256": digest, "row": row}, indent=2) + "\n",
-                      overwrite=True)
+                      overwrite=True, durable=False)
     return {**row, "skipped": False}
 
 
