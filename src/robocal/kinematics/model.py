@@ -46,7 +46,9 @@ def _fk_checked_range(kernel, q, ints, floats, e, out, links, bad, start, stop):
     ``bad`` and nothing is computed (a thread's share of :meth:`RobotModel.fk`; numpy's sum and the
     kernel both release the GIL)."""
     part = q[start:stop]
-    if not math.isfinite(float(np.add.reduce(part, axis=None))) and not np.isfinite(part).all():
+    with np.errstate(over="ignore", invalid="ignore"):  # a sum of huge finite values may overflow: look closer
+        total = float(np.add.reduce(part, axis=None))
+    if not math.isfinite(total) and not np.isfinite(part).all():
         bad.append(start)
         return
     kernel(q, ints, floats, e, out, links, start, stop)
