@@ -759,4 +759,96 @@ FIGURES += [Figure(f"thermal:compensate {k}", "docs/thermal.md", _TC + pat, "the
                                   ("true before max", r"against " + _N + r" mm \(max\) without", "true.before_max_mm"))]
 
 
+# --- figsC: docs/thermal.md, docs/tcp.md, docs/testing.md (issue 25 item 3) -----------------------------------
+# thermal.md "Each effect alone": the experiment with one effect of the realistic preset on
+# (robocal.docs.figure_producers_thermal, slow), the 20-seed rows from section 6's producers
+for _row, _prod in (("ideal (20 seeds)", "thermal/ideal"), ("realistic (20 seeds)", "thermal/realistic"),
+                    *((f"only `{_e}`", f"thermal_alone/{_e}")
+                      for _e in ("heat", "hall", "deformation", "joints", "noise", "outliers"))):
+    FIGURES += _table("docs/thermal.md", {_row: ""}, _prod,
+                      [(c, k, f"{st}.evaluation.{col}.median") for c, col in enumerate(("before", "traditional", "screened"))
+                       for k, st in enumerate(("rms", "max"))],
+                      prefix="thermal:alone ", rel_tol=0.0,
+                      after="**Each effect alone**")
+# thermal.md "Drift": the set-up of tests/test_thermal_realism.py's three-hour drift
+_DRIFT = r"\*\*Drift\.\*\* After 3 h of non-stop full-load production the realistic cell's TCP moves "
+FIGURES += [Figure(f"thermal:drift 3h {p} {f}", "docs/thermal.md", pat, f"thermal_drift/{p}", f, rel_tol=0.01)
+            for p, f, pat in (("realistic", "min", _DRIFT + _N),
+                              ("realistic", "max", _DRIFT + r"[0-9.]+–" + _N),
+                              ("realistic", "median", _DRIFT + r"[0-9.]+–[0-9.]+ mm\s+\(median " + _N),
+                              ("ideal", "min", r"ideal cell, on the same schedule: " + _N),
+                              ("ideal", "max", r"ideal cell, on the same schedule: [0-9.]+–" + _N),
+                              ("ideal", "median", r"ideal cell, on the same schedule: [0-9.]+–[0-9.]+ mm \(median " + _N),
+                              ("realistic", "median", r"drifts more \(median " + _N + r" mm after 3 h"),
+                              ("ideal", "median", r"mm after 3 h against the ideal\s+" + _N + r"\)"))]
+FIGURES[-2] = dataclasses.replace(FIGURES[-2], key="thermal:drift 3h realistic median (reading)")
+FIGURES[-1] = dataclasses.replace(FIGURES[-1], key="thermal:drift 3h ideal median (reading)")
+# thermal.md section 6 "Reading it" and "Screening robustness": the 20-seed experiment's prose
+_READ = r"\* \*\*The ordering holds"
+FIGURES += [Figure(f"thermal:reading {k}", "docs/thermal.md", pat, f"thermal/{p}", f, rel_tol=0.0)
+            for k, p, f, pat in (
+                ("rms order", "realistic", "ordering.rms.evaluation.strict_order", _READ + r"(?s:.*?)\(" + _N + r" % of the 40"),
+                ("strict order", "realistic", "ordering.max.evaluation.strict_order",
+                 _READ + r"(?s:.*?)with the strict one " + _N + " %"),
+                ("screened median", "realistic", "rms.evaluation.screened.median",
+                 _READ + r"(?s:.*?)The screened median, " + _N + " %"),
+                ("traditional screening", "realistic", "rms.screening.traditional.median", _READ + r"(?s:.*?)traditional \(" + _N),
+                ("traditional evaluation", "realistic", "rms.evaluation.traditional.median",
+                 _READ + r"(?s:.*?)traditional \([0-9]+–" + _N),
+                ("before screening", "realistic", "rms.screening.before.median", _READ + r"(?s:.*?)and before \(" + _N),
+                ("before evaluation", "realistic", "rms.evaluation.before.median",
+                 _READ + r"(?s:.*?)and before \([0-9]+–" + _N),
+                ("ideal screened", "ideal", "rms.evaluation.screened.median", r"The ideal preset's " + _N + " %"),
+                ("theta3 selected", "realistic", "selection.θ3", r"missed θ3 \(selected in " + _N + " %"),
+                ("seed 9 screened", "realistic", "rms.evaluation.screened.min", r"and scored " + _N + " %"),
+                ("strict screened", "realistic", "max.evaluation.screened.median", r"Only ~" + _N + " % of the directions"),
+                ("strict traditional", "realistic", "max.evaluation.traditional.median",
+                 r"after compensation \(" + _N + " % traditional"),
+                ("strict before", "realistic", "max.evaluation.before.median", r"% traditional, " + _N + r" % before\)"),
+                ("stable median", "realistic", "rms.evaluation.stable.median", r"Its median λ is the same \(" + _N + " %"),
+                ("stable worst", "realistic", "rms.evaluation.stable.min", r"its worst evaluation run better \(" + _N + " %"),
+                ("screened worst", "realistic", "rms.evaluation.screened.min",
+                 r"its worst evaluation run better \([0-9.]+ % against " + _N + " %"))]
+
+# tcp.md: the accuracy table's maxima (in parentheses) and the prose on the study and its budget (slow producers)
+for _label, _m, _cells in (("realistic | cross-laser", "cross_laser", (0, 1, 2)),
+                           ("realistic | parallel barriers", "parallel_barriers", (1,)),
+                           ("ideal | cross-laser", "cross_laser", (1,))):
+    _pr = f"tcp/{_label.split(' |')[0]}"
+    FIGURES += _table("docs/tcp.md", {_label: _m}, _pr,
+                      [(c, 3, f"{('repeatability_mm', 'accuracy_mm', 'check_mm')[c]}.max") for c in _cells],
+                      prefix="tcp:", rel_tol=0.01)
+_REP = r"\*\*Repeatability is not accuracy\.\*\*"
+_T48 = r"\*\*The thesis's 0\.48 mm\.\*\*"
+FIGURES += [Figure(f"tcp:prose {k}", "docs/tcp.md", pat, p, f, rel_tol=0.01)
+            for k, p, f, pat in (
+                ("repeatability", "tcp/realistic", "cross_laser.repeatability_mm.median", _REP + r"(?s:.*?)by\s+~" + _N),
+                ("accuracy", "tcp/realistic", "cross_laser.accuracy_mm.median", _REP + r"(?s:.*?)the TCPs are ~" + _N),
+                ("bias", "tcp/realistic", "cross_laser.bias_mm.median", _REP + r"(?s:.*?)\(median " + _N + r" mm\)"),
+                ("absolute error check", "tcp/budget", "absolute error.cross_laser.check_mm.median",
+                 _T48 + r"(?s:.*?)at the check pose \(" + _N),
+                ("absolute error tcp", "tcp/budget", "absolute error.cross_laser.accuracy_mm.median",
+                 _T48 + r"(?s:.*?)though only " + _N),
+                ("dirty beams", "tcp/budget", "dirty beams.cross_laser.accuracy_mm.median",
+                 _T48 + r"(?s:.*?)dirty beams \(" + _N),
+                ("I/O", "tcp/budget", "I/O 125 Hz, late, jitter.cross_laser.accuracy_mm.median",
+                 _T48 + r"(?s:.*?)jittery I/O \(" + _N),
+                ("I/O axis", "tcp/budget", "I/O 125 Hz, late, jitter.cross_laser.axis_accuracy_deg.median",
+                 _T48 + r"(?s:.*?)jittery I/O \([0-9.]+ mm, and " + _N),
+                ("arm", "tcp/budget", "measuring arm.cross_laser.check_mm.median", _T48 + r"(?s:.*?)the arm \(" + _N),
+                ("method", "tcp/realistic", "cross_laser.accuracy_mm.median", _T48 + r"(?s:.*?)itself good to\s+~" + _N),
+                ("check", "tcp/realistic", "cross_laser.check_mm.median", _T48 + r"(?s:.*?)cannot see better than ~" + _N),
+                ("barriers axis ideal", "tcp/ideal", "parallel_barriers.axis_accuracy_deg.median",
+                 r"They measure the axis\s+well — " + _N),
+                ("barriers axis realistic", "tcp/realistic", "parallel_barriers.axis_accuracy_deg.median",
+                 r"They measure the axis\s+well — [0-9.]+–" + _N),
+                ("barriers tcp realistic", "tcp/realistic", "parallel_barriers.accuracy_mm.median",
+                 r"origin,\s+" + _N + " mm median on both cells"),
+                ("barriers tcp ideal", "tcp/ideal", "parallel_barriers.accuracy_mm.median",
+                 r"origin,\s+" + _N + " mm median on both cells"))]
+FIGURES += [Figure(f"tcp:collisions ratio {k}", "docs/tcp.md", pat, "tcp/collision_ratios", k, rel_tol=0.01)
+            for k, pat in (("axis", r"the tool-axis error grows " + _N + "×"),
+                           ("tcp_thesis_step3", r"The TCP error grows \(" + _N + "×"))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
