@@ -592,8 +592,10 @@ def datasets_needed(producer: str) -> tuple:
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
-                  # thermal.md: the experiment with one effect alone (~6-10 s each), the ideal drift (figsC)
+                  # thermal.md: the experiment with one effect alone (~6-10 s each), the ideal drift; testing.md's at-the-robot
+                  # UR10 (~4 s) and gripper cases (~2 s each; slow to keep the fast set's added CPU under ~8 s) (figsC)
                   *(p for p in THERMAL_PRODUCERS if p.startswith("thermal_alone/")), "thermal_drift/ideal",
+                  "program_at_robot/ur", "program_at_robot/krl_gripper", "program_at_robot/krl_gripper_ideal",
                   # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
                   "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",

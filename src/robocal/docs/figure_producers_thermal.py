@@ -1,13 +1,15 @@
 """Producers of docs/thermal.md's documented figures that no other producer computes
-(:mod:`robocal.docs.figures`): the effect-by-effect table and the three-hour drift; and the ratios
-that docs/tcp.md's prose reads off the collision study. Each returns a flat ``{field: value}``
-dict and is cached."""
+(:mod:`robocal.docs.figures`): the effect-by-effect table and the three-hour drift; the ratios that
+docs/tcp.md's prose reads off the collision study; and docs/testing.md's at-the-robot tables (the
+set-ups of ``tests/test_program_at_robot.py`` through the command line). Each returns a flat
+``{field: value}`` dict and is cached."""
 
 from __future__ import annotations
 
 import functools
 
-__all__ = ["THERMAL_PRODUCERS", "tcp_collision_ratios", "thermal_drift_three_hours", "thermal_effect_alone"]
+__all__ = ["PROGRAM_CASES", "THERMAL_PRODUCERS", "program_at_robot", "tcp_collision_ratios", "thermal_drift_three_hours",
+           "thermal_effect_alone"]
 
 #: the effects of the realistic preset, each switchable alone (``robocal.sim.thermal.effects``)
 EFFECTS = ("heat", "hall", "deformation", "joints", "noise", "outliers")
@@ -59,7 +61,118 @@ def tcp_collision_ratios() -> dict:
             "tcp_thesis_step3": c["thesis_step3_no_beta.tcp_rms_mm"] / c["thesis_step3.tcp_rms_mm"]}
 
 
+#: docs/testing.md's at-the-robot cases (``tests/test_program_at_robot.py``): robot, campaign seed,
+#: language, taught joints [deg], home [deg], base / work object (X, Y, Z [mm], A, B, C [deg])
+PROGRAM_CASES = {
+    "krl": ("kuka_kr150_r3100", 1, "krl",
+            [[10, -80, 100, 5, 40, 20], [-25, -60, 85, -30, -60, -10], [41, -83, -87, -271, 63, 231],
+             [-59, -66, -90, -210, 34, 82]], [0, -90, 90, 0, 0, 0], [1500, -300, 400, 0, 0, 10]),
+    "rapid": ("abb_irb140", 2, "rapid",
+              [[10, 20, 10, 5, 40, 20], [-20, 30, -10, -30, -60, -10], [-73, -67, -124, 53, -50, 33],
+               [100, -45, -110, 30, 60, -40]], [0, 0, 0, 0, 30, 0], [500, -100, 300, 0, 0, 20]),
+    "fanuc": ("fanuc_r2000ic_165f", 2, "fanuc",
+              [[10, 10, 10, 5, 40, 20], [-20, 20, -10, -30, -60, -10], [112, -20, 94, -284, 88, -71],
+               [-70, 13, 117, 162, -60, 124]], [0, 0, 0, 0, -90, 0], [1200, -200, 300, 0, 0, 15]),
+    "ur": ("ur10", 3, "ur",
+           [("j", [-30, -100, 100, -90, -90, 0]), ("l", [-30, -104, 112, -98, -90, 10]),
+            ("l", [-20, -90, 100, -100, -90, 20]), ("j", [-20, -90, 100, -100, 60, 20]),
+            ("l", [-15, -95, 100, -95, 70, 10]), ("j", [150, -80, -100, -90, 90, 0]),
+            ("l", [155, -85, -95, -85, 80, 10]), ("j", [-30, -100, 100, -90, -90, 0])], None, None),
+}
+
+
+@functools.lru_cache(maxsize=None)
+def program_at_robot(case: str, effects: str = "realistic", tool: tuple | None = None) -> dict:
+    """docs/testing.md "At the robot": the set-up of ``tests/test_program_at_robot.py``'s case
+    ``case`` (:data:`PROGRAM_CASES`) through the command line: ``robocal simulate tracker ROBOT
+    --poses 40 --reflectors 3 --seed SEED --effects EFFECTS``, ``robocal calibrate`` (realistic:
+    ``--no-orientation --holdout 0 --noise 0.02``), the program taught offline with the
+    identified reflector r1 as its tool (``tool``: a tool [X, Y, Z, A, B, C] the campaign never saw
+    instead), ``robocal correct``, ``robocal simulate execute`` of the original and the corrected
+    program on the true robot (``--true-tool`` the true r1), and the first-order miss from the
+    hidden truth (:func:`robocal.sim.first_order.tracker_campaign_bias`).
+
+    Fields per corrected Cartesian target k (0-based, program order): ``landing.k``, ``miss.k``,
+    ``sigma.k``, ``before.k``, ``noise.k`` (``sqrt(sigma^2 - unknown^2)``) [mm]; and
+    ``{landing|miss|sigma|noise}.{min|max}``. ~5-15 s of CPU each."""
+    import csv
+    import json
+    import tempfile
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..io.measurements import read_measurements
+    from ..io.programs import read_program
+    from ..sim.first_order import tracker_campaign_bias
+    from ..sim.taught_programs import fanuc_program, krl_program, rapid_program, ur_program
+    from .figure_producers_cli import run_cli
+
+    robot, seed, lang, q, home, base = PROGRAM_CASES[case]
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        meas = d / "cell.csv"
+        run_cli("simulate", "tracker", robot, "--poses", 40, "--reflectors", 3, "--seed", seed, "--out", meas,
+                "--effects", effects)
+        fit = [] if effects == "ideal" else ["--no-orientation", "--holdout", 0, "--noise", 0.02]
+        run_cli("calibrate", robot, meas, "--out", d / "cal", "--no-report", *fit)
+        truth_file, cal = d / "cell.truth.json", d / "cal" / "calibrated_robot.toml"
+        result = json.loads((d / "cal" / "result.json").read_text())
+        truth = json.loads(truth_file.read_text())
+        r1 = next(t["point_mm"] for t in result["targets"] if t["name"] == "r1")
+        r1_true = truth["reflectors_mm"][0]
+        t_prog = [*r1, 0, 0, 0] if tool is None else list(tool)
+        options, execute = [], ([] if tool is not None else ["--true-tool", ",".join(f"{v!r}" for v in r1_true)])
+        if lang == "krl":
+            text, config_dat = krl_program(robot, q, home, t_prog, base)
+            src, cdat = d / "cell.dat", d / "cell_config.dat"
+            src.write_bytes(text.encode("latin-1"))
+            cdat.write_bytes(config_dat.encode("latin-1"))
+            options = ["--config-dat", cdat]
+            execute = [*options, *execute]
+        elif lang == "rapid":
+            src = d / "cell.mod"
+            src.write_text(rapid_program(robot, q, home, t_prog, base))
+        elif lang == "fanuc":
+            src = d / "cell.ls"
+            src.write_text(fanuc_program(robot, q, home, t_prog, base))
+            options = ["--tool", ",".join(repr(v) for v in t_prog), "--base", ",".join(str(v) for v in base)]
+            execute = [*options, *execute]
+        else:
+            src = d / "cell.script"
+            src.write_text(ur_program(robot, q, t_prog))
+        out = src.with_name("corrected" + src.suffix)
+        run_cli("correct", cal, src, "--out", out, *options)
+
+        def run(program, intended=None):
+            extra = ["--intended", intended] if intended is not None else []
+            r = json.loads(run_cli("simulate", "execute", truth_file, program, "--json", "--cell-base", cal,
+                                   *execute, *extra))
+            return {row["target"]: row for row in r["targets"]}
+
+        before, after = run(src), run(out, src)
+        with open(out.with_name(out.name + ".report.csv"), newline="") as f:
+            report = {row["target"]: row for row in csv.DictReader(line for line in f if not line.startswith("#"))}
+        names = [t.name for t in read_program(src).targets if t.kind != "joint"]
+        q_train = read_measurements(d / truth["simulation"]["measurements_file"]).joints
+    estimated = [p["name"] for p in result["model_parameters"] if p["estimated"]]
+    q_exec = np.radians([after[n]["joints_deg"] for n in names])
+    miss = np.linalg.norm(tracker_campaign_bias(truth, estimated, q_train, q_exec,
+                                                point=None if tool is None else list(tool[:3])), axis=1)
+    sigma = np.array([float(report[n]["sigma_mm"]) for n in names])
+    unknown = np.array([float(report[n].get("unknown_mm") or 0.0) for n in names])
+    rows = {"landing": np.array([after[n]["error_mm"] for n in names]), "miss": miss, "sigma": sigma,
+            "before": np.array([before[n]["error_mm"] for n in names]), "noise": np.sqrt(sigma**2 - unknown**2)}
+    out_d = {f"{k}.{i}": float(x) for k, v in rows.items() for i, x in enumerate(v)}
+    out_d.update({f"{k}.{s}": float(getattr(np, s)(v)) for k, v in rows.items() for s in ("min", "max")})
+    return out_d
+
+
 THERMAL_PRODUCERS = {"tcp/collision_ratios": tcp_collision_ratios,
                      **{f"thermal_drift/{p}": functools.partial(thermal_drift_three_hours, p)
                         for p in ("realistic", "ideal")},
-                     **{f"thermal_alone/{e}": functools.partial(thermal_effect_alone, e) for e in EFFECTS}}
+                     **{f"thermal_alone/{e}": functools.partial(thermal_effect_alone, e) for e in EFFECTS},
+                     **{f"program_at_robot/{c}": functools.partial(program_at_robot, c) for c in PROGRAM_CASES},
+                     "program_at_robot/krl_gripper": functools.partial(program_at_robot, "krl", tool=(0, 0, 250, 0, 0, 0)),
+                     "program_at_robot/krl_gripper_ideal": functools.partial(program_at_robot, "krl", "ideal",
+                                                                             tool=(0, 0, 250, 0, 0, 0))}

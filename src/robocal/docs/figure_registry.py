@@ -850,5 +850,26 @@ FIGURES += [Figure(f"tcp:collisions ratio {k}", "docs/tcp.md", pat, "tcp/collisi
             for k, pat in (("axis", r"the tool-axis error grows " + _N + "×"),
                            ("tcp_thesis_step3", r"The TCP error grows \(" + _N + "×"))]
 
+# testing.md "At the robot": tests/test_program_at_robot.py's realistic cases through the command line
+# (robocal.docs.figure_producers_thermal.program_at_robot); landing / first-order miss per target and the sigma range
+_PAR = [(1, k, f"landing.{k}") for k in range(4)] + [(1, 4 + k, f"miss.{k}") for k in range(4)]
+for _label, _prod, _sig in (
+        ("`test_program_at_robot.py::test_krl_program_at_a_true_kr150_with_effects_the_model_lacks`", "krl", "sigma"),
+        ("`test_program_at_robot.py::test_urscript_program_at_the_true_ur10[realistic]`", "ur", "sigma"),
+        ("`test_program_at_robot.py::test_rapid_program_at_the_true_irb140[realistic]`", "rapid", "sigma"),
+        ("`test_program_at_robot.py::test_fanuc_program_at_the_true_r2000ic[realistic]`", "fanuc", "sigma"),
+        ("`test_program_at_robot.py::test_a_tool_the_calibration_never_saw_on_effects_the_model_lacks` (and the ideal "
+         "`…gets_a_warning_and_its_uncertainty`)", "krl_gripper", "noise")):
+    FIGURES += [Figure(f"testing:at the robot {_prod} {f}", "docs/testing.md", _cell(_label, c, k),
+                       f"program_at_robot/{_prod}", f, rel_tol=0.01)
+                for c, k, f in _PAR + [(1, 8, f"{_sig}.min"), (1, 9, f"{_sig}.max")]]
+FIGURES += [Figure(f"testing:at the robot krl_gripper {k}", "docs/testing.md",
+                   _cell("`test_program_at_robot.py::test_a_tool_the_calibration_never_saw_on_effects_the_model_lacks` "
+                         "(and the ideal `…gets_a_warning_and_its_uncertainty`)", 1, pos), prod, f, rel_tol=0.01)
+            for k, pos, prod, f in (("reported sigma", 10, "program_at_robot/krl_gripper", "sigma.max"),
+                                    ("ideal landing min", 11, "program_at_robot/krl_gripper_ideal", "landing.min"),
+                                    ("ideal landing max", 12, "program_at_robot/krl_gripper_ideal", "landing.max"),
+                                    ("ideal miss", 13, "program_at_robot/krl_gripper_ideal", "miss.max"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
