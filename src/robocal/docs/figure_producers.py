@@ -596,6 +596,7 @@ SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_
                   # UR10 (~4 s) and gripper cases (~2 s each; slow to keep the fast set's added CPU under ~8 s) (figsC)
                   *(p for p in THERMAL_PRODUCERS if p.startswith("thermal_alone/")), "thermal_drift/ideal",
                   "program_at_robot/ur", "program_at_robot/krl_gripper", "program_at_robot/krl_gripper_ideal",
+                  "system_calibration/thermal_100", "system_calibration/thermal_100_off_model",
                   # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
                   "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",

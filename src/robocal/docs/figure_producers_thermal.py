@@ -9,7 +9,7 @@ from __future__ import annotations
 import functools
 
 __all__ = ["PROGRAM_CASES", "THERMAL_PRODUCERS", "program_at_robot", "tcp_collision_ratios", "thermal_drift_three_hours",
-           "thermal_effect_alone"]
+           "thermal_effect_alone", "thermal_system_advantage", "thermal_system_seeds100"]
 
 #: the effects of the realistic preset, each switchable alone (``robocal.sim.thermal.effects``)
 EFFECTS = ("heat", "hall", "deformation", "joints", "noise", "outliers")
@@ -168,7 +168,66 @@ def program_at_robot(case: str, effects: str = "realistic", tool: tuple | None =
     return out_d
 
 
+@functools.lru_cache(maxsize=None)
+def thermal_system_advantage() -> dict:
+    """docs/thermal.md "Measured accuracy", the prose under the table (producer
+    ``system_calibration/thermal``, seeds 0-19): how much larger the thesis penalty method's mean
+    error is than least squares' [%], ``min`` and ``max`` over the five measures."""
+    from .figure_producers import PRODUCERS
+
+    r = PRODUCERS["system_calibration/thermal"]()
+    keys = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+    larger = [100.0 * (r[f"thesis.seeds20_mean.{k}"] / r[f"ls.seeds20_mean.{k}"] - 1.0) for k in keys]
+    return {"min": min(larger), "max": max(larger)}
+
+
+@functools.lru_cache(maxsize=None)
+def thermal_system_seeds100(off_model: bool) -> dict:
+    """docs/thermal.md "Measured accuracy", seeds 0-99 (the set-up of ``tests/test_thermal_core.py``'s
+    ``_system_errors``, as ``system_calibration/thermal`` but 100 seeds): both system calibrations
+    per seed; ``off_model``: the true robot ``VirtualRobot.perturbed(kuka, 500 + seed, 0.1 mm, 0.01 deg,
+    0.01 deg)`` (the test on a robot that differs from its model). ~5 s of CPU.
+
+    Fields ``wins.{measure}`` (seeds where least squares is better), ``wins_all`` (all five),
+    ``ratio.{min|max}`` (mean error penalty / least squares over the measures), ``z.{rms|max}``
+    (least squares' ``|P_e error| / |std P_e|``)."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..sim import VirtualRobot
+    from ..thermal import compare_system_calibrations, design_sphere_poses, predict_sphere
+    from ..transforms import invert_transforms, rot_x, so3_exp
+
+    kuka = load_robot("kuka_kr150_r3100")
+    P_e, centre = np.array([25.0, -40.0, 160.0]), np.array([1900.0, 300.0, 700.0])
+    keys = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+    ls, th, z = [], [], []
+    for seed in range(100):
+        rng = np.random.default_rng(seed)
+        T_bs = np.eye(4)
+        T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
+        T_bs[:3, 3] = centre + [0.0, 0.0, -700.0]
+        T_sb = invert_transforms(T_bs)
+        q = design_sphere_poses(kuka, centre, P_e, 9, rng, spread_mm=(250.0, 200.0, 150.0), tilt_deg=60)
+        true = kuka if not off_model else VirtualRobot.perturbed(
+            kuka, 500 + seed, length_sigma_mm=0.1, angle_sigma_deg=0.01, offset_sigma_deg=0.01).true_model
+        P = predict_sphere(true, T_sb, P_e, q) + rng.normal(0, 0.02, (9, 3))
+        c = compare_system_calibrations(kuka, q, P, T_sensor_base_true=T_sb, P_e_true=P_e, point_sigma_mm=0.02)
+        ls.append([c.errors["least-squares"][k] for k in keys])
+        th.append([c.errors["thesis-penalty"][k] for k in keys])
+        z.append(c.errors["least-squares"]["P_e_mm"] / np.linalg.norm(c.least_squares.std_P_e_mm))
+    ls, th, z = np.array(ls), np.array(th), np.array(z)
+    better = ls < th
+    ratio = th.mean(axis=0) / ls.mean(axis=0)
+    return {**{f"wins.{k}": float(w) for k, w in zip(keys, better.sum(axis=0))},
+            "wins_all": float(better.all(axis=1).sum()), "ratio.min": float(ratio.min()),
+            "ratio.max": float(ratio.max()), "z.rms": float(np.sqrt(np.mean(z**2))), "z.max": float(z.max())}
+
+
 THERMAL_PRODUCERS = {"tcp/collision_ratios": tcp_collision_ratios,
+                     "system_calibration/thermal_advantage": thermal_system_advantage,
+                     **{f"system_calibration/thermal_100{'_off_model' if o else ''}":
+                        functools.partial(thermal_system_seeds100, o) for o in (False, True)},
                      **{f"thermal_drift/{p}": functools.partial(thermal_drift_three_hours, p)
                         for p in ("realistic", "ideal")},
                      **{f"thermal_alone/{e}": functools.partial(thermal_effect_alone, e) for e in EFFECTS},

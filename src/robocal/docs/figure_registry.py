@@ -799,7 +799,7 @@ FIGURES += [Figure(f"thermal:reading {k}", "docs/thermal.md", pat, f"thermal/{p}
                 ("before evaluation", "realistic", "rms.evaluation.before.median",
                  _READ + r"(?s:.*?)and before \([0-9]+–" + _N),
                 ("ideal screened", "ideal", "rms.evaluation.screened.median", r"The ideal preset's " + _N + " %"),
-                ("theta3 selected", "realistic", "selection.θ3", r"missed θ3 \(selected in " + _N + " %"),
+                ("theta3 selected", "realistic", "selection.theta3", r"missed θ3 \(selected in " + _N + " %"),
                 ("seed 9 screened", "realistic", "rms.evaluation.screened.min", r"and scored " + _N + " %"),
                 ("strict screened", "realistic", "max.evaluation.screened.median", r"Only ~" + _N + " % of the directions"),
                 ("strict traditional", "realistic", "max.evaluation.traditional.median",
@@ -870,6 +870,37 @@ FIGURES += [Figure(f"testing:at the robot krl_gripper {k}", "docs/testing.md",
                                     ("ideal landing min", 11, "program_at_robot/krl_gripper_ideal", "landing.min"),
                                     ("ideal landing max", 12, "program_at_robot/krl_gripper_ideal", "landing.max"),
                                     ("ideal miss", 13, "program_at_robot/krl_gripper_ideal", "miss.max"))]
+
+# thermal.md "Measured accuracy": the prose under the table (derived from system_calibration/thermal, fast)
+FIGURES += [Figure(f"thermal:system penalty mean error larger {k}", "docs/thermal.md",
+                   r"the penalty method's mean error is\s+" + (r"[0-9]+–" if k == "max" else "") + _N + "[–% ]",
+                   "system_calibration/thermal_advantage", k, rel_tol=0.0) for k in ("min", "max")]
+
+# thermal.md and testing.md: the system calibrations on seeds 0-99 (tests/test_thermal_core.py's sign tests; slow)
+_S100, _S100OFF = "system_calibration/thermal_100", "system_calibration/thermal_100_off_model"
+_MEAS = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+_W5 = r"[0-9]+\s+/\s+"
+FIGURES += [Figure(f"thermal:system seeds 0-99 wins {m}", "docs/thermal.md",
+                   r"on seeds 0–99 least squares wins " + _W5 * k + _N, _S100, f"wins.{m}", rel_tol=0.0)
+            for k, m in enumerate(_MEAS)]
+FIGURES += [Figure(f"thermal:system seeds 0-99 {k}", "docs/thermal.md", pat, p, f, rel_tol=0.0 if "wins" in f else 0.01)
+            for k, pat, p, f in (
+                ("wins all", r"seeds \(all five measures in " + _N, _S100, "wins_all"),
+                ("rms z", r"the RMS of \|P_e error\| / \|σ\| is " + _N, _S100, "z.rms"),
+                ("off-model max z", r"share a bias of up to " + _N + " σ", _S100OFF, "z.max"),
+                ("off-model ratio min", r"mean error ratio " + _N, _S100OFF, "ratio.min"),
+                ("off-model ratio max", r"mean error ratio [0-9.]+–" + _N, _S100OFF, "ratio.max"))]
+FIGURES += [Figure(f"thermal:system seeds 0-99 off-model wins {m}", "docs/thermal.md",
+                    r"established: " + _W5 * k + _N, _S100OFF, f"wins.{m}", rel_tol=0.0) for k, m in enumerate(_MEAS)]
+FIGURES += [Figure(f"testing:thermal system seeds 0-99 wins {m}", "docs/testing.md",
+                   r"\) = 0\.0020\); measured " + _W5 * k + _N, _S100, f"wins.{m}", rel_tol=0.0) for k, m in enumerate(_MEAS)]
+FIGURES += [Figure(f"testing:thermal system seeds 0-99 off-model wins {m}", "docs/testing.md",
+                   r"no longer established \(" + _W5 * k + _N, _S100OFF, f"wins.{m}", rel_tol=0.0)
+            for k, m in enumerate(_MEAS)]
+FIGURES += [Figure("testing:thermal system seeds 0-99 rms z", "docs/testing.md", r"E = 1 exactly; measured " + _N, _S100,
+                   "z.rms", rel_tol=0.01),
+            Figure("testing:thermal system seeds 0-99 off-model max z", "docs/testing.md",
+                   r"the\s+bias both share reaches " + _N + " σ", _S100OFF, "z.max", rel_tol=0.0)]
 
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
