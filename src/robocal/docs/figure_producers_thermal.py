@@ -9,7 +9,8 @@ from __future__ import annotations
 import functools
 
 __all__ = ["PROGRAM_CASES", "THERMAL_PRODUCERS", "program_at_robot", "tcp_collision_ratios", "thermal_drift_three_hours",
-           "thermal_effect_alone", "thermal_system_advantage", "thermal_system_seeds100"]
+           "thermal_effect_alone", "thermal_system_advantage",
+           "thermal_system_first_order_bias", "thermal_system_seeds100"]
 
 #: the effects of the realistic preset, each switchable alone (``robocal.sim.thermal.effects``)
 EFFECTS = ("heat", "hall", "deformation", "joints", "noise", "outliers")
@@ -224,8 +225,59 @@ def thermal_system_seeds100(off_model: bool) -> dict:
             "ratio.max": float(ratio.max()), "z.rms": float(np.sqrt(np.mean(z**2))), "z.max": float(z.max())}
 
 
+@functools.lru_cache(maxsize=None)
+def thermal_system_first_order_bias() -> dict:
+    """docs/testing.md, the thermal system calibration on a robot that differs from its model (the
+    set-up of ``tests/test_thermal_core.py``'s ``test_system_calibration_on_a_robot_that_differs_from_its_model``):
+    seeds 0-9, 9 poses, 0.02 mm noise, the true robot 0.1 mm / 0.01 deg per parameter off
+    (``VirtualRobot.perturbed(kuka, 500 + seed)``); the first-order bias of ``P_e`` from the hidden
+    truth (finite differences of ``predict_sphere``). ~1 s of CPU.
+
+    Fields ``bias_mm.{min|max}`` (|bias of P_e|), ``naive_z.max``, ``corrected_z.{max|rms}`` (per
+    axis, ``|error - bias| / std``), ``residual_rms_mm.{min|max}``."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..sim import VirtualRobot
+    from ..thermal import calibrate_system, design_sphere_poses, predict_sphere
+    from ..transforms import invert_transforms, rot_x, so3_exp
+
+    kuka = load_robot("kuka_kr150_r3100")
+    P_e, centre = np.array([25.0, -40.0, 160.0]), np.array([1900.0, 300.0, 700.0])
+    naive, corrected, rms, size = [], [], [], []
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        T_bs = np.eye(4)
+        T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
+        T_bs[:3, 3] = centre + [0.0, 0.0, -700.0]
+        T_sb = invert_transforms(T_bs)
+        q = design_sphere_poses(kuka, centre, P_e, 9, rng, spread_mm=(250.0, 200.0, 150.0), tilt_deg=60)
+        true = VirtualRobot.perturbed(kuka, 500 + seed, length_sigma_mm=0.1, angle_sigma_deg=0.01,
+                                      offset_sigma_deg=0.01).true_model
+        P_true = predict_sphere(true, T_sb, P_e, q)
+        e = P_true - predict_sphere(kuka, T_sb, P_e, q)
+        r = calibrate_system(kuka, q, P_true + rng.normal(0, 0.02, (9, 3)), point_sigma_mm=0.02)
+        h = 1e-6
+        base, cols = predict_sphere(kuka, r.T_sensor_base, r.P_e, q).ravel(), []
+        for k in range(6):
+            D = np.eye(4)
+            D[:3, :3], D[:3, 3] = so3_exp(h * np.eye(6)[k, :3]), h * np.eye(6)[k, 3:]
+            cols.append(predict_sphere(kuka, D @ r.T_sensor_base, r.P_e, q).ravel())
+        cols += [predict_sphere(kuka, r.T_sensor_base, r.P_e + h * np.eye(3)[k], q).ravel() for k in range(3)]
+        bias = np.linalg.lstsq((np.array(cols) - base).T / h, e.ravel(), rcond=None)[0][6:]
+        size.append(float(np.linalg.norm(bias)))
+        naive.append((r.P_e - P_e) / r.std_P_e_mm)
+        corrected.append((r.P_e - P_e - bias) / r.std_P_e_mm)
+        rms.append(float(np.sqrt(np.mean(r.residuals_mm ** 2))))
+    naive, corrected = np.abs(naive), np.abs(corrected)
+    return {"bias_mm.min": min(size), "bias_mm.max": max(size), "naive_z.max": float(naive.max()),
+            "corrected_z.max": float(corrected.max()), "corrected_z.rms": float(np.sqrt(np.mean(corrected**2))),
+            "residual_rms_mm.min": min(rms), "residual_rms_mm.max": max(rms)}
+
+
 THERMAL_PRODUCERS = {"tcp/collision_ratios": tcp_collision_ratios,
                      "system_calibration/thermal_advantage": thermal_system_advantage,
+                     "system_calibration/thermal_first_order_bias": thermal_system_first_order_bias,
                      **{f"system_calibration/thermal_100{'_off_model' if o else ''}":
                         functools.partial(thermal_system_seeds100, o) for o in (False, True)},
                      **{f"thermal_drift/{p}": functools.partial(thermal_drift_three_hours, p)

@@ -902,5 +902,16 @@ FIGURES += [Figure("testing:thermal system seeds 0-99 rms z", "docs/testing.md",
             Figure("testing:thermal system seeds 0-99 off-model max z", "docs/testing.md",
                    r"the\s+bias both share reaches " + _N + " σ", _S100OFF, "z.max", rel_tol=0.0)]
 
+# testing.md: the thermal system calibration on a robot that differs from its model (fast)
+_TSB = r"This biases `P_e` by "
+FIGURES += [Figure(f"testing:thermal system first-order bias {k}", "docs/testing.md", pat,
+                   "system_calibration/thermal_first_order_bias", f, rel_tol=0.01)
+            for k, pat, f in (("bias min", _TSB + _N, "bias_mm.min"), ("bias max", _TSB + r"[0-9.]+–" + _N, "bias_mm.max"),
+                              ("naive z", _TSB + r"[0-9.]+–[0-9.]+ mm, up to " + _N, "naive_z.max"),
+                              ("corrected z max", r"the largest\s+\|z\| over 10 seeds is " + _N, "corrected_z.max"),
+                              ("corrected z rms", r"over 10 seeds is [0-9.]+ and the RMS is " + _N, "corrected_z.rms"),
+                              ("residual min", r"The residual \(" + _N, "residual_rms_mm.min"),
+                              ("residual max", r"The residual \([0-9.]+–" + _N, "residual_rms_mm.max"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
