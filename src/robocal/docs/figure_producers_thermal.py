@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import functools
 
-__all__ = ["PROGRAM_CASES", "THERMAL_PRODUCERS", "program_at_robot", "tcp_collision_ratios", "thermal_drift_three_hours",
+__all__ = ["PROGRAM_CASES", "THERMAL_PRODUCERS", "program_at_robot", "six_d_at_robot", "tcp_collision_ratios", "thermal_drift_three_hours",
            "thermal_effect_alone", "thermal_system_advantage",
            "thermal_system_first_order_bias", "thermal_system_seeds100"]
 
@@ -275,8 +275,98 @@ def thermal_system_first_order_bias() -> dict:
             "residual_rms_mm.min": min(rms), "residual_rms_mm.max": max(rms)}
 
 
+@functools.lru_cache(maxsize=None)
+def six_d_at_robot() -> dict:
+    """docs/testing.md, the 6-D rows (the set-up of ``tests/test_six_d_cli.py``'s realistic cases):
+    a 6-D probe on a 35 / -20 / 180 mm tool, 60 poses of the KR 150 (seed 3, the last link's
+    parameters true = nominal), the ``realistic`` campaign effects (transmission phases from seed
+    1003), 0.02 mm / 0.02/100 rad noise; ``robocal calibrate --noise 0.02 --holdout 0``; the first-order
+    bias from the hidden truth (:func:`robocal.sim.first_order.six_d_fit_bias`); then ``robocal
+    correct`` on 8 tool-pose targets the true robot can take (seed 99) and the true robot with the
+    campaign's effects at the corrected joints. ~3 s of CPU.
+
+    Fields ``rot_z.{plain|after}.{0|1|2}`` (tool rotation |error / sigma|, before and after the
+    bias), ``residual_rms_mm``, ``residual_pred_mm`` (first-order misfit plus noise);
+    ``pos.{landing|diff|sigma}.{min|max}`` [mm] and ``rot.{landing|diff|sigma}.{min|max}`` [deg] at
+    the robot (landing error, its difference to the first-order miss, the noise sigma)."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..io.measurements import Measurements, write_measurements
+    from ..robots import load_robot
+    from ..sim import VirtualRobot
+    from ..sim.first_order import poses_with_effects, six_d_fit_bias
+    from ..transforms import quaternion_from_matrix, so3_exp, so3_log
+    from .figure_producers_cli import run_cli
+
+    robot, sigma_mm, w, n, seed = "kuka_kr150_r3100", 0.02, 100.0, 60, 3
+    nominal = load_robot(robot)
+    rng = np.random.default_rng(seed)
+    virtual = VirtualRobot.perturbed(nominal, rng)
+    true = virtual.true_model.params.values.copy()
+    for name in ("theta6", "d6", "a6", "alpha6"):
+        i = nominal.params.index(name)
+        true[i] = nominal.params.values[i]
+    virtual = VirtualRobot(nominal, virtual.true_model.with_params(true))
+    model = virtual.true_model
+    q = virtual.random_configurations(n, rng)
+    T_tool = np.eye(4)
+    T_tool[:3, :3], T_tool[:3, 3] = so3_exp([0.25, -0.15, 0.6]), [35.0, -20.0, 180.0]
+    T_inst = np.eye(4)
+    T_inst[:3, :3], T_inst[:3, 3] = so3_exp([0.05, -0.1, 2.0]), [3200.0, -400.0, -600.0]
+    phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
+    T_free = poses_with_effects(model, q, T_inst, T_tool, phases)[1]
+    p = T_free[:, :3, 3] + rng.normal(0, sigma_mm, (n, 3))
+    R = so3_exp(rng.normal(0, sigma_mm / w, (n, 3))) @ T_free[:, :3, :3]
+    meas = Measurements(q, p, joint_names=nominal.controller_joints, rotations=R,
+                        metadata={"robot": robot, "instrument": "6-D probe", "frame": "tracker"})
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        path = write_measurements(d / "probe.csv", meas, length_unit="mm", angle_unit="deg", orientation="kuka_abc")
+        run_cli("calibrate", robot, path, "--out", d / "cal", "--noise", sigma_mm, "--holdout", 0, "--no-report")
+        res = json.loads((d / "cal" / "result.json").read_text())
+        q_t = VirtualRobot(nominal, model).random_configurations(8, np.random.default_rng(99), margin=0.2)
+        targets = T_inst @ model.fk(q_t) @ T_tool
+        quat = quaternion_from_matrix(targets[:, :3, :3])
+        rows = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: quaternion",
+                "# frame: world", "name,x,y,z,qw,qx,qy,qz," + ",".join(f"A{j + 1}" for j in range(6))]
+        rows += [",".join([f"T{k}"] + [repr(float(v)) for v in (*targets[k, :3, 3], *quat[k], *np.degrees(q_t[k]))])
+                 for k in range(len(q_t))]
+        (d / "t.csv").write_text("\n".join(rows) + "\n")
+        run_cli("correct", d / "cal" / "calibrated_robot.toml", d / "t.csv", "--out", d / "c.csv")
+        lines = [x for x in (d / "c.csv").read_text().splitlines() if not x.startswith("#")]
+    estimated = [p["name"] for p in res["model_parameters"] if p["estimated"]]
+    bias = six_d_fit_bias(model, estimated, q, T_inst, T_tool, T_free, w)
+    tf = res["tool_frame"]
+    T = np.array(tf["T_flange_measured"])
+    err, std = so3_log(T[:3, :3] @ T_tool[:3, :3].T), np.array(tf["std_rotvec_rad"])
+    n_var = len(estimated) + 12
+    out = {**{f"rot_z.plain.{k}": float(abs(err[k]) / std[k]) for k in range(3)},
+           **{f"rot_z.after.{k}": float(abs(err[k] - bias["tool_rotvec"][k]) / std[k]) for k in range(3)},
+           "residual_rms_mm": float(res["residuals"]["after"]["rms"]),
+           "residual_pred_mm": float(np.hypot(bias["residual_rms_mm"], sigma_mm * np.sqrt(3 * (1 - n_var / (6 * n)))))}
+    cols = lines[0].split(",")
+    q_c = np.radians([[float(row.split(",")[cols.index(f"A{j + 1}")]) for j in range(6)] for row in lines[1:]])
+    reached = poses_with_effects(model, q_c, T_inst, T_tool, phases, after_campaign=True)[1]
+    first = six_d_fit_bias(model, estimated, q, T_inst, T_tool, T_free, w, q_at=q_c, T_at=reached, noise_mm=sigma_mm)
+    d_pos = reached[:, :3, 3] - targets[:, :3, 3]
+    d_rot = so3_log(reached[:, :3, :3] @ np.swapaxes(targets[:, :3, :3], 1, 2))
+    miss_pos, miss_rot = first["miss_at"][:, :3], first["miss_at"][:, 3:]
+    vals = {"pos.landing": np.linalg.norm(d_pos, axis=1), "pos.diff": np.linalg.norm(d_pos - miss_pos, axis=1),
+            "pos.sigma": np.asarray(first["sigma_at_mm"]),
+            "rot.landing": np.degrees(np.linalg.norm(d_rot, axis=1)),
+            "rot.diff": np.degrees(np.linalg.norm(d_rot - miss_rot, axis=1)),
+            "rot.sigma": np.degrees(np.asarray(first["sigma_at_rad"]))}
+    out.update({f"{k}.{s}": float(getattr(np, s)(v)) for k, v in vals.items() for s in ("min", "max")})
+    return out
+
+
 THERMAL_PRODUCERS = {"tcp/collision_ratios": tcp_collision_ratios,
                      "system_calibration/thermal_advantage": thermal_system_advantage,
+                     "six_d/at_robot": six_d_at_robot,
                      "system_calibration/thermal_first_order_bias": thermal_system_first_order_bias,
                      **{f"system_calibration/thermal_100{'_off_model' if o else ''}":
                         functools.partial(thermal_system_seeds100, o) for o in (False, True)},

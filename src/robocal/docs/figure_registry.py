@@ -913,5 +913,21 @@ FIGURES += [Figure(f"testing:thermal system first-order bias {k}", "docs/testing
                               ("residual min", r"The residual \(" + _N, "residual_rms_mm.min"),
                               ("residual max", r"The residual \([0-9.]+–" + _N, "residual_rms_mm.max"))]
 
+# testing.md: the 6-D rows (the set-up of tests/test_six_d_cli.py's realistic cases through the command line; fast)
+_SIXD = r"recovers_the_tool_within_3_sigma_of_its_bias` \|[^|\n]*\| rotation \\\|z\\\| "
+FIGURES += [Figure(f"testing:six-d campaign {f}", "docs/testing.md", _SIXD + pat, "six_d/at_robot", f, rel_tol=0.01)
+            for f, pat in (("rot_z.after.0", _N), ("rot_z.after.1", r"[0-9.]+ / " + _N),
+                           ("rot_z.after.2", r"[0-9.]+ / [0-9.]+ / " + _N),
+                           ("rot_z.plain.0", r"[0-9.]+ / [0-9.]+ / [0-9.]+ \(plain " + _N),
+                           ("rot_z.plain.1", r"[0-9.]+ / [0-9.]+ / [0-9.]+ \(plain [0-9.]+ / " + _N),
+                           ("rot_z.plain.2", r"[0-9.]+ / [0-9.]+ / [0-9.]+ \(plain [0-9.]+ / [0-9.]+ / " + _N),
+                           ("residual_rms_mm", r"[^|\n]*?residual " + _N),
+                           ("residual_pred_mm", r"[^|\n]*?residual [0-9.]+ mm vs " + _N))]
+FIGURES += _table("docs/testing.md", {"`test_six_d_cli.py::test_six_d_correct_on_effects_…`": ""}, "six_d/at_robot",
+                  [(1, k, f) for k, f in enumerate(("pos.landing.min", "pos.landing.max", "pos.diff.max", "pos.sigma.min",
+                                                    "pos.sigma.max", "rot.landing.min", "rot.landing.max", "rot.diff.max",
+                                                    "rot.sigma.min", "rot.sigma.max"))],
+                  prefix="testing:six-d correct ", rel_tol=0.01)
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
