@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import functools
 
-__all__ = ["PROGRAM_CASES", "THERMAL_PRODUCERS", "program_at_robot", "six_d_at_robot", "tcp_collision_ratios", "thermal_drift_three_hours",
+__all__ = ["PROGRAM_CASES", "THERMAL_PRODUCERS", "frames_only_line", "program_at_robot", "six_d_at_robot", "tcp_collision_ratios", "thermal_drift_three_hours",
            "thermal_effect_alone", "thermal_system_advantage",
            "thermal_system_first_order_bias", "thermal_system_seeds100"]
 
@@ -364,9 +364,68 @@ def six_d_at_robot() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def frames_only_line() -> dict:
+    """docs/testing.md, the frames-only row (the set-up of ``tests/test_frames_only.py``'s realistic
+    case): KR 150, 20 poses along an 800 mm line (seed 5), a ~170 deg tool, the ``realistic``
+    campaign effects (phases from seed 1005), 0.02 mm / 0.0002 rad noise; ``robocal calibrate
+    --frames-only --holdout 0 --noise 0.02``; the tool frame's first-order bias from the hidden truth
+    (:func:`robocal.sim.first_order.six_d_fit_bias`, no geometric parameter free). ~1 s of CPU.
+
+    Fields ``rot_z.{plain|after}.max`` (tool rotation |error / sigma| before / after the bias),
+    ``residual_rms_mm``, ``residual_pred_mm``."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..io.measurements import Measurements, write_measurements
+    from ..kinematics.ik import ik_numeric
+    from ..robots import load_robot
+    from ..sim.first_order import poses_with_effects, six_d_fit_bias
+    from ..transforms import so3_exp, so3_log
+    from .figure_producers_cli import run_cli
+
+    robot, n, seed = "kuka_kr150_r3100", 20, 5
+    m = load_robot(robot)
+    rng = np.random.default_rng(seed)
+    q0 = np.radians([10.0, -80.0, 100.0, 5.0, 40.0, 20.0])
+    T0 = m.fk(q0)
+    d = np.array([0.6, 0.7, -0.2])
+    d /= np.linalg.norm(d)
+    T = np.repeat(T0[None], n, axis=0)
+    T[:, :3, 3] = T0[:3, 3] + np.linspace(-400, 400, n)[:, None] * d
+    T[:, :3, :3] = so3_exp(rng.normal(0, 0.03, (n, 3))) @ T0[:3, :3]
+    q = ik_numeric(m, T, q0).q
+    tool, inst = np.eye(4), np.eye(4)
+    tool[:3, :3], tool[:3, 3] = so3_exp([2.9, 0.3, 0.2]), [30.0, 10.0, 150.0]
+    inst[:3, :3], inst[:3, 3] = so3_exp([0.03, 0.02, -2.2]), [3000.0, -500.0, -400.0]
+    phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
+    Tm = poses_with_effects(m, q, inst, tool, phases)[1]
+    p = Tm[:, :3, 3] + rng.normal(0, 0.02, (n, 3))
+    R = so3_exp(rng.normal(0, 0.0002, (n, 3))) @ Tm[:, :3, :3]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "line.csv"
+        write_measurements(path, Measurements(q, p, joint_names=m.controller_joints, rotations=R,
+                                              metadata={"robot": robot}), orientation="quaternion")
+        run_cli("calibrate", robot, path, "--out", Path(tmp) / "cal", "--frames-only", "--holdout", 0, "--noise", 0.02,
+                "--no-report")
+        res = json.loads((Path(tmp) / "cal" / "result.json").read_text())
+    bias = six_d_fit_bias(m, [], q, inst, tool, Tm, 100.0)
+    tf = res["tool_frame"]
+    err = so3_log(np.array(tf["T_flange_measured"])[:3, :3] @ tool[:3, :3].T)
+    std = np.array(tf["std_rotvec_rad"])
+    return {"rot_z.plain.max": float(np.max(np.abs(err) / std)),
+            "rot_z.after.max": float(np.max(np.abs(err - bias["tool_rotvec"]) / std)),
+            "residual_rms_mm": float(res["residuals"]["after"]["rms"]),
+            "residual_pred_mm": float(np.hypot(bias["residual_rms_mm"], 0.02 * np.sqrt(3 * (1 - 12 / (6 * n)))))}
+
+
 THERMAL_PRODUCERS = {"tcp/collision_ratios": tcp_collision_ratios,
                      "system_calibration/thermal_advantage": thermal_system_advantage,
                      "six_d/at_robot": six_d_at_robot,
+                     "six_d/frames_only_line": frames_only_line,
                      "system_calibration/thermal_first_order_bias": thermal_system_first_order_bias,
                      **{f"system_calibration/thermal_100{'_off_model' if o else ''}":
                         functools.partial(thermal_system_seeds100, o) for o in (False, True)},

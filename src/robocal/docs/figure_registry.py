@@ -929,5 +929,11 @@ FIGURES += _table("docs/testing.md", {"`test_six_d_cli.py::test_six_d_correct_on
                                                     "rot.sigma.min", "rot.sigma.max"))],
                   prefix="testing:six-d correct ", rel_tol=0.01)
 
+_FO = r"lands_within_3_sigma_of_its_bias` \|[^|\n]*\| rotation \\\|z\\\| ≤ "
+FIGURES += [Figure(f"testing:frames-only line {f}", "docs/testing.md", _FO + pat, "six_d/frames_only_line", f, rel_tol=0.01)
+            for f, pat in (("rot_z.after.max", _N), ("rot_z.plain.max", r"[0-9.]+ \(plain ≤ " + _N),
+                           ("residual_rms_mm", r"[^|\n]*?residual " + _N),
+                           ("residual_pred_mm", r"[^|\n]*?residual [0-9.]+ mm vs " + _N))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
