@@ -282,7 +282,7 @@ def test_backlash_flips_the_approach_side():
 def test_realistic_drift_after_three_hours_is_in_the_thesis_range():
     """Thesis ch. 3: after 3 h of continuous production the TCP drifts up to 0.5 mm; fig. 3-1b: a
     car-body point's coordinates drift 0.1-0.5 mm. Over 8 cells, measured: TCP 0.28-0.56 mm,
-    median 0.41 mm (the ideal cell's design: 0.28-0.30)."""
+    median 0.41 mm (the ideal cell on this schedule: 0.35-0.38, median 0.36; docs/thermal.md)."""
     sched = ProductionSchedule(np.full(60, 140.0), np.full(60, 1.0), np.zeros(60))          # 3 h non-stop
     tcp, body = [], []
     for seed in range(1, 9):

@@ -147,13 +147,13 @@ def _exempt(masked: str, start: int, end: int, line: str) -> bool:
 def _timing_column(lines: list, line_no: int, col: int) -> bool:
     """Whether position ``col`` of table row ``lines[line_no]`` is in a column whose header names a
     time, a speed or a memory size (benchmark figures, not checked)."""
-    line = lines[line_no]
+    line = lines[line_no].replace("\\|", "  ")  # an escaped pipe (inside code) separates no cells
     if not line.lstrip().startswith("|"):
         return False
     k = line_no
     while k > 0 and lines[k - 1].lstrip().startswith("|"):
         k -= 1
-    header = lines[k].strip().strip("|").split("|")
+    header = lines[k].replace("\\|", "  ").strip().strip("|").split("|")
     cell = line[:col].count("|") - 1
     if cell == 0 or k == line_no:
         return True  # a row's label or the header (the set-up measured: an input)

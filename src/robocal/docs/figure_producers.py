@@ -13,6 +13,7 @@ from pathlib import Path
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
 from .figure_producers_setups import SETUP_PRODUCERS
+from .figure_producers_thermal import THERMAL_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
 
@@ -258,11 +259,15 @@ def _datasets_report() -> dict:
 @functools.lru_cache(maxsize=None)
 def _thermal_seeds(preset: str) -> dict:
     """docs/thermal.md section 6: ``robocal thermal experiment --preset PRESET --seeds 20 --resamples 20``;
-    lambda [%] as ``{rms|max}.{screening|evaluation}.{column}.{median|q25|q75|min|max}``."""
+    lambda [%] as ``{rms|max}.{screening|evaluation}.{column}.{median|q25|q75|min|max}``; the share of
+    runs in the thesis's order [%] as ``ordering.{rms|max}.{role}.{strict_order|screened_not_worse}``;
+    the share of seeds that screen a parameter [%] as ``selection.{name}``."""
     from ..workflows.thermal.seeds import run_thermal_seeds
 
     r = run_thermal_seeds(preset=preset, seeds=20, first_seed=1, n_cycles=90, resamples=20)
-    return {**_flat(r["tables"]), "n_not_converged": float(r["fits"]["not_converged"])}
+    return {**_flat(r["tables"]), "n_not_converged": float(r["fits"]["not_converged"]),
+            **{f"ordering.{k}": 100.0 * v for k, v in _flat(r["ordering"]).items()},
+            **{f"selection.{k}": 100.0 * float(v) for k, v in r["selection"].items()}}
 
 
 @functools.lru_cache(maxsize=None)
@@ -530,6 +535,7 @@ def _iso_cube(robot: str) -> dict:
 PRODUCERS = {
     **CLI_PRODUCERS,
     **BENCH_PRODUCERS,
+    **THERMAL_PRODUCERS,
     **SETUP_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
@@ -586,6 +592,11 @@ def datasets_needed(producer: str) -> tuple:
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
+                  # thermal.md: the experiment with one effect alone (~6-10 s each), the ideal drift; testing.md's at-the-robot
+                  # UR10 (~4 s) and gripper cases (~2 s each; slow to keep the fast set's added CPU under ~8 s) (figsC)
+                  *(p for p in THERMAL_PRODUCERS if p.startswith("thermal_alone/")), "thermal_drift/ideal",
+                  "program_at_robot/ur", "program_at_robot/krl_gripper", "program_at_robot/krl_gripper_ideal",
+                  "system_calibration/thermal_100", "system_calibration/thermal_100_off_model",
                   # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
                   "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",

@@ -759,4 +759,181 @@ FIGURES += [Figure(f"thermal:compensate {k}", "docs/thermal.md", _TC + pat, "the
                                   ("true before max", r"against " + _N + r" mm \(max\) without", "true.before_max_mm"))]
 
 
+# --- figsC: docs/thermal.md, docs/tcp.md, docs/testing.md (issue 25 item 3) -----------------------------------
+# thermal.md "Each effect alone": the experiment with one effect of the realistic preset on
+# (robocal.docs.figure_producers_thermal, slow), the 20-seed rows from section 6's producers
+for _row, _prod in (("ideal (20 seeds)", "thermal/ideal"), ("realistic (20 seeds)", "thermal/realistic"),
+                    *((f"only `{_e}`", f"thermal_alone/{_e}")
+                      for _e in ("heat", "hall", "deformation", "joints", "noise", "outliers"))):
+    FIGURES += _table("docs/thermal.md", {_row: ""}, _prod,
+                      [(c, k, f"{st}.evaluation.{col}.median") for c, col in enumerate(("before", "traditional", "screened"))
+                       for k, st in enumerate(("rms", "max"))],
+                      prefix="thermal:alone ", rel_tol=0.0,
+                      after="**Each effect alone**")
+# thermal.md "Drift": the set-up of tests/test_thermal_realism.py's three-hour drift
+_DRIFT = r"\*\*Drift\.\*\* After 3 h of non-stop full-load production the realistic cell's TCP moves "
+FIGURES += [Figure(f"thermal:drift 3h {p} {f}", "docs/thermal.md", pat, f"thermal_drift/{p}", f, rel_tol=0.01)
+            for p, f, pat in (("realistic", "min", _DRIFT + _N),
+                              ("realistic", "max", _DRIFT + r"[0-9.]+–" + _N),
+                              ("realistic", "median", _DRIFT + r"[0-9.]+–[0-9.]+ mm\s+\(median " + _N),
+                              ("ideal", "min", r"ideal cell, on the same schedule: " + _N),
+                              ("ideal", "max", r"ideal cell, on the same schedule: [0-9.]+–" + _N),
+                              ("ideal", "median", r"ideal cell, on the same schedule: [0-9.]+–[0-9.]+ mm \(median " + _N),
+                              ("realistic", "median", r"drifts more \(median " + _N + r" mm after 3 h"),
+                              ("ideal", "median", r"mm after 3 h against the ideal\s+" + _N + r"\)"))]
+FIGURES[-2] = dataclasses.replace(FIGURES[-2], key="thermal:drift 3h realistic median (reading)")
+FIGURES[-1] = dataclasses.replace(FIGURES[-1], key="thermal:drift 3h ideal median (reading)")
+# thermal.md section 6 "Reading it" and "Screening robustness": the 20-seed experiment's prose
+_READ = r"\* \*\*The ordering holds"
+FIGURES += [Figure(f"thermal:reading {k}", "docs/thermal.md", pat, f"thermal/{p}", f, rel_tol=0.0)
+            for k, p, f, pat in (
+                ("rms order", "realistic", "ordering.rms.evaluation.strict_order", _READ + r"(?s:.*?)\(" + _N + r" % of the 40"),
+                ("strict order", "realistic", "ordering.max.evaluation.strict_order",
+                 _READ + r"(?s:.*?)with the strict one " + _N + " %"),
+                ("screened median", "realistic", "rms.evaluation.screened.median",
+                 _READ + r"(?s:.*?)The screened median, " + _N + " %"),
+                ("traditional screening", "realistic", "rms.screening.traditional.median", _READ + r"(?s:.*?)traditional \(" + _N),
+                ("traditional evaluation", "realistic", "rms.evaluation.traditional.median",
+                 _READ + r"(?s:.*?)traditional \([0-9]+–" + _N),
+                ("before screening", "realistic", "rms.screening.before.median", _READ + r"(?s:.*?)and before \(" + _N),
+                ("before evaluation", "realistic", "rms.evaluation.before.median",
+                 _READ + r"(?s:.*?)and before \([0-9]+–" + _N),
+                ("ideal screened", "ideal", "rms.evaluation.screened.median", r"The ideal preset's " + _N + " %"),
+                ("theta3 selected", "realistic", "selection.theta3", r"missed θ3 \(selected in " + _N + " %"),
+                ("seed 9 screened", "realistic", "rms.evaluation.screened.min", r"and scored " + _N + " %"),
+                ("strict screened", "realistic", "max.evaluation.screened.median", r"Only ~" + _N + " % of the directions"),
+                ("strict traditional", "realistic", "max.evaluation.traditional.median",
+                 r"after compensation \(" + _N + " % traditional"),
+                ("strict before", "realistic", "max.evaluation.before.median", r"% traditional, " + _N + r" % before\)"),
+                ("stable median", "realistic", "rms.evaluation.stable.median", r"Its median λ is the same \(" + _N + " %"),
+                ("stable worst", "realistic", "rms.evaluation.stable.min", r"its worst evaluation run better \(" + _N + " %"),
+                ("screened worst", "realistic", "rms.evaluation.screened.min",
+                 r"its worst evaluation run better \([0-9.]+ % against " + _N + " %"))]
+
+# tcp.md: the accuracy table's maxima (in parentheses) and the prose on the study and its budget (slow producers)
+for _label, _m, _cells in (("realistic | cross-laser", "cross_laser", (0, 1, 2)),
+                           ("realistic | parallel barriers", "parallel_barriers", (1,)),
+                           ("ideal | cross-laser", "cross_laser", (1,))):
+    _pr = f"tcp/{_label.split(' |')[0]}"
+    FIGURES += _table("docs/tcp.md", {_label: _m}, _pr,
+                      [(c, 3, f"{('repeatability_mm', 'accuracy_mm', 'check_mm')[c]}.max") for c in _cells],
+                      prefix="tcp:", rel_tol=0.01)
+_REP = r"\*\*Repeatability is not accuracy\.\*\*"
+_T48 = r"\*\*The thesis's 0\.48 mm\.\*\*"
+FIGURES += [Figure(f"tcp:prose {k}", "docs/tcp.md", pat, p, f, rel_tol=0.01)
+            for k, p, f, pat in (
+                ("repeatability", "tcp/realistic", "cross_laser.repeatability_mm.median", _REP + r"(?s:.*?)by\s+~" + _N),
+                ("accuracy", "tcp/realistic", "cross_laser.accuracy_mm.median", _REP + r"(?s:.*?)the TCPs are ~" + _N),
+                ("bias", "tcp/realistic", "cross_laser.bias_mm.median", _REP + r"(?s:.*?)\(median " + _N + r" mm\)"),
+                ("absolute error check", "tcp/budget", "absolute error.cross_laser.check_mm.median",
+                 _T48 + r"(?s:.*?)at the check pose \(" + _N),
+                ("absolute error tcp", "tcp/budget", "absolute error.cross_laser.accuracy_mm.median",
+                 _T48 + r"(?s:.*?)though only " + _N),
+                ("dirty beams", "tcp/budget", "dirty beams.cross_laser.accuracy_mm.median",
+                 _T48 + r"(?s:.*?)dirty beams \(" + _N),
+                ("I/O", "tcp/budget", "I/O 125 Hz, late, jitter.cross_laser.accuracy_mm.median",
+                 _T48 + r"(?s:.*?)jittery I/O \(" + _N),
+                ("I/O axis", "tcp/budget", "I/O 125 Hz, late, jitter.cross_laser.axis_accuracy_deg.median",
+                 _T48 + r"(?s:.*?)jittery I/O \([0-9.]+ mm, and " + _N),
+                ("arm", "tcp/budget", "measuring arm.cross_laser.check_mm.median", _T48 + r"(?s:.*?)the arm \(" + _N),
+                ("method", "tcp/realistic", "cross_laser.accuracy_mm.median", _T48 + r"(?s:.*?)itself good to\s+~" + _N),
+                ("check", "tcp/realistic", "cross_laser.check_mm.median", _T48 + r"(?s:.*?)cannot see better than ~" + _N),
+                ("barriers axis ideal", "tcp/ideal", "parallel_barriers.axis_accuracy_deg.median",
+                 r"They measure the axis\s+well — " + _N),
+                ("barriers axis realistic", "tcp/realistic", "parallel_barriers.axis_accuracy_deg.median",
+                 r"They measure the axis\s+well — [0-9.]+–" + _N),
+                ("barriers tcp realistic", "tcp/realistic", "parallel_barriers.accuracy_mm.median",
+                 r"origin,\s+" + _N + " mm median on both cells"),
+                ("barriers tcp ideal", "tcp/ideal", "parallel_barriers.accuracy_mm.median",
+                 r"origin,\s+" + _N + " mm median on both cells"))]
+FIGURES += [Figure(f"tcp:collisions ratio {k}", "docs/tcp.md", pat, "tcp/collision_ratios", k, rel_tol=0.01)
+            for k, pat in (("axis", r"the tool-axis error grows " + _N + "×"),
+                           ("tcp_thesis_step3", r"The TCP error grows \(" + _N + "×"))]
+
+# testing.md "At the robot": tests/test_program_at_robot.py's realistic cases through the command line
+# (robocal.docs.figure_producers_thermal.program_at_robot); landing / first-order miss per target and the sigma range
+_PAR = [(1, k, f"landing.{k}") for k in range(4)] + [(1, 4 + k, f"miss.{k}") for k in range(4)]
+for _label, _prod, _sig in (
+        ("`test_program_at_robot.py::test_krl_program_at_a_true_kr150_with_effects_the_model_lacks`", "krl", "sigma"),
+        ("`test_program_at_robot.py::test_urscript_program_at_the_true_ur10[realistic]`", "ur", "sigma"),
+        ("`test_program_at_robot.py::test_rapid_program_at_the_true_irb140[realistic]`", "rapid", "sigma"),
+        ("`test_program_at_robot.py::test_fanuc_program_at_the_true_r2000ic[realistic]`", "fanuc", "sigma"),
+        ("`test_program_at_robot.py::test_a_tool_the_calibration_never_saw_on_effects_the_model_lacks` (and the ideal "
+         "`…gets_a_warning_and_its_uncertainty`)", "krl_gripper", "noise")):
+    FIGURES += [Figure(f"testing:at the robot {_prod} {f}", "docs/testing.md", _cell(_label, c, k),
+                       f"program_at_robot/{_prod}", f, rel_tol=0.01)
+                for c, k, f in _PAR + [(1, 8, f"{_sig}.min"), (1, 9, f"{_sig}.max")]]
+FIGURES += [Figure(f"testing:at the robot krl_gripper {k}", "docs/testing.md",
+                   _cell("`test_program_at_robot.py::test_a_tool_the_calibration_never_saw_on_effects_the_model_lacks` "
+                         "(and the ideal `…gets_a_warning_and_its_uncertainty`)", 1, pos), prod, f, rel_tol=0.01)
+            for k, pos, prod, f in (("reported sigma", 10, "program_at_robot/krl_gripper", "sigma.max"),
+                                    ("ideal landing min", 11, "program_at_robot/krl_gripper_ideal", "landing.min"),
+                                    ("ideal landing max", 12, "program_at_robot/krl_gripper_ideal", "landing.max"),
+                                    ("ideal miss", 13, "program_at_robot/krl_gripper_ideal", "miss.max"))]
+
+# thermal.md "Measured accuracy": the prose under the table (derived from system_calibration/thermal, fast)
+FIGURES += [Figure(f"thermal:system penalty mean error larger {k}", "docs/thermal.md",
+                   r"the penalty method's mean error is\s+" + (r"[0-9]+–" if k == "max" else "") + _N + "[–% ]",
+                   "system_calibration/thermal_advantage", k, rel_tol=0.0) for k in ("min", "max")]
+
+# thermal.md and testing.md: the system calibrations on seeds 0-99 (tests/test_thermal_core.py's sign tests; slow)
+_S100, _S100OFF = "system_calibration/thermal_100", "system_calibration/thermal_100_off_model"
+_MEAS = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+_W5 = r"[0-9]+\s+/\s+"
+FIGURES += [Figure(f"thermal:system seeds 0-99 wins {m}", "docs/thermal.md",
+                   r"on seeds 0–99 least squares wins " + _W5 * k + _N, _S100, f"wins.{m}", rel_tol=0.0)
+            for k, m in enumerate(_MEAS)]
+FIGURES += [Figure(f"thermal:system seeds 0-99 {k}", "docs/thermal.md", pat, p, f, rel_tol=0.0 if "wins" in f else 0.01)
+            for k, pat, p, f in (
+                ("wins all", r"seeds \(all five measures in " + _N, _S100, "wins_all"),
+                ("rms z", r"the RMS of \|P_e error\| / \|σ\| is " + _N, _S100, "z.rms"),
+                ("off-model max z", r"share a bias of up to " + _N + " σ", _S100OFF, "z.max"),
+                ("off-model ratio min", r"mean error ratio " + _N, _S100OFF, "ratio.min"),
+                ("off-model ratio max", r"mean error ratio [0-9.]+–" + _N, _S100OFF, "ratio.max"))]
+FIGURES += [Figure(f"thermal:system seeds 0-99 off-model wins {m}", "docs/thermal.md",
+                    r"established: " + _W5 * k + _N, _S100OFF, f"wins.{m}", rel_tol=0.0) for k, m in enumerate(_MEAS)]
+FIGURES += [Figure(f"testing:thermal system seeds 0-99 wins {m}", "docs/testing.md",
+                   r"\) = 0\.0020\); measured " + _W5 * k + _N, _S100, f"wins.{m}", rel_tol=0.0) for k, m in enumerate(_MEAS)]
+FIGURES += [Figure(f"testing:thermal system seeds 0-99 off-model wins {m}", "docs/testing.md",
+                   r"no longer established \(" + _W5 * k + _N, _S100OFF, f"wins.{m}", rel_tol=0.0)
+            for k, m in enumerate(_MEAS)]
+FIGURES += [Figure("testing:thermal system seeds 0-99 rms z", "docs/testing.md", r"E = 1 exactly; measured " + _N, _S100,
+                   "z.rms", rel_tol=0.01),
+            Figure("testing:thermal system seeds 0-99 off-model max z", "docs/testing.md",
+                   r"the\s+bias both share reaches " + _N + " σ", _S100OFF, "z.max", rel_tol=0.0)]
+
+# testing.md: the thermal system calibration on a robot that differs from its model (fast)
+_TSB = r"This biases `P_e` by "
+FIGURES += [Figure(f"testing:thermal system first-order bias {k}", "docs/testing.md", pat,
+                   "system_calibration/thermal_first_order_bias", f, rel_tol=0.01)
+            for k, pat, f in (("bias min", _TSB + _N, "bias_mm.min"), ("bias max", _TSB + r"[0-9.]+–" + _N, "bias_mm.max"),
+                              ("naive z", _TSB + r"[0-9.]+–[0-9.]+ mm, up to " + _N, "naive_z.max"),
+                              ("corrected z max", r"the largest\s+\|z\| over 10 seeds is " + _N, "corrected_z.max"),
+                              ("corrected z rms", r"over 10 seeds is [0-9.]+ and the RMS is " + _N, "corrected_z.rms"),
+                              ("residual min", r"The residual \(" + _N, "residual_rms_mm.min"),
+                              ("residual max", r"The residual \([0-9.]+–" + _N, "residual_rms_mm.max"))]
+
+# testing.md: the 6-D rows (the set-up of tests/test_six_d_cli.py's realistic cases through the command line; fast)
+_SIXD = r"recovers_the_tool_within_3_sigma_of_its_bias` \|[^|\n]*\| rotation \\\|z\\\| "
+FIGURES += [Figure(f"testing:six-d campaign {f}", "docs/testing.md", _SIXD + pat, "six_d/at_robot", f, rel_tol=0.01)
+            for f, pat in (("rot_z.after.0", _N), ("rot_z.after.1", r"[0-9.]+ / " + _N),
+                           ("rot_z.after.2", r"[0-9.]+ / [0-9.]+ / " + _N),
+                           ("rot_z.plain.0", r"[0-9.]+ / [0-9.]+ / [0-9.]+ \(plain " + _N),
+                           ("rot_z.plain.1", r"[0-9.]+ / [0-9.]+ / [0-9.]+ \(plain [0-9.]+ / " + _N),
+                           ("rot_z.plain.2", r"[0-9.]+ / [0-9.]+ / [0-9.]+ \(plain [0-9.]+ / [0-9.]+ / " + _N),
+                           ("residual_rms_mm", r"[^|\n]*?residual " + _N),
+                           ("residual_pred_mm", r"[^|\n]*?residual [0-9.]+ mm vs " + _N))]
+FIGURES += _table("docs/testing.md", {"`test_six_d_cli.py::test_six_d_correct_on_effects_…`": ""}, "six_d/at_robot",
+                  [(1, k, f) for k, f in enumerate(("pos.landing.min", "pos.landing.max", "pos.diff.max", "pos.sigma.min",
+                                                    "pos.sigma.max", "rot.landing.min", "rot.landing.max", "rot.diff.max",
+                                                    "rot.sigma.min", "rot.sigma.max"))],
+                  prefix="testing:six-d correct ", rel_tol=0.01)
+
+_FO = r"lands_within_3_sigma_of_its_bias` \|[^|\n]*\| rotation \\\|z\\\| ≤ "
+FIGURES += [Figure(f"testing:frames-only line {f}", "docs/testing.md", _FO + pat, "six_d/frames_only_line", f, rel_tol=0.01)
+            for f, pat in (("rot_z.after.max", _N), ("rot_z.plain.max", r"[0-9.]+ \(plain ≤ " + _N),
+                           ("residual_rms_mm", r"[^|\n]*?residual " + _N),
+                           ("residual_pred_mm", r"[^|\n]*?residual [0-9.]+ mm vs " + _N))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
