@@ -12,6 +12,7 @@ from pathlib import Path
 
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
+from .figure_producers_handeye import HANDEYE_PRODUCERS
 from .figure_producers_setups import SETUP_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
@@ -531,6 +532,7 @@ PRODUCERS = {
     **CLI_PRODUCERS,
     **BENCH_PRODUCERS,
     **SETUP_PRODUCERS,
+    **HANDEYE_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -575,6 +577,8 @@ PRODUCERS = {
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
+    if producer.startswith("handeye/default_real/"):
+        return ("ros_industrial_handeye",)
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
     return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),

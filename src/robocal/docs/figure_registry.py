@@ -759,4 +759,68 @@ FIGURES += [Figure(f"thermal:compensate {k}", "docs/thermal.md", _TC + pat, "the
                                   ("true before max", r"against " + _N + r" mm \(max\) without", "true.before_max_mm"))]
 
 
+# ---- docs/handeye.md and docs/controller.md (robocal.docs.figure_producers_handeye) ----
+# controller.md "Walk-through": the page's six commands (FK differences are floating-point rounding:
+# checked to their order of magnitude, 0-10x the printed value)
+_CW, _CTL = "controller/walkthrough", "docs/controller.md"
+_ROUNDING = "floating-point rounding: order of magnitude"
+FIGURES += [Figure(f"controller:walk-through {k}", _CTL, pat, _CW, field, rel_tol=tol, note=note)
+            for k, pat, field, tol, note in (
+                ("import fk", r"FK equal to the controller's\s+to " + _N + " mm", "import.fk_mm", 9.0, _ROUNDING),
+                ("conversion cancels", r"hundred-metre offsets cancel to ~" + _N + " mm", "import.fk_mm", 9.0, _ROUNDING),
+                ("factory rms", r"moves the flange by " + _N + " mm RMS", "factory.rms_mm", 0.01, ""),
+                ("factory max", r"moves the flange by [0-9.]+ mm RMS, " + _N + " mm max", "factory.max_mm", 0.01, ""),
+                ("factory rot max", r"mm RMS, [0-9.]+ mm max, " + _N + " deg max", "factory.rot_max_deg", 0.01, ""),
+                ("holdout before", r"Held-out error goes from " + _N + " mm RMS", "holdout.before_mm", 0.02, ""),
+                ("holdout after", r"Held-out error goes from [0-9.]+ mm RMS to " + _N + " mm RMS", "holdout.after_mm",
+                 0.05, ""),
+                ("added rms", r"calib/calibrated_robot\.toml`\):\s+" + _N + " mm RMS", "added.rms_mm", 0.02, ""),
+                ("added max", r"calib/calibrated_robot\.toml`\):\s+[0-9.]+ mm RMS, " + _N + " mm max", "added.max_mm",
+                 0.02, ""),
+                ("added aligned rms", r"mm max \(" + _N + " mm RMS after a best-fit base", "added.aligned_rms_mm", 0.02, ""),
+                ("export fk", r"The file's chain equals the calibrated model to " + _N + " mm", "export.fk_mm", 9.0,
+                 _ROUNDING),
+                ("export read back", r"1000 random joint sets; ~" + _N, "export.fk_mm", 9.0, _ROUNDING))]
+FIGURES.append(Figure("controller:export urdf read back", _CTL, r"checks the file against the model\s+\(~" + _N + " mm",
+                      _CW, "urdf.fk_mm", rel_tol=9.0, note=_ROUNDING))
+_ANG = r"would move the flange by up to\s+"
+FIGURES += [Figure(f"controller:angle convention {k}", _CTL, _ANG + pat, "controller/angle_convention", field, rel_tol=0.02)
+            for k, pat, field in (("ur10 mm", _N + " mm", "ur10.mm"), ("ur10 deg", r"[0-9.]+ mm / " + _N + " deg", "ur10.deg"),
+                                  ("ur10e a mm", r"[^(]*\(UR10\), " + _N + " mm", "ur10e_a.mm"),
+                                  ("ur10e b mm", r"[^(]*\(UR10\), [0-9.]+ mm \(UR10e a\) and " + _N + " mm", "ur10e_b.mm"))]
+FIGURES += [Figure(f"controller:probe {k}", _CTL, r"The fit leaves " + pat, "controller/probe", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("fit max mm", _N + " mm", "fit.max_mm", 0.05),
+                ("fit max deg", r"[0-9.]+ mm and " + _N + " deg", "fit.max_deg", 0.1),
+                ("rounding allows", r"[^(]*\(the rounding allows " + _N + " mm", "tolerance_mm", 0.01),
+                ("diff min", r"(?s:.*?)by at most " + _N + " to", "diff.min_mm", 0.1),
+                ("diff max", r"(?s:.*?)by at most [0-9.]+ to " + _N + " mm", "diff.max_mm", 0.1),
+                ("diff rot", r"(?s:.*?)by at most [0-9.]+ to [0-9.]+ mm and " + _N + " deg", "diff.rot_max_deg", 0.5))]
+FIGURES += [Figure(f"controller:ur10e (b) d{k + 1}", _CTL, r"metres that cancel \(" + r"[−0-9.-]+ m,? (?:and )?" * i + _N,
+                   "controller/ur10e_b_table", f"d.{k}", rel_tol=0.0)
+            for i, k in enumerate((1, 2, 3))]
+
+# handeye.md "The default": robocal handeye solve <set>/cal_data.yaml --json on the ROS-Industrial sets
+_HD = "| set | held-out RMS exact / estimated [px] |"
+for _label, _set, _cols in (
+        ("circle grid (eye-in-hand)", "test_set_10x10",
+         [(0, 0, "cv.exact"), (0, 1, "cv.estimated"), (2, 0, "default_vs_exact.mm"), (2, 1, "default_vs_exact.deg"),
+          (3, 0, "rms_px"), (4, 0, "noise.mm"), (4, 1, "noise.deg"), (4, 2, "noise.px"), (5, 0, "difference.mm"),
+          (5, 1, "difference.deg"), (5, 2, "difference.sigma")]),
+        ("ChArUco (eye-to-hand)", "test_set_charuco",
+         [(0, 0, "cv.exact"), (0, 1, "cv.estimated"), (2, 0, "default_vs_exact.mm"), (2, 1, "default_vs_exact.deg"),
+          (3, 0, "rms_px"), (4, 0, "noise.mm"), (4, 1, "noise.deg"), (4, 2, "noise.px"), (5, 0, "difference.sigma")])):
+    FIGURES += _table("docs/handeye.md", {_label: ""}, f"handeye/default_real/{_set}", _cols,
+                      prefix=f"handeye:default {_set} ", rel_tol=0.02, after=_HD)
+FIGURES += [Figure(f"handeye:default {k}", "docs/handeye.md", pat, f"handeye/default_real/{s}", field, rel_tol=tol)
+            for k, pat, s, field, tol in (
+                ("charuco rms (still missing)", r"reprojection RMS with the given intrinsics is " + _N + " px",
+                 "test_set_charuco", "rms_px", 0.005),
+                ("10x10 chain rms", r"per-image PnP fits to [0-9.]+ px, the chain to " + _N + " px", "test_set_10x10",
+                 "rms_px", 0.005),
+                ("10x10 estimated noise mm", r"the estimated-noise fits \(" + _N + " mm", "test_set_10x10", "noise.mm", 0.05),
+                ("10x10 estimated noise deg", r"the estimated-noise fits \([0-9.]+ mm / " + _N + " deg", "test_set_10x10",
+                 "noise.deg", 0.05))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

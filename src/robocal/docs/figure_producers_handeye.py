@@ -1,0 +1,162 @@
+"""Producers of the documented figures of docs/handeye.md and docs/controller.md that run the
+page's own commands (:mod:`robocal.docs.figures`): the walk-through and the probe of
+docs/controller.md and ``handeye solve``'s default on the ROS-Industrial sets. Each returns a flat
+``{field: value}`` dict and is cached."""
+
+from __future__ import annotations
+
+import functools
+import json
+import tempfile
+from pathlib import Path
+
+__all__ = ["HANDEYE_PRODUCERS", "controller_probe", "controller_walkthrough", "handeye_default_real",
+           "ur_angle_convention", "ur_controller_table"]
+
+
+def _controller_data(name: str) -> Path:
+    """``tests/data/controller/NAME`` of the repository."""
+    from .figure_producers import repository_root
+
+    return repository_root() / "tests" / "data" / "controller" / name
+
+
+@functools.lru_cache(maxsize=None)
+def controller_walkthrough() -> dict:
+    """docs/controller.md "Walk-through": the page's six commands on
+    ``tests/data/controller/ur10_driver_test.conf`` in a temporary folder.
+
+    Fields: ``import.fk_mm`` (the robot file's FK against the controller's, 1000 joint sets [mm]),
+    ``factory.{rms|max}_mm``, ``factory.rot_max_deg`` (``diff ur10 ur10_controller.toml``, 2000
+    joint sets), ``holdout.{before|after}_mm`` (RMS of ``calibrate``'s held-out poses [mm]),
+    ``added.{rms|max}_mm``, ``added.aligned_rms_mm`` (``diff`` of the calibrated model, and after a
+    best-fit base), ``export.fk_mm`` (the YAML's chain against the calibrated model [mm]),
+    ``urdf.fk_mm`` (``controller export urdf``'s file read back against the model [mm])."""
+    from .figure_producers_cli import run_cli
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        ctl, cal = t / "ur10_controller.toml", t / "calib"
+        imp = json.loads(run_cli("controller", "import", "ur", "ur10", _controller_data("ur10_driver_test.conf"),
+                                 "--out", ctl, "--json"))
+        d1 = json.loads(run_cli("controller", "diff", "ur10", ctl, "--json"))
+        run_cli("simulate", "tracker", ctl, "--poses", 100, "--seed", 3, "--out", t / "tracker.csv")
+        c = json.loads(run_cli("calibrate", ctl, t / "tracker.csv", "--out", cal, "--json"))
+        d2 = json.loads(run_cli("controller", "diff", ctl, cal / "calibrated_robot.toml", "--json"))
+        ex = json.loads(run_cli("controller", "export", "ur", cal / "calibrated_robot.toml", "--out",
+                                t / "my_robot_calibration.yaml", "--json"))
+        urdf = json.loads(run_cli("controller", "export", "urdf", cal / "calibrated_robot.toml", "--out",
+                                  t / "robot.urdf", "--json"))
+    return {"import.fk_mm": float(imp["fk_check"]["max_mm"]),
+            "factory.rms_mm": d1["position_mm"]["rms"], "factory.max_mm": d1["position_mm"]["max"],
+            "factory.rot_max_deg": d1["rotation_deg"]["max"],
+            "holdout.before_mm": c["validation"]["before"]["rms"], "holdout.after_mm": c["validation"]["after"]["rms"],
+            "added.rms_mm": d2["position_mm"]["rms"], "added.max_mm": d2["position_mm"]["max"],
+            "added.aligned_rms_mm": d2["base_aligned"]["position_mm"]["rms"],
+            "export.fk_mm": float(ex["fk_check"]["max_mm"]), "urdf.fk_mm": float(urdf["fk_check"]["max_mm"])}
+
+
+@functools.lru_cache(maxsize=None)
+def controller_probe() -> dict:
+    """docs/controller.md "Measured with a virtual controller": the walk-through's
+    ``ur10_controller.toml``, then per format (``ur``, ``abb``, ``kuka``, ``doosan``)
+    ``controller probe-simulate ... --count 200 --seed 1``, ``controller probe ur10 pairs.txt``,
+    ``controller diff ur10_controller.toml probed.toml --poses 1000``.
+
+    Fields (the ``ur`` format): ``fit.max_mm``, ``fit.max_deg`` (the fit's largest residual at the
+    pairs), ``tolerance_mm`` (what the rounding allows); over the four formats:
+    ``diff.{min|max}_mm``, ``diff.rot_max_deg`` (largest difference at 1000 joint sets)."""
+    from .figure_producers_cli import run_cli
+
+    out, diffs, rots = {}, [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        ctl = t / "ur10_controller.toml"
+        run_cli("controller", "import", "ur", "ur10", _controller_data("ur10_driver_test.conf"), "--out", ctl)
+        for fmt in ("ur", "abb", "kuka", "doosan"):
+            pairs, probed = t / f"pairs_{fmt}.txt", t / f"probed_{fmt}.toml"
+            run_cli("controller", "probe-simulate", ctl, fmt, "--count", 200, "--seed", 1, "--out", pairs)
+            p = json.loads(run_cli("controller", "probe", "ur10", pairs, "--out", probed, "--json"))
+            d = json.loads(run_cli("controller", "diff", ctl, probed, "--poses", 1000, "--json"))
+            if fmt == "ur":
+                out.update({"fit.max_mm": p["fit_residual"]["position_mm"]["max"],
+                            "fit.max_deg": p["fit_residual"]["rotation_deg"]["max"],
+                            "tolerance_mm": p["tolerance"]["mm"]})
+            diffs.append(d["position_mm"]["max"])
+            rots.append(d["rotation_deg"]["max"])
+    out.update({"diff.min_mm": min(diffs), "diff.max_mm": max(diffs), "diff.rot_max_deg": max(rots)})
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def ur_controller_table(conf: str, robot: str) -> dict:
+    """docs/controller.md: the controller's own DH table (nominal + deltas, metres) of
+    ``robocal controller import ur ROBOT tests/data/controller/CONF``: ``d.{0..5}`` [m]."""
+    from ..workflows.controller.models import import_ur
+
+    r = import_ur(_controller_data(conf), robot, n_check=10, seed=0)
+    return {f"d.{k}": float(v) for k, v in enumerate(r["dh"]["d"])}
+
+
+@functools.lru_cache(maxsize=None)
+def ur_angle_convention() -> dict:
+    """docs/controller.md "Angle convention, an open point": robocal's joint origins of the three UR
+    driver test arms (``ur_joint_origins``), their intrinsic X-Y'-Z'' angles read as URDF ``rpy``,
+    over 1000 random joint sets (seed 0): ``{arm}.mm``, ``{arm}.deg`` (largest flange move), ``arm``
+    in ``ur10``, ``ur10e_a``, ``ur10e_b``."""
+    import numpy as np
+
+    from ..kinematics.links import frame_from_xyz_rpy
+    from ..transforms import euler_from_matrix
+    from ..workflows.controller.models import _pose_errors, import_ur, origins_fk, random_joints, ur_joint_origins
+
+    out = {}
+    for arm, conf, robot in (("ur10", "ur10_driver_test.conf", "ur10"), ("ur10e_a", "ur10e_driver_test_a.conf", "ur10e"),
+                             ("ur10e_b", "ur10e_driver_test_b.conf", "ur10e")):
+        m = import_ur(_controller_data(conf), robot, n_check=2)["model"]
+        O = ur_joint_origins(m)
+        mixed = [frame_from_xyz_rpy(T[:3, 3], euler_from_matrix(T[:3, :3], "xyz_intrinsic")) for T in O]
+        dp, ang = _pose_errors(origins_fk(O, random_joints(m, 1000, seed=0)),
+                               origins_fk(mixed, random_joints(m, 1000, seed=0)))
+        out[f"{arm}.mm"], out[f"{arm}.deg"] = float(dp.max()), float(np.degrees(ang.max()))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def handeye_default_real(test_set: str) -> dict:
+    """docs/handeye.md "The default": ``robocal handeye solve
+    <datasets>/ros_industrial_handeye/raw/TEST_SET/cal_data.yaml --out DIR --json`` (``--robot-pose-sigma
+    auto``): ``cv.{exact|estimated}`` (held-out RMS [px]), ``kept_exact`` (1 when the exact model was
+    kept), ``rms_px``, ``noise.{mm|deg|px}`` (the estimated noise), ``difference.{mm|deg|sigma}`` (the
+    two fits' cameras apart), ``default_vs_exact.{mm|deg}`` (the kept camera against the
+    ``--exact-poses`` fit's)."""
+    import numpy as np
+
+    from ..io.datasets import datasets_root
+    from .figure_producers_cli import ros_handeye, run_cli
+
+    src = datasets_root() / "ros_industrial_handeye" / "raw" / test_set / "cal_data.yaml"
+    with tempfile.TemporaryDirectory() as tmp:
+        d = json.loads(run_cli("handeye", "solve", src, "--out", Path(tmp) / "out", "--json"))
+    s = d["robot_pose_sigma"]
+    exact = ros_handeye(test_set)
+    pose = d["camera_pose"]
+    d_mm = float(np.linalg.norm(np.subtract(pose["position_mm"], [exact[f"position_mm.{k}"] for k in range(3)])))
+    d_deg = float(np.linalg.norm(np.subtract(pose["rotation_vector_deg"],
+                                             [exact[f"rotation_vector_deg.{k}"] for k in range(3)])))
+    return {"cv.exact": s["cv_rms_px"]["exact"], "cv.estimated": s["cv_rms_px"]["estimated"],
+            "kept_exact": float(s["choice"] == "exact"), "rms_px": float(d["reprojection_rms_px"]),
+            "noise.mm": s["estimated"]["robot_pose_sigma"][0], "noise.deg": s["estimated"]["robot_pose_sigma"][1],
+            "noise.px": s["estimated"]["pixel_sigma_px"], "difference.mm": s["difference"]["position_mm"],
+            "difference.deg": s["difference"]["rotation_deg"], "difference.sigma": s["difference"]["sigma"],
+            "default_vs_exact.mm": d_mm, "default_vs_exact.deg": d_deg}
+
+
+HANDEYE_PRODUCERS = {
+    "controller/walkthrough": controller_walkthrough,
+    "controller/probe": controller_probe,
+    "controller/angle_convention": ur_angle_convention,
+    "controller/ur10e_b_table": lambda: ur_controller_table("ur10e_driver_test_b.conf", "ur10e"),
+    **{f"handeye/default_real/{t}": functools.partial(handeye_default_real, t)
+       for t in ("test_set_10x10", "test_set_charuco")},
+}
