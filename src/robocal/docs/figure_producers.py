@@ -577,7 +577,7 @@ PRODUCERS = {
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
-    if producer.startswith("handeye/default_real/"):
+    if producer.startswith(("handeye/default_real/", "handeye/camera_real/")):
         return ("ros_industrial_handeye",)
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
@@ -593,4 +593,6 @@ SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_
                   # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
                   "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",
+                  # docs/handeye.md: camera calibrate on the real sets, ~2-5 s CPU each
+                  "handeye/camera_real/test_set_charuco", "handeye/camera_real/test_set_10x10",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

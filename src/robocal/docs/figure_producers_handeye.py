@@ -10,8 +10,9 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "controller_probe", "controller_walkthrough", "handeye_default_real",
-           "ur_angle_convention", "ur_controller_table"]
+__all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
+           "principal_point_rotation", "ur_angle_convention",
+           "ur_controller_table"]
 
 
 def _controller_data(name: str) -> Path:
@@ -152,7 +153,58 @@ def handeye_default_real(test_set: str) -> dict:
             "default_vs_exact.mm": d_mm, "default_vs_exact.deg": d_deg}
 
 
+#: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
+ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
+              "test_set_10x10": "circles:10x10:25.4mm:modified"}
+
+
+@functools.lru_cache(maxsize=None)
+def camera_calibrate_real(test_set: str) -> dict:
+    """docs/handeye.md "`camera calibrate`: the distortion model by held-out reprojection":
+    ``robocal camera calibrate <datasets>/ros_industrial_handeye/raw/TEST_SET/images --board SPEC
+    --json`` (``--distortion auto``) and, on ChArUco, ``--distortion 8``.
+
+    Fields: ``held_out.{k1-k2|k1-k2-p1-p2|k1-k3|k1-k3-p1-p2|rational}`` [px], ``rms_px`` (the chosen
+    model's training RMS), ``richer_lower_percent`` (how much lower the best richer model's held-out
+    RMS is than the chosen one's [%]); with ``--distortion 8``: ``rational.rms_px``,
+    ``rational.{k3|k6}``, ``rational.{k3|k6}_sigma``, ``rational.n_not_determined``."""
+    from ..io.datasets import datasets_root
+    from .figure_producers_cli import run_cli
+
+    images = datasets_root() / "ros_industrial_handeye" / "raw" / test_set / "images"
+
+    def run(*extra):
+        with tempfile.TemporaryDirectory() as tmp:
+            text = run_cli("camera", "calibrate", images, "--board", ROS_BOARDS[test_set], *extra, "--json",
+                           "--out", Path(tmp) / "out")
+        return json.loads(text[text.index("{"):])
+
+    d = run()
+    held = d["distortion_selection"]["held_out_rms_px"]
+    chosen = d["distortion_selection"]["chosen"]
+    out = {f"held_out.{k}": float(v) for k, v in held.items()}
+    out["rms_px"] = float(d["reprojection_rms_px"])
+    out["richer_lower_percent"] = 100.0 * (1.0 - min(held.values()) / held[chosen])
+    if test_set == "test_set_charuco":
+        r = run("--distortion", "8")
+        nd = r["not_determined"]
+        out.update({"rational.rms_px": float(r["reprojection_rms_px"]), "rational.n_not_determined": float(len(nd))})
+        for k in ("k3", "k6"):
+            out[f"rational.{k}"], out[f"rational.{k}_sigma"] = float(nd[k]["value"]), float(nd[k]["sigma"])
+    return out
+
+
+def principal_point_rotation() -> dict:
+    """docs/handeye.md "Uncertainty caveat": the camera rotation [deg] that a 3 px principal-point error
+    is at the study's focal length (1400 px): ``deg = atan(3 / 1400)``."""
+    import math
+
+    return {"deg": math.degrees(math.atan(3.0 / 1400.0))}
+
+
 HANDEYE_PRODUCERS = {
+    "handeye/principal_point_rotation": principal_point_rotation,
+    **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,
     "controller/probe": controller_probe,
     "controller/angle_convention": ur_angle_convention,
