@@ -577,7 +577,7 @@ PRODUCERS = {
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
-    if producer.startswith(("handeye/default_real/", "handeye/camera_real/")):
+    if producer.startswith(("handeye/default_real/", "handeye/camera_real/", "handeye/gate_shifted")):
         return ("ros_industrial_handeye",)
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)

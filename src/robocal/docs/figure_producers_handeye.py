@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
+__all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "handeye_gate_shifted", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
 
@@ -130,7 +130,8 @@ def handeye_default_real(test_set: str) -> dict:
     auto``): ``cv.{exact|estimated}`` (held-out RMS [px]), ``kept_exact`` (1 when the exact model was
     kept), ``rms_px``, ``noise.{mm|deg|px}`` (the estimated noise), ``difference.{mm|deg|sigma}`` (the
     two fits' cameras apart), ``default_vs_exact.{mm|deg}`` (the kept camera against the
-    ``--exact-poses`` fit's)."""
+    ``--exact-poses`` fit's), the sanity gate's ``gate.angle_mismatch_deg`` (median motion-angle
+    mismatch), ``gate.backprojection_px`` and ``gate.backprojection_limit_px``."""
     import numpy as np
 
     from ..io.datasets import datasets_root
@@ -150,7 +151,39 @@ def handeye_default_real(test_set: str) -> dict:
             "noise.mm": s["estimated"]["robot_pose_sigma"][0], "noise.deg": s["estimated"]["robot_pose_sigma"][1],
             "noise.px": s["estimated"]["pixel_sigma_px"], "difference.mm": s["difference"]["position_mm"],
             "difference.deg": s["difference"]["rotation_deg"], "difference.sigma": s["difference"]["sigma"],
-            "default_vs_exact.mm": d_mm, "default_vs_exact.deg": d_deg}
+            "default_vs_exact.mm": d_mm, "default_vs_exact.deg": d_deg,
+            "gate.angle_mismatch_deg": d["sanity_checks"]["motion_angle_consistency"]["value"],
+            "gate.backprojection_px": d["sanity_checks"]["reprojection_vs_corner_noise"]["value"],
+            "gate.backprojection_limit_px": d["sanity_checks"]["reprojection_vs_corner_noise"]["limit"]}
+
+
+@functools.lru_cache(maxsize=None)
+def handeye_gate_shifted() -> dict:
+    """docs/handeye.md "Sanity gate" (``tests/test_handeye_gate.py``): the ROS-Industrial 10x10 set with
+    image i paired to pose i+1 (14 images) through ``robocal handeye solve CAL_DATA --json`` (exit 3).
+
+    Fields: ``angle_mismatch_deg``, ``backprojection_px`` (the failed checks' values), and from the
+    named likely cause ``repaired.angle_mismatch_deg``, ``repaired.linear_rms_px`` (the data re-paired)."""
+    import re
+
+    from ..io.datasets import datasets_root
+    from .figure_producers_cli import run_cli
+
+    src = datasets_root() / "ros_industrial_handeye" / "raw" / "test_set_10x10"
+    lines = ["data:"]
+    for i in range(14):
+        lines += [f"  - pose: {src / 'poses' / f'{i + 1}.yaml'}", f"    image: {src / 'images' / f'{i}.png'}"]
+    text = (src / "cal_data.yaml").read_text(encoding="utf-8")
+    with tempfile.TemporaryDirectory() as tmp:
+        cal = Path(tmp) / "cal_data.yaml"
+        cal.write_text("\n".join(lines) + "\n" + text[text.index("target_finder"):], encoding="utf-8")
+        run_cli("handeye", "solve", cal, "--out", Path(tmp) / "he", "--json", ok=(3,))
+        d = json.loads((Path(tmp) / "he" / "handeye.json").read_text(encoding="utf-8"))
+    cause = next(r for r in d["reasons"] if r.startswith("likely cause"))
+    m = re.search(r"motion angle mismatch ([0-9.]+) deg, linear solution's back-projection RMS ([0-9.]+) px", cause)
+    return {"angle_mismatch_deg": d["sanity_checks"]["motion_angle_consistency"]["value"],
+            "backprojection_px": d["sanity_checks"]["reprojection_vs_corner_noise"]["value"],
+            "repaired.angle_mismatch_deg": float(m.group(1)), "repaired.linear_rms_px": float(m.group(2))}
 
 
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
@@ -204,6 +237,7 @@ def principal_point_rotation() -> dict:
 
 HANDEYE_PRODUCERS = {
     "handeye/principal_point_rotation": principal_point_rotation,
+    "handeye/gate_shifted": handeye_gate_shifted,
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,
     "controller/probe": controller_probe,

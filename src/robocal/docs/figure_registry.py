@@ -864,5 +864,39 @@ FIGURES += [Figure(f"handeye:camera calibrate {k}", "docs/handeye.md", pat, _CR,
                  0.9, "not determined: sigma ill-conditioned, order of magnitude"),
                 ("rational training rms", r"although its training RMS \(" + _N + r" px\)", "rational.rms_px", 0.005, ""))]
 
+# handeye.md "Side by side with OpenCV": the prose on the rendered table (camera/bench_calibration, slow)
+_CBP = r"it picked the refined set in every seed\)(?s:.*?)"
+FIGURES += [Figure(f"handeye:camera bench prose {k}", "docs/handeye.md", _CBP + pat, "camera/bench_calibration", field,
+                   rel_tol=0.02)
+            for k, pat, field in (
+                ("charuco unrefined fx", r"focal length \(" + _N, "charuco | OpenCV CharucoDetector|1|0"),
+                ("charuco robocal fy", r"focal length \([0-9.]+ against " + _N, "charuco | **robocal**|2|0"),
+                ("charuco robocal fx", r"focal length \([0-9.]+ against [0-9.]+-" + _N, "charuco | **robocal**|1|0"),
+                ("k2 min", r"The k2 errors \(" + _N, "checkerboard | **robocal**|6|0"),
+                ("k2 max", r"The k2 errors \([0-9.]+-" + _N, "charuco | OpenCV CharucoDetector|6|0"))]
+
+# handeye.md "Sanity gate": the clean ROS-Industrial sets (handeye/default_real) and the 10x10 set shifted
+_GT = r"Measured by `pytest tests/test_handeye_gate\.py`: the clean ROS-Industrial sets pass\s+\(median angle mismatch "
+_DR = "handeye/default_real/"
+FIGURES += [Figure(f"handeye:gate {k}", "docs/handeye.md", _GT + pat, prod, field, rel_tol=tol)
+            for k, pat, prod, field, tol in (
+                ("charuco angle", _N + " deg ChArUco", _DR + "test_set_charuco", "gate.angle_mismatch_deg", 0.02),
+                ("10x10 angle", r"[0-9.]+ deg ChArUco, " + _N + " deg 10x10", _DR + "test_set_10x10",
+                 "gate.angle_mismatch_deg", 0.02),
+                ("charuco backprojection", r"[^;]*; back-projection " + _N, _DR + "test_set_charuco",
+                 "gate.backprojection_px", 0.02),
+                ("10x10 backprojection", r"[^;]*; back-projection [0-9.]+ and " + _N, _DR + "test_set_10x10",
+                 "gate.backprojection_px", 0.02),
+                ("charuco limit", r"[^;]*; back-projection [0-9.]+ and [0-9.]+ px against a " + _N, _DR + "test_set_charuco",
+                 "gate.backprojection_limit_px", 0.02),
+                ("shifted angle", r"(?s:.*?)paired to pose i\+1 fails \(" + _N + " deg", "handeye/gate_shifted",
+                 "angle_mismatch_deg", 0.02),
+                ("shifted backprojection", r"(?s:.*?)paired to pose i\+1 fails \([0-9.]+ deg, " + _N + " px",
+                 "handeye/gate_shifted", "backprojection_px", 0.02),
+                ("re-paired angle", r"(?s:.*?)the\s+shift is named \(" + _N + " deg", "handeye/gate_shifted",
+                 "repaired.angle_mismatch_deg", 0.02),
+                ("re-paired rms", r"(?s:.*?)the\s+shift is named \([0-9.]+ deg, " + _N + " px", "handeye/gate_shifted",
+                 "repaired.linear_rms_px", 0.05))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
