@@ -898,5 +898,33 @@ FIGURES += [Figure(f"handeye:gate {k}", "docs/handeye.md", _GT + pat, prod, fiel
                 ("re-paired rms", r"(?s:.*?)the\s+shift is named \([0-9.]+ deg, " + _N + " px", "handeye/gate_shifted",
                  "repaired.linear_rms_px", 0.05))]
 
+# handeye.md "Or let the data say": robot_pose_sigma="estimate" in simulation (handeye/noise_estimate)
+_NE = r"\*Or let the data say\.\*(?s:.*?)"
+FIGURES += [Figure(f"handeye:noise estimate {k}", "docs/handeye.md", _NE + pat, "handeye/noise_estimate", field,
+                   rel_tol=0.02)
+            for k, pat, field in (
+                ("l1 px", r"0\.01 deg as " + _N + " px", "l1.px.max"),
+                ("l1 mm min", r"0\.01 deg as [0-9.]+ px / " + _N, "l1.mm.min"),
+                ("l1 mm max", r"0\.01 deg as [0-9.]+ px / [0-9.]+-" + _N, "l1.mm.max"),
+                ("l1 deg", r"0\.01 deg as [0-9.]+ px / [0-9.]+-[0-9.]+ mm / " + _N, "l1.deg.max"),
+                ("l2 mm min", r"0\.3 mm / 0\.05 deg as " + _N, "l2.mm.min"),
+                ("l2 mm max", r"0\.3 mm / 0\.05 deg as [0-9.]+-" + _N, "l2.mm.max"),
+                ("l2 deg min", r"0\.3 mm / 0\.05 deg as [0-9.]+-[0-9.]+ mm / " + _N, "l2.deg.min"),
+                ("l2 deg max", r"0\.3 mm / 0\.05 deg as [0-9.]+-[0-9.]+ mm / [0-9.]+-" + _N, "l2.deg.max"),
+                ("l3 mm min", r"1 mm / 0\.1 deg as " + _N, "l3.mm.min"),
+                ("l3 mm max", r"1 mm / 0\.1 deg as [0-9.]+-" + _N, "l3.mm.max"),
+                ("l3 deg min", r"1 mm / 0\.1 deg as [0-9.]+-[0-9.]+ mm /\s+" + _N, "l3.deg.min"),
+                ("l3 deg max", r"1 mm / 0\.1 deg as [0-9.]+-[0-9.]+ mm /\s+[0-9.]+-" + _N, "l3.deg.max"),
+                ("err estimate min", r"it gives " + _N, "err.estimate.min"),
+                ("err estimate max", r"it gives [0-9.]+-" + _N, "err.estimate.max"),
+                ("err default min", r"camera-position errors against " + _N, "err.default.min"),
+                ("err default max", r"camera-position errors against [0-9.]+-" + _N, "err.default.max"),
+                ("err exact min", r"default and " + _N + "-[0-9.]+ mm with the poses taken as exact", "err.exact.min"),
+                ("err exact max", r"default and [0-9.]+-" + _N + " mm with the poses taken as exact", "err.exact.max"),
+                ("z estimate max", r"its error is at most " + _N + " of its sigma", "z.estimate.max"),
+                ("z default min", r"\(the default's: " + _N, "z.default.min"),
+                ("z default max", r"\(the default's: [0-9.]+-" + _N, "z.default.max"),
+                ("12 images worse", r"\(" + _N + r" of 6\s+seeds worse\)", "n12.worse"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
