@@ -577,7 +577,8 @@ PRODUCERS = {
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
-    if producer.startswith(("handeye/default_real/", "handeye/camera_real/", "handeye/gate_shifted")):
+    if producer.startswith(("handeye/default_real/", "handeye/camera_real/", "handeye/gate_shifted",
+                            "handeye/variants_real/")):
         return ("ros_industrial_handeye",)
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
@@ -595,4 +596,6 @@ SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_
                   "tcp/realistic", "tcp/ideal", "tcp/budget",
                   # docs/handeye.md: camera calibrate on the real sets, ~2-5 s CPU each
                   "handeye/camera_real/test_set_charuco", "handeye/camera_real/test_set_10x10",
+                  "handeye/variants_real/test_set_charuco", "handeye/variants_real/test_set_10x10",
+                  "handeye/gate_shifted",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

@@ -10,7 +10,8 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "handeye_gate_shifted", "handeye_noise_estimate", "controller_probe", "controller_walkthrough", "handeye_default_real",
+__all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_noise_estimate",
+           "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
 
@@ -237,6 +238,57 @@ def handeye_noise_estimate() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def handeye_variants_real(test_set: str) -> dict:
+    """docs/handeye.md: ``robocal handeye solve <datasets>/ros_industrial_handeye/raw/TEST_SET/cal_data.yaml
+    --json`` with the former fixed prior (``--robot-pose-sigma 0.05,0.01``) and with ``--exact-poses
+    --refine-intrinsics``: ``prior.backprojection_px`` (through the reported flange poses),
+    ``prior.from_exact_mm``, ``prior.from_exact_deg`` (its camera against the ``--exact-poses``
+    fit's), ``exact.rms_px`` and ``refined_intrinsics.rms_px``."""
+    import numpy as np
+
+    from ..io.datasets import datasets_root
+    from ..transforms import so3_exp
+    from .figure_producers_cli import ros_handeye, run_cli
+
+    src = datasets_root() / "ros_industrial_handeye" / "raw" / test_set / "cal_data.yaml"
+    with tempfile.TemporaryDirectory() as tmp:
+        prior = json.loads(run_cli("handeye", "solve", src, "--robot-pose-sigma", "0.05,0.01", "--out",
+                                   Path(tmp) / "prior", "--json"))
+        refined = json.loads(run_cli("handeye", "solve", src, "--exact-poses", "--refine-intrinsics", "--out",
+                                     Path(tmp) / "refined", "--json"))
+    exact = ros_handeye(test_set)
+    p = prior["camera_pose"]
+    R_prior = so3_exp(np.radians(p["rotation_vector_deg"]))
+    R_exact = so3_exp(np.radians([exact[f"rotation_vector_deg.{k}"] for k in range(3)]))
+    cos = np.clip((np.trace(R_prior.T @ R_exact) - 1.0) / 2.0, -1.0, 1.0)
+    return {"prior.backprojection_px": float(prior["backprojection_rms_px"]),
+            "prior.from_exact_mm": float(np.linalg.norm(np.subtract(p["position_mm"],
+                                                                    [exact[f"position_mm.{k}"] for k in range(3)]))),
+            "prior.from_exact_deg": float(np.degrees(np.arccos(cos))), "exact.rms_px": exact["rms_px"],
+            "refined_intrinsics.rms_px": float(refined["reprojection_rms_px"])}
+
+
+@functools.lru_cache(maxsize=None)
+def handeye_auto_simulated() -> dict:
+    """docs/handeye.md "The default" (``tests/test_handeye_refine.py::
+    test_auto_keeps_the_estimated_noise_when_the_robot_is_randomly_noisy``): ``simulate_hand_eye(0,
+    n_images=16, pixel_noise=0.2, pose_noise_mm=1, pose_noise_deg=0.1)``; ``kept_estimated`` (1 when
+    ``auto`` kept the estimated noise), ``auto.error_mm``, ``exact.error_mm`` (camera position error)."""
+    import numpy as np
+
+    from ..handeye import refine_hand_eye
+    from ..sim.cameras.handeye_points import simulate_hand_eye
+
+    sim = simulate_hand_eye(0, n_images=16, pixel_noise=0.2, pose_noise_mm=1.0, pose_noise_deg=0.1)
+    data = (sim.T_base_flange, sim.image_points, sim.target_points, sim.camera)
+    auto = refine_hand_eye(*data, robot_pose_sigma="auto")
+    exact = refine_hand_eye(*data, robot_pose_sigma=None)
+    return {"kept_estimated": float(auto.noise_estimate["choice"] == "estimated"),
+            "auto.error_mm": float(np.linalg.norm(auto.camera_pose[:3, 3] - sim.camera_pose[:3, 3])),
+            "exact.error_mm": float(np.linalg.norm(exact.camera_pose[:3, 3] - sim.camera_pose[:3, 3]))}
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -290,6 +342,8 @@ HANDEYE_PRODUCERS = {
     "handeye/principal_point_rotation": principal_point_rotation,
     "handeye/gate_shifted": handeye_gate_shifted,
     "handeye/noise_estimate": handeye_noise_estimate,
+    "handeye/auto_simulated": handeye_auto_simulated,
+    **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,
     "controller/probe": controller_probe,

@@ -926,5 +926,31 @@ FIGURES += [Figure(f"handeye:noise estimate {k}", "docs/handeye.md", _NE + pat, 
                 ("z default max", r"\(the default's: [0-9.]+-" + _N, "z.default.max"),
                 ("12 images worse", r"\(" + _N + r" of 6\s+seeds worse\)", "n12.worse"))]
 
+# handeye.md: the former fixed prior and refined intrinsics on the real sets (handeye/variants_real, slow),
+# auto in simulation (handeye/auto_simulated)
+_VR = "handeye/variants_real/"
+_CH = r"\*Choose the sigma to match the robot\.\*(?s:.*?)"
+_PD = r"The previous default \(a fixed [0-9.]+ mm / [0-9.]+ deg prior\) landed "
+_AS = r"In simulation \(16 images, 0\.2 px, seed 0, 1 mm / 0\.1\s+deg robot noise\) the estimated model is kept and lands "
+FIGURES += [Figure(f"handeye:variants {k}", "docs/handeye.md", pat, prod, field, rel_tol=tol)
+            for k, pat, prod, field, tol in (
+                ("10x10 prior rms", _CH + r"circle grid " + _N + " px against", _VR + "test_set_10x10",
+                 "prior.backprojection_px", 0.01),
+                ("10x10 exact rms", _CH + r"circle grid [0-9.]+ px against " + _N + " px", _VR + "test_set_10x10",
+                 "exact.rms_px", 0.005),
+                ("charuco prior rms", _CH + r"ChArUco " + _N + " against", _VR + "test_set_charuco",
+                 "prior.backprojection_px", 0.01),
+                ("charuco exact rms", _CH + r"ChArUco [0-9.]+ against " + _N, _VR + "test_set_charuco", "exact.rms_px", 0.005),
+                ("10x10 prior from exact mm", _PD + _N + " mm", _VR + "test_set_10x10", "prior.from_exact_mm", 0.02),
+                ("10x10 prior from exact deg", _PD + r"[0-9.]+ mm / " + _N + " deg", _VR + "test_set_10x10",
+                 "prior.from_exact_deg", 0.02),
+                ("10x10 prior rms (default section)", _PD + r"[^\n]*\nat " + _N + " px on the circle grid", _VR + "test_set_10x10",
+                 "prior.backprojection_px", 0.01),
+                ("charuco refined intrinsics", r"With the intrinsics refined it is " + _N + " px", _VR + "test_set_charuco",
+                 "refined_intrinsics.rms_px", 0.01),
+                ("auto simulated error", _AS + _N + " mm", "handeye/auto_simulated", "auto.error_mm", 0.02),
+                ("exact simulated error", _AS + r"[0-9.]+ mm from the true camera against " + _N, "handeye/auto_simulated",
+                 "exact.error_mm", 0.02))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
