@@ -11,7 +11,7 @@ import tempfile
 from pathlib import Path
 
 __all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_noise_estimate",
-           "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
+           "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
 
@@ -129,7 +129,7 @@ def handeye_default_real(test_set: str) -> dict:
     """docs/handeye.md "The default": ``robocal handeye solve
     <datasets>/ros_industrial_handeye/raw/TEST_SET/cal_data.yaml --out DIR --json`` (``--robot-pose-sigma
     auto``): ``cv.{exact|estimated}`` (held-out RMS [px]), ``kept_exact`` (1 when the exact model was
-    kept), ``rms_px``, ``noise.{mm|deg|px}`` (the estimated noise), ``difference.{mm|deg|sigma}`` (the
+    kept), ``rms_px``, ``rms_mm`` (on the target plane), ``noise.{mm|deg|px}`` (the estimated noise), ``difference.{mm|deg|sigma}`` (the
     two fits' cameras apart), ``default_vs_exact.{mm|deg}`` (the kept camera against the
     ``--exact-poses`` fit's), the sanity gate's ``gate.angle_mismatch_deg`` (median motion-angle
     mismatch), ``gate.backprojection_px`` and ``gate.backprojection_limit_px``."""
@@ -149,6 +149,7 @@ def handeye_default_real(test_set: str) -> dict:
                                              [exact[f"rotation_vector_deg.{k}"] for k in range(3)])))
     return {"cv.exact": s["cv_rms_px"]["exact"], "cv.estimated": s["cv_rms_px"]["estimated"],
             "kept_exact": float(s["choice"] == "exact"), "rms_px": float(d["reprojection_rms_px"]),
+            "rms_mm": float(d["reprojection_rms_mm"]),
             "noise.mm": s["estimated"]["robot_pose_sigma"][0], "noise.deg": s["estimated"]["robot_pose_sigma"][1],
             "noise.px": s["estimated"]["pixel_sigma_px"], "difference.mm": s["difference"]["position_mm"],
             "difference.deg": s["difference"]["rotation_deg"], "difference.sigma": s["difference"]["sigma"],
@@ -289,6 +290,34 @@ def handeye_auto_simulated() -> dict:
             "exact.error_mm": float(np.linalg.norm(exact.camera_pose[:3, 3] - sim.camera_pose[:3, 3]))}
 
 
+@functools.lru_cache(maxsize=None)
+def handeye_study_summary() -> dict:
+    """docs/handeye.md "Do the paper's conclusions hold?": summaries of ``python
+    benchmarks/handeye_study.py --seeds 16``'s refined table (the producer ``handeye/study``).
+
+    Fields: ``brown.ratio_3_6_to_8.{min|max}`` (refined translation error at 3-6 images over that at 8),
+    ``brown.rot_10_30.median`` [deg] (the rotation floor), ``none.trans_4_30.{min|max}`` [mm] and
+    ``none.rot.{min|max}`` [deg] (no distortion model), ``radial_division.rot_8_30.median`` [deg]."""
+    import numpy as np
+
+    from .figure_producers import PRODUCERS
+
+    t = PRODUCERS["handeye/study"]()
+
+    def v(model, n, what):
+        return t[f"{model}.{n}.refined.{what}"]
+
+    ratios = [v("brown", n, "trans_mm") / v("brown", 8, "trans_mm") for n in (3, 4, 5, 6)]
+    none_t = [v("none", n, "trans_mm") for n in (4, 5, 6, 8, 10, 15, 20, 30)]
+    none_r = [v("none", n, "rot_deg") for n in (3, 4, 5, 6, 8, 10, 15, 20, 30)]
+    floor = [v(m, n, "rot_deg") for m in ("radial", "division") for n in (8, 10, 15, 20, 30)]
+    return {"brown.ratio_3_6_to_8.min": min(ratios), "brown.ratio_3_6_to_8.max": max(ratios),
+            "brown.rot_10_30.median": float(np.median([v("brown", n, "rot_deg") for n in (10, 15, 20, 30)])),
+            "none.trans_4_30.min": min(none_t), "none.trans_4_30.max": max(none_t),
+            "none.rot.min": min(none_r), "none.rot.max": max(none_r),
+            "radial_division.rot_8_30.median": float(np.median(floor))}
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -343,6 +372,7 @@ HANDEYE_PRODUCERS = {
     "handeye/gate_shifted": handeye_gate_shifted,
     "handeye/noise_estimate": handeye_noise_estimate,
     "handeye/auto_simulated": handeye_auto_simulated,
+    "handeye/study_summary": handeye_study_summary,
     **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,

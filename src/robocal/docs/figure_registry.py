@@ -952,5 +952,22 @@ FIGURES += [Figure(f"handeye:variants {k}", "docs/handeye.md", pat, prod, field,
                 ("exact simulated error", _AS + r"[0-9.]+ mm from the true camera against " + _N, "handeye/auto_simulated",
                  "exact.error_mm", 0.02))]
 
+# handeye.md "Do the paper's conclusions hold?": summaries of the study's refined table (slow)
+_SS = r"\*\*Do the paper's conclusions hold\?(?s:.*?)"
+FIGURES += [Figure(f"handeye:study summary {k}", "docs/handeye.md", _SS + pat, "handeye/study_summary", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("ratio min", r"with 3-6 images the errors are " + _N + "-", "brown.ratio_3_6_to_8.min"),
+                ("ratio max", r"with 3-6 images the errors are [0-9.]+-" + _N + "x", "brown.ratio_3_6_to_8.max"),
+                ("rotation floor", r"stops improving at about " + _N + " deg", "brown.rot_10_30.median"),
+                ("no distortion trans min", r"Ignoring distortion costs " + _N + "-", "none.trans_4_30.min"),
+                ("no distortion trans max", r"Ignoring distortion costs [0-9.]+-" + _N + " mm", "none.trans_4_30.max"),
+                ("no distortion rot min", r"Ignoring distortion costs [0-9.]+-[0-9.]+ mm and " + _N + "-", "none.rot.min"),
+                ("no distortion rot max", r"Ignoring distortion costs [0-9.]+-[0-9.]+ mm and [0-9.]+-" + _N + " deg",
+                 "none.rot.max"),
+                ("radial/division floor", r"keep a rotation floor of ~" + _N + " deg", "radial_division.rot_8_30.median"))]
+FIGURES.append(Figure("handeye:default charuco rms on the target plane", "docs/handeye.md",
+                      r"\(" + _N + r" mm RMS left on the ChArUco target plane\)", "handeye/default_real/test_set_charuco",
+                      "rms_mm", rel_tol=0.01))
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
