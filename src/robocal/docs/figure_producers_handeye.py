@@ -11,7 +11,7 @@ import tempfile
 from pathlib import Path
 
 __all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_noise_estimate",
-           "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
+           "handeye_refine_cases", "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
 
@@ -318,6 +318,57 @@ def handeye_study_summary() -> dict:
             "radial_division.rot_8_30.median": float(np.median(floor))}
 
 
+@functools.lru_cache(maxsize=None)
+def handeye_refine_cases() -> dict:
+    """docs/handeye.md "Accuracy against OpenCV", the other tests of ``tests/test_handeye_refine.py`` on
+    their set-ups (``simulate_hand_eye``):
+
+    * ``sigma.{eye_in_hand|eye_to_hand}.max``: the largest |translation error| / reported sigma over
+      the axes and seeds 0-4 (15 images, 0.3 px, 0.05 mm / 0.01 deg);
+    * ``corner.px``: seed 5, 8 noise-free images, one corner moved by (3, -2) px, its residual [px];
+    * ``wrong.{held|free}.{px|mm}``: seed 2, 20 images, fx 1390 / fy 1410 and distortion (-0.2, 0.1):
+      back-projection RMS and camera position error, intrinsics held and refined;
+    * ``swapped.{plain|huber}.{mm|deg}``: seed 20, 15 images, poses 4 and 9 swapped: camera error."""
+    import dataclasses
+
+    import numpy as np
+
+    from ..handeye import refine_hand_eye
+    from ..handeye.refine import rotation_error_deg
+    from ..sim.cameras.handeye_points import simulate_hand_eye
+
+    def pos_err(T, sim):
+        return float(np.linalg.norm(T[:3, 3] - sim.camera_pose[:3, 3]))
+
+    out = {}
+    for setup in ("eye_in_hand", "eye_to_hand"):
+        z = []
+        for seed in range(5):
+            sim = simulate_hand_eye(seed, setup=setup, n_images=15, pixel_noise=0.3, pose_noise_mm=0.05,
+                                    pose_noise_deg=0.01)
+            res = refine_hand_eye(sim.T_base_flange, sim.image_points, sim.target_points, sim.camera, setup=setup)
+            z.append(np.max(np.abs(res.camera_pose[:3, 3] - sim.camera_pose[:3, 3]) / res.sigma_translation_mm))
+        out[f"sigma.{setup}.max"] = float(max(z))
+    sim = simulate_hand_eye(5, n_images=8, pixel_noise=0.0, pose_noise_mm=0.0, pose_noise_deg=0.0)
+    uv = sim.image_points.copy()
+    uv[2, 40] += [3.0, -2.0]
+    res = refine_hand_eye(sim.T_base_flange, uv, sim.target_points, sim.camera, robot_pose_sigma=None)
+    out["corner.px"] = float(np.linalg.norm(res.residuals_px[2, 40]))
+    sim = simulate_hand_eye(2, n_images=20)
+    wrong = dataclasses.replace(sim.camera, fx=1390.0, fy=1410.0, distortion=(-0.2, 0.1, 0.0, 0.0, 0.0))
+    for k, free in (("held", False), ("free", True)):
+        r = refine_hand_eye(sim.T_base_flange, sim.image_points, sim.target_points, wrong, refine_intrinsics=free)
+        out[f"wrong.{k}.px"], out[f"wrong.{k}.mm"] = float(r.rms_px), pos_err(r.camera_pose, sim)
+    sim = simulate_hand_eye(20, n_images=15)
+    F = sim.T_base_flange.copy()
+    F[[4, 9]] = F[[9, 4]]
+    for k, loss in (("plain", "linear"), ("huber", "huber")):
+        r = refine_hand_eye(F, sim.image_points, sim.target_points, sim.camera, loss=loss)
+        out[f"swapped.{k}.mm"] = pos_err(r.camera_pose, sim)
+        out[f"swapped.{k}.deg"] = float(rotation_error_deg(r.camera_pose, sim.camera_pose))
+    return out
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -373,6 +424,7 @@ HANDEYE_PRODUCERS = {
     "handeye/noise_estimate": handeye_noise_estimate,
     "handeye/auto_simulated": handeye_auto_simulated,
     "handeye/study_summary": handeye_study_summary,
+    "handeye/refine_cases": handeye_refine_cases,
     **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,

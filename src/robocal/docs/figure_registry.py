@@ -969,5 +969,21 @@ FIGURES.append(Figure("handeye:default charuco rms on the target plane", "docs/h
                       r"\(" + _N + r" mm RMS left on the ChArUco target plane\)", "handeye/default_real/test_set_charuco",
                       "rms_mm", rel_tol=0.01))
 
+# handeye.md: the other tests of tests/test_handeye_refine.py on their set-ups (handeye/refine_cases)
+_RC = "handeye/refine_cases"
+FIGURES += [Figure(f"handeye:refine cases {k}", "docs/handeye.md", pat, _RC, field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("sigma eye-in-hand", r"\(measured at most " + _N + " and", "sigma.eye_in_hand.max", 0.02),
+                ("sigma eye-to-hand", r"\(measured at most [0-9.]+ and " + _N + r" sigma\)", "sigma.eye_to_hand.max", 0.02),
+                ("corner px", r"one corner moved by [0-9.]+ px shows " + _N + " px", "corner.px", 0.01),
+                ("wrong held px", r"wrong distortion\) gives " + _N + " px", "wrong.held.px", 0.02),
+                ("wrong held mm", r"wrong distortion\) gives [0-9.]+ px and " + _N + " mm held", "wrong.held.mm", 0.02),
+                ("wrong free px", r"mm held, " + _N + " px and", "wrong.free.px", 0.02),
+                ("wrong free mm", r"mm held, [0-9.]+ px and " + _N + " mm with", "wrong.free.mm", 0.02),
+                ("swapped plain mm", r"pose file give " + _N + " mm", "swapped.plain.mm", 0.02),
+                ("swapped plain deg", r"pose file give [0-9.]+ mm / " + _N + " deg plain", "swapped.plain.deg", 0.02),
+                ("swapped huber mm", r"deg plain and " + _N + " mm", "swapped.huber.mm", 0.02),
+                ("swapped huber deg", r"deg plain and [0-9.]+ mm / " + _N + " deg with Huber", "swapped.huber.deg", 0.02))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
