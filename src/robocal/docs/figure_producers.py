@@ -597,5 +597,5 @@ SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_
                   # docs/handeye.md: camera calibrate on the real sets, ~2-5 s CPU each
                   "handeye/camera_real/test_set_charuco", "handeye/camera_real/test_set_10x10",
                   "handeye/variants_real/test_set_charuco", "handeye/variants_real/test_set_10x10",
-                  "handeye/gate_shifted", "handeye/study_summary",
+                  "handeye/gate_shifted", "handeye/study_summary", "handeye/board_shape",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

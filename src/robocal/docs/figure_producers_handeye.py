@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_calibrate_real", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_noise_estimate",
+__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_noise_estimate",
            "handeye_refine_cases", "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
@@ -369,6 +369,52 @@ def handeye_refine_cases() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def camera_board_shape() -> dict:
+    """docs/handeye.md "Board shape" (the set-up of ``tests/test_camera_board_shape.py``): 10 rendered
+    views (seed 3) of ``checkerboard:9x6:25mm`` bent into a cylinder with its middle 1 mm out of the
+    plane of the printed pattern's ends, through ``robocal camera calibrate --distortion 5 --fix k3``
+    without and with ``--board-shape``.
+
+    Fields: ``true_sag_mm`` (the bend over the corners, analytic), ``sag.{x|y|sigma_x}`` [mm],
+    ``fx_error.{flat|shaped}`` [px] (|fx - truth|), ``rms.{flat|shaped}`` [px]."""
+    import cv2
+    import numpy as np
+
+    from ..io.boards import board_image, parse_board
+    from ..sim.cameras.camera_cell import simulate_hand_eye_poses
+    from ..sim.cameras.camera_render import BoardRenderer
+    from ..sim.cameras.self_calibration import board_surface
+    from ..workflows.cameras.camera_simulate import _texel_mm
+    from .figure_producers_cli import run_cli
+
+    spec = "checkerboard:9x6:25mm"
+    b = parse_board(spec)
+    X = b.object_points()
+    cell = simulate_hand_eye_poses(X, setup="eye_in_hand", n_images=10, front_z=b.front_z, seed=3)
+    texture, affine = board_image(b, _texel_mm(b))
+    surface = board_surface(b, 1.0)
+    renderer = BoardRenderer(cell.camera, texture, affine, surface=surface)
+    rng = np.random.default_rng(3)
+    z = surface(X[:, 0], X[:, 1])
+    out = {"true_sag_mm": float(z.max() - z[np.argmin(X[:, 0])])}
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "images"
+        folder.mkdir()
+        for k, T in enumerate(cell.T_camera_target):
+            cv2.imwrite(str(folder / f"{k:02d}.png"), renderer.render(T, rng))
+        for key, extra in (("flat", ()), ("shaped", ("--board-shape",))):
+            text = run_cli("camera", "calibrate", folder, "--board", spec, "--distortion", "5", "--fix", "k3", "--json",
+                           "--out", Path(tmp) / key, *extra)
+            d = json.loads(text[text.index("{"):])
+            out[f"fx_error.{key}"] = abs(d["camera"]["parameters"]["fx"] - cell.camera.fx)
+            out[f"rms.{key}"] = float(d["reprojection_rms_px"])
+            if key == "shaped":
+                sag = d["board_sag_mm"]
+                out.update({"sag.x": sag["x"], "sag.y": sag["y"], "sag.sigma_x": sag["sigma_x"]})
+    return out
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -425,6 +471,7 @@ HANDEYE_PRODUCERS = {
     "handeye/auto_simulated": handeye_auto_simulated,
     "handeye/study_summary": handeye_study_summary,
     "handeye/refine_cases": handeye_refine_cases,
+    "handeye/board_shape": camera_board_shape,
     **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,

@@ -985,5 +985,18 @@ FIGURES += [Figure(f"handeye:refine cases {k}", "docs/handeye.md", pat, _RC, fie
                 ("swapped huber mm", r"deg plain and " + _N + " mm", "swapped.huber.mm", 0.02),
                 ("swapped huber deg", r"deg plain and [0-9.]+ mm / " + _N + " deg with Huber", "swapped.huber.deg", 0.02))]
 
+# handeye.md "Board shape": rendered bent board through camera calibrate (handeye/board_shape, slow)
+_BS = r"### Board shape(?s:.*?)"
+FIGURES += [Figure(f"handeye:board shape {k}", "docs/handeye.md", _BS + pat, "handeye/board_shape", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("true sag", r"i\.e\. " + _N + " mm over the corners", "true_sag_mm", 0.0),
+                ("sag x", r"sag_x " + _N, "sag.x", 0.005),
+                ("sag x sigma", r"sag_x [0-9.]+ \+- " + _N, "sag.sigma_x", 0.1),
+                ("sag y", r"sag_y " + _N + " mm", "sag.y", 0.0),
+                ("fx flat", r"fx " + _N + " px off with the flat model", "fx_error.flat", 0.02),
+                ("fx shaped", r"off with the flat model, " + _N + " px with", "fx_error.shaped", 0.1),
+                ("rms flat", r"RMS " + _N + " px flat", "rms.flat", 0.02),
+                ("rms shaped", r"px flat, " + _N + " px with the shape", "rms.shaped", 0.02))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
