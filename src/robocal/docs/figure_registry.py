@@ -998,5 +998,21 @@ FIGURES += [Figure(f"handeye:board shape {k}", "docs/handeye.md", _BS + pat, "ha
                 ("rms flat", r"RMS " + _N + " px flat", "rms.flat", 0.02),
                 ("rms shaped", r"px flat, " + _N + " px with the shape", "rms.shaped", 0.02))]
 
+# handeye.md: the joint-offset tests of tests/test_handeye_refine.py (handeye/joint_offsets)
+_JO = r"the joint offsets of an ABB IRB 140 \([^)]*\) come back within 3\s+sigma, eye-to-hand \(measured \|error\| <= "
+FIGURES += [Figure(f"handeye:joint offsets {k}", "docs/handeye.md", _JO + pat, "handeye/joint_offsets", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("e2h err", _N + " deg", "e2h.err_max", 0.02),
+                ("e2h sigma min", r"[0-9.]+ deg, sigma " + _N, "e2h.sigma.min", 0.05),
+                ("e2h sigma max", r"[0-9.]+ deg, sigma [0-9.]+-" + _N, "e2h.sigma.max", 0.05),
+                ("e2i err", r"[^)]*\) and eye-in-hand\s+\(\|error\| <= " + _N, "e2i.err_max", 0.02),
+                ("e2i sigma min", r"[^)]*\) and eye-in-hand\s+\(\|error\| <= [0-9.]+ deg, sigma " + _N, "e2i.sigma.min", 0.05),
+                ("e2i sigma max", r"[^)]*\) and eye-in-hand\s+\(\|error\| <= [0-9.]+ deg, sigma [0-9.]+-" + _N,
+                 "e2i.sigma.max", 0.05),
+                ("e2h rms", r"(?s:.*?)only with the offsets \(" + _N + " px", "e2h.rms_px", 0.02),
+                ("e2h without", r"(?s:.*?)only with the offsets \([0-9.]+ px against " + _N, "e2h.without_px", 0.02),
+                ("e2i without", r"(?s:.*?)only with the offsets \([0-9.]+ px against [0-9.]+ and\s+" + _N + " px without",
+                 "e2i.without_px", 0.02))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
