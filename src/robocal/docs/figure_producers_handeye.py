@@ -132,7 +132,8 @@ def handeye_default_real(test_set: str) -> dict:
     kept), ``rms_px``, ``rms_mm`` (on the target plane), ``noise.{mm|deg|px}`` (the estimated noise), ``difference.{mm|deg|sigma}`` (the
     two fits' cameras apart), ``default_vs_exact.{mm|deg}`` (the kept camera against the
     ``--exact-poses`` fit's), the sanity gate's ``gate.angle_mismatch_deg`` (median motion-angle
-    mismatch), ``gate.backprojection_px`` and ``gate.backprojection_limit_px``."""
+    mismatch), ``gate.backprojection_px``, ``gate.backprojection_limit_px`` and ``gate.pnp_rms_px`` (the
+    per-image PnP RMS, the corner noise)."""
     import numpy as np
 
     from ..io.datasets import datasets_root
@@ -156,7 +157,8 @@ def handeye_default_real(test_set: str) -> dict:
             "default_vs_exact.mm": d_mm, "default_vs_exact.deg": d_deg,
             "gate.angle_mismatch_deg": d["sanity_checks"]["motion_angle_consistency"]["value"],
             "gate.backprojection_px": d["sanity_checks"]["reprojection_vs_corner_noise"]["value"],
-            "gate.backprojection_limit_px": d["sanity_checks"]["reprojection_vs_corner_noise"]["limit"]}
+            "gate.backprojection_limit_px": d["sanity_checks"]["reprojection_vs_corner_noise"]["limit"],
+            "gate.pnp_rms_px": d["sanity_checks"]["corner_noise_pnp_rms_px"]["value"]}
 
 
 @functools.lru_cache(maxsize=None)
@@ -245,7 +247,9 @@ def handeye_variants_real(test_set: str) -> dict:
     --json`` with the former fixed prior (``--robot-pose-sigma 0.05,0.01``) and with ``--exact-poses
     --refine-intrinsics``: ``prior.backprojection_px`` (through the reported flange poses),
     ``prior.from_exact_mm``, ``prior.from_exact_deg`` (its camera against the ``--exact-poses``
-    fit's), ``exact.rms_px`` and ``refined_intrinsics.rms_px``."""
+    fit's), ``exact.rms_px`` and ``refined_intrinsics.rms_px``; on ChArUco ``source.from_default_{mm|deg}``
+    (the exact-pose refinement on the 14 images the source library uses, standing in for its camera as in
+    ``tests/test_handeye_real.py``, against the default's camera, which is the exact-pose fit)."""
     import numpy as np
 
     from ..io.datasets import datasets_root
@@ -262,11 +266,28 @@ def handeye_variants_real(test_set: str) -> dict:
     p = prior["camera_pose"]
     R_prior = so3_exp(np.radians(p["rotation_vector_deg"]))
     R_exact = so3_exp(np.radians([exact[f"rotation_vector_deg.{k}"] for k in range(3)]))
-    cos = np.clip((np.trace(R_prior.T @ R_exact) - 1.0) / 2.0, -1.0, 1.0)
-    return {"prior.backprojection_px": float(prior["backprojection_rms_px"]),
+    def angle_deg(R_a, R_b):
+        return float(np.degrees(np.arccos(np.clip((np.trace(R_a.T @ R_b) - 1.0) / 2.0, -1.0, 1.0))))
+
+    out = {}
+    if test_set == "test_set_charuco":  # the default keeps the exact-pose fit: its camera against the source's
+        from ..handeye import refine_hand_eye
+        from ..io.ros_calibration import read_cal_data
+        from ..workflows.cameras.camera_common import detect_set
+
+        data = read_cal_data(src)
+        det = detect_set(data.image_paths, data.board, blob_settings=data.blob_settings,
+                         homography_threshold=data.homography_threshold)
+        keep = np.isin(det.names, [f"{i}.png" for i in range(16) if i not in (2, 15)]) & det.used
+        source_like = refine_hand_eye(data.T_base_flange[keep], det.image_points[keep], det.board.object_points(),
+                                      data.camera, setup=data.setup, robot_pose_sigma=None).camera_pose
+        out["source.from_default_mm"] = float(np.linalg.norm(source_like[:3, 3] - [exact[f"position_mm.{k}"]
+                                                                                  for k in range(3)]))
+        out["source.from_default_deg"] = angle_deg(source_like[:3, :3], R_exact)
+    return {**out, "prior.backprojection_px": float(prior["backprojection_rms_px"]),
             "prior.from_exact_mm": float(np.linalg.norm(np.subtract(p["position_mm"],
                                                                     [exact[f"position_mm.{k}"] for k in range(3)]))),
-            "prior.from_exact_deg": float(np.degrees(np.arccos(cos))), "exact.rms_px": exact["rms_px"],
+            "prior.from_exact_deg": angle_deg(R_prior, R_exact), "exact.rms_px": exact["rms_px"],
             "refined_intrinsics.rms_px": float(refined["reprojection_rms_px"])}
 
 

@@ -1014,5 +1014,15 @@ FIGURES += [Figure(f"handeye:joint offsets {k}", "docs/handeye.md", _JO + pat, "
                 ("e2i without", r"(?s:.*?)only with the offsets \([0-9.]+ px against [0-9.]+ and\s+" + _N + " px without",
                  "e2i.without_px", 0.02))]
 
+# handeye.md "The default": the ChArUco camera against the source library's (handeye/variants_real, slow);
+# the circle grid's per-image PnP RMS
+_SRC = r"\| ChArUco \(eye-to-hand\) \|[^|]*\|[^|]*\| [0-9.]+ mm / [0-9.]+ deg \("
+FIGURES += [Figure("handeye:default charuco from the source mm", "docs/handeye.md", _SRC + _N + " mm",
+                   _VR + "test_set_charuco", "source.from_default_mm", rel_tol=0.03),
+            Figure("handeye:default charuco from the source deg", "docs/handeye.md", _SRC + r"[0-9.]+ mm / " + _N + " deg",
+                   _VR + "test_set_charuco", "source.from_default_deg", rel_tol=0.03),
+            Figure("handeye:default 10x10 per-image pnp", "docs/handeye.md", r"per-image PnP fits to " + _N + " px",
+                   "handeye/default_real/test_set_10x10", "gate.pnp_rms_px", rel_tol=0.02)]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
