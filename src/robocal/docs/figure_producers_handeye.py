@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate",
+__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate",
            "handeye_refine_cases", "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
@@ -518,6 +518,33 @@ def handeye_joint_offsets() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def camera_sag() -> dict:
+    """docs/handeye.md "Camera calibration" (the set-up of ``tests/test_camera_calibration.py``): 12
+    simulated views (seed 11, 0.3 px, no robot noise) of a board whose middle sags by 0.15 mm and by
+    1 mm, calibrated with the planar model, Brown and division: ``{model}.z_max_0.15`` (largest
+    |error| / sigma over the parameters) and ``{model}.fx_z_1`` (|fx error| / sigma at 1 mm)."""
+    from ..handeye import calibrate_camera
+    from ..sim.cameras.handeye_points import CAMERA_MODELS, simulate_hand_eye
+
+    def values(camera):
+        names = ("fx", "fy", "cx", "cy") + (("k1", "k2", "p1", "p2", "k3") if camera.model == "brown" else ("kappa",))
+        return dict(zip(names, (*camera.intrinsics, *camera.distortion)))
+
+    out = {}
+    for model in ("brown", "division"):
+        for bend in (0.15, 1.0):
+            sim = simulate_hand_eye(11, n_images=12, camera=CAMERA_MODELS[model], bend_mm=bend, pose_noise_mm=0.0,
+                                    pose_noise_deg=0.0)
+            res = calibrate_camera(sim.image_points, sim.target_points, (1280, 1024), model=model)
+            ours, truth = values(res.camera), values(sim.camera)
+            if bend < 0.5:
+                out[f"{model}.z_max_0.15"] = float(max(abs(ours[k] - truth[k]) / res.sigma[k] for k in truth))
+            else:
+                out[f"{model}.fx_z_1"] = float(abs(ours["fx"] - truth["fx"]) / res.sigma["fx"])
+    return out
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -576,6 +603,7 @@ HANDEYE_PRODUCERS = {
     "handeye/refine_cases": handeye_refine_cases,
     "handeye/board_shape": camera_board_shape,
     "handeye/joint_offsets": handeye_joint_offsets,
+    "handeye/camera_sag": camera_sag,
     **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,

@@ -1024,5 +1024,13 @@ FIGURES += [Figure("handeye:default charuco from the source mm", "docs/handeye.m
             Figure("handeye:default 10x10 per-image pnp", "docs/handeye.md", r"per-image PnP fits to " + _N + " px",
                    "handeye/default_real/test_set_10x10", "gate.pnp_rms_px", rel_tol=0.02)]
 
+# handeye.md "Camera calibration": a sagging board (handeye/camera_sag)
+FIGURES += [Figure(f"handeye:camera sag {k}", "docs/handeye.md", pat, "handeye/camera_sag", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("brown 0.15", r"\(measured max " + _N + " and", "brown.z_max_0.15"),
+                ("division 0.15", r"\(measured max [0-9.]+ and " + _N + " sigma\\)", "division.z_max_0.15"),
+                ("brown 1", r"\(measured " + _N + " and [0-9.]+ sigma\\): flatness", "brown.fx_z_1"),
+                ("division 1", r"\(measured [0-9.]+ and " + _N + " sigma\\): flatness", "division.fx_z_1"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
