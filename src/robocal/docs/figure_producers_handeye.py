@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate",
+__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate", "handeye_plain_fit",
            "handeye_refine_cases", "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
@@ -545,6 +545,43 @@ def camera_sag() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def handeye_plain_fit() -> dict:
+    """docs/handeye.md "Errors in variables": ``simulate_hand_eye`` seeds 0-2, 15 images, 0.05 mm /
+    0.01 deg robot noise, no corner noise; the plain reprojection fit (``robot_pose_sigma=None``)
+    against the linear solvers and the default errors-in-variables fit.
+
+    Fields ``plain.{rot_deg|mm}.{min|max}``, ``plain.z.{min|max}`` (largest |error| / sigma over the
+    axes), ``linear_best.{rot_deg|mm}.median`` (the median over the seeds of the best linear solver's
+    error), ``default.z.max``."""
+    import numpy as np
+
+    from ..handeye import refine_hand_eye
+    from ..handeye.refine import rotation_error_deg
+    from ..sim.cameras.handeye_points import simulate_hand_eye
+
+    rows = {"plain.rot_deg": [], "plain.mm": [], "plain.z": [], "lin.rot": [], "lin.mm": [], "default.z": []}
+    for seed in range(3):
+        sim = simulate_hand_eye(seed, n_images=15, pixel_noise=0.0, pose_noise_mm=0.05, pose_noise_deg=0.01)
+        data = (sim.T_base_flange, sim.image_points, sim.target_points, sim.camera)
+        for key, res in (("plain", refine_hand_eye(*data, robot_pose_sigma=None)), ("default", refine_hand_eye(*data))):
+            d = res.camera_pose[:3, 3] - sim.camera_pose[:3, 3]
+            rows[f"{key}.z"].append(float(np.max(np.abs(d) / res.sigma_translation_mm)))
+            if key == "plain":
+                rows["plain.rot_deg"].append(float(rotation_error_deg(res.camera_pose, sim.camera_pose)))
+                rows["plain.mm"].append(float(np.linalg.norm(d)))
+                lin = [v[0] for v in res.linear.values()]
+                rows["lin.rot"].append(min(float(rotation_error_deg(T, sim.camera_pose)) for T in lin))
+                rows["lin.mm"].append(min(float(np.linalg.norm(T[:3, 3] - sim.camera_pose[:3, 3])) for T in lin))
+    out = {}
+    for k in ("plain.rot_deg", "plain.mm", "plain.z"):
+        out[f"{k}.min"], out[f"{k}.max"] = min(rows[k]), max(rows[k])
+    out["linear_best.rot_deg.median"] = float(np.median(rows["lin.rot"]))
+    out["linear_best.mm.median"] = float(np.median(rows["lin.mm"]))
+    out["default.z.max"] = max(rows["default.z"])
+    return out
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -604,6 +641,7 @@ HANDEYE_PRODUCERS = {
     "handeye/board_shape": camera_board_shape,
     "handeye/joint_offsets": handeye_joint_offsets,
     "handeye/camera_sag": camera_sag,
+    "handeye/plain_fit": handeye_plain_fit,
     **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,

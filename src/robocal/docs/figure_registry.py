@@ -1032,5 +1032,19 @@ FIGURES += [Figure(f"handeye:camera sag {k}", "docs/handeye.md", pat, "handeye/c
                 ("brown 1", r"\(measured " + _N + " and [0-9.]+ sigma\\): flatness", "brown.fx_z_1"),
                 ("division 1", r"\(measured [0-9.]+ and " + _N + " sigma\\): flatness", "division.fx_z_1"))]
 
+# handeye.md "Errors in variables": the plain reprojection fit with robot noise (handeye/plain_fit)
+_PF = r"that plain reprojection fit was \*worse\*\s+than the linear solvers \("
+FIGURES += [Figure(f"handeye:plain fit {k}", "docs/handeye.md", _PF + pat, "handeye/plain_fit", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("rot min", _N + "-", "plain.rot_deg.min"),
+                ("rot max", r"[0-9.]+-" + _N + " deg", "plain.rot_deg.max"),
+                ("mm min", r"[0-9.]+-[0-9.]+ deg,\s+" + _N + "-", "plain.mm.min"),
+                ("mm max", r"[0-9.]+-[0-9.]+ deg,\s+[0-9.]+-" + _N + " mm", "plain.mm.max"),
+                ("linear rot", r"[^)]*against a median " + _N + " deg", "linear_best.rot_deg.median"),
+                ("linear mm", r"[^)]*against a median [0-9.]+ deg, " + _N + " mm", "linear_best.mm.median"),
+                ("z min", r"[^)]*\), and its error was " + _N + "-", "plain.z.min"),
+                ("z max", r"[^)]*\), and its error was [0-9.]+-" + _N + " times", "plain.z.max"),
+                ("default z", r"(?s:.*?)its sigma covers the error \(at most " + _N + " sigma", "default.z.max"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
