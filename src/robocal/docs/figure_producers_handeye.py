@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate", "handeye_plain_fit",
+__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "handeye_agreement", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate", "handeye_plain_fit",
            "handeye_refine_cases", "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
@@ -582,6 +582,102 @@ def handeye_plain_fit() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def handeye_agreement() -> dict:
+    """docs/handeye.md "Agreement with OpenCV" (the set-ups of ``tests/test_camera_projection.py``,
+    ``tests/test_camera_reprojection.py`` and ``tests/test_handeye_linear.py``, seeded, noise-free where
+    the test is): floating-point agreement, checked to its order of magnitude.
+
+    Fields: ``projection_px`` (largest |robocal - cv2.projectPoints| over seeds 0-2 and 4, 5, 8
+    coefficients, 200 points), ``reprojection.{intrinsics_px|distortion}`` (the core's camera
+    calibration against ``cv2.calibrateCamera``, 12 views of a 9 x 6 board, 0.1 px), ``ax_xb.truth.{rad|mm}``,
+    ``ax_xb.opencv.{rad|mm}`` (TSAI, PARK, DANIILIDIS, both set-ups), ``ax_zb.truth.{rad|mm}``."""
+    import cv2
+    import numpy as np
+
+    from ..calib import Problem, solve
+    from ..calib.blocks import CameraIntrinsics, FramesBlock
+    from ..calib.residuals import ReprojectionResidual
+    from ..camera import Camera, project_points
+    from ..handeye import solve_hand_eye, solve_robot_world_hand_eye
+    from ..transforms import invert_transforms, so3_exp, so3_log
+
+    out = {"projection_px": 0.0}
+    for seed in range(3):
+        for n_dist in (4, 5, 8):
+            rng = np.random.default_rng(seed)
+            P = np.column_stack([rng.uniform(-300, 300, (200, 2)), rng.uniform(400, 1500, 200)])
+            intr = np.array([rng.uniform(800, 2500), rng.uniform(800, 2500), rng.uniform(500, 700), rng.uniform(400, 600)])
+            dist = rng.normal(0, [0.1, 0.05, 0.002, 0.002, 0.02, 0.01, 0.005, 0.002][:n_dist])
+            ref, _ = cv2.projectPoints(P, np.zeros(3), np.zeros(3), Camera(*intr, distortion=tuple(dist)).matrix, dist)
+            out["projection_px"] = max(out["projection_px"],
+                                       float(np.max(np.abs(project_points(P, intr, dist).pixels - ref[:, 0]))))
+    # the core's camera calibration against cv2.calibrateCamera
+    true_intr, true_dist = np.array([1400.0, 1380.0, 645.0, 508.0]), np.array([-0.12, 0.08, 0.0008, -0.0005, -0.02])
+    rng = np.random.default_rng(0)
+    g = np.stack(np.meshgrid(np.arange(9.0), np.arange(6.0)), -1).reshape(-1, 2) * 25.0
+    X = np.column_stack([g - g.mean(0), np.zeros(len(g))])
+    T = np.tile(np.eye(4), (12, 1, 1))
+    T[:, :3, :3] = so3_exp(rng.normal(0, 0.35, (12, 3)))
+    T[:, :3, 3] = np.column_stack([rng.normal(0, 60, (12, 2)), rng.uniform(450, 800, 12)])
+    P = (T[:, None, :3, :3] @ X[None, :, :, None])[..., 0] + T[:, None, :3, 3]
+    uv = project_points(P.reshape(-1, 3), true_intr, true_dist).pixels.reshape(12, len(X), 2)
+    uv = uv + rng.normal(0, 0.1, uv.shape)
+    cam = CameraIntrinsics(np.array([1300.0, 1300.0, 640.0, 512.0]), np.zeros(5))
+    start = T.copy()
+    start[:, :3, 3] += 5.0
+    res = ReprojectionResidual(cam, FramesBlock("camera", np.eye(4), free=False), FramesBlock("board", start), uv, X,
+                               sigma=0.1)
+    ours = solve(Problem([cam, res.camera_poses, res.target_poses], [res])).value("cam")
+    _, K, dist, _, _ = cv2.calibrateCamera([X.astype(np.float32)] * len(uv), [u.astype(np.float32) for u in uv],
+                                           (1280, 1024), None, None, flags=0,
+                                           criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12))
+    theirs = np.concatenate([[K[0, 0], K[1, 1], K[0, 2], K[1, 2]], dist.ravel()[:5]])
+    out["reprojection.intrinsics_px"] = float(np.max(np.abs(ours[:4] - theirs[:4])))
+    out["reprojection.distortion"] = float(np.max(np.abs(ours[4:] - theirs[4:])))
+
+    # the linear solvers on noise-free pose sets
+    def frame(rng, rot_sigma, t_sigma, t_mean=(0.0, 0.0, 0.0)):
+        F = np.eye(4)
+        F[:3, :3] = so3_exp(rng.normal(0, rot_sigma, 3))
+        F[:3, 3] = np.asarray(t_mean) + rng.normal(0, t_sigma, 3)
+        return F
+
+    def data(seed, setup):
+        rng = np.random.default_rng(seed)
+        F = np.stack([frame(rng, 0.5, 200, (800, 0, 600)) for _ in range(10)])
+        if setup == "eye_in_hand":
+            Xh, Z = frame(rng, 1.0, 80), frame(rng, 0.3, 100, (900, 0, 0))
+            return F, invert_transforms(F @ Xh) @ Z, Xh, Z
+        Xh, Z = frame(rng, 1.0, 300, (500, 1200, 1500)), frame(rng, 0.5, 60)
+        return F, invert_transforms(Xh) @ F @ Z, Xh, Z
+
+    def err(A, B):
+        return (float(np.linalg.norm(so3_log((A[:3, :3] @ B[:3, :3].T)[None])[0])),
+                float(np.linalg.norm(A[:3, 3] - B[:3, 3])))
+
+    methods = {"tsai": cv2.CALIB_HAND_EYE_TSAI, "park": cv2.CALIB_HAND_EYE_PARK,
+               "daniilidis": cv2.CALIB_HAND_EYE_DANIILIDIS}
+    truth, opencv, zb = [], [], []
+    for setup in ("eye_in_hand", "eye_to_hand"):
+        F, C, Xh, _ = data(1, setup)
+        F_cv = F if setup == "eye_in_hand" else invert_transforms(F)
+        for method, flag in methods.items():
+            ours = solve_hand_eye(F, C, setup=setup, method=method)
+            truth.append(err(ours, Xh))
+            R, t = cv2.calibrateHandEye(list(F_cv[:, :3, :3]), list(F_cv[:, :3, 3]), list(C[:, :3, :3]),
+                                        list(C[:, :3, 3]), method=flag)
+            Tcv = np.eye(4)
+            Tcv[:3, :3], Tcv[:3, 3] = R, t.ravel()
+            opencv.append(err(ours, Tcv))
+        F, C, Xh, Z = data(2, setup)
+        for T_found, T_ref in zip(solve_robot_world_hand_eye(F, C, setup=setup), (Xh, Z)):
+            zb.append(err(T_found, T_ref))
+    for key, rows in (("ax_xb.truth", truth), ("ax_xb.opencv", opencv), ("ax_zb.truth", zb)):
+        out[f"{key}.rad"], out[f"{key}.mm"] = max(r[0] for r in rows), max(r[1] for r in rows)
+    return out
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -642,6 +738,7 @@ HANDEYE_PRODUCERS = {
     "handeye/joint_offsets": handeye_joint_offsets,
     "handeye/camera_sag": camera_sag,
     "handeye/plain_fit": handeye_plain_fit,
+    "handeye/agreement": handeye_agreement,
     **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,

@@ -1046,5 +1046,21 @@ FIGURES += [Figure(f"handeye:plain fit {k}", "docs/handeye.md", _PF + pat, "hand
                 ("z max", r"[^)]*\), and its error was [0-9.]+-" + _N + " times", "plain.z.max"),
                 ("default z", r"(?s:.*?)its sigma covers the error \(at most " + _N + " sigma", "default.z.max"))]
 
+# handeye.md "Agreement with OpenCV": floating-point agreement on the tests' set-ups (handeye/agreement;
+# checked to its order of magnitude, 0-10x the printed value)
+_AG = "handeye/agreement"
+FIGURES += [Figure(f"handeye:agreement {k}", "docs/handeye.md", pat, _AG, field, rel_tol=9.0, note=_ROUNDING)
+            for k, pat, field in (
+                ("projection", r"\| max " + _N + " px from `cv2\\.projectPoints`", "projection_px"),
+                ("reprojection intrinsics", r"\| intrinsics " + _N + " px, distortion", "reprojection.intrinsics_px"),
+                ("reprojection distortion", r"\| intrinsics [0-9.e-]+ px, distortion " + _N, "reprojection.distortion"),
+                ("ax=xb truth rad", r"_agrees_with_opencv` \| truth: <= " + _N + " rad", "ax_xb.truth.rad"),
+                ("ax=xb truth mm", r"_agrees_with_opencv` \| truth: <= [0-9.e-]+ rad, " + _N + " mm", "ax_xb.truth.mm"),
+                ("ax=xb opencv rad", r"\(TSAI, PARK, DANIILIDIS\): <= " + _N + " rad", "ax_xb.opencv.rad"),
+                ("ax=xb opencv mm", r"\(TSAI, PARK, DANIILIDIS\): <= [0-9.e-]+ rad, " + _N + " mm", "ax_xb.opencv.mm"),
+                ("ax=zb truth rad", r"both_transforms_and_agrees_with_opencv` \| truth: <= " + _N + " rad", "ax_zb.truth.rad"),
+                ("ax=zb truth mm", r"both_transforms_and_agrees_with_opencv` \| truth: <= [0-9.e-]+ rad, " + _N + " mm",
+                 "ax_zb.truth.mm"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
