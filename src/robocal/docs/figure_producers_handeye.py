@@ -249,7 +249,8 @@ def handeye_variants_real(test_set: str) -> dict:
     ``prior.from_exact_mm``, ``prior.from_exact_deg`` (its camera against the ``--exact-poses``
     fit's), ``exact.rms_px`` and ``refined_intrinsics.rms_px``; on ChArUco ``source.from_default_{mm|deg}``
     (the exact-pose refinement on the 14 images the source library uses, standing in for its camera as in
-    ``tests/test_handeye_real.py``, against the default's camera, which is the exact-pose fit)."""
+    ``tests/test_handeye_real.py``, against the default's camera, which is the exact-pose fit),
+    ``pnp_rms_px.{min|max}`` (one PnP pose per image with the given intrinsics) and ``n_corners``."""
     import numpy as np
 
     from ..io.datasets import datasets_root
@@ -284,6 +285,11 @@ def handeye_variants_real(test_set: str) -> dict:
         out["source.from_default_mm"] = float(np.linalg.norm(source_like[:3, 3] - [exact[f"position_mm.{k}"]
                                                                                   for k in range(3)]))
         out["source.from_default_deg"] = angle_deg(source_like[:3, :3], R_exact)
+        from ..handeye import solve_pnp
+
+        _, rms, _ = solve_pnp(data.camera, det.board.object_points(), det.image_points[det.used])
+        out["pnp_rms_px.min"], out["pnp_rms_px.max"] = float(np.nanmin(rms)), float(np.nanmax(rms))
+        out["n_corners"] = float(np.sum(np.isfinite(det.image_points[det.used][..., 0])))
     return {**out, "prior.backprojection_px": float(prior["backprojection_rms_px"]),
             "prior.from_exact_mm": float(np.linalg.norm(np.subtract(p["position_mm"],
                                                                     [exact[f"position_mm.{k}"] for k in range(3)]))),
@@ -349,7 +355,9 @@ def handeye_refine_cases() -> dict:
     * ``corner.px``: seed 5, 8 noise-free images, one corner moved by (3, -2) px, its residual [px];
     * ``wrong.{held|free}.{px|mm}``: seed 2, 20 images, fx 1390 / fy 1410 and distortion (-0.2, 0.1):
       back-projection RMS and camera position error, intrinsics held and refined;
-    * ``swapped.{plain|huber}.{mm|deg}``: seed 20, 15 images, poses 4 and 9 swapped: camera error."""
+    * ``swapped.{plain|huber}.{mm|deg}``: seed 20, 15 images, poses 4 and 9 swapped: camera error;
+    * ``one_off.{plain|huber}.{mm|outliers}``: the same set, pose 4 moved by 3.7 mm along (1, 1, 1):
+      camera error and the images rejected."""
     import dataclasses
 
     import numpy as np
@@ -387,6 +395,12 @@ def handeye_refine_cases() -> dict:
         r = refine_hand_eye(F, sim.image_points, sim.target_points, sim.camera, loss=loss)
         out[f"swapped.{k}.mm"] = pos_err(r.camera_pose, sim)
         out[f"swapped.{k}.deg"] = float(rotation_error_deg(r.camera_pose, sim.camera_pose))
+    F = sim.T_base_flange.copy()
+    F[4, :3, 3] += 3.7 / np.sqrt(3.0)  # one reading 3.7 mm off
+    for k, loss in (("plain", "linear"), ("huber", "huber")):
+        r = refine_hand_eye(F, sim.image_points, sim.target_points, sim.camera, loss=loss)
+        out[f"one_off.{k}.mm"] = pos_err(r.camera_pose, sim)
+        out[f"one_off.{k}.outliers"] = float(len(r.outliers))
     return out
 
 

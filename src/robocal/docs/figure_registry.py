@@ -1062,5 +1062,22 @@ FIGURES += [Figure(f"handeye:agreement {k}", "docs/handeye.md", pat, _AG, field,
                 ("ax=zb truth mm", r"both_transforms_and_agrees_with_opencv` \| truth: <= [0-9.e-]+ rad, " + _N + " mm",
                  "ax_zb.truth.mm"))]
 
+# handeye.md "Robust option": one reading off by 3.7 mm (handeye/refine_cases)
+_OO = r"one pose instead moved by 3\.7 mm:\s+"
+FIGURES += [Figure(f"handeye:refine cases one off {k}", "docs/handeye.md", _OO + pat, _RC, field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("plain", _N + " mm camera error plain", "one_off.plain.mm", 0.02),
+                ("huber", r"[0-9.]+ mm camera error plain, " + _N + " mm with Huber", "one_off.huber.mm", 0.02),
+                ("rejected", r"[^)]*with Huber, " + _N + " images rejected", "one_off.huber.outliers", 0.0))]
+
+# handeye.md "Detection": the real ChArUco set's per-image PnP fits (handeye/variants_real, slow)
+_DT = r"On the ROS-Industrial\s+ChArUco set this recovers [0-9]+ corners \([0-9]+ -> "
+FIGURES += [Figure("handeye:detection charuco corners", "docs/handeye.md", _DT + _N + " in 16 images", _VR + "test_set_charuco",
+                   "n_corners", rel_tol=0.0),
+            Figure("handeye:detection charuco pnp min", "docs/handeye.md", _DT + r"(?s:.*?)to " + _N + "-[0-9.]+ px RMS",
+                   _VR + "test_set_charuco", "pnp_rms_px.min", rel_tol=0.02),
+            Figure("handeye:detection charuco pnp max", "docs/handeye.md", _DT + r"(?s:.*?)to [0-9.]+-" + _N + " px RMS",
+                   _VR + "test_set_charuco", "pnp_rms_px.max", rel_tol=0.02)]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
