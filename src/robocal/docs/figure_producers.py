@@ -598,4 +598,5 @@ SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_
                   "handeye/camera_real/test_set_charuco", "handeye/camera_real/test_set_10x10",
                   "handeye/variants_real/test_set_charuco", "handeye/variants_real/test_set_10x10",
                   "handeye/gate_shifted", "handeye/study_summary", "handeye/board_shape",
+                  "handeye/detection_rendered",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

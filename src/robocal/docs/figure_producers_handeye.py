@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "handeye_agreement", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate", "handeye_plain_fit",
+__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "detection_rendered", "handeye_agreement", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate", "handeye_plain_fit",
            "handeye_refine_cases", "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
@@ -692,6 +692,37 @@ def handeye_agreement() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def detection_rendered() -> dict:
+    """docs/handeye.md "Detection" (the set-up of ``tests/test_camera_detection.py``): 3 rendered views
+    (seed 3, noise seed 11) of each of ``checkerboard:9x6:30mm``, ``charuco:9x7:30mm:22mm:DICT_5X5_100``
+    and ``circles:10x10:25.4mm:modified``, detected; ``rms_px.{min|max}`` of the detections against the
+    exact projections over the nine images."""
+    import numpy as np
+
+    from ..io.boards import board_image, parse_board
+    from ..io.detection import detect_board
+    from ..sim.cameras.camera_cell import default_camera, simulate_hand_eye_poses
+    from ..sim.cameras.camera_render import BoardRenderer
+    from ..workflows.cameras.camera_simulate import _texel_mm
+
+    rms = []
+    for spec in ("checkerboard:9x6:30mm", "charuco:9x7:30mm:22mm:DICT_5X5_100", "circles:10x10:25.4mm:modified"):
+        board = parse_board(spec)
+        obj = board.object_points()
+        cam = default_camera()
+        truth = simulate_hand_eye_poses(obj, n_images=3, camera=cam, front_z=board.front_z, seed=3)
+        texture, affine = board_image(board, _texel_mm(board))
+        renderer = BoardRenderer(cam, texture, affine)
+        rng = np.random.default_rng(11)
+        for i, T in enumerate(truth.T_camera_target):
+            det = detect_board(renderer.render(T, rng), board, name=f"v{i}")
+            err = det.image_points - cam.project((T[:3, :3] @ obj.T).T + T[:3, 3]).pixels
+            ok = np.isfinite(err[:, 0])
+            rms.append(float(np.sqrt(np.mean(np.sum(err[ok] ** 2, axis=1)))))
+    return {"rms_px.min": min(rms), "rms_px.max": max(rms)}
+
+
 #: the ROS-Industrial sets' boards (as ``tests/test_camera_calibrate_real.py``)
 ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
               "test_set_10x10": "circles:10x10:25.4mm:modified"}
@@ -753,6 +784,7 @@ HANDEYE_PRODUCERS = {
     "handeye/camera_sag": camera_sag,
     "handeye/plain_fit": handeye_plain_fit,
     "handeye/agreement": handeye_agreement,
+    "handeye/detection_rendered": detection_rendered,
     **{f"handeye/variants_real/{t}": functools.partial(handeye_variants_real, t) for t in ROS_BOARDS},
     **{f"handeye/camera_real/{t}": functools.partial(camera_calibrate_real, t) for t in ROS_BOARDS},
     "controller/walkthrough": controller_walkthrough,

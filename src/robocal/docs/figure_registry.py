@@ -1079,5 +1079,11 @@ FIGURES += [Figure("handeye:detection charuco corners", "docs/handeye.md", _DT +
             Figure("handeye:detection charuco pnp max", "docs/handeye.md", _DT + r"(?s:.*?)to [0-9.]+-" + _N + " px RMS",
                    _VR + "test_set_charuco", "pnp_rms_px.max", rel_tol=0.02)]
 
+# handeye.md "Detection": rendered images against the exact projections (handeye/detection_rendered, slow)
+FIGURES += [Figure(f"handeye:detection rendered {k}", "docs/handeye.md", r"detections are " + pat,
+                   "handeye/detection_rendered", field, rel_tol=0.05)
+            for k, pat, field in (("min", _N + "-", "rms_px.min"), ("max", r"[0-9.]+-" + _N + " px RMS from the exact",
+                                                                  "rms_px.max"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
