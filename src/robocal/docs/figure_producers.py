@@ -12,6 +12,7 @@ from pathlib import Path
 
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
+from .figure_producers_handeye import HANDEYE_PRODUCERS
 from .figure_producers_setups import SETUP_PRODUCERS
 from .figure_producers_thermal import THERMAL_PRODUCERS
 
@@ -537,6 +538,7 @@ PRODUCERS = {
     **BENCH_PRODUCERS,
     **THERMAL_PRODUCERS,
     **SETUP_PRODUCERS,
+    **HANDEYE_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -581,6 +583,9 @@ PRODUCERS = {
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     head = producer.split("/")[0]
+    if producer.startswith(("handeye/default_real/", "handeye/camera_real/", "handeye/gate_shifted",
+                            "handeye/variants_real/")):
+        return ("ros_industrial_handeye",)
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
     return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
@@ -600,4 +605,9 @@ SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_
                   # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
                   "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",
+                  # docs/handeye.md: camera calibrate on the real sets, ~2-5 s CPU each
+                  "handeye/camera_real/test_set_charuco", "handeye/camera_real/test_set_10x10",
+                  "handeye/variants_real/test_set_charuco", "handeye/variants_real/test_set_10x10",
+                  "handeye/gate_shifted", "handeye/study_summary", "handeye/board_shape",
+                  "handeye/detection_rendered",
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

@@ -935,5 +935,331 @@ FIGURES += [Figure(f"testing:frames-only line {f}", "docs/testing.md", _FO + pat
                            ("residual_rms_mm", r"[^|\n]*?residual " + _N),
                            ("residual_pred_mm", r"[^|\n]*?residual [0-9.]+ mm vs " + _N))]
 
+# ---- docs/handeye.md and docs/controller.md (robocal.docs.figure_producers_handeye) ----
+# controller.md "Walk-through": the page's six commands (FK differences are floating-point rounding:
+# checked to their order of magnitude, 0-10x the printed value)
+_CW, _CTL = "controller/walkthrough", "docs/controller.md"
+_ROUNDING = "floating-point rounding: order of magnitude"
+FIGURES += [Figure(f"controller:walk-through {k}", _CTL, pat, _CW, field, rel_tol=tol, note=note)
+            for k, pat, field, tol, note in (
+                ("import fk", r"FK equal to the controller's\s+to " + _N + " mm", "import.fk_mm", 9.0, _ROUNDING),
+                ("conversion cancels", r"hundred-metre offsets cancel to ~" + _N + " mm", "import.fk_mm", 9.0, _ROUNDING),
+                ("factory rms", r"moves the flange by " + _N + " mm RMS", "factory.rms_mm", 0.01, ""),
+                ("factory max", r"moves the flange by [0-9.]+ mm RMS, " + _N + " mm max", "factory.max_mm", 0.01, ""),
+                ("factory rot max", r"mm RMS, [0-9.]+ mm max, " + _N + " deg max", "factory.rot_max_deg", 0.01, ""),
+                ("holdout before", r"Held-out error goes from " + _N + " mm RMS", "holdout.before_mm", 0.02, ""),
+                ("holdout after", r"Held-out error goes from [0-9.]+ mm RMS to " + _N + " mm RMS", "holdout.after_mm",
+                 0.05, ""),
+                ("added rms", r"calib/calibrated_robot\.toml`\):\s+" + _N + " mm RMS", "added.rms_mm", 0.02, ""),
+                ("added max", r"calib/calibrated_robot\.toml`\):\s+[0-9.]+ mm RMS, " + _N + " mm max", "added.max_mm",
+                 0.02, ""),
+                ("added aligned rms", r"mm max \(" + _N + " mm RMS after a best-fit base", "added.aligned_rms_mm", 0.02, ""),
+                ("export fk", r"The file's chain equals the calibrated model to " + _N + " mm", "export.fk_mm", 9.0,
+                 _ROUNDING),
+                ("export read back", r"1000 random joint sets; ~" + _N, "export.fk_mm", 9.0, _ROUNDING))]
+FIGURES.append(Figure("controller:export urdf read back", _CTL, r"checks the file against the model\s+\(~" + _N + " mm",
+                      _CW, "urdf.fk_mm", rel_tol=9.0, note=_ROUNDING))
+_ANG = r"would move the flange by up to\s+"
+FIGURES += [Figure(f"controller:angle convention {k}", _CTL, _ANG + pat, "controller/angle_convention", field, rel_tol=0.02)
+            for k, pat, field in (("ur10 mm", _N + " mm", "ur10.mm"), ("ur10 deg", r"[0-9.]+ mm / " + _N + " deg", "ur10.deg"),
+                                  ("ur10e a mm", r"[^(]*\(UR10\), " + _N + " mm", "ur10e_a.mm"),
+                                  ("ur10e b mm", r"[^(]*\(UR10\), [0-9.]+ mm \(UR10e a\) and " + _N + " mm", "ur10e_b.mm"))]
+FIGURES += [Figure(f"controller:probe {k}", _CTL, r"The fit leaves " + pat, "controller/probe", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("fit max mm", _N + " mm", "fit.max_mm", 0.05),
+                ("fit max deg", r"[0-9.]+ mm and " + _N + " deg", "fit.max_deg", 0.1),
+                ("rounding allows", r"[^(]*\(the rounding allows " + _N + " mm", "tolerance_mm", 0.01),
+                ("diff min", r"(?s:.*?)by at most " + _N + " to", "diff.min_mm", 0.1),
+                ("diff max", r"(?s:.*?)by at most [0-9.]+ to " + _N + " mm", "diff.max_mm", 0.1),
+                ("diff rot", r"(?s:.*?)by at most [0-9.]+ to [0-9.]+ mm and " + _N + " deg", "diff.rot_max_deg", 0.5))]
+FIGURES += [Figure(f"controller:ur10e (b) d{k + 1}", _CTL, r"metres that cancel \(" + r"[−0-9.-]+ m,? (?:and )?" * i + _N,
+                   "controller/ur10e_b_table", f"d.{k}", rel_tol=0.0)
+            for i, k in enumerate((1, 2, 3))]
+
+# handeye.md "The default": robocal handeye solve <set>/cal_data.yaml --json on the ROS-Industrial sets
+_HD = "| set | held-out RMS exact / estimated [px] |"
+for _label, _set, _cols in (
+        ("circle grid (eye-in-hand)", "test_set_10x10",
+         [(0, 0, "cv.exact"), (0, 1, "cv.estimated"), (2, 0, "default_vs_exact.mm"), (2, 1, "default_vs_exact.deg"),
+          (3, 0, "rms_px"), (4, 0, "noise.mm"), (4, 1, "noise.deg"), (4, 2, "noise.px"), (5, 0, "difference.mm"),
+          (5, 1, "difference.deg"), (5, 2, "difference.sigma")]),
+        ("ChArUco (eye-to-hand)", "test_set_charuco",
+         [(0, 0, "cv.exact"), (0, 1, "cv.estimated"), (2, 0, "default_vs_exact.mm"), (2, 1, "default_vs_exact.deg"),
+          (3, 0, "rms_px"), (4, 0, "noise.mm"), (4, 1, "noise.deg"), (4, 2, "noise.px"), (5, 0, "difference.sigma")])):
+    FIGURES += _table("docs/handeye.md", {_label: ""}, f"handeye/default_real/{_set}", _cols,
+                      prefix=f"handeye:default {_set} ", rel_tol=0.02, after=_HD)
+FIGURES += [Figure(f"handeye:default {k}", "docs/handeye.md", pat, f"handeye/default_real/{s}", field, rel_tol=tol)
+            for k, pat, s, field, tol in (
+                ("charuco rms (still missing)", r"reprojection RMS with the given intrinsics is " + _N + " px",
+                 "test_set_charuco", "rms_px", 0.005),
+                ("10x10 chain rms", r"per-image PnP fits to [0-9.]+ px, the chain to " + _N + " px", "test_set_10x10",
+                 "rms_px", 0.005),
+                ("10x10 estimated noise mm", r"the estimated-noise fits \(" + _N + " mm", "test_set_10x10", "noise.mm", 0.05),
+                ("10x10 estimated noise deg", r"the estimated-noise fits \([0-9.]+ mm / " + _N + " deg", "test_set_10x10",
+                 "noise.deg", 0.05))]
+
+# handeye.md: the prose on the paper's study (handeye/study, slow) and on the fair comparison
+_ST = r"\*Number of images\.\*(?s:.*?)"
+FIGURES += [Figure(f"handeye:study prose {k}", "docs/handeye.md", _ST + pat, "handeye/study", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("brown 3 trans", r"falls from\s+" + _N + " mm at 3 images", "brown.3.refined.trans_mm"),
+                ("brown 8 trans", r"mm at 3 images to " + _N + " mm at 8", "brown.8.refined.trans_mm"),
+                ("brown 30 trans", r"mm at 8 and " + _N + " mm at 30", "brown.30.refined.trans_mm"),
+                ("brown 3 rot", r"the rotation error from " + _N + " deg", "brown.3.refined.rot_deg"),
+                ("brown 10 rot", r"the rotation error from [0-9.]+ deg to\s+" + _N + "-", "brown.10.refined.rot_deg"),
+                ("brown 8 rot", r"the rotation error from [0-9.]+ deg to\s+[0-9.]+-" + _N + " deg at 8-10",
+                 "brown.8.refined.rot_deg"))]
+FIGURES += [Figure(f"handeye:fair prose {k}", "docs/handeye.md", _WIN + pat, _FC, field, rel_tol=0.01)
+            for k, pat, field in (
+                ("1 linear rot min", r"It wins in rotation \([0-9.]+ deg against\s+" + _N, "1 mm / 0.1 deg | OpenCV TSAI|1|0"),
+                ("1 linear rot max", r"It wins in rotation \([0-9.]+ deg against\s+[0-9.]+-" + _N + " deg",
+                 "1 mm / 0.1 deg | OpenCV DANIILIDIS|1|0"),
+                ("systematic default", r"every refinement ends near " + _N + " mm",
+                 f"systematic 0.5 mm/m + 0.02 mm / 0.004 deg | {_D}|0|0"))]
+FIGURES += [Figure(f"handeye:principal point rotation {k}", "docs/handeye.md", pat, "handeye/principal_point_rotation",
+                   "deg", rel_tol=0.0)
+                for k, pat in (("caveat", r"a 3 px principal-point error is a " + _N + " deg"),
+                               ("study", r"principal-point uncertainty of ~3 px \(= " + _N + " deg"))]
+
+# handeye.md "`camera calibrate`: the distortion model": camera calibrate on the ROS-Industrial images
+_CC = "| set | held-out RMS [px] k1-k2 / k1-k2-p1-p2 / k1-k3 / k1-k3-p1-p2 / rational |"
+for _label, _set in (("ChArUco, 16 images", "test_set_charuco"), ("circle grid, 15 images", "test_set_10x10")):
+    FIGURES += _table("docs/handeye.md", {_label: ""}, f"handeye/camera_real/{_set}",
+                      [(0, k, f"held_out.{m}") for k, m in enumerate(("k1-k2", "k1-k2-p1-p2", "k1-k3", "k1-k3-p1-p2",
+                                                                       "rational"))] + [(2, 0, "rms_px")],
+                      prefix=f"handeye:camera calibrate {_set} ", rel_tol=0.005, after=_CC)
+_CR = "handeye/camera_real/test_set_charuco"
+FIGURES += [Figure(f"handeye:camera calibrate {k}", "docs/handeye.md", pat, _CR, field, rel_tol=tol, note=note)
+            for k, pat, field, tol, note in (
+                ("charuco richer lower", r"\(k1-k2-p1-p2 is only " + _N + r" % lower\)", "richer_lower_percent", 0.05, ""),
+                ("rational k3", r"\(e\.g\.\s+k3 " + _N, "rational.k3", 0.05, ""),
+                ("rational k3 sigma", r"\(e\.g\.\s+k3 [−0-9.-]+ \+- " + _N, "rational.k3_sigma", 0.9,
+                 "not determined: sigma ill-conditioned, order of magnitude"),
+                ("rational k6", r"\(e\.g\.\s+k3 [−0-9.-]+ \+- [0-9.]+, k6 " + _N, "rational.k6", 0.05, ""),
+                ("rational k6 sigma", r"\(e\.g\.\s+k3 [−0-9.-]+ \+- [0-9.]+, k6 [−0-9.-]+ \+- " + _N, "rational.k6_sigma",
+                 0.9, "not determined: sigma ill-conditioned, order of magnitude"),
+                ("rational training rms", r"although its training RMS \(" + _N + r" px\)", "rational.rms_px", 0.005, ""))]
+
+# handeye.md "Side by side with OpenCV": the prose on the rendered table (camera/bench_calibration, slow)
+_CBP = r"it picked the refined set in every seed\)(?s:.*?)"
+FIGURES += [Figure(f"handeye:camera bench prose {k}", "docs/handeye.md", _CBP + pat, "camera/bench_calibration", field,
+                   rel_tol=0.02)
+            for k, pat, field in (
+                ("charuco unrefined fx", r"focal length \(" + _N, "charuco | OpenCV CharucoDetector|1|0"),
+                ("charuco robocal fy", r"focal length \([0-9.]+ against " + _N, "charuco | **robocal**|2|0"),
+                ("charuco robocal fx", r"focal length \([0-9.]+ against [0-9.]+-" + _N, "charuco | **robocal**|1|0"),
+                ("k2 min", r"The k2 errors \(" + _N, "checkerboard | **robocal**|6|0"),
+                ("k2 max", r"The k2 errors \([0-9.]+-" + _N, "charuco | OpenCV CharucoDetector|6|0"))]
+
+# handeye.md "Sanity gate": the clean ROS-Industrial sets (handeye/default_real) and the 10x10 set shifted
+_GT = r"Measured by `pytest tests/test_handeye_gate\.py`: the clean ROS-Industrial sets pass\s+\(median angle mismatch "
+_DR = "handeye/default_real/"
+FIGURES += [Figure(f"handeye:gate {k}", "docs/handeye.md", _GT + pat, prod, field, rel_tol=tol)
+            for k, pat, prod, field, tol in (
+                ("charuco angle", _N + " deg ChArUco", _DR + "test_set_charuco", "gate.angle_mismatch_deg", 0.02),
+                ("10x10 angle", r"[0-9.]+ deg ChArUco, " + _N + " deg 10x10", _DR + "test_set_10x10",
+                 "gate.angle_mismatch_deg", 0.02),
+                ("charuco backprojection", r"[^;]*; back-projection " + _N, _DR + "test_set_charuco",
+                 "gate.backprojection_px", 0.02),
+                ("10x10 backprojection", r"[^;]*; back-projection [0-9.]+ and " + _N, _DR + "test_set_10x10",
+                 "gate.backprojection_px", 0.02),
+                ("charuco limit", r"[^;]*; back-projection [0-9.]+ and [0-9.]+ px against a " + _N, _DR + "test_set_charuco",
+                 "gate.backprojection_limit_px", 0.02),
+                ("shifted angle", r"(?s:.*?)paired to pose i\+1 fails \(" + _N + " deg", "handeye/gate_shifted",
+                 "angle_mismatch_deg", 0.02),
+                ("shifted backprojection", r"(?s:.*?)paired to pose i\+1 fails \([0-9.]+ deg, " + _N + " px",
+                 "handeye/gate_shifted", "backprojection_px", 0.02),
+                ("re-paired angle", r"(?s:.*?)the\s+shift is named \(" + _N + " deg", "handeye/gate_shifted",
+                 "repaired.angle_mismatch_deg", 0.02),
+                ("re-paired rms", r"(?s:.*?)the\s+shift is named \([0-9.]+ deg, " + _N + " px", "handeye/gate_shifted",
+                 "repaired.linear_rms_px", 0.05))]
+
+# handeye.md "Or let the data say": robot_pose_sigma="estimate" in simulation (handeye/noise_estimate)
+_NE = r"\*Or let the data say\.\*(?s:.*?)"
+FIGURES += [Figure(f"handeye:noise estimate {k}", "docs/handeye.md", _NE + pat, "handeye/noise_estimate", field,
+                   rel_tol=0.02)
+            for k, pat, field in (
+                ("l1 px", r"0\.01 deg as " + _N + " px", "l1.px.max"),
+                ("l1 mm min", r"0\.01 deg as [0-9.]+ px / " + _N, "l1.mm.min"),
+                ("l1 mm max", r"0\.01 deg as [0-9.]+ px / [0-9.]+-" + _N, "l1.mm.max"),
+                ("l1 deg", r"0\.01 deg as [0-9.]+ px / [0-9.]+-[0-9.]+ mm / " + _N, "l1.deg.max"),
+                ("l2 mm min", r"0\.3 mm / 0\.05 deg as " + _N, "l2.mm.min"),
+                ("l2 mm max", r"0\.3 mm / 0\.05 deg as [0-9.]+-" + _N, "l2.mm.max"),
+                ("l2 deg min", r"0\.3 mm / 0\.05 deg as [0-9.]+-[0-9.]+ mm / " + _N, "l2.deg.min"),
+                ("l2 deg max", r"0\.3 mm / 0\.05 deg as [0-9.]+-[0-9.]+ mm / [0-9.]+-" + _N, "l2.deg.max"),
+                ("l3 mm min", r"1 mm / 0\.1 deg as " + _N, "l3.mm.min"),
+                ("l3 mm max", r"1 mm / 0\.1 deg as [0-9.]+-" + _N, "l3.mm.max"),
+                ("l3 deg min", r"1 mm / 0\.1 deg as [0-9.]+-[0-9.]+ mm /\s+" + _N, "l3.deg.min"),
+                ("l3 deg max", r"1 mm / 0\.1 deg as [0-9.]+-[0-9.]+ mm /\s+[0-9.]+-" + _N, "l3.deg.max"),
+                ("err estimate min", r"it gives " + _N, "err.estimate.min"),
+                ("err estimate max", r"it gives [0-9.]+-" + _N, "err.estimate.max"),
+                ("err default min", r"camera-position errors against " + _N, "err.default.min"),
+                ("err default max", r"camera-position errors against [0-9.]+-" + _N, "err.default.max"),
+                ("err exact min", r"default and " + _N + "-[0-9.]+ mm with the poses taken as exact", "err.exact.min"),
+                ("err exact max", r"default and [0-9.]+-" + _N + " mm with the poses taken as exact", "err.exact.max"),
+                ("z estimate max", r"its error is at most " + _N + " of its sigma", "z.estimate.max"),
+                ("z default min", r"\(the default's: " + _N, "z.default.min"),
+                ("z default max", r"\(the default's: [0-9.]+-" + _N, "z.default.max"),
+                ("12 images worse", r"\(" + _N + r" of 6\s+seeds worse\)", "n12.worse"))]
+
+# handeye.md: the former fixed prior and refined intrinsics on the real sets (handeye/variants_real, slow),
+# auto in simulation (handeye/auto_simulated)
+_VR = "handeye/variants_real/"
+_CH = r"\*Choose the sigma to match the robot\.\*(?s:.*?)"
+_PD = r"The previous default \(a fixed [0-9.]+ mm / [0-9.]+ deg prior\) landed "
+_AS = r"In simulation \(16 images, 0\.2 px, seed 0, 1 mm / 0\.1\s+deg robot noise\) the estimated model is kept and lands "
+FIGURES += [Figure(f"handeye:variants {k}", "docs/handeye.md", pat, prod, field, rel_tol=tol)
+            for k, pat, prod, field, tol in (
+                ("10x10 prior rms", _CH + r"circle grid " + _N + " px against", _VR + "test_set_10x10",
+                 "prior.backprojection_px", 0.01),
+                ("10x10 exact rms", _CH + r"circle grid [0-9.]+ px against " + _N + " px", _VR + "test_set_10x10",
+                 "exact.rms_px", 0.005),
+                ("charuco prior rms", _CH + r"ChArUco " + _N + " against", _VR + "test_set_charuco",
+                 "prior.backprojection_px", 0.01),
+                ("charuco exact rms", _CH + r"ChArUco [0-9.]+ against " + _N, _VR + "test_set_charuco", "exact.rms_px", 0.005),
+                ("10x10 prior from exact mm", _PD + _N + " mm", _VR + "test_set_10x10", "prior.from_exact_mm", 0.02),
+                ("10x10 prior from exact deg", _PD + r"[0-9.]+ mm / " + _N + " deg", _VR + "test_set_10x10",
+                 "prior.from_exact_deg", 0.02),
+                ("10x10 prior rms (default section)", _PD + r"[^\n]*\nat " + _N + " px on the circle grid", _VR + "test_set_10x10",
+                 "prior.backprojection_px", 0.01),
+                ("charuco refined intrinsics", r"With the intrinsics refined it is " + _N + " px", _VR + "test_set_charuco",
+                 "refined_intrinsics.rms_px", 0.01),
+                ("auto simulated error", _AS + _N + " mm", "handeye/auto_simulated", "auto.error_mm", 0.02),
+                ("exact simulated error", _AS + r"[0-9.]+ mm from the true camera against " + _N, "handeye/auto_simulated",
+                 "exact.error_mm", 0.02))]
+
+# handeye.md "Do the paper's conclusions hold?": summaries of the study's refined table (slow)
+_SS = r"\*\*Do the paper's conclusions hold\?(?s:.*?)"
+FIGURES += [Figure(f"handeye:study summary {k}", "docs/handeye.md", _SS + pat, "handeye/study_summary", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("ratio min", r"with 3-6 images the errors are " + _N + "-", "brown.ratio_3_6_to_8.min"),
+                ("ratio max", r"with 3-6 images the errors are [0-9.]+-" + _N + "x", "brown.ratio_3_6_to_8.max"),
+                ("rotation floor", r"stops improving at about " + _N + " deg", "brown.rot_10_30.median"),
+                ("no distortion trans min", r"Ignoring distortion costs " + _N + "-", "none.trans_4_30.min"),
+                ("no distortion trans max", r"Ignoring distortion costs [0-9.]+-" + _N + " mm", "none.trans_4_30.max"),
+                ("no distortion rot min", r"Ignoring distortion costs [0-9.]+-[0-9.]+ mm and " + _N + "-", "none.rot.min"),
+                ("no distortion rot max", r"Ignoring distortion costs [0-9.]+-[0-9.]+ mm and [0-9.]+-" + _N + " deg",
+                 "none.rot.max"),
+                ("radial/division floor", r"keep a rotation floor of ~" + _N + " deg", "radial_division.rot_8_30.median"))]
+FIGURES.append(Figure("handeye:default charuco rms on the target plane", "docs/handeye.md",
+                      r"\(" + _N + r" mm RMS left on the ChArUco target plane\)", "handeye/default_real/test_set_charuco",
+                      "rms_mm", rel_tol=0.01))
+
+# handeye.md: the other tests of tests/test_handeye_refine.py on their set-ups (handeye/refine_cases)
+_RC = "handeye/refine_cases"
+FIGURES += [Figure(f"handeye:refine cases {k}", "docs/handeye.md", pat, _RC, field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("sigma eye-in-hand", r"\(measured at most " + _N + " and", "sigma.eye_in_hand.max", 0.02),
+                ("sigma eye-to-hand", r"\(measured at most [0-9.]+ and " + _N + r" sigma\)", "sigma.eye_to_hand.max", 0.02),
+                ("corner px", r"one corner moved by [0-9.]+ px shows " + _N + " px", "corner.px", 0.01),
+                ("wrong held px", r"wrong distortion\) gives " + _N + " px", "wrong.held.px", 0.02),
+                ("wrong held mm", r"wrong distortion\) gives [0-9.]+ px and " + _N + " mm held", "wrong.held.mm", 0.02),
+                ("wrong free px", r"mm held, " + _N + " px and", "wrong.free.px", 0.02),
+                ("wrong free mm", r"mm held, [0-9.]+ px and " + _N + " mm with", "wrong.free.mm", 0.02),
+                ("swapped plain mm", r"pose file give " + _N + " mm", "swapped.plain.mm", 0.02),
+                ("swapped plain deg", r"pose file give [0-9.]+ mm / " + _N + " deg plain", "swapped.plain.deg", 0.02),
+                ("swapped huber mm", r"deg plain and " + _N + " mm", "swapped.huber.mm", 0.02),
+                ("swapped huber deg", r"deg plain and [0-9.]+ mm / " + _N + " deg with Huber", "swapped.huber.deg", 0.02))]
+
+# handeye.md "Board shape": rendered bent board through camera calibrate (handeye/board_shape, slow)
+_BS = r"### Board shape(?s:.*?)"
+FIGURES += [Figure(f"handeye:board shape {k}", "docs/handeye.md", _BS + pat, "handeye/board_shape", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("true sag", r"i\.e\. " + _N + " mm over the corners", "true_sag_mm", 0.0),
+                ("sag x", r"sag_x " + _N, "sag.x", 0.005),
+                ("sag x sigma", r"sag_x [0-9.]+ \+- " + _N, "sag.sigma_x", 0.1),
+                ("sag y", r"sag_y " + _N + " mm", "sag.y", 0.0),
+                ("fx flat", r"fx " + _N + " px off with the flat model", "fx_error.flat", 0.02),
+                ("fx shaped", r"off with the flat model, " + _N + " px with", "fx_error.shaped", 0.1),
+                ("rms flat", r"RMS " + _N + " px flat", "rms.flat", 0.02),
+                ("rms shaped", r"px flat, " + _N + " px with the shape", "rms.shaped", 0.02))]
+
+# handeye.md: the joint-offset tests of tests/test_handeye_refine.py (handeye/joint_offsets)
+_JO = r"the joint offsets of an ABB IRB 140 \([^)]*\) come back within 3\s+sigma, eye-to-hand \(measured \|error\| <= "
+FIGURES += [Figure(f"handeye:joint offsets {k}", "docs/handeye.md", _JO + pat, "handeye/joint_offsets", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("e2h err", _N + " deg", "e2h.err_max", 0.02),
+                ("e2h sigma min", r"[0-9.]+ deg, sigma " + _N, "e2h.sigma.min", 0.05),
+                ("e2h sigma max", r"[0-9.]+ deg, sigma [0-9.]+-" + _N, "e2h.sigma.max", 0.05),
+                ("e2i err", r"[^)]*\) and eye-in-hand\s+\(\|error\| <= " + _N, "e2i.err_max", 0.02),
+                ("e2i sigma min", r"[^)]*\) and eye-in-hand\s+\(\|error\| <= [0-9.]+ deg, sigma " + _N, "e2i.sigma.min", 0.05),
+                ("e2i sigma max", r"[^)]*\) and eye-in-hand\s+\(\|error\| <= [0-9.]+ deg, sigma [0-9.]+-" + _N,
+                 "e2i.sigma.max", 0.05),
+                ("e2h rms", r"(?s:.*?)only with the offsets \(" + _N + " px", "e2h.rms_px", 0.02),
+                ("e2h without", r"(?s:.*?)only with the offsets \([0-9.]+ px against " + _N, "e2h.without_px", 0.02),
+                ("e2i without", r"(?s:.*?)only with the offsets \([0-9.]+ px against [0-9.]+ and\s+" + _N + " px without",
+                 "e2i.without_px", 0.02))]
+
+# handeye.md "The default": the ChArUco camera against the source library's (handeye/variants_real, slow);
+# the circle grid's per-image PnP RMS
+_SRC = r"\| ChArUco \(eye-to-hand\) \|[^|]*\|[^|]*\| [0-9.]+ mm / [0-9.]+ deg \("
+FIGURES += [Figure("handeye:default charuco from the source mm", "docs/handeye.md", _SRC + _N + " mm",
+                   _VR + "test_set_charuco", "source.from_default_mm", rel_tol=0.03),
+            Figure("handeye:default charuco from the source deg", "docs/handeye.md", _SRC + r"[0-9.]+ mm / " + _N + " deg",
+                   _VR + "test_set_charuco", "source.from_default_deg", rel_tol=0.03),
+            Figure("handeye:default 10x10 per-image pnp", "docs/handeye.md", r"per-image PnP fits to " + _N + " px",
+                   "handeye/default_real/test_set_10x10", "gate.pnp_rms_px", rel_tol=0.02)]
+
+# handeye.md "Camera calibration": a sagging board (handeye/camera_sag)
+FIGURES += [Figure(f"handeye:camera sag {k}", "docs/handeye.md", pat, "handeye/camera_sag", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("brown 0.15", r"\(measured max " + _N + " and", "brown.z_max_0.15"),
+                ("division 0.15", r"\(measured max [0-9.]+ and " + _N + " sigma\\)", "division.z_max_0.15"),
+                ("brown 1", r"\(measured " + _N + " and [0-9.]+ sigma\\): flatness", "brown.fx_z_1"),
+                ("division 1", r"\(measured [0-9.]+ and " + _N + " sigma\\): flatness", "division.fx_z_1"))]
+
+# handeye.md "Errors in variables": the plain reprojection fit with robot noise (handeye/plain_fit)
+_PF = r"that plain reprojection fit was \*worse\*\s+than the linear solvers \("
+FIGURES += [Figure(f"handeye:plain fit {k}", "docs/handeye.md", _PF + pat, "handeye/plain_fit", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("rot min", _N + "-", "plain.rot_deg.min"),
+                ("rot max", r"[0-9.]+-" + _N + " deg", "plain.rot_deg.max"),
+                ("mm min", r"[0-9.]+-[0-9.]+ deg,\s+" + _N + "-", "plain.mm.min"),
+                ("mm max", r"[0-9.]+-[0-9.]+ deg,\s+[0-9.]+-" + _N + " mm", "plain.mm.max"),
+                ("linear rot", r"[^)]*against a median " + _N + " deg", "linear_best.rot_deg.median"),
+                ("linear mm", r"[^)]*against a median [0-9.]+ deg, " + _N + " mm", "linear_best.mm.median"),
+                ("z min", r"[^)]*\), and its error was " + _N + "-", "plain.z.min"),
+                ("z max", r"[^)]*\), and its error was [0-9.]+-" + _N + " times", "plain.z.max"),
+                ("default z", r"(?s:.*?)its sigma covers the error \(at most " + _N + " sigma", "default.z.max"))]
+
+# handeye.md "Agreement with OpenCV": floating-point agreement on the tests' set-ups (handeye/agreement;
+# checked to its order of magnitude, 0-10x the printed value)
+_AG = "handeye/agreement"
+FIGURES += [Figure(f"handeye:agreement {k}", "docs/handeye.md", pat, _AG, field, rel_tol=9.0, note=_ROUNDING)
+            for k, pat, field in (
+                ("projection", r"\| max " + _N + " px from `cv2\\.projectPoints`", "projection_px"),
+                ("reprojection intrinsics", r"\| intrinsics " + _N + " px, distortion", "reprojection.intrinsics_px"),
+                ("reprojection distortion", r"\| intrinsics [0-9.e-]+ px, distortion " + _N, "reprojection.distortion"),
+                ("ax=xb truth rad", r"_agrees_with_opencv` \| truth: <= " + _N + " rad", "ax_xb.truth.rad"),
+                ("ax=xb truth mm", r"_agrees_with_opencv` \| truth: <= [0-9.e-]+ rad, " + _N + " mm", "ax_xb.truth.mm"),
+                ("ax=xb opencv rad", r"\(TSAI, PARK, DANIILIDIS\): <= " + _N + " rad", "ax_xb.opencv.rad"),
+                ("ax=xb opencv mm", r"\(TSAI, PARK, DANIILIDIS\): <= [0-9.e-]+ rad, " + _N + " mm", "ax_xb.opencv.mm"),
+                ("ax=zb truth rad", r"both_transforms_and_agrees_with_opencv` \| truth: <= " + _N + " rad", "ax_zb.truth.rad"),
+                ("ax=zb truth mm", r"both_transforms_and_agrees_with_opencv` \| truth: <= [0-9.e-]+ rad, " + _N + " mm",
+                 "ax_zb.truth.mm"))]
+
+# handeye.md "Robust option": one reading off by 3.7 mm (handeye/refine_cases)
+_OO = r"one pose instead moved by 3\.7 mm:\s+"
+FIGURES += [Figure(f"handeye:refine cases one off {k}", "docs/handeye.md", _OO + pat, _RC, field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("plain", _N + " mm camera error plain", "one_off.plain.mm", 0.02),
+                ("huber", r"[0-9.]+ mm camera error plain, " + _N + " mm with Huber", "one_off.huber.mm", 0.02),
+                ("rejected", r"[^)]*with Huber, " + _N + " images rejected", "one_off.huber.outliers", 0.0))]
+
+# handeye.md "Detection": the real ChArUco set's per-image PnP fits (handeye/variants_real, slow)
+_DT = r"On the ROS-Industrial\s+ChArUco set this recovers [0-9]+ corners \([0-9]+ -> "
+FIGURES += [Figure("handeye:detection charuco corners", "docs/handeye.md", _DT + _N + " in 16 images", _VR + "test_set_charuco",
+                   "n_corners", rel_tol=0.0),
+            Figure("handeye:detection charuco pnp min", "docs/handeye.md", _DT + r"(?s:.*?)to " + _N + "-[0-9.]+ px RMS",
+                   _VR + "test_set_charuco", "pnp_rms_px.min", rel_tol=0.02),
+            Figure("handeye:detection charuco pnp max", "docs/handeye.md", _DT + r"(?s:.*?)to [0-9.]+-" + _N + " px RMS",
+                   _VR + "test_set_charuco", "pnp_rms_px.max", rel_tol=0.02)]
+
+# handeye.md "Detection": rendered images against the exact projections (handeye/detection_rendered, slow)
+FIGURES += [Figure(f"handeye:detection rendered {k}", "docs/handeye.md", r"detections are " + pat,
+                   "handeye/detection_rendered", field, rel_tol=0.05)
+            for k, pat, field in (("min", _N + "-", "rms_px.min"), ("max", r"[0-9.]+-" + _N + " px RMS from the exact",
+                                                                  "rms_px.max"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
