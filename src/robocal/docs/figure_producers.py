@@ -12,6 +12,7 @@ from pathlib import Path
 
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
+from .figure_producers_datasets import DATASET_PRODUCERS, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
@@ -242,9 +243,7 @@ def _printed_table(module: str, function: str) -> dict:
 @functools.lru_cache(maxsize=None)
 def _datasets_report() -> dict:
     """``python -m robocal.workflows.datasets``'s text: Justin's middle level and boby's seeds."""
-    from ..workflows.datasets.report import report
-
-    text = report()
+    text = report_text()
     out = {}
     m = re.search(r"\+ 18 joint offsets\s+" + r"([0-9.]+)\s+" * 3 + r"\(train ([0-9.]+)\)", text)
     if m:
@@ -531,6 +530,7 @@ PRODUCERS = {
     **CLI_PRODUCERS,
     **BENCH_PRODUCERS,
     **SETUP_PRODUCERS,
+    **DATASET_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -577,7 +577,7 @@ def datasets_needed(producer: str) -> tuple:
     head = producer.split("/")[0]
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
-    return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
+    return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"), "elastic": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
             "ros_industrial_positioner": ("ros_industrial_handeye",),
             "ros_handeye": ("ros_industrial_handeye",), "camera": ("ros_industrial_handeye",)}.get(head, ())
 
@@ -585,7 +585,7 @@ def datasets_needed(producer: str) -> tuple:
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
-                  "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
+                  "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, *SLOW_DATASET_PRODUCERS, "ik_net/cli_example",
                   # 3-6 s each: slow only to keep the CPU the suite's figures added on 2026-11-27 under 20 s
                   "thermal_cli/compensate", "tutorial/calibrate", "handeye/rendered", "self_calibration/industrial",
                   "tcp/realistic", "tcp/ideal", "tcp/budget",

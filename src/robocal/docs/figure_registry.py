@@ -759,4 +759,68 @@ FIGURES += [Figure(f"thermal:compensate {k}", "docs/thermal.md", _TC + pat, "the
                                   ("true before max", r"against " + _N + r" mm \(max\) without", "true.before_max_mm"))]
 
 
+# ---- docs/datasets.md, docs/elastic.md, docs/self-calibration.md (issue 25 item 3, branch figsB) ----
+# producers: robocal.docs.figure_producers_datasets (the protocols' report and what derives from their records)
+_HILTI_NOMINAL = {label: "hilti." + key.split(".")[1] for label, key in _HILTI_SETS.items()}
+FIGURES += _table("docs/datasets.md", _HILTI_NOMINAL, "datasets/report_tables",
+                  [(0, 1, "nominal.p95_xy"), (0, 2, "nominal.p95_z")], prefix="datasets:hilti table ")
+FIGURES += _table("docs/datasets.md", {"nominal, base + 2 marker offsets": "justin.nominal"}, "datasets/report_tables",
+                  [(3, 0, "train")], prefix="datasets:justin ")
+FIGURES += [
+    Figure("datasets:boby train rms min", "docs/datasets.md", r"the training residual stays " + _N,
+           "boby_fanuc/geometric", "train_rms_mm.min"),
+    Figure("datasets:boby train rms max", "docs/datasets.md", r"the training residual stays [0-9.]+-" + _N,
+           "boby_fanuc/geometric", "train_rms_mm.max"),
+    Figure("datasets:boby seed 3 holdout (prose)", "docs/datasets.md", r"seed 3 holds out at " + _N,
+           "datasets/boby_geometric_seeds", "seed3.holdout"),
+    Figure("datasets:hilti train rms nominal", "docs/datasets.md", r"Training RMS " + _N + r" -> [0-9.]+ mm",
+           "datasets/report_tables", "hilti.train_before"),
+    Figure("datasets:hilti p95 xy above README min", "docs/datasets.md", r"the 95 % xy figure is\s+" + _N,
+           "datasets/hilti_vs_readme", "above.min", rel_tol=0.05),
+    Figure("datasets:hilti p95 xy above README max", "docs/datasets.md", r"the 95 % xy figure is\s+[0-9.]+-" + _N,
+           "datasets/hilti_vs_readme", "above.max", rel_tol=0.05),
+    Figure("datasets:boby elastic-joint train (prose)", "docs/datasets.md", r"boby_fanuc trains to " + _N,
+           "boby_fanuc/elastic-joint", "train_rms_mm.mean", rel_tol=0.02),
+    Figure("datasets:boby elastic-joint seeds min", "docs/datasets.md", r"the holdout \(" + _N + r"-[0-9.]+ mm per seed\)",
+           "datasets/boby_joint_seeds", "holdout.min", rel_tol=0.02),
+    Figure("datasets:boby elastic-joint seeds max", "docs/datasets.md", r"the holdout \([0-9.]+-" + _N + r" mm per seed\)",
+           "datasets/boby_joint_seeds", "holdout.max", rel_tol=0.02),
+    Figure("datasets:justin elastic-full above the source", "docs/datasets.md", r"Justin's full model is " + _N + r" mm mean above",
+           "datasets/justin_full_vs_source", "above_source_mm", rel_tol=0.2,
+           note="a difference of two means: 1 % of Justin's 3.26 mm is 0.03 mm"),
+]
+_SUMMARY = "| holdout [mm] | geometric RMS / mean / max |"
+FIGURES += _table("docs/datasets.md", {"boby_fanuc (mean over seeds 0-4)": ""}, "boby_fanuc/geometric",
+                  [(0, 2, "geometric.max")], prefix="datasets:summary boby ", after=_SUMMARY)
+FIGURES += _table("docs/datasets.md", {"dlr_justin (seed 0)": ""}, "dlr_justin/geometric",
+                  [(0, 0, "geometric.rms"), (0, 2, "geometric.max")], prefix="datasets:summary justin ", after=_SUMMARY)
+for _col, _model in ((1, "elastic-joint"), (2, "elastic-full")):
+    FIGURES += _table("docs/datasets.md", {"dlr_justin (seed 0)": ""}, f"dlr_justin/{_model}",
+                      [(_col, 0, "holdout_rms_mm"), (_col, 2, "holdout_max_mm")],
+                      prefix=f"datasets:summary justin {_model} ", after=_SUMMARY, rel_tol=0.01)
+# elastic.md's prose
+FIGURES += [
+    Figure("elastic:boby geometric rms (prose)", "docs/elastic.md", r"elasticity was what limited it: " + _N,
+           "boby_fanuc/geometric", "holdout_rms_mm"),
+    Figure("elastic:boby joint rms (prose)", "docs/elastic.md", r"elasticity was what limited it: [0-9.]+ → " + _N,
+           "boby_fanuc/elastic-joint", "holdout_rms_mm", rel_tol=0.01),
+    Figure("elastic:boby full rms (prose)", "docs/elastic.md", r"every seed converged\): " + _N + r" mm \(per seed",
+           "boby_fanuc/elastic-full", "holdout_rms_mm", rel_tol=0.01),
+    Figure("elastic:hilti joint gain min", "docs/elastic.md", r"`joint` " + _N + r"-[0-9.]+ mm,", "elastic/hilti_gain_joint",
+           "gain.min", rel_tol=0.05),
+    Figure("elastic:hilti joint gain max", "docs/elastic.md", r"`joint` [0-9.]+-" + _N + r" mm,", "elastic/hilti_gain_joint",
+           "gain.max", rel_tol=0.05),
+    Figure("elastic:hilti full gain min", "docs/elastic.md", r"`full` " + _N + r"-[0-9.]+ mm lower RMS", "elastic/hilti_gain_full",
+           "gain.min", rel_tol=0.05),
+    Figure("elastic:hilti full gain max", "docs/elastic.md", r"`full` [0-9.]+-" + _N + r" mm lower RMS", "elastic/hilti_gain_full",
+           "gain.max", rel_tol=0.05),
+    Figure("elastic:justin joint seeds 0-4 min", "docs/elastic.md", r"holdout mean\s+" + _N + r"-[0-9.]+ mm \(`calibrate_justin",
+           "elastic/justin_joint_seeds", "min", rel_tol=0.01),
+    Figure("elastic:justin joint seeds 0-4 max", "docs/elastic.md", r"holdout mean\s+[0-9.]+-" + _N + r" mm \(`calibrate_justin",
+           "elastic/justin_joint_seeds", "max", rel_tol=0.01),
+    Figure("elastic:justin full mean (times paragraph)", "docs/elastic.md", r"holdout " + _N + r" mm mean \(before",
+           "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01),
+]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

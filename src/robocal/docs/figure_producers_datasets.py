@@ -1,0 +1,120 @@
+"""Producers of the documented figures of docs/datasets.md and docs/elastic.md beyond the protocols'
+JSON records (:mod:`robocal.docs.figures`): the protocols' plain-text report
+(``python -m robocal.workflows.datasets``: Justin's training RMS per level, Hilti's nominal 95 %
+columns and training RMS before / after) and figures derived from the dataset protocols' records
+(ranges over seeds and sets, differences between models). Each returns a flat ``{field: value}``
+dict and is cached."""
+
+from __future__ import annotations
+
+import functools
+import re
+
+__all__ = ["DATASET_PRODUCERS", "report_text"]
+
+
+@functools.lru_cache(maxsize=None)
+def report_text() -> str:
+    """``python -m robocal.workflows.datasets``'s text (every geometric protocol once)."""
+    from ..workflows.datasets.report import report
+
+    return report()
+
+
+@functools.lru_cache(maxsize=None)
+def report_tables() -> dict:
+    """The report's numbers that the protocols' JSON records do not carry.
+
+    Fields: ``justin.{nominal,offsets,all}.train`` (training RMS per level [mm]),
+    ``hilti.train_before`` / ``hilti.train_after`` (training RMS on ``flat``, nominal and calibrated
+    [mm]), ``hilti.{set}.nominal.{rms,p95_xy,p95_z}`` and ``hilti.{set}.calibrated.{rms,p95_xy,p95_z,
+    mean,max}`` [mm]."""
+    text = report_text()
+    out = {}
+    for level, label in (("nominal", r"base \+ 2 markers"), ("offsets", r"\+ 18 joint offsets"), ("all", r"\+ all DH")):
+        m = re.search(label + r".*?\(train ([0-9.]+)\)", text)
+        if m:
+            out[f"justin.{level}.train"] = float(m.group(1))
+    m = re.search(r"train RMS ([0-9.]+) -> ([0-9.]+) mm", text)
+    if m:
+        out["hilti.train_before"], out["hilti.train_after"] = float(m.group(1)), float(m.group(2))
+    for line in text.splitlines():
+        f = line.split()
+        if len(f) == 10 and re.fullmatch(r"[a-z_]+", f[0]) and f[1].isdigit():
+            v = list(map(float, f[2:]))
+            for k, x in zip(("nominal.rms", "nominal.p95_xy", "nominal.p95_z", "calibrated.rms", "calibrated.p95_xy",
+                             "calibrated.p95_z", "calibrated.mean", "calibrated.max"), v):
+                out[f"hilti.{f[0]}.{k}"] = x
+    return out
+
+
+def _producer(name: str) -> dict:
+    from .figure_producers import PRODUCERS
+
+    return PRODUCERS[name]()
+
+
+@functools.lru_cache(maxsize=None)
+def boby_seeds(model: str) -> dict:
+    """boby_fanuc's per-seed holdout RMS with ``model``: ``holdout.min`` / ``holdout.max`` [mm],
+    and ``seed3.holdout`` [mm]."""
+    r = _producer(f"boby_fanuc/{model}")
+    per = [v for k, v in r.items() if re.fullmatch(r"per_seed_holdout_rms_mm\.\d+", k)]
+    return {"holdout.min": min(per), "holdout.max": max(per), "seed3.holdout": r["per_seed_holdout_rms_mm.3"]}
+
+
+@functools.lru_cache(maxsize=None)
+def hilti_gain(model: str) -> dict:
+    """How much lower Hilti's holdout RMS is with ``model`` than with the geometric model over the
+    seven sets: ``gain.min`` / ``gain.max`` [mm]."""
+    geo, ela = _producer("hilti_trailblazer/geometric"), _producer(f"hilti_trailblazer/{model}")
+    sets = [k.split(".")[0] for k in geo if k.endswith(".holdout_rms_mm") and k.count(".") == 1]
+    gain = [geo[f"{s}.holdout_rms_mm"] - ela[f"{s}.holdout_rms_mm"] for s in sets]
+    return {"gain.min": min(gain), "gain.max": max(gain)}
+
+
+#: the Hilti repository README's calibrated 95 % xy figures of the tilted sets [mm] (docs/datasets.md's
+#: "README calibrated" column)
+HILTI_README_P95_XY = {"wood_left_track": 11.1, "seesaw": 12.4, "diagonal_wood": 7.4}
+
+
+@functools.lru_cache(maxsize=None)
+def hilti_vs_readme() -> dict:
+    """robocal's calibrated 95 % xy error minus the README's on the tilted sets: ``above.min`` /
+    ``above.max`` [mm]."""
+    geo = _producer("hilti_trailblazer/geometric")
+    d = [geo[f"sets.{s}.p95_xy_mm"] - v for s, v in HILTI_README_P95_XY.items()]
+    return {"above.min": min(d), "above.max": max(d)}
+
+
+@functools.lru_cache(maxsize=None)
+def justin_joint_seeds() -> dict:
+    """docs/elastic.md: ``calibrate_justin(seed, model="elastic-joint")`` over seeds 0-4: holdout mean
+    ``min`` / ``max`` [mm] and ``n_not_converged`` (every fit of every seed)."""
+    from ..workflows.convergence import recording_fits
+    from ..workflows.datasets.dlr_justin import calibrate_justin
+
+    with recording_fits() as fits:
+        means = [calibrate_justin(seed, model="elastic-joint")["calibrated"]["mean"] for seed in range(5)]
+    return {"min": min(means), "max": max(means), "n_not_converged": float(sum(not f.converged for f in fits))}
+
+
+@functools.lru_cache(maxsize=None)
+def justin_full_vs_source() -> dict:
+    """docs/datasets.md: Justin's elastic-full holdout mean above the source's published 3.12 mm [mm]."""
+    return {"above_source_mm": _producer("dlr_justin/elastic-full")["holdout_mean_mm"] - 3.12}
+
+
+DATASET_PRODUCERS = {
+    "datasets/report_tables": report_tables,
+    "datasets/boby_joint_seeds": lambda: boby_seeds("elastic-joint"),
+    "datasets/boby_geometric_seeds": lambda: boby_seeds("geometric"),
+    "elastic/hilti_gain_joint": lambda: hilti_gain("elastic-joint"),
+    "elastic/hilti_gain_full": lambda: hilti_gain("elastic-full"),
+    "elastic/justin_joint_seeds": justin_joint_seeds,
+    "datasets/hilti_vs_readme": hilti_vs_readme,
+    "datasets/justin_full_vs_source": justin_full_vs_source,
+}
+
+#: more than ~10 s of CPU (they run the Justin / Hilti elastic-full fits or five Justin elastic fits)
+SLOW_DATASET_PRODUCERS = {"elastic/hilti_gain_full", "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}
