@@ -105,7 +105,19 @@ def justin_full_vs_source() -> dict:
     return {"above_source_mm": _producer("dlr_justin/elastic-full")["holdout_mean_mm"] - 3.12}
 
 
+@functools.lru_cache(maxsize=None)
+def nao_sigma_gain() -> dict:
+    """docs/self-calibration.md: how much smaller the shared head joint's (``theta1``) sigma is with
+    both arms than with one arm alone (NAO acceptance, ``nao/acceptance``): ``left_percent``,
+    ``right_percent`` [%]."""
+    r = _producer("nao/acceptance")
+    both = r["both.theta1.sigma_deg"]
+    return {f"{h.split('_')[0]}_percent": 100.0 * (1.0 - both / r[f"{h}.theta1.sigma_deg"])
+            for h in ("left_hand", "right_hand")}
+
+
 DATASET_PRODUCERS = {
+    "self_calibration/nao_sigma_gain": nao_sigma_gain,
     "datasets/report_tables": report_tables,
     "datasets/boby_joint_seeds": lambda: boby_seeds("elastic-joint"),
     "datasets/boby_geometric_seeds": lambda: boby_seeds("geometric"),

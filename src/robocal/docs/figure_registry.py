@@ -822,5 +822,13 @@ FIGURES += [
            "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01),
 ]
 
+# self-calibration.md: the NAO acceptance's held offsets' truth and the gain of both arms in sigma
+FIGURES += [Figure(f"self-calibration:nao held {p} truth", "docs/self-calibration.md", _cell(label, 0),
+                   "nao/acceptance", f"truth.{p}", rel_tol=0.0)
+            for label, p in (("theta2 HeadPitch", "theta2"), ("theta8 LWristYaw", "theta8"), ("theta13 RWristYaw", "theta13"))]
+FIGURES += [Figure(f"self-calibration:nao both arms sigma gain {h}", "docs/self-calibration.md",
+                   r"the shared head joint's by " + (r"[0-9]+ % \(left\) and " if h == "right" else "") + _N + rf" % \({h}\)",
+                   "self_calibration/nao_sigma_gain", f"{h}_percent", rel_tol=0.05) for h in ("left", "right")]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
