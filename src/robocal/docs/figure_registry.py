@@ -830,5 +830,38 @@ FIGURES += [Figure(f"self-calibration:nao both arms sigma gain {h}", "docs/self-
                    r"the shared head joint's by " + (r"[0-9]+ % \(left\) and " if h == "right" else "") + _N + rf" % \({h}\)",
                    "self_calibration/nao_sigma_gain", f"{h}_percent", rel_tol=0.05) for h in ("left", "right")]
 
+# datasets.md "ros_industrial_handeye": the per-image RMS (all 16), the linear starts, their RMS range
+_PER_IMAGE = "| image | source corners | source RMS |"
+FIGURES += [Figure(f"datasets:ros handeye charuco image {k} rms", "docs/datasets.md", _cell(f"{k}.png", 4, after=_PER_IMAGE),
+                   "ros_handeye/test_set_charuco", f"images.{k}.png.rms_px", rel_tol=0.01) for k in range(16)]
+_LINEAR = "| set | robocal tsai | park | daniilidis | shah |"
+for _label, _set in (("ChArUco", "test_set_charuco"), ("circle grid", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: "linear"}, f"ros_handeye/{_set}",
+                      [(c, 0, f"{m}.difference_position_mm") for c, m in enumerate(("tsai", "park", "daniilidis", "shah"))],
+                      prefix=f"datasets:ros handeye {_set} ", after=_LINEAR, rel_tol=0.01)
+_BP = r"Their back-projection RMS: "
+FIGURES += [
+    Figure("datasets:ros handeye charuco linear rms min", "docs/datasets.md", _BP + r"ChArUco " + _N, "ros_handeye/test_set_charuco",
+           "linear.rms_px.min", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco linear rms max", "docs/datasets.md", _BP + r"ChArUco [0-9.]+-" + _N,
+           "ros_handeye/test_set_charuco", "linear.rms_px.max", rel_tol=0.01),
+    Figure("datasets:ros handeye circles linear rms min", "docs/datasets.md", _BP + r"(?s:.*?)circle grid " + _N,
+           "ros_handeye/test_set_10x10", "linear.rms_px.min", rel_tol=0.01),
+    Figure("datasets:ros handeye circles linear rms max", "docs/datasets.md", _BP + r"(?s:.*?)circle grid [0-9.]+-" + _N,
+           "ros_handeye/test_set_10x10", "linear.rms_px.max", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco refined rms (prose)", "docs/datasets.md", r"against " + _N + r" and [0-9.]+ px refined",
+           "ros_handeye/test_set_charuco", "rms_px", rel_tol=0.002),
+    Figure("datasets:ros handeye circles refined rms (prose)", "docs/datasets.md", r"against [0-9.]+ and " + _N + r" px refined",
+           "ros_handeye/test_set_10x10", "rms_px", rel_tol=0.002),
+    Figure("datasets:ros handeye charuco rms mm", "docs/datasets.md", r"the refined fit leaves " + _N + r" mm RMS",
+           "ros_handeye/test_set_charuco", "rms_mm", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco all 16 rms (prose)", "docs/datasets.md", r"which robocal can now use, the RMS is " + _N,
+           "ros_handeye/test_set_charuco", "rms_px", rel_tol=0.002),
+    Figure("datasets:ros handeye charuco image 2 (prose)", "docs/datasets.md", r"source cannot use, fit at " + _N,
+           "ros_handeye/test_set_charuco", "images.2.png.rms_px", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco image 15 (prose)", "docs/datasets.md", r"source cannot use, fit at [0-9.]+ and " + _N,
+           "ros_handeye/test_set_charuco", "images.15.png.rms_px", rel_tol=0.01),
+]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
