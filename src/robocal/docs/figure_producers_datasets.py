@@ -116,7 +116,36 @@ def nao_sigma_gain() -> dict:
             for h in ("left_hand", "right_hand")}
 
 
+@functools.lru_cache(maxsize=None)
+def positioner() -> dict:
+    """docs/datasets.md's positioner prose: ``calibrate_positioner_seeds(range(5))`` (the table's run).
+
+    Fields: ``angle_deg.min`` / ``.max`` and ``common_normal_mm.min`` / ``.max`` over the seeds,
+    ``a1_sigma_mm.mean``; the means over seeds ``{nominal,calibrated}.{train,test}.{pos_mean,rot_mean,
+    pos_max}`` [mm, deg]; ``gain_percent.{pos_mean,pos_max,rot_mean}`` (hold-out, calibrated against
+    nominal) [%]; seed 0's hold-out ``seed0.{nominal,calibrated}.{pos_mean,rot_mean}``."""
+    import numpy as np
+
+    from ..workflows.datasets.ros_industrial_positioner import calibrate_positioner_seeds
+
+    res = calibrate_positioner_seeds(range(5))
+    axes = [r["axes"] for r in res["runs"]]
+    out = {}
+    for k in ("angle_deg", "common_normal_mm"):
+        out[f"{k}.min"], out[f"{k}.max"] = min(a[k] for a in axes), max(a[k] for a in axes)
+    out["a1_sigma_mm.mean"] = float(np.mean([next(p["std"] for p in r["result"].parameter_table() if p["name"] == "a1")
+                                             for r in res["runs"]]))
+    for key in ("nominal", "calibrated"):
+        for part in ("train", "test"):
+            out.update({f"{key}.{part}.{s}": float(v) for s, v in res[key][part].items()})
+        out.update({f"seed0.{key}.{s}": float(res["runs"][0][key]["test"][s]) for s in ("pos_mean", "rot_mean")})
+    for s in ("pos_mean", "pos_max", "rot_mean"):
+        out[f"gain_percent.{s}"] = 100.0 * (1.0 - out[f"calibrated.test.{s}"] / out[f"nominal.test.{s}"])
+    return out
+
+
 DATASET_PRODUCERS = {
+    "datasets/positioner": positioner,
     "self_calibration/nao_sigma_gain": nao_sigma_gain,
     "datasets/report_tables": report_tables,
     "datasets/boby_joint_seeds": lambda: boby_seeds("elastic-joint"),

@@ -863,5 +863,33 @@ FIGURES += [
            "ros_handeye/test_set_charuco", "images.15.png.rms_px", rel_tol=0.01),
 ]
 
+# datasets.md: the positioner's prose (calibrate_positioner_seeds over seeds 0-4, as the table)
+_AX = r"The axes, in the camera frame: "
+_SRC = r"The source's own test asserts(?s:.*?)"
+FIGURES += [Figure(f"datasets:positioner {k}", "docs/datasets.md", pat, "datasets/positioner", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("angle min", _AX + r"(?s:.*?)are " + _N + r"-[0-9.]+ deg", "angle_deg.min", 1e-5),
+                ("angle max", _AX + r"(?s:.*?)are [0-9.]+-" + _N + r" deg", "angle_deg.max", 1e-5),
+                ("common normal min", r"by a common normal of " + _N, "common_normal_mm.min", 0.01),
+                ("common normal max", r"by a common normal of [0-9.]+-" + _N, "common_normal_mm.max", 0.01),
+                ("a1 sigma", r"the core's 1-sigma of that distance \(`a1`\) is " + _N, "a1_sigma_mm.mean", 0.02),
+                ("train pos mean", _SRC + r"robocal: " + _N + " mm", "calibrated.train.pos_mean", 0.005),
+                ("train rot mean", _SRC + r"robocal: [0-9.]+ mm / " + _N + " deg", "calibrated.train.rot_mean", 0.005),
+                ("test pos mean", _SRC + r"training records and " + _N + " mm", "calibrated.test.pos_mean", 0.005),
+                ("test rot mean", _SRC + r"training records and [0-9.]+ mm / " + _N + " deg", "calibrated.test.rot_mean",
+                 0.005),
+                ("gain pos mean %", r"the improvement over the nominal DH is " + _N + " %", "gain_percent.pos_mean", 0.05),
+                ("nominal test pos mean", r"hold-out position mean \(" + _N + " ->", "nominal.test.pos_mean", 0.005),
+                ("gain pos max %", _N + r" % in hold-out position max", "gain_percent.pos_max", 0.05),
+                ("gain rot mean %", r"but only " + _N + r" % in orientation", "gain_percent.rot_mean", 0.1),
+                ("remaining pos", r"what remains \(" + _N + " mm", "calibrated.test.pos_mean", 0.005),
+                ("remaining rot", r"what remains \([0-9.]+ mm, " + _N + " deg", "calibrated.test.rot_mean", 0.005),
+                ("seed 0 test pos", r"\(seed 0: hold-out " + _N + " mm", "seed0.calibrated.pos_mean", 0.005),
+                ("seed 0 test rot", r"\(seed 0: hold-out [0-9.]+ mm / " + _N + " deg", "seed0.calibrated.rot_mean", 0.005),
+                ("seed 0 nominal pos", r"\(seed 0: hold-out [0-9.]+ mm / [0-9.]+ deg against " + _N + " mm",
+                 "seed0.nominal.pos_mean", 0.005),
+                ("seed 0 nominal rot", r"\(seed 0: hold-out [0-9.]+ mm / [0-9.]+ deg against [0-9.]+ mm /\s+" + _N + " deg",
+                 "seed0.nominal.rot_mean", 0.005))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
