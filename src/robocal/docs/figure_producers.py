@@ -12,7 +12,7 @@ from pathlib import Path
 
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
-from .figure_producers_datasets import DATASET_PRODUCERS, SLOW_DATASET_PRODUCERS, report_text
+from .figure_producers_datasets import DATASET_PRODUCERS, DATASETS_NEEDED, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
@@ -574,10 +574,12 @@ PRODUCERS = {
 
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
+    if producer in DATASETS_NEEDED:
+        return DATASETS_NEEDED[producer]
     head = producer.split("/")[0]
     if head in ("boby_fanuc", "dlr_justin", "hilti_trailblazer"):
         return (head,)
-    return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"), "elastic": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
+    return {"datasets": ("boby_fanuc", "dlr_justin", "hilti_trailblazer"),
             "ros_industrial_positioner": ("ros_industrial_handeye",),
             "ros_handeye": ("ros_industrial_handeye",), "camera": ("ros_industrial_handeye",)}.get(head, ())
 

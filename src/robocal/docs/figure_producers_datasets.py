@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import re
 
-__all__ = ["DATASET_PRODUCERS", "report_text"]
+__all__ = ["DATASETS_NEEDED", "DATASET_PRODUCERS", "SLOW_DATASET_PRODUCERS", "report_text"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -144,7 +144,51 @@ def positioner() -> dict:
     return out
 
 
+#: the boards of the ROS-Industrial hand-eye sets (as their cal_data.yaml)
+ROS_BOARDS = {"test_set_charuco": "charuco:5x7:36.195mm:18.256mm:DICT_6X6_250",
+              "test_set_10x10": "circles:10x10:25.4mm:modified"}
+
+
+@functools.lru_cache(maxsize=None)
+def ros_handeye_variants(test_set: str) -> dict:
+    """docs/datasets.md "ros_industrial_handeye", the columns and prose beside the default solve, each
+    through the command line on ``<datasets>/ros_industrial_handeye/raw/TEST_SET``:
+
+    * ``prior.rms_px``: ``handeye solve cal_data.yaml --robot-pose-sigma 0.05,0.01`` (the former default);
+    * ``refined.rms_px``: ``handeye solve cal_data.yaml --refine-intrinsics --exact-poses``;
+    * ``camera.{rms_px,fx,sigma_fx}``: ``camera calibrate images --board B --distortion 5``, and
+      ``two_step.rms_px``: ``handeye solve cal_data.yaml --camera cam/camera.json --exact-poses`` with it;
+    * ``auto.rms_px``: ``camera calibrate images --board B`` (the default ``--distortion auto``)."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    from ..io.datasets import datasets_root
+    from .figure_producers_cli import run_cli
+
+    src = datasets_root() / "ros_industrial_handeye" / "raw" / test_set
+    cal, images, board = src / "cal_data.yaml", src / "images", ROS_BOARDS[test_set]
+
+    def doc(text: str) -> dict:
+        return json.loads(text[text.index("{"):])
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        prior = doc(run_cli("handeye", "solve", cal, "--robot-pose-sigma", "0.05,0.01", "--out", t / "p", "--json"))
+        refined = doc(run_cli("handeye", "solve", cal, "--refine-intrinsics", "--exact-poses", "--out", t / "r", "--json"))
+        cam = doc(run_cli("camera", "calibrate", images, "--board", board, "--distortion", "5", "--out", t / "c", "--json"))
+        two = doc(run_cli("handeye", "solve", cal, "--camera", t / "c" / "camera.json", "--exact-poses", "--out", t / "h",
+                          "--json"))
+        auto = doc(run_cli("camera", "calibrate", images, "--board", board, "--out", t / "a", "--json"))
+    return {"prior.rms_px": prior["reprojection_rms_px"], "refined.rms_px": refined["reprojection_rms_px"],
+            "camera.rms_px": cam["reprojection_rms_px"], "camera.fx": cam["camera"]["parameters"]["fx"],
+            "camera.sigma_fx": cam["camera"]["sigma"]["fx"], "camera.n_images_used": float(cam["n_images_used"]),
+            "camera.n_corners": float(cam["n_corners"]), "two_step.rms_px": two["reprojection_rms_px"],
+            "auto.rms_px": auto["reprojection_rms_px"]}
+
+
 DATASET_PRODUCERS = {
+    **{f"datasets/ros_handeye_variants/{t}": functools.partial(ros_handeye_variants, t) for t in ROS_BOARDS},
     "datasets/positioner": positioner,
     "self_calibration/nao_sigma_gain": nao_sigma_gain,
     "datasets/report_tables": report_tables,
@@ -157,5 +201,15 @@ DATASET_PRODUCERS = {
     "datasets/justin_full_vs_source": justin_full_vs_source,
 }
 
-#: more than ~10 s of CPU (they run the Justin / Hilti elastic-full fits or five Justin elastic fits)
-SLOW_DATASET_PRODUCERS = {"elastic/hilti_gain_full", "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}
+#: the data sets these producers read where the producer's first name part does not tell
+#: (``figure_producers.datasets_needed``)
+DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
+                   **{f"datasets/ros_handeye_variants/{t}": ("ros_industrial_handeye",) for t in ROS_BOARDS},
+                   "datasets/boby_joint_seeds": ("boby_fanuc",), "datasets/boby_geometric_seeds": ("boby_fanuc",),
+                   "datasets/hilti_vs_readme": ("hilti_trailblazer",), "datasets/justin_full_vs_source": ("dlr_justin",),
+                   "elastic/hilti_gain_joint": ("hilti_trailblazer",), "elastic/hilti_gain_full": ("hilti_trailblazer",),
+                   "elastic/justin_joint_seeds": ("dlr_justin",)}
+
+#: more than ~10 s of CPU (the Justin / Hilti elastic-full fits, five Justin elastic fits, five hand-eye / camera
+#: runs per ROS-Industrial set)
+SLOW_DATASET_PRODUCERS = {*(f"datasets/ros_handeye_variants/{t}" for t in ROS_BOARDS), "elastic/hilti_gain_full", "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}

@@ -891,5 +891,29 @@ FIGURES += [Figure(f"datasets:positioner {k}", "docs/datasets.md", pat, "dataset
                 ("seed 0 nominal rot", r"\(seed 0: hold-out [0-9.]+ mm / [0-9.]+ deg against [0-9.]+ mm /\s+" + _N + " deg",
                  "seed0.nominal.rot_mean", 0.005))]
 
+# datasets.md "ros_industrial_handeye": the former default, refined intrinsics and the two-step camera + hand-eye
+for _label, _set in (("ChArUco, eye-to-hand", "test_set_charuco"), ("circle grid, eye-in-hand", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: ""}, f"datasets/ros_handeye_variants/{_set}",
+                      [(3, 0, "prior.rms_px"), (4, 0, "refined.rms_px")], prefix="datasets:ros handeye variants ",
+                      rel_tol=0.005, after=_RH, short=False)
+_V = "datasets/ros_handeye_variants/"
+FIGURES += [Figure(f"datasets:ros handeye variants {k}", "docs/datasets.md", pat, _V + t, field, rel_tol=tol)
+            for k, pat, t, field, tol in (
+                ("charuco auto rms", r"picks k1-k2 \(" + _N + " px", "test_set_charuco", "auto.rms_px", 0.01),
+                ("circles auto rms", r"and k1-k3 \(" + _N + " px", "test_set_10x10", "auto.rms_px", 0.01),
+                ("charuco camera rms", r"\(ChArUco: 16 of 16 images, 382 corners, " + _N + " px", "test_set_charuco",
+                 "camera.rms_px", 0.01),
+                ("charuco camera fx", r"382 corners, [0-9.]+ px, fx " + _N, "test_set_charuco", "camera.fx", 0.0005),
+                ("charuco camera sigma fx", r"382 corners, [0-9.]+ px, fx [0-9.]+ \+- " + _N, "test_set_charuco",
+                 "camera.sigma_fx", 0.02),
+                ("circles camera rms", r"circle grid: 15 images, " + _N + " px", "test_set_10x10", "camera.rms_px", 0.01),
+                ("circles camera fx", r"circle grid: 15 images, [0-9.]+ px, fx " + _N, "test_set_10x10", "camera.fx", 0.0005),
+                ("circles camera sigma fx", r"circle grid: 15 images, [0-9.]+ px, fx [0-9.]+ \+- " + _N, "test_set_10x10",
+                 "camera.sigma_fx", 0.02),
+                ("charuco two-step rms", r"--exact-poses --out he`: " + _N + r" px \(ChArUco\)", "test_set_charuco",
+                 "two_step.rms_px", 0.005),
+                ("circles two-step rms", r"--exact-poses --out he`: [0-9.]+ px \(ChArUco\) and\s+" + _N + r" px \(circle",
+                 "test_set_10x10", "two_step.rms_px", 0.005))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
