@@ -187,7 +187,62 @@ def ros_handeye_variants(test_set: str) -> dict:
             "auto.rms_px": auto["reprojection_rms_px"]}
 
 
+@functools.lru_cache(maxsize=None)
+def ros_handeye_opencv(test_set: str) -> dict:
+    """docs/datasets.md's table of linear solutions, OpenCV's columns: on robocal's detections of
+    ``<datasets>/ros_industrial_handeye/raw/TEST_SET`` (the cal_data.yaml's board, blob settings,
+    homography check and intrinsics), ``cv2.solvePnP`` per used image, then ``cv2.calibrateHandEye``
+    (TSAI, PARK, HORAUD, ANDREFF, DANIILIDIS; the flange poses inverted for the static camera) and
+    ``cv2.calibrateRobotWorldHandEye`` (RW_SHAH, RW_LI). Fields ``{METHOD}.distance_mm``: the camera
+    position's distance from robocal's refined one (``robocal handeye solve --exact-poses``) [mm];
+    ``guess.distance_mm``: the refined position's distance from the layout's ``camera_guess`` [mm]."""
+    import cv2
+    import numpy as np
+
+    from ..io.datasets import datasets_root
+    from ..io.ros_calibration import read_cal_data
+    from ..transforms import invert_transforms
+    from ..workflows.cameras.camera_common import detect_set
+
+    d = read_cal_data(datasets_root() / "ros_industrial_handeye" / "raw" / test_set / "cal_data.yaml")
+    det = detect_set(d.image_paths, d.board, blob_settings=d.blob_settings, homography_threshold=d.homography_threshold)
+    used = det.used
+    X = d.board.object_points().astype(np.float64)
+    K, dist = d.camera.matrix, np.asarray(d.camera.distortion, float)
+    T_ct = []  # target in the camera frame, per used image
+    for uv in det.image_points[used]:
+        ok = np.all(np.isfinite(uv), axis=1)
+        _, rvec, tvec = cv2.solvePnP(X[ok], uv[ok].astype(np.float64), K, dist)
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
+        T_ct.append(T)
+    T_ct, F = np.array(T_ct), d.T_base_flange[used]
+    static = d.setup == "eye_to_hand"
+    G = invert_transforms(F) if static else F  # "gripper to base" as calibrateHandEye reads it
+    refined = np.array([_producer(f"ros_handeye/{test_set}")[f"position_mm.{k}"] for k in range(3)])
+    out = {}
+    for name in ("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS"):
+        R, t = cv2.calibrateHandEye(G[:, :3, :3], G[:, :3, 3], T_ct[:, :3, :3], T_ct[:, :3, 3],
+                                    method=getattr(cv2, f"CALIB_HAND_EYE_{name}"))
+        out[f"{name}.distance_mm"] = float(np.linalg.norm(t.ravel() - refined))
+    # calibrateRobotWorldHandEye: X_cam = T_cam_world X_world observed, the camera rigid with the "gripper"
+    # and the world with the "base"; for a static camera the robot is read backwards: the "gripper" is
+    # the base, the "base" the flange (base2gripper = T_base_flange) and the "world" the target
+    B = F if static else invert_transforms(F)
+    for name in ("SHAH", "LI"):
+        _, _, R_gc, t_gc = cv2.calibrateRobotWorldHandEye(
+            T_ct[:, :3, :3], T_ct[:, :3, 3], B[:, :3, :3], B[:, :3, 3],
+            method=getattr(cv2, f"CALIB_ROBOT_WORLD_HAND_EYE_{name}"))
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R_gc, t_gc.ravel()  # the "gripper" in the camera frame
+        out[f"RW_{name}.distance_mm"] = float(np.linalg.norm(invert_transforms(T)[:3, 3] - refined))
+    if d.camera_guess is not None:
+        out["guess.distance_mm"] = float(np.linalg.norm(d.camera_guess[:3, 3] - refined))
+    return out
+
+
 DATASET_PRODUCERS = {
+    **{f"datasets/ros_handeye_opencv/{t}": functools.partial(ros_handeye_opencv, t) for t in ROS_BOARDS},
     **{f"datasets/ros_handeye_variants/{t}": functools.partial(ros_handeye_variants, t) for t in ROS_BOARDS},
     "datasets/positioner": positioner,
     "self_calibration/nao_sigma_gain": nao_sigma_gain,
@@ -204,7 +259,8 @@ DATASET_PRODUCERS = {
 #: the data sets these producers read where the producer's first name part does not tell
 #: (``figure_producers.datasets_needed``)
 DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
-                   **{f"datasets/ros_handeye_variants/{t}": ("ros_industrial_handeye",) for t in ROS_BOARDS},
+                   **{f"datasets/ros_handeye_{v}/{t}": ("ros_industrial_handeye",) for t in ROS_BOARDS
+                      for v in ("variants", "opencv")},
                    "datasets/boby_joint_seeds": ("boby_fanuc",), "datasets/boby_geometric_seeds": ("boby_fanuc",),
                    "datasets/hilti_vs_readme": ("hilti_trailblazer",), "datasets/justin_full_vs_source": ("dlr_justin",),
                    "elastic/hilti_gain_joint": ("hilti_trailblazer",), "elastic/hilti_gain_full": ("hilti_trailblazer",),

@@ -915,5 +915,15 @@ FIGURES += [Figure(f"datasets:ros handeye variants {k}", "docs/datasets.md", pat
                 ("circles two-step rms", r"--exact-poses --out he`: [0-9.]+ px \(ChArUco\) and\s+" + _N + r" px \(circle",
                  "test_set_10x10", "two_step.rms_px", 0.005))]
 
+# datasets.md: OpenCV's linear solutions on robocal's detections, and the distance from the layout's guess
+for _label, _set in (("ChArUco", "test_set_charuco"), ("circle grid", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: ""}, f"datasets/ros_handeye_opencv/{_set}",
+                      [(4 + c, 0, f"{m}.distance_mm") for c, m in enumerate(("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS",
+                                                                             "RW_SHAH", "RW_LI"))],
+                      prefix=f"datasets:ros handeye opencv {_set} ", after=_LINEAR, rel_tol=0.01)
+FIGURES.append(Figure("datasets:ros handeye charuco distance from the layout's guess", "docs/datasets.md",
+                      _N + r" mm from the layout's own initial guess", "datasets/ros_handeye_opencv/test_set_charuco",
+                      "guess.distance_mm", rel_tol=0.01))
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
