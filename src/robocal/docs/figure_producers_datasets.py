@@ -123,7 +123,8 @@ def positioner() -> dict:
     Fields: ``angle_deg.min`` / ``.max`` and ``common_normal_mm.min`` / ``.max`` over the seeds,
     ``a1_sigma_mm.mean``; the means over seeds ``{nominal,calibrated}.{train,test}.{pos_mean,rot_mean,
     pos_max}`` [mm, deg]; ``gain_percent.{pos_mean,pos_max,rot_mean}`` (hold-out, calibrated against
-    nominal) [%]; seed 0's hold-out ``seed0.{nominal,calibrated}.{pos_mean,rot_mean}``."""
+    nominal) [%]; seed 0's hold-out ``seed0.{nominal,calibrated}.{pos_mean,rot_mean}`` and its axes
+    ``seed0.angle_deg``, ``seed0.common_normal_mm``, ``seed0.alpha1_sigma_deg``, ``seed0.a1_sigma_mm``."""
     import numpy as np
 
     from ..workflows.datasets.ros_industrial_positioner import calibrate_positioner_seeds
@@ -135,6 +136,10 @@ def positioner() -> dict:
         out[f"{k}.min"], out[f"{k}.max"] = min(a[k] for a in axes), max(a[k] for a in axes)
     out["a1_sigma_mm.mean"] = float(np.mean([next(p["std"] for p in r["result"].parameter_table() if p["name"] == "a1")
                                              for r in res["runs"]]))
+    table0 = {p["name"]: p for p in res["runs"][0]["result"].parameter_table()}
+    out.update({"seed0.angle_deg": axes[0]["angle_deg"], "seed0.common_normal_mm": axes[0]["common_normal_mm"],
+                "seed0.alpha1_sigma_deg": float(np.degrees(table0["alpha1"]["std"])),
+                "seed0.a1_sigma_mm": float(table0["a1"]["std"])})
     for key in ("nominal", "calibrated"):
         for part in ("train", "test"):
             out.update({f"{key}.{part}.{s}": float(v) for s, v in res[key][part].items()})
@@ -195,11 +200,16 @@ def ros_handeye_opencv(test_set: str) -> dict:
     (TSAI, PARK, HORAUD, ANDREFF, DANIILIDIS; the flange poses inverted for the static camera) and
     ``cv2.calibrateRobotWorldHandEye`` (RW_SHAH, RW_LI). Fields ``{METHOD}.distance_mm``: the camera
     position's distance from robocal's refined one (``robocal handeye solve --exact-poses``) [mm];
-    ``guess.distance_mm``: the refined position's distance from the layout's ``camera_guess`` [mm]."""
+    ``guess.distance_mm``: the refined position's distance from the layout's ``camera_guess`` [mm];
+    the detections: ``pnp_rms_px.min`` / ``.max`` (per image, OpenCV's PnP with the given intrinsics),
+    ``homography_px.max`` (the largest mean homography error, :func:`robocal.io.detection.homography_error_px`),
+    ``subpix_move_px.mean`` (ChArUco: how far ``cornerSubPix`` moves the corners, mean) and
+    ``subpix_move_px.image_mean_max`` (the largest of the per-image means) [px]."""
     import cv2
     import numpy as np
 
     from ..io.datasets import datasets_root
+    from ..io.detection import homography_error_px
     from ..io.ros_calibration import read_cal_data
     from ..transforms import invert_transforms
     from ..workflows.cameras.camera_common import detect_set
@@ -209,18 +219,25 @@ def ros_handeye_opencv(test_set: str) -> dict:
     used = det.used
     X = d.board.object_points().astype(np.float64)
     K, dist = d.camera.matrix, np.asarray(d.camera.distortion, float)
-    T_ct = []  # target in the camera frame, per used image
+    T_ct, pnp_rms, homography = [], [], []  # target in the camera frame per used image, its PnP RMS [px]
     for uv in det.image_points[used]:
         ok = np.all(np.isfinite(uv), axis=1)
         _, rvec, tvec = cv2.solvePnP(X[ok], uv[ok].astype(np.float64), K, dist)
         T = np.eye(4)
         T[:3, :3], T[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
         T_ct.append(T)
+        proj = cv2.projectPoints(X[ok], rvec, tvec, K, dist)[0].reshape(-1, 2)
+        pnp_rms.append(float(np.sqrt(np.mean(np.sum((proj - uv[ok]) ** 2, axis=1)))))
+        homography.append(homography_error_px(uv, X))
+    out = {"pnp_rms_px.min": min(pnp_rms), "pnp_rms_px.max": max(pnp_rms), "homography_px.max": max(homography)}
+    if det.refined_points is not None:  # cornerSubPix's move of the corners, mean over the used images' corners
+        move = np.linalg.norm(det.refined_points[used] - det.image_points[used], axis=2)
+        out["subpix_move_px.mean"] = float(np.nanmean(move))
+        out["subpix_move_px.image_mean_max"] = float(np.nanmax(np.nanmean(move, axis=1)))
     T_ct, F = np.array(T_ct), d.T_base_flange[used]
     static = d.setup == "eye_to_hand"
     G = invert_transforms(F) if static else F  # "gripper to base" as calibrateHandEye reads it
     refined = np.array([_producer(f"ros_handeye/{test_set}")[f"position_mm.{k}"] for k in range(3)])
-    out = {}
     for name in ("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS"):
         R, t = cv2.calibrateHandEye(G[:, :3, :3], G[:, :3, 3], T_ct[:, :3, :3], T_ct[:, :3, 3],
                                     method=getattr(cv2, f"CALIB_HAND_EYE_{name}"))

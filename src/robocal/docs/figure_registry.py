@@ -925,5 +925,25 @@ FIGURES.append(Figure("datasets:ros handeye charuco distance from the layout's g
                       _N + r" mm from the layout's own initial guess", "datasets/ros_handeye_opencv/test_set_charuco",
                       "guess.distance_mm", rel_tol=0.01))
 
+_OC = "datasets/ros_handeye_opencv/"
+FIGURES += [Figure(f"datasets:ros handeye detection {k}", "docs/datasets.md", pat, _OC + t, field, rel_tol=0.01)
+            for k, pat, t, field in (
+                ("charuco pnp rms min", r"fits every image to " + _N + r"-[0-9.]+ px RMS", "test_set_charuco", "pnp_rms_px.min"),
+                ("charuco pnp rms max", r"fits every image to [0-9.]+-" + _N + r" px RMS", "test_set_charuco", "pnp_rms_px.max"),
+                ("charuco cornerSubPix move", r"`cornerSubPix` moves the corners by\s+" + _N + r" px on average",
+                 "test_set_charuco", "subpix_move_px.mean"),
+                ("charuco homography max", r"mean homography errors " + _N + " px", "test_set_charuco", "homography_px.max"),
+                ("circles homography max", r"mean homography errors [0-9.]+ px and " + _N + " px", "test_set_10x10",
+                 "homography_px.max"))]
+
+_REF = r"on the same 150 records: "
+FIGURES += [Figure(f"datasets:positioner seed 0 {k} (= the test's reference fit)", "docs/datasets.md", _REF + pat,
+                   "datasets/positioner", field, rel_tol=tol)
+            for k, pat, field, tol in (("angle", _N + "°", "seed0.angle_deg", 1e-6),
+                                       ("angle sigma", r"[0-9.]+° \(σ " + _N, "seed0.alpha1_sigma_deg", 0.02),
+                                       ("common normal", r"[0-9.]+° \(σ [0-9.]+°\) and " + _N, "seed0.common_normal_mm", 0.002),
+                                       ("common normal sigma", r"[0-9.]+° \(σ [0-9.]+°\) and [0-9.]+ mm\s+\(σ " + _N,
+                                        "seed0.a1_sigma_mm", 0.02))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
