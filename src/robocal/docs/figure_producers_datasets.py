@@ -258,7 +258,36 @@ def ros_handeye_opencv(test_set: str) -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def elastic_rigid_robot() -> dict:
+    """docs/elastic.md, the gate on a rigid robot, through the command line as the page states:
+    ``robocal simulate tracker kuka_kr150_r3100 --seed 1 --out m.csv``, then ``robocal calibrate
+    kuka_kr150_r3100 m.csv --out cal --elastic joint`` (exit 3). Fields from ``result.json``'s
+    ``elastic``: ``compliance.{min,max}.{value,std}`` (the smallest and largest estimated compliance
+    with its sigma) [mrad/kNm], ``moment.{value,std}`` (the first mass moment of largest magnitude)
+    [kg m], ``n_identified`` (compliances identified), ``exit_code``."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    from .figure_producers_cli import run_cli
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        run_cli("simulate", "tracker", "kuka_kr150_r3100", "--seed", "1", "--out", t / "m.csv")
+        run_cli("calibrate", "kuka_kr150_r3100", t / "m.csv", "--out", t / "cal", "--elastic", "joint", "--no-report",
+                ok=(3,))
+        e = json.loads((t / "cal" / "result.json").read_text())["elastic"]
+    comp = [c for c in e["compliance"] if c["std"] is not None]
+    lo, hi = min(comp, key=lambda c: c["value"]), max(comp, key=lambda c: c["value"])
+    mom = max((m for m in e["mass_parameters"] if m["std"] is not None), key=lambda m: abs(m["value"]))
+    return {"compliance.min.value": lo["value"], "compliance.min.std": lo["std"], "compliance.max.value": hi["value"],
+            "compliance.max.std": hi["std"], "moment.value": mom["value"], "moment.std": mom["std"],
+            "n_identified": float(sum(bool(c["identifiable"]) for c in e["compliance"])), "exit_code": 3.0}
+
+
 DATASET_PRODUCERS = {
+    "elastic/rigid_robot": elastic_rigid_robot,
     **{f"datasets/ros_handeye_opencv/{t}": functools.partial(ros_handeye_opencv, t) for t in ROS_BOARDS},
     **{f"datasets/ros_handeye_variants/{t}": functools.partial(ros_handeye_variants, t) for t in ROS_BOARDS},
     "datasets/positioner": positioner,

@@ -945,5 +945,15 @@ FIGURES += [Figure(f"datasets:positioner seed 0 {k} (= the test's reference fit)
                                        ("common normal sigma", r"[0-9.]+° \(σ [0-9.]+°\) and [0-9.]+ mm\s+\(σ " + _N,
                                         "seed0.a1_sigma_mm", 0.02))]
 
+_RIG = r"kuka_kr150_r3100 m\.csv --out cal --elastic joint`\) gives compliances from "
+FIGURES += [Figure(f"elastic:rigid robot {k}", "docs/elastic.md", _RIG + pat, "elastic/rigid_robot", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("compliance min", _N, "compliance.min.value", 0.05),
+                ("compliance min sigma", r"[−0-9.-]+ ± " + _N, "compliance.min.std", 0.05),
+                ("compliance max", r"[−0-9.-]+ ± [0-9.]+ to\s+" + _N, "compliance.max.value", 0.05),
+                ("compliance max sigma", r"[−0-9.-]+ ± [0-9.]+ to\s+[0-9.]+ ± " + _N, "compliance.max.std", 0.05),
+                ("first moment", r"(?s:.*?)first moments such as " + _N, "moment.value", 0.05),
+                ("first moment sigma", r"(?s:.*?)first moments such as [−0-9.-]+ ± " + _N, "moment.std", 0.05))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
