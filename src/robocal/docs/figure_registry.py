@@ -955,5 +955,12 @@ FIGURES += [Figure(f"elastic:rigid robot {k}", "docs/elastic.md", _RIG + pat, "e
                 ("first moment", r"(?s:.*?)first moments such as " + _N, "moment.value", 0.05),
                 ("first moment sigma", r"(?s:.*?)first moments such as [−0-9.-]+ ± " + _N, "moment.std", 0.05))]
 
+_SIX = r"64 training \+ 16 holdout poses, seed 4\): holdout "
+FIGURES += [Figure(f"elastic:six-d cli {k}", "docs/elastic.md", _SIX + pat, "elastic/six_d_cli", field, rel_tol=0.02)
+            for k, pat, field in (("joint", _N + " mm RMS", "joint.holdout_rms_mm"),
+                                  ("full", r"[0-9.]+ mm RMS, `full`\s+" + _N + " mm", "full.holdout_rms_mm"),
+                                  ("geometric", r"[0-9.]+ mm RMS, `full`\s+[0-9.]+ mm; the geometric calibration of the same "
+                                                r"file " + _N + " mm", "geometric.holdout_rms_mm"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
