@@ -295,6 +295,71 @@ ELASTIC_PAYLOAD = ("flange", 120.0, (0.0, 50.0, 200.0))
 ELASTIC_COMPLIANCE = {"A1": 0.15, "A2": 0.25, "A3": 0.4, "A4": 1.5, "A5": 2.0, "A6": 3.0}
 
 
+def elastic_six_d_campaign(seed: int, n: int):
+    """``tests/test_elastic_six_d.py``'s campaign: (nominal, q (n, 6) [rad], T (n, 4, 4) the true probe
+    poses in the instrument frame [mm], measured points (n, 3) [mm] with 0.02 mm noise and rotations
+    (n, 3, 3) with 2e-4 rad): a 6-D probe on a 38 deg / 185 mm tool of a KR150 carrying 120 kg that
+    deflects with :data:`ELASTIC_COMPLIANCE` (torques at the deflected pose, ``hardening=0.0002``)."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..sim import VirtualRobot
+    from ..sim.elastic import ElasticTruth
+    from ..transforms import so3_exp
+
+    sigma = 0.02
+    nominal = load_robot("kuka_kr150_r3100")
+    truth = ElasticTruth(ELASTIC_COMPLIANCE, ELASTIC_MASSES, payload=ELASTIC_PAYLOAD, hardening=0.0002)
+    true = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0).with_elastic(truth)
+    rng = np.random.default_rng(seed + 300)
+    q = true.random_configurations(n, rng, margin=0.1)
+    T_inst, tool = np.eye(4), np.eye(4)
+    T_inst[:3, :3], T_inst[:3, 3] = so3_exp([0.05, -0.1, 2.0]), [3200.0, -400.0, -600.0]
+    tool[:3, :3], tool[:3, 3] = so3_exp([0.25, -0.15, 0.6]), [35.0, -20.0, 180.0]
+    T = T_inst @ true.true_poses(q) @ tool
+    p = T[:, :3, 3] + rng.normal(0, sigma, (n, 3))
+    R = so3_exp(rng.normal(0, sigma / 100.0, (n, 3))) @ T[:, :3, :3]
+    return nominal, q, T, p, R
+
+
+@functools.lru_cache(maxsize=None)
+def elastic_six_d_round_trip() -> dict:
+    """docs/elastic.md's 6-D round-trip table (``tests/test_elastic_six_d.py``'s library round trip):
+    mass model and payload known, geometry + base + 6-DoF tool frame (+ compliances) fitted to 60
+    poses of :func:`elastic_six_d_campaign` (seeds 0, 1), 40 held out. Fields per seed ``s`` and
+    ``{elastic,rigid}``: ``{model}.{s}.rotation_rms`` (rotation residual RMS in noise sigmas),
+    ``{model}.{s}.holdout_rms_mm``; ``elastic.{s}.z.{A2..A6}`` (compliance error / sigma) and
+    ``elastic.z_max`` (largest |z| over both seeds)."""
+    import numpy as np
+
+    from ..calib import solve
+    from ..calib.elastic import ElasticModel, Payload
+    from ..calib.pose_problem import PoseCalibrationProblem
+
+    elastic = ElasticModel(masses=ELASTIC_MASSES, payload=Payload(ELASTIC_PAYLOAD[1], ELASTIC_PAYLOAD[2], "flange"),
+                           compliance_initial=0.0)
+    n, out, z_all = 60, {}, []
+    for seed in (0, 1):
+        nominal, q, T, p, R = elastic_six_d_campaign(seed, n + 40)
+        for label, el in (("elastic", elastic), ("rigid", None)):
+            prob = PoseCalibrationProblem(nominal, q[:n], p[:n], R[:n], point_sigma_mm=0.02, rotation_weight=100.0,
+                                          elastic=el)
+            res = solve(prob)
+            rows = np.array([prob.row_label(i)[1] == "rotation" for i in range(prob.n_residuals)])
+            out[f"{label}.{seed}.rotation_rms"] = float(np.sqrt(np.mean(res.residuals_after[rows] ** 2)))
+            pred = prob.predict_points(res.state, q=q[n:])[:, 0]
+            out[f"{label}.{seed}.holdout_rms_mm"] = float(np.sqrt(np.mean(np.sum((pred - T[n:, :3, 3]) ** 2, axis=-1))))
+            out[f"{label}.{seed}.converged"] = float(res.converged)
+            if el is not None:
+                for j in ("A2", "A3", "A4", "A5", "A6"):
+                    i = res.names.index(f"compliance.{j}")
+                    z = float((res.values[i] - ELASTIC_COMPLIANCE[j]) / res.std[i])
+                    out[f"elastic.{seed}.z.{j}"] = z
+                    z_all.append(abs(z))
+    out["elastic.z_max"] = max(z_all)
+    return out
+
+
 @functools.lru_cache(maxsize=None)
 def elastic_six_d_cli() -> dict:
     """docs/elastic.md "Through the command": the campaign of ``tests/test_elastic_six_d.py``
@@ -306,27 +371,11 @@ def elastic_six_d_cli() -> dict:
     import tempfile
     from pathlib import Path
 
-    import numpy as np
-
     from ..io.measurements import Measurements, write_measurements
-    from ..robots import load_robot
-    from ..sim import VirtualRobot
-    from ..sim.elastic import ElasticTruth
-    from ..transforms import so3_exp
     from .figure_producers_cli import run_cli
 
-    robot, seed, n, sigma = "kuka_kr150_r3100", 4, 80, 0.02
-    nominal = load_robot(robot)
-    truth = ElasticTruth(ELASTIC_COMPLIANCE, ELASTIC_MASSES, payload=ELASTIC_PAYLOAD, hardening=0.0002)
-    true = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0).with_elastic(truth)
-    rng = np.random.default_rng(seed + 300)
-    q = true.random_configurations(n, rng, margin=0.1)
-    T_inst, tool = np.eye(4), np.eye(4)
-    T_inst[:3, :3], T_inst[:3, 3] = so3_exp([0.05, -0.1, 2.0]), [3200.0, -400.0, -600.0]
-    tool[:3, :3], tool[:3, 3] = so3_exp([0.25, -0.15, 0.6]), [35.0, -20.0, 180.0]
-    T = T_inst @ true.true_poses(q) @ tool
-    p = T[:, :3, 3] + rng.normal(0, sigma, (n, 3))
-    R = so3_exp(rng.normal(0, sigma / 100.0, (n, 3))) @ T[:, :3, :3]
+    robot, sigma = "kuka_kr150_r3100", 0.02
+    nominal, q, _, p, R = elastic_six_d_campaign(4, 80)
     meas = Measurements(q, p, joint_names=nominal.controller_joints, rotations=R,
                         metadata={"robot": robot, "instrument": "6-D probe", "frame": "tracker"})
     out = {}
@@ -343,6 +392,7 @@ def elastic_six_d_cli() -> dict:
 
 
 DATASET_PRODUCERS = {
+    "elastic/six_d_round_trip": elastic_six_d_round_trip,
     "elastic/six_d_cli": elastic_six_d_cli,
     "elastic/rigid_robot": elastic_rigid_robot,
     **{f"datasets/ros_handeye_opencv/{t}": functools.partial(ros_handeye_opencv, t) for t in ROS_BOARDS},

@@ -962,5 +962,15 @@ FIGURES += [Figure(f"elastic:six-d cli {k}", "docs/elastic.md", _SIX + pat, "ela
                                   ("geometric", r"[0-9.]+ mm RMS, `full`\s+[0-9.]+ mm; the geometric calibration of the same "
                                                 r"file " + _N + " mm", "geometric.holdout_rms_mm"))]
 
+_RT = "| | rotation residual RMS (noise σ) | holdout RMS [mm] | compliances A2-A6 |"
+for _label, _m in (("elastic (joint)", "elastic"), ("rigid (geometric)", "rigid")):
+    FIGURES += [Figure(f"elastic:six-d round trip {_m} seed {s} {f}", "docs/elastic.md", _cell(_label, c, s, after=_RT),
+                       "elastic/six_d_round_trip", f"{_m}.{s}.{f}", rel_tol=0.02)
+                for c, f in ((0, "rotation_rms"), (1, "holdout_rms_mm")) for s in (0, 1)]
+FIGURES += [Figure("elastic:six-d round trip max |z|", "docs/elastic.md", r"\| elastic \(joint\) \|[^|]*\|[^|]*\| within " + _N + " σ",
+                   "elastic/six_d_round_trip", "elastic.z_max", rel_tol=0.03),
+            Figure("elastic:six-d round trip A5 seed 0 z", "docs/elastic.md", r"\(A5 seed 0: " + _N + " σ",
+                   "elastic/six_d_round_trip", "elastic.0.z.A5", rel_tol=0.03)]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
