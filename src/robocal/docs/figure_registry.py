@@ -972,5 +972,16 @@ FIGURES += [Figure("elastic:six-d round trip max |z|", "docs/elastic.md", r"\| e
             Figure("elastic:six-d round trip A5 seed 0 z", "docs/elastic.md", r"\(A5 seed 0: " + _N + " σ",
                    "elastic/six_d_round_trip", "elastic.0.z.A5", rel_tol=0.03)]
 
+_JN = r"\*\*Joint-reading noise\*\*(?s:.*?)"
+FIGURES += [Figure(f"self-calibration:nao joint noise {k}", "docs/self-calibration.md", _JN + pat,
+                   "self_calibration/nao_joint_noise", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("exact variance factor", r"the residuals are " + _N + "x the corner noise", "exact.variance_factor", 0.03),
+                ("exact rms", r"corner noise \(RMS " + _N + " px", "exact.rms_px_per_coordinate", 0.02),
+                ("exact max error", r"off by up to " + _N + "°", "exact.max_error_deg", 0.03),
+                ("exact max |z|", r"off by up to [0-9.]+° at up to " + _N + r"\s+sigma", "exact.max_abs_z", 0.05),
+                ("eiv max error", r"errors up to " + _N + "° and", "eiv.max_error_deg", 0.05),
+                ("eiv max |z|", r"errors up to [0-9.]+° and\s+max \|error / sigma\| " + _N, "eiv.max_abs_z", 0.05))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
