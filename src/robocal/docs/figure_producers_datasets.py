@@ -422,7 +422,46 @@ def nao_joint_noise() -> dict:
     return out
 
 
+def _true_corners(run, q, chain: str):
+    """The corners [px] (P, 2) of a self-calibration run's board on ``chain`` seen by its camera, through
+    the true robot at joints ``q`` (n_joints,) [rad]."""
+    import numpy as np
+
+    from ..transforms import compose, invert_transforms
+
+    m = run.true_robot
+    T_cam = compose(m.fk(q[None], run.camera_end_effector), run.T_ee_camera)
+    T_board = run.T_ee_board[chain][None] if chain == "world" else compose(m.fk(q[None], chain), run.T_ee_board[chain])
+    T = compose(invert_transforms(T_cam), T_board)
+    pts = np.einsum("nij,pj->npi", T[:, :3, :3], run.board.object_points()) + T[:, None, :3, 3]
+    return run.camera.project(pts.reshape(-1, 3)).pixels
+
+
+@functools.lru_cache(maxsize=None)
+def self_calibration_noise_budget() -> dict:
+    """docs/self-calibration-simulator.md "Noise budget": ``simulate_self_calibration(robot, seed=1,
+    n_images_per_chain=40, joint_noise_deg=J)`` (the other settings default; NAO both hands, the KR 150
+    with the world board); each full view's corners projected through the true robot at the joints
+    read from the log (the row :func:`~robocal.io.capture_times.match_capture_times` pairs with the
+    frame) against those at the true joints. Fields ``{robot}.{J}.rms_px`` (RMS per pixel coordinate)."""
+    import numpy as np
+
+    from ..io.capture_times import match_capture_times
+    from ..sim.cameras.self_calibration import simulate_self_calibration
+
+    out = {}
+    for robot, chains in (("nao_h25", ("left_hand", "right_hand")), ("kuka_kr150_r3100", ("world",))):
+        for jn in (0.01, 0.05):
+            r = simulate_self_calibration(robot, chains=chains, n_images_per_chain=40, joint_noise_deg=jn, seed=1)
+            q, _, _ = match_capture_times(r.frame_times, r.log_times, r.log_joints, tolerance=0.06)
+            d = np.concatenate([_true_corners(r, q[i], r.chain_of_image[i]) - _true_corners(r, r.q_true[i], r.chain_of_image[i])
+                                for i in np.flatnonzero(r.fully_visible)])
+            out[f"{robot}.{jn}.rms_px"] = float(np.sqrt(np.mean(d ** 2)))
+    return out
+
+
 DATASET_PRODUCERS = {
+    "self_calibration/noise_budget": self_calibration_noise_budget,
     "self_calibration/nao_joint_noise": nao_joint_noise,
     "elastic/six_d_round_trip": elastic_six_d_round_trip,
     "elastic/six_d_cli": elastic_six_d_cli,

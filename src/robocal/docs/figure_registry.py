@@ -983,5 +983,11 @@ FIGURES += [Figure(f"self-calibration:nao joint noise {k}", "docs/self-calibrati
                 ("eiv max error", r"errors up to " + _N + "° and", "eiv.max_error_deg", 0.05),
                 ("eiv max |z|", r"errors up to [0-9.]+° and\s+max \|error / sigma\| " + _N, "eiv.max_abs_z", 0.05))]
 
+# self-calibration-simulator.md: the noise budget
+FIGURES += [Figure(f"self-calibration-simulator:noise-budget {r} {j}", "docs/self-calibration-simulator.md",
+                   r"RMS per pixel coordinate\):(?s:.*?)`" + r + "`(?s:.*?)" + _N + f" px at {j} deg",
+                   "self_calibration/noise_budget", f"{r}.{j}.rms_px", rel_tol=0.02)
+            for r in ("nao_h25", "kuka_kr150_r3100") for j in ("0.01", "0.05")]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
