@@ -460,7 +460,46 @@ def self_calibration_noise_budget() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def nao_null_directions() -> dict:
+    """docs/self-calibration-simulator.md "Identifiability": ``simulate_self_calibration("nao_h25",
+    n_images_per_chain=40, seed=1)``; the finite-difference Jacobian (step 1e-6) of the ideal corners of
+    the full views with respect to the 12 joint offsets, the camera mount and both board mounts (small
+    rotation vector + translation each), columns scaled to unit norm, as
+    ``tests/test_self_calibration_sim.py``. Fields: ``next_singular_value`` (the fourth smallest),
+    ``next_relative`` (over the largest), ``null_relative_max`` (the three smallest over the largest)."""
+    import numpy as np
+
+    from ..sim.cameras.self_calibration import simulate_self_calibration
+    from ..transforms import compose, invert_transforms, so3_exp, transforms_from
+
+    r = simulate_self_calibration("nao_h25", n_images_per_chain=40, seed=1)
+    m, X, full = r.true_robot, r.board.object_points(), np.flatnonzero(r.fully_visible)
+    theta = [m.params.index(f"theta{k + 1}") for k, link in enumerate(m.links) if link.moves]
+    chains = np.array(r.chain_of_image)[full]
+
+    def pixels(p):
+        values = m.params.values.copy()
+        values[theta] += p[:12]
+        mm, out = m.with_params(values), []
+        for c, off in (("left_hand", 18), ("right_hand", 24)):
+            q = r.q_true[full[chains == c]]
+            T_cam = compose(mm.fk(q, "camera_top"), r.T_ee_camera, transforms_from(so3_exp(p[15:18]), p[12:15]))
+            T = compose(invert_transforms(T_cam), mm.fk(q, c), r.T_ee_board[c],
+                        transforms_from(so3_exp(p[off + 3:off + 6]), p[off:off + 3]))
+            out.append(r.camera.project((np.einsum("nij,pj->npi", T[:, :3, :3], X) + T[:, None, :3, 3]).reshape(-1, 3))
+                       .pixels.ravel())
+        return np.concatenate(out)
+
+    f0 = pixels(np.zeros(30))
+    J = np.stack([(pixels(np.eye(30)[j] * 1e-6) - f0) / 1e-6 for j in range(30)], axis=1)
+    s = np.linalg.svd(J / np.linalg.norm(J, axis=0), compute_uv=False)
+    return {"next_singular_value": float(s[-4]), "next_relative": float(s[-4] / s[0]),
+            "null_relative_max": float(s[-3:].max() / s[0])}
+
+
 DATASET_PRODUCERS = {
+    "self_calibration/nao_null_directions": nao_null_directions,
     "self_calibration/noise_budget": self_calibration_noise_budget,
     "self_calibration/nao_joint_noise": nao_joint_noise,
     "elastic/six_d_round_trip": elastic_six_d_round_trip,
@@ -492,5 +531,7 @@ DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
 
 #: slow: more than ~10 s of CPU (the Justin / Hilti elastic-full fits, five Justin elastic fits, five hand-eye /
 #: camera runs per ROS-Industrial set, the NAO joint-noise fits ~22 s) or, to keep the suite's added CPU under
-#: ~8 s, 3-6 s (the 6-D calibrations through the command line)
-SLOW_DATASET_PRODUCERS = {"self_calibration/nao_joint_noise", "elastic/six_d_cli", *(f"datasets/ros_handeye_variants/{t}" for t in ROS_BOARDS), "elastic/hilti_gain_full", "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}
+#: ~8 s, 1-6 s (the 6-D calibrations through the command line, the NAO null directions)
+SLOW_DATASET_PRODUCERS = {"self_calibration/nao_null_directions", "self_calibration/nao_joint_noise", "elastic/six_d_cli",
+                          *(f"datasets/ros_handeye_variants/{t}" for t in ROS_BOARDS), "elastic/hilti_gain_full",
+                          "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}

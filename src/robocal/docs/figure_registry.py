@@ -989,5 +989,12 @@ FIGURES += [Figure(f"self-calibration-simulator:noise-budget {r} {j}", "docs/sel
                    "self_calibration/noise_budget", f"{r}.{j}.rms_px", rel_tol=0.02)
             for r in ("nao_h25", "kuka_kr150_r3100") for j in ("0.01", "0.05")]
 
+FIGURES += [Figure("self-calibration-simulator:null directions next singular value", "docs/self-calibration-simulator.md",
+                   r"the next is " + _N + r", [0-9.]+ of the largest", "self_calibration/nao_null_directions",
+                   "next_singular_value", rel_tol=0.02),
+            Figure("self-calibration-simulator:null directions next relative", "docs/self-calibration-simulator.md",
+                   r"the next is [0-9.]+, " + _N + r" of the largest", "self_calibration/nao_null_directions",
+                   "next_relative", rel_tol=0.02)]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
