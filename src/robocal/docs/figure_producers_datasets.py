@@ -498,7 +498,46 @@ def nao_null_directions() -> dict:
             "null_relative_max": float(s[-3:].max() / s[0])}
 
 
+@functools.lru_cache(maxsize=None)
+def nao_self_calibrate_cli() -> dict:
+    """docs/self-calibration.md "Sanity gate and the joint-reading noise by default", through the command
+    line as the page states: ``robocal simulate self-calibration nao_h25 --out nao --images-per-chain 15
+    --seed 3``, then ``robocal self-calibrate nao_h25 --images nao/images --joints nao/joint_log.csv
+    --frames nao/frames.csv --board checkerboard:7x4:12mm --camera-on camera_top --board-on
+    left_hand,right_hand --camera nao/camera.json --out nao-cal --json`` by default (``default``) and with
+    ``--joint-noise 0.0001`` (``exact``, exit 3). Fields per run: ``joint_noise_deg``, ``variance_factor``,
+    ``max_abs_z`` and ``max_error_deg`` of the identifiable offsets against ``truth.json``, ``ok`` (status)."""
+    import json
+    import math
+    import tempfile
+    from pathlib import Path
+
+    from .figure_producers_cli import run_cli
+
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        sim = Path(tmp) / "nao"
+        run_cli("simulate", "self-calibration", "nao_h25", "--out", sim, "--images-per-chain", 15, "--seed", 3)
+        truth = json.loads((sim / "truth.json").read_text())["joint_offsets_deg"]
+        args = ["self-calibrate", "nao_h25", "--images", sim / "images", "--joints", sim / "joint_log.csv", "--frames",
+                sim / "frames.csv", "--board", "checkerboard:7x4:12mm", "--camera-on", "camera_top", "--board-on",
+                "left_hand,right_hand", "--camera", sim / "camera.json", "--json"]
+        for label, extra, ok in (("default", [], (0,)), ("exact", ["--joint-noise", "0.0001"], (3,))):
+            text = run_cli(*args, "--out", Path(tmp) / label, *extra, ok=ok)
+            s = json.loads(text[text.index("{"):])
+            joint = {r["name"]: r["joint"] for r in s["joint_report"] if r["identifiable"]}
+            err = [(math.degrees(j["value"]) - truth[joint[j["name"]]], math.degrees(j["sigma"]))
+                   for j in s["joint_offsets"] if j["name"] in joint]
+            out.update({f"{label}.joint_noise_deg": float(s["joint_noise_deg"]),
+                        f"{label}.variance_factor": float(s["variance_factor"]),
+                        f"{label}.max_abs_z": max(abs(e) / sg for e, sg in err),
+                        f"{label}.max_error_deg": max(abs(e) for e, _ in err), f"{label}.ok": float(s["status"] == "ok"),
+                        f"{label}.n_identifiable": float(len(err))})
+    return out
+
+
 DATASET_PRODUCERS = {
+    "self_calibration/nao_cli": nao_self_calibrate_cli,
     "self_calibration/nao_null_directions": nao_null_directions,
     "self_calibration/noise_budget": self_calibration_noise_budget,
     "self_calibration/nao_joint_noise": nao_joint_noise,
@@ -532,6 +571,6 @@ DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
 #: slow: more than ~10 s of CPU (the Justin / Hilti elastic-full fits, five Justin elastic fits, five hand-eye /
 #: camera runs per ROS-Industrial set, the NAO joint-noise fits ~22 s) or, to keep the suite's added CPU under
 #: ~8 s, 1-6 s (the 6-D calibrations through the command line, the NAO null directions)
-SLOW_DATASET_PRODUCERS = {"self_calibration/nao_null_directions", "self_calibration/nao_joint_noise", "elastic/six_d_cli",
+SLOW_DATASET_PRODUCERS = {"self_calibration/nao_cli", "self_calibration/nao_null_directions", "self_calibration/nao_joint_noise", "elastic/six_d_cli",
                           *(f"datasets/ros_handeye_variants/{t}" for t in ROS_BOARDS), "elastic/hilti_gain_full",
                           "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}

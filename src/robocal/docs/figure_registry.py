@@ -996,5 +996,18 @@ FIGURES += [Figure("self-calibration-simulator:null directions next singular val
                    r"the next is [0-9.]+, " + _N + r" of the largest", "self_calibration/nao_null_directions",
                    "next_relative", rel_tol=0.02)]
 
+_SC = r"On the\s+simulator's own default NAO data(?s:.*?)"
+FIGURES += [Figure(f"self-calibration:nao cli {k}", "docs/self-calibration.md", _SC + pat, "self_calibration/nao_cli", field,
+                   rel_tol=tol)
+            for k, pat, field, tol in (
+                ("default joint noise", r"default estimates " + _N + " deg", "default.joint_noise_deg", 0.0),
+                ("default variance factor", r"default estimates [0-9.]+ deg \(variance factor " + _N, "default.variance_factor",
+                 0.02),
+                ("default max |z|", r"offsets fall within " + _N + r"\s+sigma", "default.max_abs_z", 0.05),
+                ("default max error", r"\(largest error " + _N + " deg", "default.max_error_deg", 0.05),
+                ("exact variance factor", r"the variance factor is " + _N, "exact.variance_factor", 0.03),
+                ("exact max |z|", r"the offsets up to " + _N + " sigma", "exact.max_abs_z", 0.05),
+                ("exact max error", r"the offsets up to [0-9.]+ sigma \(" + _N + " deg", "exact.max_error_deg", 0.05))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
