@@ -536,7 +536,78 @@ def nao_self_calibrate_cli() -> dict:
     return out
 
 
+def _expected_holdout_rms(prob, res, q_hold, sigma: float) -> float:
+    """The noise-limited optimum of the holdout RMS [mm]: sqrt(sigma^2 trace(J_h (J^T J)^-1 J_h^T) / N_h)
+    over the identifiable set (as ``tests/test_calibration.py``)."""
+    import numpy as np
+
+    active = np.isfinite(np.diag(res.covariance))
+    _, J, _ = prob.evaluate(res.state)
+    _, Jh = prob.predict_points(res.state, q=q_hold, jacobian=True)
+    Jh = Jh.reshape(-1, prob.n_variables)[:, active] / sigma
+    cov = np.linalg.inv(J[:, active].T @ J[:, active])
+    return float(np.sqrt(np.einsum("ij,jk,ik->", Jh, cov, Jh) * sigma**2 / len(q_hold)))
+
+
+@functools.lru_cache(maxsize=None)
+def elastic_round_trips() -> dict:
+    """docs/elastic.md's round trips, the set-ups of ``tests/test_elastic.py``: a KR150 R3100 carrying
+    120 kg with the hidden :data:`ELASTIC_COMPLIANCE`, one reflector at (30, 40, 250) mm, 0.02 mm
+    tracker, mass model and payload known. ``joint.{0,1}.holdout_rms_mm`` / ``.optimum_mm``: 100 + 100
+    poses (seeds 0, 1; torques at the deflected pose, ``hardening=0.0002``); ``full.holdout_rms_mm`` /
+    ``full.optimum_mm`` and ``joint_only.holdout_rms_mm``: 150 + 100 poses (seed 4, lateral compliances of
+    A2-A4 hidden), the full and the joint-only model. Holdout: RMS of the predicted against the true
+    reflector positions [mm]."""
+    import numpy as np
+
+    from ..calib import CalibrationProblem, Target, solve
+    from ..calib.elastic import ElasticModel, Payload
+    from ..robots import load_robot
+    from ..sim import LaserTracker, VirtualRobot
+    from ..sim.elastic import ElasticTruth
+
+    sigma, tool = 0.02, np.array([[30.0, 40.0, 250.0]])
+    lateral = {"A2": (0.05, 0.08), "A3": (0.1, 0.06), "A4": (0.4, 0.3)}
+    nominal = load_robot("kuka_kr150_r3100")
+    payload = Payload(ELASTIC_PAYLOAD[1], ELASTIC_PAYLOAD[2], "flange")
+
+    def fit_and_judge(q, pts, true_pts, n, elastic, **kw):
+        prob = CalibrationProblem(nominal, q[:n], [Target("r1", None, (0.0, 0.0, 50.0))], pts[:n], point_sigma_mm=sigma,
+                                  base_initial="fit", elastic=elastic)
+        res = solve(prob, **kw)
+        pred = prob.predict_points(res.state, q=q[n:])
+        return (float(np.sqrt(np.mean(np.sum((pred - true_pts[n:]) ** 2, axis=-1)))),
+                _expected_holdout_rms(prob, res, q[n:], sigma), res.converged)
+
+    out, conv = {}, []
+    for seed in (0, 1):
+        truth = ElasticTruth(ELASTIC_COMPLIANCE, ELASTIC_MASSES, payload=ELASTIC_PAYLOAD, hardening=0.0002)
+        robot = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0).with_elastic(truth)
+        tracker = LaserTracker.placed(seed + 100, reflectors=tool, sigma_mm=sigma)
+        rng = np.random.default_rng(seed + 200)
+        q = robot.random_configurations(200, rng, margin=0.1)
+        el = ElasticModel(masses=ELASTIC_MASSES, payload=payload, compliance_initial=0.0)
+        h, o, c = fit_and_judge(q, tracker.measure(robot, q, rng).points, tracker.true_points(robot, q), 100, el)
+        out[f"joint.{seed}.holdout_rms_mm"], out[f"joint.{seed}.optimum_mm"] = h, o
+        conv.append(c)
+    truth = ElasticTruth(ELASTIC_COMPLIANCE, ELASTIC_MASSES, payload=ELASTIC_PAYLOAD, hardening=0.0, lateral=lateral)
+    robot = VirtualRobot.perturbed(nominal, 4, joint_noise_deg=0.0).with_elastic(truth)
+    tracker = LaserTracker.placed(104, reflectors=tool, sigma_mm=sigma)
+    rng = np.random.default_rng(204)
+    q = robot.random_configurations(250, rng, margin=0.1)
+    pts, true_pts = tracker.measure(robot, q, rng).points, tracker.true_points(robot, q)
+    for label, with_lateral in (("full", True), ("joint_only", False)):
+        el = ElasticModel(masses=ELASTIC_MASSES, payload=payload, compliance_initial=0.0,
+                          joints=("A2", "A3", "A4", "A5", "A6"), lateral=with_lateral, lateral_joints=tuple(lateral))
+        h, o, c = fit_and_judge(q, pts, true_pts, 150, el, max_iterations=200)
+        out[f"{label}.holdout_rms_mm"], out[f"{label}.optimum_mm"] = h, o
+        conv.append(c)
+    out["n_not_converged"] = float(sum(not c for c in conv))
+    return out
+
+
 DATASET_PRODUCERS = {
+    "elastic/round_trips": elastic_round_trips,
     "self_calibration/nao_cli": nao_self_calibrate_cli,
     "self_calibration/nao_null_directions": nao_null_directions,
     "self_calibration/noise_budget": self_calibration_noise_budget,
@@ -571,6 +642,6 @@ DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
 #: slow: more than ~10 s of CPU (the Justin / Hilti elastic-full fits, five Justin elastic fits, five hand-eye /
 #: camera runs per ROS-Industrial set, the NAO joint-noise fits ~22 s) or, to keep the suite's added CPU under
 #: ~8 s, 1-6 s (the 6-D calibrations through the command line, the NAO null directions)
-SLOW_DATASET_PRODUCERS = {"self_calibration/nao_cli", "self_calibration/nao_null_directions", "self_calibration/nao_joint_noise", "elastic/six_d_cli",
+SLOW_DATASET_PRODUCERS = {"elastic/round_trips", "self_calibration/nao_cli", "self_calibration/nao_null_directions", "self_calibration/nao_joint_noise", "elastic/six_d_cli",
                           *(f"datasets/ros_handeye_variants/{t}" for t in ROS_BOARDS), "elastic/hilti_gain_full",
                           "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}

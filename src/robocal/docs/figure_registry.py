@@ -1009,5 +1009,19 @@ FIGURES += [Figure(f"self-calibration:nao cli {k}", "docs/self-calibration.md", 
                 ("exact max |z|", r"the offsets up to " + _N + " sigma", "exact.max_abs_z", 0.05),
                 ("exact max error", r"the offsets up to [0-9.]+ sigma \(" + _N + " deg", "exact.max_error_deg", 0.05))]
 
+_RTJ = r"A1 reported unidentifiable\s+by name, holdout "
+_RTF = r"the six lateral compliances within 1\.7 σ, holdout\s+"
+FIGURES += [Figure(f"elastic:round trip {k}", "docs/elastic.md", pat, "elastic/round_trips", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("joint seed 0 holdout", _RTJ + _N, "joint.0.holdout_rms_mm"),
+                ("joint seed 1 holdout", _RTJ + r"[0-9.]+ / " + _N, "joint.1.holdout_rms_mm"),
+                ("joint seed 0 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of " + _N,
+                 "joint.0.optimum_mm"),
+                ("joint seed 1 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of [0-9.]+ / " + _N,
+                 "joint.1.optimum_mm"),
+                ("full holdout", _RTF + _N, "full.holdout_rms_mm"),
+                ("full optimum", _RTF + r"[0-9.]+ mm against a noise-limited optimum of " + _N, "full.optimum_mm"),
+                ("joint-only holdout", r"the joint-only model leaves " + _N, "joint_only.holdout_rms_mm"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
