@@ -1,9 +1,10 @@
-"""Producers of the documented figures of docs/datasets.md and docs/elastic.md beyond the protocols'
-JSON records (:mod:`robocal.docs.figures`): the protocols' plain-text report
-(``python -m robocal.workflows.datasets``: Justin's training RMS per level, Hilti's nominal 95 %
-columns and training RMS before / after) and figures derived from the dataset protocols' records
-(ranges over seeds and sets, differences between models). Each returns a flat ``{field: value}``
-dict and is cached."""
+"""Producers of documented figures of docs/datasets.md, docs/elastic.md, docs/self-calibration.md and
+docs/self-calibration-simulator.md (:mod:`robocal.docs.figures`): the protocols' plain-text report
+(``python -m robocal.workflows.datasets``), figures derived from the dataset protocols' records
+(ranges over seeds and sets, differences between models), the ROS-Industrial hand-eye sets beside
+the default solve (OpenCV's linear solutions, the former default, the two-step calibration), the
+positioner's prose, and the set-ups of the elastic and self-calibration tests and commands the
+pages quote. Each returns a flat ``{field: value}`` dict and is cached."""
 
 from __future__ import annotations
 
