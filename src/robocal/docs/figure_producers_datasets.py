@@ -1,5 +1,6 @@
-"""Producers of documented figures of docs/datasets.md, docs/elastic.md, docs/self-calibration.md and
-docs/self-calibration-simulator.md (:mod:`robocal.docs.figures`): the protocols' plain-text report
+"""Producers of the documented figures of the data-set, elastic and self-calibration pages (docs/datasets.md,
+docs/elastic.md, docs/self-calibration.md, docs/self-calibration-simulator.md; :mod:`robocal.docs.figures`):
+the protocols' plain-text report
 (``python -m robocal.workflows.datasets``), figures derived from the dataset protocols' records
 (ranges over seeds and sets, differences between models), the ROS-Industrial hand-eye sets beside
 the default solve (OpenCV's linear solutions, the former default, the two-step calibration), the
