@@ -128,9 +128,10 @@ def test_nao_model_simulator_run_end_to_end_without_rendering(simulated_run):
 
 def test_joint_reading_noise_needs_the_per_image_joint_corrections():
     """nao-model's default 0.05 deg reading noise per log row: without per-image joint corrections
-    the sigmas claim far too much (measured max |error / sigma| 11.8, errors up to 0.135 deg, even
-    with the sigmas scaled by the variance factor 5.1); with them (errors in variables, prior
-    0.05 deg) max |error / sigma| 2.1 and errors up to 0.046 deg."""
+    the sigmas claim far too much (measured max |error / sigma| 7.4, errors up to 0.133 deg, even
+    with the sigmas scaled by the variance factor 5.4); with them (errors in variables, prior
+    0.05 deg) max |error / sigma| 1.1 and errors up to 0.028 deg (docs/self-calibration.md, checked by
+    ``python -m robocal.docs.figures --all --only "nao joint noise"``)."""
     from robocal.io.capture_times import match_capture_times
     from robocal.sim.cameras.self_calibration import simulate_self_calibration
 

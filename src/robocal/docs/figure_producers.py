@@ -13,6 +13,7 @@ from pathlib import Path
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
 from .figure_producers_handeye import HANDEYE_PRODUCERS
+from .figure_producers_datasets import DATASET_PRODUCERS, DATASETS_NEEDED, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
 from .figure_producers_thermal import THERMAL_PRODUCERS
 
@@ -244,9 +245,7 @@ def _printed_table(module: str, function: str) -> dict:
 @functools.lru_cache(maxsize=None)
 def _datasets_report() -> dict:
     """``python -m robocal.workflows.datasets``'s text: Justin's middle level and boby's seeds."""
-    from ..workflows.datasets.report import report
-
-    text = report()
+    text = report_text()
     out = {}
     m = re.search(r"\+ 18 joint offsets\s+" + r"([0-9.]+)\s+" * 3 + r"\(train ([0-9.]+)\)", text)
     if m:
@@ -539,6 +538,7 @@ PRODUCERS = {
     **THERMAL_PRODUCERS,
     **SETUP_PRODUCERS,
     **HANDEYE_PRODUCERS,
+    **DATASET_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -582,6 +582,8 @@ PRODUCERS = {
 
 def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
+    if producer in DATASETS_NEEDED:
+        return DATASETS_NEEDED[producer]
     head = producer.split("/")[0]
     if producer.startswith(("handeye/default_real/", "handeye/camera_real/", "handeye/gate_shifted",
                             "handeye/variants_real/")):
@@ -596,7 +598,7 @@ def datasets_needed(producer: str) -> tuple:
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
-                  "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, "ik_net/cli_example",
+                  "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, *SLOW_DATASET_PRODUCERS, "ik_net/cli_example",
                   # thermal.md: the experiment with one effect alone (~6-10 s each), the ideal drift; testing.md's at-the-robot
                   # UR10 (~4 s) and gripper cases (~2 s each; slow to keep the fast set's added CPU under ~8 s) (figsC)
                   *(p for p in THERMAL_PRODUCERS if p.startswith("thermal_alone/")), "thermal_drift/ideal",

@@ -347,7 +347,9 @@ def ros_handeye(test_set: str) -> dict:
     """docs/datasets.md "ros_industrial_handeye": ``robocal handeye solve
     <datasets>/ros_industrial_handeye/raw/TEST_SET/cal_data.yaml --exact-poses --json``: ``rms_px``,
     ``n_images_used``, ``n_corners``, the camera pose ``position_mm.{0,1,2}``, ``sigma_position_mm.{0,1,2}``,
-    ``rotation_vector_deg.{0,1,2}``, ``sigma_rotation_deg.max``."""
+    ``rotation_vector_deg.{0,1,2}``, ``sigma_rotation_deg.max``, ``rms_mm`` (on the target plane), the linear
+    starts ``linear.{method}.difference_position_mm`` / ``.rms_px`` (and ``linear.rms_px.min`` / ``.max``) and
+    ``images.{name}.rms_px`` per image."""
     from ..io.datasets import datasets_root
 
     src = datasets_root() / "ros_industrial_handeye" / "raw" / test_set / "cal_data.yaml"
@@ -358,6 +360,13 @@ def ros_handeye(test_set: str) -> dict:
            "n_corners": float(d["n_corners"]), "sigma_rotation_deg.max": float(max(pose["sigma_rotation_deg"]))}
     for key in ("position_mm", "sigma_position_mm", "rotation_vector_deg"):
         out.update({f"{key}.{k}": float(v) for k, v in enumerate(pose[key])})
+    out["rms_mm"] = float(d["reprojection_rms_mm"])
+    for m, lin in d["linear"].items():  # the linear starts: distance from the refined position, their RMS
+        out[f"linear.{m}.difference_position_mm"] = float(lin["difference_position_mm"])
+        out[f"linear.{m}.rms_px"] = float(lin["reprojection_rms_px"])
+    rms = [out[f"linear.{m}.rms_px"] for m in d["linear"]]
+    out["linear.rms_px.min"], out["linear.rms_px.max"] = min(rms), max(rms)
+    out.update({f"images.{im['name']}.rms_px": float(im["rms_px"]) for im in d["images"] if im.get("rms_px") is not None})
     return out
 
 

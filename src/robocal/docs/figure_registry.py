@@ -1261,5 +1261,269 @@ FIGURES += [Figure(f"handeye:detection rendered {k}", "docs/handeye.md", r"detec
             for k, pat, field in (("min", _N + "-", "rms_px.min"), ("max", r"[0-9.]+-" + _N + " px RMS from the exact",
                                                                   "rms_px.max"))]
 
+# ---- docs/datasets.md, docs/elastic.md, docs/self-calibration.md (issue 25 item 3, branch figsB) ----
+# producers: robocal.docs.figure_producers_datasets (the protocols' report and what derives from their records)
+_HILTI_NOMINAL = {label: "hilti." + key.split(".")[1] for label, key in _HILTI_SETS.items()}
+FIGURES += _table("docs/datasets.md", _HILTI_NOMINAL, "datasets/report_tables",
+                  [(0, 1, "nominal.p95_xy"), (0, 2, "nominal.p95_z")], prefix="datasets:hilti table ")
+FIGURES += _table("docs/datasets.md", {"nominal, base + 2 marker offsets": "justin.nominal"}, "datasets/report_tables",
+                  [(3, 0, "train")], prefix="datasets:justin ")
+FIGURES += [
+    Figure("datasets:boby train rms min", "docs/datasets.md", r"the training residual stays " + _N,
+           "boby_fanuc/geometric", "train_rms_mm.min"),
+    Figure("datasets:boby train rms max", "docs/datasets.md", r"the training residual stays [0-9.]+-" + _N,
+           "boby_fanuc/geometric", "train_rms_mm.max"),
+    Figure("datasets:boby seed 3 holdout (prose)", "docs/datasets.md", r"seed 3 holds out at " + _N,
+           "datasets/boby_geometric_seeds", "seed3.holdout"),
+    Figure("datasets:hilti train rms nominal", "docs/datasets.md", r"Training RMS " + _N + r" -> [0-9.]+ mm",
+           "datasets/report_tables", "hilti.train_before"),
+    Figure("datasets:hilti p95 xy above README min", "docs/datasets.md", r"the 95 % xy figure is\s+" + _N,
+           "datasets/hilti_vs_readme", "above.min", rel_tol=0.05),
+    Figure("datasets:hilti p95 xy above README max", "docs/datasets.md", r"the 95 % xy figure is\s+[0-9.]+-" + _N,
+           "datasets/hilti_vs_readme", "above.max", rel_tol=0.05),
+    Figure("datasets:boby elastic-joint train (prose)", "docs/datasets.md", r"boby_fanuc trains to " + _N,
+           "boby_fanuc/elastic-joint", "train_rms_mm.mean", rel_tol=0.02),
+    Figure("datasets:boby elastic-joint seeds min", "docs/datasets.md", r"the holdout \(" + _N + r"-[0-9.]+ mm per seed\)",
+           "datasets/boby_joint_seeds", "holdout.min", rel_tol=0.02),
+    Figure("datasets:boby elastic-joint seeds max", "docs/datasets.md", r"the holdout \([0-9.]+-" + _N + r" mm per seed\)",
+           "datasets/boby_joint_seeds", "holdout.max", rel_tol=0.02),
+    Figure("datasets:justin elastic-full above the source", "docs/datasets.md", r"Justin's full model is " + _N + r" mm mean above",
+           "datasets/justin_full_vs_source", "above_source_mm", rel_tol=0.2,
+           note="a difference of two means: 1 % of Justin's 3.26 mm is 0.03 mm"),
+]
+_SUMMARY = "| holdout [mm] | geometric RMS / mean / max |"
+FIGURES += _table("docs/datasets.md", {"boby_fanuc (mean over seeds 0-4)": ""}, "boby_fanuc/geometric",
+                  [(0, 2, "geometric.max")], prefix="datasets:summary boby ", after=_SUMMARY)
+FIGURES += _table("docs/datasets.md", {"dlr_justin (seed 0)": ""}, "dlr_justin/geometric",
+                  [(0, 0, "geometric.rms"), (0, 2, "geometric.max")], prefix="datasets:summary justin ", after=_SUMMARY)
+for _col, _model in ((1, "elastic-joint"), (2, "elastic-full")):
+    FIGURES += _table("docs/datasets.md", {"dlr_justin (seed 0)": ""}, f"dlr_justin/{_model}",
+                      [(_col, 0, "holdout_rms_mm"), (_col, 2, "holdout_max_mm")],
+                      prefix=f"datasets:summary justin {_model} ", after=_SUMMARY, rel_tol=0.01)
+# elastic.md's prose
+FIGURES += [
+    Figure("elastic:boby geometric rms (prose)", "docs/elastic.md", r"elasticity was what limited it: " + _N,
+           "boby_fanuc/geometric", "holdout_rms_mm"),
+    Figure("elastic:boby joint rms (prose)", "docs/elastic.md", r"elasticity was what limited it: [0-9.]+ → " + _N,
+           "boby_fanuc/elastic-joint", "holdout_rms_mm", rel_tol=0.01),
+    Figure("elastic:boby full rms (prose)", "docs/elastic.md", r"every seed converged\): " + _N + r" mm \(per seed",
+           "boby_fanuc/elastic-full", "holdout_rms_mm", rel_tol=0.01),
+    Figure("elastic:hilti joint gain min", "docs/elastic.md", r"`joint` " + _N + r"-[0-9.]+ mm,", "elastic/hilti_gain_joint",
+           "gain.min", rel_tol=0.05),
+    Figure("elastic:hilti joint gain max", "docs/elastic.md", r"`joint` [0-9.]+-" + _N + r" mm,", "elastic/hilti_gain_joint",
+           "gain.max", rel_tol=0.05),
+    Figure("elastic:hilti full gain min", "docs/elastic.md", r"`full` " + _N + r"-[0-9.]+ mm lower RMS", "elastic/hilti_gain_full",
+           "gain.min", rel_tol=0.05),
+    Figure("elastic:hilti full gain max", "docs/elastic.md", r"`full` [0-9.]+-" + _N + r" mm lower RMS", "elastic/hilti_gain_full",
+           "gain.max", rel_tol=0.05),
+    Figure("elastic:justin joint seeds 0-4 min", "docs/elastic.md", r"holdout mean\s+" + _N + r"-[0-9.]+ mm \(`calibrate_justin",
+           "elastic/justin_joint_seeds", "min", rel_tol=0.01),
+    Figure("elastic:justin joint seeds 0-4 max", "docs/elastic.md", r"holdout mean\s+[0-9.]+-" + _N + r" mm \(`calibrate_justin",
+           "elastic/justin_joint_seeds", "max", rel_tol=0.01),
+    Figure("elastic:justin full mean (times paragraph)", "docs/elastic.md", r"holdout " + _N + r" mm mean \(before",
+           "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01),
+]
+
+# self-calibration.md: the NAO acceptance's held offsets' truth and the gain of both arms in sigma
+FIGURES += [Figure(f"self-calibration:nao held {p} truth", "docs/self-calibration.md", _cell(label, 0),
+                   "nao/acceptance", f"truth.{p}", rel_tol=0.0)
+            for label, p in (("theta2 HeadPitch", "theta2"), ("theta8 LWristYaw", "theta8"), ("theta13 RWristYaw", "theta13"))]
+FIGURES += [Figure(f"self-calibration:nao both arms sigma gain {h}", "docs/self-calibration.md",
+                   r"the shared head joint's by " + (r"[0-9]+ % \(left\) and " if h == "right" else "") + _N + rf" % \({h}\)",
+                   "self_calibration/nao_sigma_gain", f"{h}_percent", rel_tol=0.05) for h in ("left", "right")]
+
+# datasets.md "ros_industrial_handeye": the per-image RMS (all 16), the linear starts, their RMS range
+_PER_IMAGE = "| image | source corners | source RMS |"
+FIGURES += [Figure(f"datasets:ros handeye charuco image {k} rms", "docs/datasets.md", _cell(f"{k}.png", 4, after=_PER_IMAGE),
+                   "ros_handeye/test_set_charuco", f"images.{k}.png.rms_px", rel_tol=0.01) for k in range(16)]
+_LINEAR = "| set | robocal tsai | park | daniilidis | shah |"
+for _label, _set in (("ChArUco", "test_set_charuco"), ("circle grid", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: "linear"}, f"ros_handeye/{_set}",
+                      [(c, 0, f"{m}.difference_position_mm") for c, m in enumerate(("tsai", "park", "daniilidis", "shah"))],
+                      prefix=f"datasets:ros handeye {_set} ", after=_LINEAR, rel_tol=0.01)
+_BP = r"Their back-projection RMS: "
+FIGURES += [
+    Figure("datasets:ros handeye charuco linear rms min", "docs/datasets.md", _BP + r"ChArUco " + _N, "ros_handeye/test_set_charuco",
+           "linear.rms_px.min", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco linear rms max", "docs/datasets.md", _BP + r"ChArUco [0-9.]+-" + _N,
+           "ros_handeye/test_set_charuco", "linear.rms_px.max", rel_tol=0.01),
+    Figure("datasets:ros handeye circles linear rms min", "docs/datasets.md", _BP + r"(?s:.*?)circle grid " + _N,
+           "ros_handeye/test_set_10x10", "linear.rms_px.min", rel_tol=0.01),
+    Figure("datasets:ros handeye circles linear rms max", "docs/datasets.md", _BP + r"(?s:.*?)circle grid [0-9.]+-" + _N,
+           "ros_handeye/test_set_10x10", "linear.rms_px.max", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco refined rms (prose)", "docs/datasets.md", r"against " + _N + r" and [0-9.]+ px refined",
+           "ros_handeye/test_set_charuco", "rms_px", rel_tol=0.002),
+    Figure("datasets:ros handeye circles refined rms (prose)", "docs/datasets.md", r"against [0-9.]+ and " + _N + r" px refined",
+           "ros_handeye/test_set_10x10", "rms_px", rel_tol=0.002),
+    Figure("datasets:ros handeye charuco rms mm", "docs/datasets.md", r"the refined fit leaves " + _N + r" mm RMS",
+           "ros_handeye/test_set_charuco", "rms_mm", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco all 16 rms (prose)", "docs/datasets.md", r"which robocal can now use, the RMS is " + _N,
+           "ros_handeye/test_set_charuco", "rms_px", rel_tol=0.002),
+    Figure("datasets:ros handeye charuco image 2 (prose)", "docs/datasets.md", r"source cannot use, fit at " + _N,
+           "ros_handeye/test_set_charuco", "images.2.png.rms_px", rel_tol=0.01),
+    Figure("datasets:ros handeye charuco image 15 (prose)", "docs/datasets.md", r"source cannot use, fit at [0-9.]+ and " + _N,
+           "ros_handeye/test_set_charuco", "images.15.png.rms_px", rel_tol=0.01),
+]
+
+# datasets.md: the positioner's prose (calibrate_positioner_seeds over seeds 0-4, as the table)
+_AX = r"The axes, in the camera frame: "
+_SRC = r"The source's own test asserts(?s:.*?)"
+FIGURES += [Figure(f"datasets:positioner {k}", "docs/datasets.md", pat, "datasets/positioner", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("angle min", _AX + r"(?s:.*?)are " + _N + r"-[0-9.]+ deg", "angle_deg.min", 1e-5),
+                ("angle max", _AX + r"(?s:.*?)are [0-9.]+-" + _N + r" deg", "angle_deg.max", 1e-5),
+                ("common normal min", r"by a common normal of " + _N, "common_normal_mm.min", 0.01),
+                ("common normal max", r"by a common normal of [0-9.]+-" + _N, "common_normal_mm.max", 0.01),
+                ("a1 sigma", r"the core's 1-sigma of that distance \(`a1`\) is " + _N, "a1_sigma_mm.mean", 0.02),
+                ("train pos mean", _SRC + r"robocal: " + _N + " mm", "calibrated.train.pos_mean", 0.005),
+                ("train rot mean", _SRC + r"robocal: [0-9.]+ mm / " + _N + " deg", "calibrated.train.rot_mean", 0.005),
+                ("test pos mean", _SRC + r"training records and " + _N + " mm", "calibrated.test.pos_mean", 0.005),
+                ("test rot mean", _SRC + r"training records and [0-9.]+ mm / " + _N + " deg", "calibrated.test.rot_mean",
+                 0.005),
+                ("gain pos mean %", r"the improvement over the nominal DH is " + _N + " %", "gain_percent.pos_mean", 0.05),
+                ("nominal test pos mean", r"hold-out position mean \(" + _N + " ->", "nominal.test.pos_mean", 0.005),
+                ("gain pos max %", _N + r" % in hold-out position max", "gain_percent.pos_max", 0.05),
+                ("gain rot mean %", r"but only " + _N + r" % in orientation", "gain_percent.rot_mean", 0.1),
+                ("remaining pos", r"what remains \(" + _N + " mm", "calibrated.test.pos_mean", 0.005),
+                ("remaining rot", r"what remains \([0-9.]+ mm, " + _N + " deg", "calibrated.test.rot_mean", 0.005),
+                ("seed 0 test pos", r"\(seed 0: hold-out " + _N + " mm", "seed0.calibrated.pos_mean", 0.005),
+                ("seed 0 test rot", r"\(seed 0: hold-out [0-9.]+ mm / " + _N + " deg", "seed0.calibrated.rot_mean", 0.005),
+                ("seed 0 nominal pos", r"\(seed 0: hold-out [0-9.]+ mm / [0-9.]+ deg against " + _N + " mm",
+                 "seed0.nominal.pos_mean", 0.005),
+                ("seed 0 nominal rot", r"\(seed 0: hold-out [0-9.]+ mm / [0-9.]+ deg against [0-9.]+ mm /\s+" + _N + " deg",
+                 "seed0.nominal.rot_mean", 0.005))]
+
+# datasets.md "ros_industrial_handeye": the former default, refined intrinsics and the two-step camera + hand-eye
+for _label, _set in (("ChArUco, eye-to-hand", "test_set_charuco"), ("circle grid, eye-in-hand", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: ""}, f"datasets/ros_handeye_variants/{_set}",
+                      [(3, 0, "prior.rms_px"), (4, 0, "refined.rms_px")], prefix="datasets:ros handeye variants ",
+                      rel_tol=0.005, after=_RH, short=False)
+_V = "datasets/ros_handeye_variants/"
+FIGURES += [Figure(f"datasets:ros handeye variants {k}", "docs/datasets.md", pat, _V + t, field, rel_tol=tol)
+            for k, pat, t, field, tol in (
+                ("charuco auto rms", r"picks k1-k2 \(" + _N + " px", "test_set_charuco", "auto.rms_px", 0.01),
+                ("circles auto rms", r"and k1-k3 \(" + _N + " px", "test_set_10x10", "auto.rms_px", 0.01),
+                ("charuco camera rms", r"\(ChArUco: 16 of 16 images, 382 corners, " + _N + " px", "test_set_charuco",
+                 "camera.rms_px", 0.01),
+                ("charuco camera fx", r"382 corners, [0-9.]+ px, fx " + _N, "test_set_charuco", "camera.fx", 0.0005),
+                ("charuco camera sigma fx", r"382 corners, [0-9.]+ px, fx [0-9.]+ \+- " + _N, "test_set_charuco",
+                 "camera.sigma_fx", 0.02),
+                ("circles camera rms", r"circle grid: 15 images, " + _N + " px", "test_set_10x10", "camera.rms_px", 0.01),
+                ("circles camera fx", r"circle grid: 15 images, [0-9.]+ px, fx " + _N, "test_set_10x10", "camera.fx", 0.0005),
+                ("circles camera sigma fx", r"circle grid: 15 images, [0-9.]+ px, fx [0-9.]+ \+- " + _N, "test_set_10x10",
+                 "camera.sigma_fx", 0.02),
+                ("charuco two-step rms", r"--exact-poses --out he`: " + _N + r" px \(ChArUco\)", "test_set_charuco",
+                 "two_step.rms_px", 0.005),
+                ("circles two-step rms", r"--exact-poses --out he`: [0-9.]+ px \(ChArUco\) and\s+" + _N + r" px \(circle",
+                 "test_set_10x10", "two_step.rms_px", 0.005))]
+
+# datasets.md: OpenCV's linear solutions on robocal's detections, and the distance from the layout's guess
+for _label, _set in (("ChArUco", "test_set_charuco"), ("circle grid", "test_set_10x10")):
+    FIGURES += _table("docs/datasets.md", {_label: ""}, f"datasets/ros_handeye_opencv/{_set}",
+                      [(4 + c, 0, f"{m}.distance_mm") for c, m in enumerate(("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS",
+                                                                             "RW_SHAH", "RW_LI"))],
+                      prefix=f"datasets:ros handeye opencv {_set} ", after=_LINEAR, rel_tol=0.01)
+FIGURES.append(Figure("datasets:ros handeye charuco distance from the layout's guess", "docs/datasets.md",
+                      _N + r" mm from the layout's own initial guess", "datasets/ros_handeye_opencv/test_set_charuco",
+                      "guess.distance_mm", rel_tol=0.01))
+
+_OC = "datasets/ros_handeye_opencv/"
+FIGURES += [Figure(f"datasets:ros handeye detection {k}", "docs/datasets.md", pat, _OC + t, field, rel_tol=0.01)
+            for k, pat, t, field in (
+                ("charuco pnp rms min", r"fits every image to " + _N + r"-[0-9.]+ px RMS", "test_set_charuco", "pnp_rms_px.min"),
+                ("charuco pnp rms max", r"fits every image to [0-9.]+-" + _N + r" px RMS", "test_set_charuco", "pnp_rms_px.max"),
+                ("charuco cornerSubPix move", r"`cornerSubPix` moves the corners by\s+" + _N + r" px on average",
+                 "test_set_charuco", "subpix_move_px.mean"),
+                ("charuco homography max", r"mean homography errors " + _N + " px", "test_set_charuco", "homography_px.max"),
+                ("circles homography max", r"mean homography errors [0-9.]+ px and " + _N + " px", "test_set_10x10",
+                 "homography_px.max"))]
+
+_REF = r"on the same 150 records: "
+FIGURES += [Figure(f"datasets:positioner seed 0 {k} (= the test's reference fit)", "docs/datasets.md", _REF + pat,
+                   "datasets/positioner", field, rel_tol=tol)
+            for k, pat, field, tol in (("angle", _N + "°", "seed0.angle_deg", 1e-6),
+                                       ("angle sigma", r"[0-9.]+° \(σ " + _N, "seed0.alpha1_sigma_deg", 0.02),
+                                       ("common normal", r"[0-9.]+° \(σ [0-9.]+°\) and " + _N, "seed0.common_normal_mm", 0.002),
+                                       ("common normal sigma", r"[0-9.]+° \(σ [0-9.]+°\) and [0-9.]+ mm\s+\(σ " + _N,
+                                        "seed0.a1_sigma_mm", 0.02))]
+
+_RIG = r"kuka_kr150_r3100 m\.csv --out cal --elastic joint`\) gives compliances from "
+FIGURES += [Figure(f"elastic:rigid robot {k}", "docs/elastic.md", _RIG + pat, "elastic/rigid_robot", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("compliance min", _N, "compliance.min.value", 0.05),
+                ("compliance min sigma", r"[−0-9.-]+ ± " + _N, "compliance.min.std", 0.05),
+                ("compliance max", r"[−0-9.-]+ ± [0-9.]+ to\s+" + _N, "compliance.max.value", 0.05),
+                ("compliance max sigma", r"[−0-9.-]+ ± [0-9.]+ to\s+[0-9.]+ ± " + _N, "compliance.max.std", 0.05),
+                ("first moment", r"(?s:.*?)first moments such as " + _N, "moment.value", 0.05),
+                ("first moment sigma", r"(?s:.*?)first moments such as [−0-9.-]+ ± " + _N, "moment.std", 0.05))]
+
+_SIX = r"64 training \+ 16 holdout poses, seed 4\): holdout "
+FIGURES += [Figure(f"elastic:six-d cli {k}", "docs/elastic.md", _SIX + pat, "elastic/six_d_cli", field, rel_tol=0.02)
+            for k, pat, field in (("joint", _N + " mm RMS", "joint.holdout_rms_mm"),
+                                  ("full", r"[0-9.]+ mm RMS, `full`\s+" + _N + " mm", "full.holdout_rms_mm"),
+                                  ("geometric", r"[0-9.]+ mm RMS, `full`\s+[0-9.]+ mm; the geometric calibration of the same "
+                                                r"file " + _N + " mm", "geometric.holdout_rms_mm"))]
+
+_RT = "| | rotation residual RMS (noise σ) | holdout RMS [mm] | compliances A2-A6 |"
+for _label, _m in (("elastic (joint)", "elastic"), ("rigid (geometric)", "rigid")):
+    FIGURES += [Figure(f"elastic:six-d round trip {_m} seed {s} {f}", "docs/elastic.md", _cell(_label, c, s, after=_RT),
+                       "elastic/six_d_round_trip", f"{_m}.{s}.{f}", rel_tol=0.02)
+                for c, f in ((0, "rotation_rms"), (1, "holdout_rms_mm")) for s in (0, 1)]
+FIGURES += [Figure("elastic:six-d round trip max |z|", "docs/elastic.md", r"\| elastic \(joint\) \|[^|]*\|[^|]*\| within " + _N + " σ",
+                   "elastic/six_d_round_trip", "elastic.z_max", rel_tol=0.03),
+            Figure("elastic:six-d round trip A5 seed 0 z", "docs/elastic.md", r"\(A5 seed 0: " + _N + " σ",
+                   "elastic/six_d_round_trip", "elastic.0.z.A5", rel_tol=0.03)]
+
+_JN = r"\*\*Joint-reading noise\*\*(?s:.*?)"
+FIGURES += [Figure(f"self-calibration:nao joint noise {k}", "docs/self-calibration.md", _JN + pat,
+                   "self_calibration/nao_joint_noise", field, rel_tol=tol)
+            for k, pat, field, tol in (
+                ("exact variance factor", r"the residuals are " + _N + "x the corner noise", "exact.variance_factor", 0.03),
+                ("exact rms", r"corner noise \(RMS " + _N + " px", "exact.rms_px_per_coordinate", 0.02),
+                ("exact max error", r"off by up to " + _N + "°", "exact.max_error_deg", 0.03),
+                ("exact max |z|", r"off by up to [0-9.]+° at up to " + _N + r"\s+sigma", "exact.max_abs_z", 0.05),
+                ("eiv max error", r"errors up to " + _N + "° and", "eiv.max_error_deg", 0.05),
+                ("eiv max |z|", r"errors up to [0-9.]+° and\s+max \|error / sigma\| " + _N, "eiv.max_abs_z", 0.05))]
+
+# self-calibration-simulator.md: the noise budget
+FIGURES += [Figure(f"self-calibration-simulator:noise-budget {r} {j}", "docs/self-calibration-simulator.md",
+                   r"RMS per pixel coordinate\):(?s:.*?)`" + r + "`(?s:.*?)" + _N + f" px at {j} deg",
+                   "self_calibration/noise_budget", f"{r}.{j}.rms_px", rel_tol=0.02)
+            for r in ("nao_h25", "kuka_kr150_r3100") for j in ("0.01", "0.05")]
+
+FIGURES += [Figure("self-calibration-simulator:null directions next singular value", "docs/self-calibration-simulator.md",
+                   r"the next is " + _N + r", [0-9.]+ of the largest", "self_calibration/nao_null_directions",
+                   "next_singular_value", rel_tol=0.02),
+            Figure("self-calibration-simulator:null directions next relative", "docs/self-calibration-simulator.md",
+                   r"the next is [0-9.]+, " + _N + r" of the largest", "self_calibration/nao_null_directions",
+                   "next_relative", rel_tol=0.02)]
+
+_SC = r"On the\s+simulator's own default NAO data(?s:.*?)"
+FIGURES += [Figure(f"self-calibration:nao cli {k}", "docs/self-calibration.md", _SC + pat, "self_calibration/nao_cli", field,
+                   rel_tol=tol)
+            for k, pat, field, tol in (
+                ("default joint noise", r"default estimates " + _N + " deg", "default.joint_noise_deg", 0.0),
+                ("default variance factor", r"default estimates [0-9.]+ deg \(variance factor " + _N, "default.variance_factor",
+                 0.02),
+                ("default max |z|", r"offsets fall within " + _N + r"\s+sigma", "default.max_abs_z", 0.05),
+                ("default max error", r"\(largest error " + _N + " deg", "default.max_error_deg", 0.05),
+                ("exact variance factor", r"the variance factor is " + _N, "exact.variance_factor", 0.03),
+                ("exact max |z|", r"the offsets up to " + _N + " sigma", "exact.max_abs_z", 0.05),
+                ("exact max error", r"the offsets up to [0-9.]+ sigma \(" + _N + " deg", "exact.max_error_deg", 0.05))]
+
+_RTJ = r"A1 reported unidentifiable\s+by name, holdout "
+_RTF = r"the six lateral compliances within 1\.7 σ, holdout\s+"
+FIGURES += [Figure(f"elastic:round trip {k}", "docs/elastic.md", pat, "elastic/round_trips", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("joint seed 0 holdout", _RTJ + _N, "joint.0.holdout_rms_mm"),
+                ("joint seed 1 holdout", _RTJ + r"[0-9.]+ / " + _N, "joint.1.holdout_rms_mm"),
+                ("joint seed 0 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of " + _N,
+                 "joint.0.optimum_mm"),
+                ("joint seed 1 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of [0-9.]+ / " + _N,
+                 "joint.1.optimum_mm"),
+                ("full holdout", _RTF + _N, "full.holdout_rms_mm"),
+                ("full optimum", _RTF + r"[0-9.]+ mm against a noise-limited optimum of " + _N, "full.optimum_mm"),
+                ("joint-only holdout", r"the joint-only model leaves " + _N, "joint_only.holdout_rms_mm"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

@@ -33,7 +33,7 @@ def _justin_lines(root) -> list:
 
 def _hilti_lines(root) -> list:
     r = calibrate_hilti(root=root)
-    lines = [f"hilti_trailblazer (fit on flat: train RMS {r['result'].rms_after:.2f} mm; per-station CROSS Kabsch, "
+    lines = [f"hilti_trailblazer (fit on flat: train RMS {r['result'].rms_before:.2f} -> {r['result'].rms_after:.2f} mm; per-station CROSS Kabsch, "
              f"ss 0/7)",
              "  set               n   nominal RMS/p95xy/p95z   calibrated RMS/p95xy/p95z  mean   max"]
     for s in HILTI_SETS:
