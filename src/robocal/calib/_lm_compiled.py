@@ -138,7 +138,7 @@ def _kernel_args(pk: _Packed, state, active, ctl):
     act = np.flatnonzero(active).astype(np.int64)
     na = len(act)
     params = np.array(state.params, dtype=float)
-    base = np.ascontiguousarray(state.bases[0, :3], dtype=float)
+    base = np.array(state.bases[0, :3], dtype=float, order="C")  # a copy: the kernel updates it in place
     pts = np.array(state.targets, dtype=float).reshape(pk.K, 3)
     return (pk.ip, pk.op_axis, pk.qm, pk.cq, pk.sq, pk.tT, pk.gmove, pk.measured, pk.row_of, pk.w, pk.gparam, act, ctl,
             params, base, pts, np.empty_like(params), np.empty_like(base), np.empty_like(pts),
