@@ -24,14 +24,14 @@ anywhere else it is reported as NOT converged, as is reaching the iteration cap.
 lower the cost strictly, and the cost-change and step-size criteria count only for steps whose
 damping is below 1 (a heavily damped step is short wherever it is).
 
-The chi-square criterion: with ``d_k`` the cost decrease of accepted step k and ``d_{k-1}`` that of
-the accepted step before it in the same phase, ``q = d_k / d_{k-1}`` and the remaining decrease
-``R_k = d_k q / (1 - q)`` (the geometric tail of steps that keep contracting at ``q``; infinite for
-the first step of a phase or when ``q >= 1``, :func:`remaining_decrease_bound`), the solve stops when
-``2 max(d_k, R_k) <= chi2_tol * s^2`` with ``s^2 = 2 cost / (M - n_active)`` and the damping at most
-1e-3. Where Gauss-Newton converges quadratically ``q`` is tiny and ``R_k << d_k``: the rule is the
-plain "last change below chi2_tol" then (one more step only when the very first step of a phase is
-already that small). Where it converges only linearly -- large residuals with strong curvature, the
+The chi-square criterion: with ``d_k``, ``d_{k-1}``, ``d_{k-2}`` the cost decreases of the last
+three accepted steps of the phase, ``q = max(d_k / d_{k-1}, d_{k-1} / d_{k-2})`` and the remaining
+decrease ``R_k = d_k q / (1 - q)`` (the geometric tail of steps that keep contracting at ``q``;
+infinite before a phase's third step or when ``q >= 1``, :func:`remaining_decrease_bound`), the solve
+stops when ``2 max(d_k, R_k) <= chi2_tol * s^2`` with ``s^2 = 2 cost / (M - n_active)`` and the
+damping at most 1e-3. Where Gauss-Newton converges quadratically ``q <= 1/2`` and ``R_k <= d_k``: the
+rule is the plain "last change below chi2_tol" then (a phase takes at least three steps to stop by
+it). Where it converges only linearly -- large residuals with strong curvature, the
 lumped elastic fits of docs/elastic.md, whose dropped second-order term is far larger than J^T J in
 some directions -- the last change can be tiny while the cost is still many tolerances above the
 minimum; ``R_k`` then keeps the iteration going (or to the cap, reported as not converged). The
@@ -56,18 +56,21 @@ GTOL = 1e-6
 STALL_RTOL = 1e-6
 
 
-def remaining_decrease_bound(dcost: float, dcost_prev: float | None) -> float:
+def remaining_decrease_bound(dcost: float, dcost_prev: float | None, dcost_prev2: float | None) -> float:
     """Estimated cost decrease still to come after an accepted step (the chi-square stop's bound).
 
-    ``dcost`` is the last accepted step's cost decrease, ``dcost_prev`` the one before it in the same
-    phase (``None`` for the first). With the contraction ratio ``q = dcost / dcost_prev``, steps
-    that keep contracting at ``q`` lower the cost by ``dcost (q + q^2 + ...) = dcost q / (1 - q)``
-    more; ``inf`` when there is no previous step or ``q >= 1`` (no contraction seen yet).
-    Same units as the cost.
+    ``dcost``, ``dcost_prev``, ``dcost_prev2``: the cost decreases of the last three accepted steps
+    of the phase, newest first (``None`` where the phase has had fewer). With the contraction ratio
+    ``q = max(dcost / dcost_prev, dcost_prev / dcost_prev2)`` (the slower of the last two: one short
+    step in a slow valley is no contraction), steps that keep contracting at ``q`` lower the cost by
+    ``dcost (q + q^2 + ...) = dcost q / (1 - q)`` more; ``inf`` when the phase has had fewer than
+    three steps or ``q >= 1`` (no contraction seen). Same units as the cost.
     """
-    if dcost_prev is None or not dcost_prev > 0.0 or dcost >= dcost_prev:
+    if dcost_prev is None or dcost_prev2 is None or not (dcost_prev > 0.0 and dcost_prev2 > 0.0):
         return math.inf
-    q = dcost / dcost_prev
+    q = max(dcost / dcost_prev, dcost_prev / dcost_prev2)
+    if q >= 1.0:
+        return math.inf
     return dcost * q / (1.0 - q)
 
 
@@ -133,7 +136,7 @@ class DampedGaussNewton:
         # first (the Jacobian then only at the step taken): a refused trial then costs its residuals
         # only. Same trials, same decisions, same numbers; only when the Jacobian is computed changes.
         self._refused_last = False
-        self._dcost_prev = None  # the previous accepted step's cost decrease in this phase
+        self._dcost_prev = (None, None)  # the two previous accepted steps' cost decreases in this phase
 
     # ------------------------------------------------------------------ pieces
     # The linear algebra goes through hooks (_column_norms, augmented, _normal_system /
@@ -325,7 +328,8 @@ class DampedGaussNewton:
 
     def _converged_after_step(self, dcost, step_s) -> bool:
         cost = self.cost
-        dcost_prev, self._dcost_prev = self._dcost_prev, dcost
+        dcost_prev, dcost_prev2 = self._dcost_prev
+        self._dcost_prev = (dcost, dcost_prev)
         if self.lam >= 1.0:
             # a heavily damped step (a short gradient step) is small however far the minimum is:
             # its size and cost change say nothing about convergence
@@ -337,7 +341,7 @@ class DampedGaussNewton:
         # ratio) add up to less than that, so the estimate is within a small fraction of a standard
         # deviation of the optimum also where Gauss-Newton converges only linearly (module docstring)
         s2 = 2.0 * cost / max(len(self.r) - self.n_active, 1)
-        if self.lam <= 1e-3 and 2.0 * max(abs(dcost), remaining_decrease_bound(dcost, dcost_prev)) \
+        if self.lam <= 1e-3 and 2.0 * max(abs(dcost), remaining_decrease_bound(dcost, dcost_prev, dcost_prev2)) \
                 <= self.chi2_tol * max(s2, 1e-300):
             return self._stop(f"chi-square change and its estimated remainder below {self.chi2_tol:g} "
                               "residual variances")
@@ -360,6 +364,6 @@ class DampedGaussNewton:
         self.w_rows = self.row_weights()
         self.cost = self._cost(self.r)
         self.lam, self._nu = 1e-3, 2.0
-        self._dcost_prev = None
+        self._dcost_prev = (None, None)
         self.reason, self.converged = MAX_ITERATIONS_REASON, False
         return True
