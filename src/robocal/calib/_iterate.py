@@ -25,13 +25,13 @@ lower the cost strictly, and the cost-change and step-size criteria count only f
 damping is below 1 (a heavily damped step is short wherever it is).
 
 The chi-square criterion: with ``d_k``, ``d_{k-1}``, ``d_{k-2}`` the cost decreases of the last
-three accepted steps of the phase, ``q = max(d_k / d_{k-1}, d_{k-1} / d_{k-2})`` and the remaining
+three accepted steps of the phase (however damped), ``q = max(d_k / d_{k-1}, d_{k-1} / d_{k-2})`` and the remaining
 decrease ``R_k = d_k q / (1 - q)`` (the geometric tail of steps that keep contracting at ``q``;
 infinite before a phase's third step or when ``q >= 1``, :func:`remaining_decrease_bound`), the solve
 stops when ``2 max(d_k, R_k) <= chi2_tol * s^2`` with ``s^2 = 2 cost / (M - n_active)`` and the
-damping at most 1e-3. Where Gauss-Newton converges quadratically ``q <= 1/2`` and ``R_k <= d_k``: the
-rule is the plain "last change below chi2_tol" then (a phase takes at least three steps to stop by
-it). Where it converges only linearly -- large residuals with strong curvature, the
+damping at most 1e-3. Where Gauss-Newton converges quadratically the ratios are small and
+``R_k <= d_k`` once ``q <= 1/2``: the rule is the plain "last change below chi2_tol" then (a phase
+takes at least three steps to stop by it). Where it converges only linearly -- large residuals with strong curvature, the
 lumped elastic fits of docs/elastic.md, whose dropped second-order term is far larger than J^T J in
 some directions -- the last change can be tiny while the cost is still many tolerances above the
 minimum; ``R_k`` then keeps the iteration going (or to the cap, reported as not converged). The
