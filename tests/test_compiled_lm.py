@@ -87,7 +87,7 @@ def test_compiled_loop_equals_python_loop(monkeypatch, robot, n_targets, missing
     assert compiled.rms_before > 10 * compiled.rms_after
 
 
-@pytest.mark.parametrize("tols, reason", [(dict(ftol=0.0), "chi-square change below"),
+@pytest.mark.parametrize("tols, reason", [(dict(ftol=0.0), "chi-square change and its estimated remainder below"),
                                           (dict(chi2_tol=0.0), "relative cost reduction below ftol")])
 def test_compiled_loop_stops_for_the_same_reason(monkeypatch, tols, reason):
     problem, _, _ = _campaign(n_poses=60, seed=3, identifiable_only=True)

@@ -14,7 +14,8 @@ reset to 2 by a taken step). The stop rules below are the same for both.
 
 Convergence policy (the one of every solver in robocal): a solve has converged when one stated
 criterion was met after an accepted step -- relative cost change below ``ftol``, chi-square change
-below ``chi2_tol`` residual variances, scaled step below ``xtol`` -- or at a first-order stationary
+*and the estimated chi-square change still to come* below ``chi2_tol`` residual variances (below),
+scaled step below ``xtol`` -- or at a first-order stationary
 point: the largest scaled gradient component ``|J_j^T r|`` at most ``GTOL`` times
 ``max_j |J_j| * |r|`` (the cosine between the residuals and the Jacobian's columns), or a
 Gauss-Newton step predicting a cost reduction of at most ``STALL_RTOL`` of the cost. "No step
@@ -22,6 +23,20 @@ reduces the cost" is convergence only at such a stationary point (numerical prec
 anywhere else it is reported as NOT converged, as is reaching the iteration cap. A trial step must
 lower the cost strictly, and the cost-change and step-size criteria count only for steps whose
 damping is below 1 (a heavily damped step is short wherever it is).
+
+The chi-square criterion: with ``d_k``, ``d_{k-1}``, ``d_{k-2}`` the cost decreases of the last
+three accepted steps of the phase (however damped), ``q = max(d_k / d_{k-1}, d_{k-1} / d_{k-2})`` and the remaining
+decrease ``R_k = d_k q / (1 - q)`` (the geometric tail of steps that keep contracting at ``q``;
+infinite before a phase's third step or when ``q >= 1``, :func:`remaining_decrease_bound`), the solve
+stops when ``2 max(d_k, R_k) <= chi2_tol * s^2`` with ``s^2 = 2 cost / (M - n_active)`` and the
+damping at most 1e-3. Where Gauss-Newton converges quadratically the ratios are small and
+``R_k <= d_k`` once ``q <= 1/2``: the rule is the plain "last change below chi2_tol" then (a phase
+takes at least three steps to stop by it). Where it converges only linearly -- large residuals with strong curvature, the
+lumped elastic fits of docs/elastic.md, whose dropped second-order term is far larger than J^T J in
+some directions -- the last change can be tiny while the cost is still many tolerances above the
+minimum; ``R_k`` then keeps the iteration going (or to the cap, reported as not converged). The
+Gauss-Newton model's own prediction at the accepted point (½ g^T (J^T J)^-1 g) is no such bound: it
+underestimates the remaining decrease by the same factor ``1 - q`` as the last change does.
 """
 
 from __future__ import annotations
@@ -52,7 +67,26 @@ def no_step_reason(optimality: float, rel: float) -> tuple[str, bool]:
 
 
 def chi2_reason(chi2_tol: float) -> str:
-    return f"chi-square change below {chi2_tol:g} residual variances"
+    """The stop reason of the chi-square criterion (module docstring)."""
+    return f"chi-square change and its estimated remainder below {chi2_tol:g} residual variances"
+
+
+def remaining_decrease_bound(dcost: float, dcost_prev: float | None, dcost_prev2: float | None) -> float:
+    """Estimated cost decrease still to come after an accepted step (the chi-square stop's bound).
+
+    ``dcost``, ``dcost_prev``, ``dcost_prev2``: the cost decreases of the last three accepted steps
+    of the phase, newest first (``None`` where the phase has had fewer). With the contraction ratio
+    ``q = max(dcost / dcost_prev, dcost_prev / dcost_prev2)`` (the slower of the last two: one short
+    step in a slow valley is no contraction), steps that keep contracting at ``q`` lower the cost by
+    ``dcost (q + q^2 + ...) = dcost q / (1 - q)`` more; ``inf`` when the phase has had fewer than
+    three steps or ``q >= 1`` (no contraction seen). Same units as the cost.
+    """
+    if dcost_prev is None or dcost_prev2 is None or not (dcost_prev > 0.0 and dcost_prev2 > 0.0):
+        return math.inf
+    q = max(dcost / dcost_prev, dcost_prev / dcost_prev2)
+    if q >= 1.0:
+        return math.inf
+    return dcost * q / (1.0 - q)
 
 
 def robust_weights(r_pose, loss, f_scale):
@@ -117,6 +151,7 @@ class DampedGaussNewton:
         # first (the Jacobian then only at the step taken): a refused trial then costs its residuals
         # only. Same trials, same decisions, same numbers; only when the Jacobian is computed changes.
         self._refused_last = False
+        self._dcost_prev = (None, None)  # the two previous accepted steps' cost decreases in this phase
 
     # ------------------------------------------------------------------ pieces
     # The linear algebra goes through hooks (_column_norms, augmented, _normal_system /
@@ -302,6 +337,8 @@ class DampedGaussNewton:
 
     def _converged_after_step(self, dcost, step_s) -> bool:
         cost = self.cost
+        dcost_prev, dcost_prev2 = self._dcost_prev
+        self._dcost_prev = (dcost, dcost_prev)
         if self.lam >= 1.0:
             # a heavily damped step (a short gradient step) is small however far the minimum is:
             # its size and cost change say nothing about convergence
@@ -309,10 +346,12 @@ class DampedGaussNewton:
         if abs(dcost) <= self.ftol * max(cost, 1e-300):
             return self._stop("relative cost reduction below ftol")
         # statistical criterion: the last step changed chi^2 by less than chi2_tol residual
-        # variances, so the estimate is within a small fraction of a standard deviation of
-        # the optimum (Gauss-Newton converges quadratically: the next change is smaller still)
+        # variances AND the changes still to come (the geometric tail at the observed contraction
+        # ratio) add up to less than that, so the estimate is within a small fraction of a standard
+        # deviation of the optimum also where Gauss-Newton converges only linearly (module docstring)
         s2 = 2.0 * cost / max(len(self.r) - self.n_active, 1)
-        if 2.0 * abs(dcost) <= self.chi2_tol * max(s2, 1e-300) and self.lam <= 1e-3:
+        if self.lam <= 1e-3 and 2.0 * max(abs(dcost), remaining_decrease_bound(dcost, dcost_prev, dcost_prev2)) \
+                <= self.chi2_tol * max(s2, 1e-300):
             return self._stop(chi2_reason(self.chi2_tol))
         if math.sqrt(float(step_s @ step_s)) <= self.xtol * (1.0 + math.sqrt(2.0 * cost)):
             return self._stop("step below xtol")
@@ -333,5 +372,6 @@ class DampedGaussNewton:
         self.w_rows = self.row_weights()
         self.cost = self._cost(self.r)
         self.lam, self._nu = 1e-3, 2.0
+        self._dcost_prev = (None, None)
         self.reason, self.converged = MAX_ITERATIONS_REASON, False
         return True

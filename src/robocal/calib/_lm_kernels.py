@@ -465,6 +465,10 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, gparam, a
         col_scale[i] = d if d != 0.0 else 1.0
     lam = 1e-3
     refused_last = False
+    # the cost decreases of the two previous accepted steps (NaN: none yet), for the chi-square stop's
+    # estimated remainder (robocal.calib._iterate.remaining_decrease_bound)
+    d_prev = math.nan
+    d_prev2 = math.nan
     code = MAX_ITERATIONS
     it = first + max_it - 1
     out[1] = math.nan
@@ -535,13 +539,21 @@ def lm_points(ip, op_axis, qm, cq, sq, tT, gmove, measured, row_of, w, gparam, a
         hist[itn - first] = c_t
         dcost = cost - c_t
         cost = c_t
+        dp, dp2 = d_prev, d_prev2
+        d_prev2 = d_prev
+        d_prev = dcost
         if lam >= 1.0:  # a heavily damped step is short wherever it is: no convergence test
             continue
         if abs(dcost) <= ftol * max(cost, 1e-300):
             code = FTOL
             break
         s2 = 2.0 * cost / max(M - na, 1)
-        if 2.0 * abs(dcost) <= chi2_tol * max(s2, 1e-300) and lam <= 1e-3:
+        remainder = math.inf  # the geometric tail at the slower of the last two contraction ratios
+        if dp > 0.0 and dp2 > 0.0:  # False for NaN (fewer than three steps in this phase)
+            q = max(dcost / dp, dp / dp2)
+            if q < 1.0:
+                remainder = dcost * q / (1.0 - q)
+        if lam <= 1e-3 and 2.0 * max(abs(dcost), remainder) <= chi2_tol * max(s2, 1e-300):
             code = CHI2
             break
         ss = 0.0

@@ -242,7 +242,9 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     reject_outliers: after the robust solve, drop the reported outliers and finish with plain
         least squares (their residuals are still reported; the covariance excludes them).
     chi2_tol: stop when an accepted step changes chi^2 by less than this many residual variances
-        (the estimate is then within a few hundredths of a standard deviation of the optimum);
+        and so does the change still to come, estimated from the contraction of the last two steps
+        (:func:`robocal.calib._iterate.remaining_decrease_bound`; the estimate is then within a
+        few hundredths of a standard deviation of the optimum);
         ``ftol`` (relative cost change) and ``xtol`` (scaled step) stop it too.
     progress: optional callable ``progress(iteration, cost)``.
     """
