@@ -628,9 +628,9 @@ FIGURES += [
            "dlr_justin/elastic-joint", "holdout_mean_mm", rel_tol=0.01),
     Figure("elastic:justin full mean (prose)", "docs/elastic.md", r"the full\s+model " + _N + " mm mean",
            "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01),
-    Figure("elastic:boby training range joint min", "docs/elastic.md", r"0\.338 mm; training " + _N, "boby_fanuc/elastic-joint",
+    Figure("elastic:boby training range joint min", "docs/elastic.md", r"0\.309, 0\.344 mm; training " + _N, "boby_fanuc/elastic-joint",
            "train_rms_mm.min", rel_tol=0.01),
-    Figure("elastic:boby training range joint max", "docs/elastic.md", r"0\.338 mm; training [0-9.]+-" + _N,
+    Figure("elastic:boby training range joint max", "docs/elastic.md", r"0\.309, 0\.344 mm; training [0-9.]+-" + _N,
            "boby_fanuc/elastic-joint", "train_rms_mm.max", rel_tol=0.01),
 ]
 FIGURES += _table("docs/datasets.md", {"calibrated (robocal)": "geometric"}, "boby_fanuc/geometric", [(0, 0, "rms")],
@@ -1306,7 +1306,7 @@ FIGURES += [
            "boby_fanuc/geometric", "holdout_rms_mm"),
     Figure("elastic:boby joint rms (prose)", "docs/elastic.md", r"elasticity was what limited it: [0-9.]+ → " + _N,
            "boby_fanuc/elastic-joint", "holdout_rms_mm", rel_tol=0.01),
-    Figure("elastic:boby full rms (prose)", "docs/elastic.md", r"every seed converged\): " + _N + r" mm \(per seed",
+    Figure("elastic:boby full rms (prose)", "docs/elastic.md", r"protocol's cap of 1000 iterations per solve, 2000 in all\): " + _N + r" mm \(per seed",
            "boby_fanuc/elastic-full", "holdout_rms_mm", rel_tol=0.01),
     Figure("elastic:hilti joint gain min", "docs/elastic.md", r"`joint` " + _N + r"-[0-9.]+ mm,", "elastic/hilti_gain_joint",
            "gain.min", rel_tol=0.05),
@@ -1454,8 +1454,9 @@ FIGURES += [Figure(f"elastic:rigid robot {k}", "docs/elastic.md", _RIG + pat, "e
                 ("compliance min sigma", r"[−0-9.-]+ ± " + _N, "compliance.min.std", 0.05),
                 ("compliance max", r"[−0-9.-]+ ± [0-9.]+ to\s+" + _N, "compliance.max.value", 0.05),
                 ("compliance max sigma", r"[−0-9.-]+ ± [0-9.]+ to\s+[0-9.]+ ± " + _N, "compliance.max.std", 0.05),
-                ("first moment", r"(?s:.*?)first moments such as " + _N, "moment.value", 0.05),
-                ("first moment sigma", r"(?s:.*?)first moments such as [−0-9.-]+ ± " + _N, "moment.std", 0.05))]
+                # the first moments' values are not registered: not identified, they end where the solver's
+                # path leaves them (the gate's point is sigma > |value|, tests/test_elastic.py)
+                )]
 
 _SIX = r"64 training \+ 16 holdout poses, seed 4\): holdout "
 FIGURES += [Figure(f"elastic:six-d cli {k}", "docs/elastic.md", _SIX + pat, "elastic/six_d_cli", field, rel_tol=0.02)
