@@ -18,10 +18,10 @@ def simulate():
 @click.argument("robot")
 @click.option("--poses", "n_poses", default=100, show_default=True, type=click.IntRange(1, 1_000_000),
               help="Number of random poses (at most 1,000,000).")
-@click.option("--noise", "noise_mm", default=0.02, show_default=True, help="Tracker noise per coordinate [mm].")
+@click.option("--noise", "noise_mm", default=0.02, show_default=True, metavar="MM", help="Tracker noise per coordinate [mm].")
 @click.option("--reflectors", type=click.Choice(["1", "3"]), default="1", show_default=True,
               help="Reflectors on the flange (3: the file also holds the flange orientation).")
-@click.option("--joint-noise", "joint_noise_deg", default=0.0, show_default=True, help="Encoder noise [deg].")
+@click.option("--joint-noise", "joint_noise_deg", default=0.0, show_default=True, metavar="DEG", help="Encoder noise [deg].")
 @click.option("--seed", default=0, show_default=True, help="Seed of the true parameters, tracker placement and poses.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="Measurement CSV file; the truth goes to <name>.truth.json next to it.")

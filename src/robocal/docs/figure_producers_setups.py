@@ -22,24 +22,10 @@ def thermal_system_calibration() -> dict:
     ``at_point_mm``, ``sensor_origin_mm``, ``translation_mm``, ``P_e_mm``."""
     import numpy as np
 
-    from ..robots import load_robot
-    from ..thermal import compare_system_calibrations, design_sphere_poses, predict_sphere
-    from ..transforms import invert_transforms, rot_x, so3_exp
-
-    kuka = load_robot("kuka_kr150_r3100")
-    P_e = np.array([25.0, -40.0, 160.0])
-    centre = np.array([1900.0, 300.0, 700.0])
-    keys = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+    keys = SYSTEM_MEASURES
     runs = {"ls": [], "thesis": []}
     for seed in range(20):
-        rng = np.random.default_rng(seed)
-        T_bs = np.eye(4)
-        T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
-        T_bs[:3, 3] = centre + [0.0, 0.0, -700.0]
-        T_sb = invert_transforms(T_bs)
-        q = design_sphere_poses(kuka, centre, P_e, 9, rng, spread_mm=(250.0, 200.0, 150.0), tilt_deg=60)
-        P = predict_sphere(kuka, T_sb, P_e, q) + rng.normal(0, 0.02, (9, 3))
-        c = compare_system_calibrations(kuka, q, P, T_sensor_base_true=T_sb, P_e_true=P_e, point_sigma_mm=0.02)
+        c = system_calibration_seed(seed)
         runs["ls"].append([c.errors["least-squares"][k] for k in keys])
         runs["thesis"].append([c.errors["thesis-penalty"][k] for k in keys])
     out = {}
@@ -138,3 +124,31 @@ def self_calibration_industrial() -> dict:
 
 SETUP_PRODUCERS = {"self_calibration/industrial": self_calibration_industrial,
                    "system_calibration/thermal": thermal_system_calibration, "handeye/rendered": handeye_rendered}
+
+
+#: the measures of :func:`system_calibration_seed`
+SYSTEM_MEASURES = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+
+
+def system_calibration_seed(seed: int, true_model=None):
+    """One seed of the thermal system-calibration set-up (``tests/test_thermal_core.py``): KR150 R3100,
+    a sensor 700 mm below a volume centred at (1900, 300, 700) mm with a random roll and tilt, the
+    sphere at (25, -40, 160) mm on the flange, 9 designed poses (tilts up to 60 deg), 0.02 mm noise;
+    ``true_model``: the robot that moves (default: the nominal one). Returns
+    ``compare_system_calibrations``'s result (both methods)."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..thermal import compare_system_calibrations, design_sphere_poses, predict_sphere
+    from ..transforms import invert_transforms, rot_x, so3_exp
+
+    kuka = load_robot("kuka_kr150_r3100")
+    P_e, centre = np.array([25.0, -40.0, 160.0]), np.array([1900.0, 300.0, 700.0])
+    rng = np.random.default_rng(seed)
+    T_bs = np.eye(4)
+    T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
+    T_bs[:3, 3] = centre + [0.0, 0.0, -700.0]
+    T_sb = invert_transforms(T_bs)
+    q = design_sphere_poses(kuka, centre, P_e, 9, rng, spread_mm=(250.0, 200.0, 150.0), tilt_deg=60)
+    P = predict_sphere(kuka if true_model is None else true_model, T_sb, P_e, q) + rng.normal(0, 0.02, (9, 3))
+    return compare_system_calibrations(kuka, q, P, T_sensor_base_true=T_sb, P_e_true=P_e, point_sigma_mm=0.02)

@@ -196,24 +196,15 @@ def thermal_system_seeds100(off_model: bool) -> dict:
 
     from ..robots import load_robot
     from ..sim import VirtualRobot
-    from ..thermal import compare_system_calibrations, design_sphere_poses, predict_sphere
-    from ..transforms import invert_transforms, rot_x, so3_exp
+    from .figure_producers_setups import SYSTEM_MEASURES, system_calibration_seed
 
     kuka = load_robot("kuka_kr150_r3100")
-    P_e, centre = np.array([25.0, -40.0, 160.0]), np.array([1900.0, 300.0, 700.0])
-    keys = ("rotation_deg", "at_point_mm", "sensor_origin_mm", "translation_mm", "P_e_mm")
+    keys = SYSTEM_MEASURES
     ls, th, z = [], [], []
     for seed in range(100):
-        rng = np.random.default_rng(seed)
-        T_bs = np.eye(4)
-        T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
-        T_bs[:3, 3] = centre + [0.0, 0.0, -700.0]
-        T_sb = invert_transforms(T_bs)
-        q = design_sphere_poses(kuka, centre, P_e, 9, rng, spread_mm=(250.0, 200.0, 150.0), tilt_deg=60)
-        true = kuka if not off_model else VirtualRobot.perturbed(
+        true = None if not off_model else VirtualRobot.perturbed(
             kuka, 500 + seed, length_sigma_mm=0.1, angle_sigma_deg=0.01, offset_sigma_deg=0.01).true_model
-        P = predict_sphere(true, T_sb, P_e, q) + rng.normal(0, 0.02, (9, 3))
-        c = compare_system_calibrations(kuka, q, P, T_sensor_base_true=T_sb, P_e_true=P_e, point_sigma_mm=0.02)
+        c = system_calibration_seed(seed, true)
         ls.append([c.errors["least-squares"][k] for k in keys])
         th.append([c.errors["thesis-penalty"][k] for k in keys])
         z.append(c.errors["least-squares"]["P_e_mm"] / np.linalg.norm(c.least_squares.std_P_e_mm))
