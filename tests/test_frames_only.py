@@ -18,13 +18,13 @@ from robocal.calib.initial import base_and_tool_from_orientations
 from robocal.calib.sanity import Verdict
 from robocal.cli import main
 from robocal.io.measurements import Measurements, write_measurements
-from robocal.kinematics.ik import ik_numeric
 from robocal.robots import load_robot
+from robocal.sim.line_campaign import LINE_ROBOT, LINE_TOOL_ROTVEC, line_campaign_poses
 from robocal.transforms import so3_exp, so3_log
 from robocal.workflows.calibration.calibrate import _non_convergence_first
 
-ROBOT = "kuka_kr150_r3100"
-TOOL_ROTVEC = [2.9, 0.3, 0.2]  # ~170 deg
+ROBOT = LINE_ROBOT
+TOOL_ROTVEC = list(LINE_TOOL_ROTVEC)  # ~170 deg
 
 
 def run(*args):
@@ -32,36 +32,13 @@ def run(*args):
 
 
 def line_campaign(path, seed=5, n=20, effects=False):
-    """Write the line campaign to ``path``; returns (tool, instrument frame) [mm]. ``effects``: the
-    robot and instrument have the ``realistic`` campaign effects (tests/_first_order.py
-    ``poses_with_effects``, phases from ``seed + 1000``); then also returns the joints and the
-    noise-free measured poses."""
-    m = load_robot(ROBOT)
-    rng = np.random.default_rng(seed)
-    q0 = np.radians([10.0, -80.0, 100.0, 5.0, 40.0, 20.0])
-    T0 = m.fk(q0)
-    d = np.array([0.6, 0.7, -0.2])
-    d /= np.linalg.norm(d)
-    T = np.repeat(T0[None], n, axis=0)
-    T[:, :3, 3] = T0[:3, 3] + np.linspace(-400, 400, n)[:, None] * d
-    T[:, :3, :3] = so3_exp(rng.normal(0, 0.03, (n, 3))) @ T0[:3, :3]
-    q = ik_numeric(m, T, q0).q
-    tool = np.eye(4)
-    tool[:3, :3], tool[:3, 3] = so3_exp(TOOL_ROTVEC), [30.0, 10.0, 150.0]
-    inst = np.eye(4)
-    inst[:3, :3], inst[:3, 3] = so3_exp([0.03, 0.02, -2.2]), [3000.0, -500.0, -400.0]
-    if effects:
-        from _first_order import poses_with_effects
-
-        phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
-        Tm = poses_with_effects(m, q, inst, tool, phases)[1]
-    else:
-        Tm = inst @ m.fk(q) @ tool
-    p = Tm[:, :3, 3] + rng.normal(0, 0.02, (n, 3))
-    R = so3_exp(rng.normal(0, 0.0002, (n, 3))) @ Tm[:, :3, :3]
-    write_measurements(path, Measurements(q, p, joint_names=m.controller_joints, rotations=R,
-                                          metadata={"robot": ROBOT}), orientation="quaternion")
-    return (tool, inst, q, Tm) if effects else (tool, inst)
+    """Write the line campaign (:func:`robocal.sim.line_campaign.line_campaign_poses`) to ``path``;
+    returns (tool, instrument frame) [mm]; with ``effects`` (the ``realistic`` campaign effects) also
+    the joints and the noise-free measured poses."""
+    c = line_campaign_poses(seed, n, effects)
+    write_measurements(path, Measurements(c["q"], c["points"], joint_names=c["model"].controller_joints,
+                                          rotations=c["rotations"], metadata={"robot": ROBOT}), orientation="quaternion")
+    return (c["tool"], c["instrument"], c["q"], c["T_measured"]) if effects else (c["tool"], c["instrument"])
 
 
 @pytest.fixture(scope="module")

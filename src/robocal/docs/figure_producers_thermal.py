@@ -372,30 +372,15 @@ def frames_only_line() -> dict:
     import numpy as np
 
     from ..io.measurements import Measurements, write_measurements
-    from ..kinematics.ik import ik_numeric
-    from ..robots import load_robot
-    from ..sim.first_order import poses_with_effects, six_d_fit_bias
-    from ..transforms import so3_exp, so3_log
+    from ..sim.first_order import six_d_fit_bias
+    from ..sim.line_campaign import LINE_ROBOT, line_campaign_poses
+    from ..transforms import so3_log
     from .figure_producers_cli import run_cli
 
-    robot, n, seed = "kuka_kr150_r3100", 20, 5
-    m = load_robot(robot)
-    rng = np.random.default_rng(seed)
-    q0 = np.radians([10.0, -80.0, 100.0, 5.0, 40.0, 20.0])
-    T0 = m.fk(q0)
-    d = np.array([0.6, 0.7, -0.2])
-    d /= np.linalg.norm(d)
-    T = np.repeat(T0[None], n, axis=0)
-    T[:, :3, 3] = T0[:3, 3] + np.linspace(-400, 400, n)[:, None] * d
-    T[:, :3, :3] = so3_exp(rng.normal(0, 0.03, (n, 3))) @ T0[:3, :3]
-    q = ik_numeric(m, T, q0).q
-    tool, inst = np.eye(4), np.eye(4)
-    tool[:3, :3], tool[:3, 3] = so3_exp([2.9, 0.3, 0.2]), [30.0, 10.0, 150.0]
-    inst[:3, :3], inst[:3, 3] = so3_exp([0.03, 0.02, -2.2]), [3000.0, -500.0, -400.0]
-    phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
-    Tm = poses_with_effects(m, q, inst, tool, phases)[1]
-    p = Tm[:, :3, 3] + rng.normal(0, 0.02, (n, 3))
-    R = so3_exp(rng.normal(0, 0.0002, (n, 3))) @ Tm[:, :3, :3]
+    n = 20
+    c = line_campaign_poses(5, n, effects=True)
+    m, q, tool, inst, Tm, p, R, robot = (c["model"], c["q"], c["tool"], c["instrument"], c["T_measured"], c["points"],
+                                         c["rotations"], LINE_ROBOT)
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "line.csv"
         write_measurements(path, Measurements(q, p, joint_names=m.controller_joints, rotations=R,
