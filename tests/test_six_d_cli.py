@@ -14,14 +14,16 @@ from robocal.calib.initial import frame_from_orientations, rigid_fit
 from robocal.calib.pose_problem import PoseCalibrationProblem
 from robocal.calib.solve import NotConvergedWarning
 from robocal.cli import main
-from robocal.io.measurements import Measurements, write_measurements
+from robocal.io.measurements import write_measurements
 from robocal.robots import load_robot
 from robocal.sim import VirtualRobot
+from robocal.sim.six_d_campaign import SIX_D_ROBOT, SIX_D_SIGMA_MM, SIX_D_W_MM_PER_RAD, six_d_true_tool
+from robocal.sim.six_d_campaign import six_d_campaign as _six_d_campaign
 from robocal.transforms import so3_exp, so3_log
 
-SIGMA_MM = 0.02
-W_MM_PER_RAD = 100.0  # the CLI default: rotation noise SIGMA_MM / W rad
-ROBOT = "kuka_kr150_r3100"
+SIGMA_MM = SIX_D_SIGMA_MM
+W_MM_PER_RAD = SIX_D_W_MM_PER_RAD  # the CLI default: rotation noise SIGMA_MM / W rad
+ROBOT = SIX_D_ROBOT
 
 
 def run(*args):
@@ -29,42 +31,13 @@ def run(*args):
 
 
 def true_tool():
-    T = np.eye(4)
-    T[:3, :3] = so3_exp([0.25, -0.15, 0.6])
-    T[:3, 3] = [35.0, -20.0, 180.0]
-    return T
+    return six_d_true_tool()
 
 
 def six_d_campaign(n=60, seed=3, q=None, effects=False):
-    """(Measurements, truth): a 6-D probe on a 35/-20/180 mm, 38 deg tool; the last link's
-    parameters true = nominal, so the tool frame alone carries the flange -> probe transform.
-    ``effects``: the campaign has the ``realistic`` effects the model lacks
-    (tests/_first_order.py ``poses_with_effects``; transmission phases from ``seed + 1000``)."""
-    nominal = load_robot(ROBOT)
-    rng = np.random.default_rng(seed)
-    virtual = VirtualRobot.perturbed(nominal, rng)
-    true = virtual.true_model.params.values.copy()
-    for name in ("theta6", "d6", "a6", "alpha6"):
-        i = nominal.params.index(name)
-        true[i] = nominal.params.values[i]
-    virtual = VirtualRobot(nominal, virtual.true_model.with_params(true))
-    q = virtual.random_configurations(n, rng) if q is None else q
-    T_inst = np.eye(4)
-    T_inst[:3, :3] = so3_exp([0.05, -0.1, 2.0])
-    T_inst[:3, 3] = [3200.0, -400.0, -600.0]
-    if effects:
-        from _first_order import poses_with_effects
-
-        phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
-        T = poses_with_effects(virtual.true_model, q, T_inst, true_tool(), phases)[1]
-    else:
-        T = T_inst @ virtual.true_poses(q) @ true_tool()
-    p = T[:, :3, 3] + rng.normal(0, SIGMA_MM, (n, 3))
-    R = so3_exp(rng.normal(0, SIGMA_MM / W_MM_PER_RAD, (n, 3))) @ T[:, :3, :3]
-    meas = Measurements(q, p, joint_names=nominal.controller_joints, rotations=R,
-                        metadata={"robot": ROBOT, "instrument": "6-D probe", "frame": "tracker"})
-    return meas, {"T_tool": true_tool(), "T_inst_base": T_inst @ virtual.true_model.T_world_base, "T_inst": T_inst,
-                  "model": virtual.true_model, "q": q, "T_free": T}
+    """(Measurements, truth): :func:`robocal.sim.six_d_campaign.six_d_campaign` (a 6-D probe on a
+    35/-20/180 mm, 38 deg tool; the last link true = nominal; ``effects``: the ``realistic`` effects)."""
+    return _six_d_campaign(n, seed, q, effects)
 
 
 @pytest.fixture(scope="module")

@@ -286,34 +286,19 @@ def six_d_at_robot() -> dict:
 
     import numpy as np
 
-    from ..io.measurements import Measurements, write_measurements
+    from ..io.measurements import write_measurements
     from ..robots import load_robot
     from ..sim import VirtualRobot
     from ..sim.first_order import poses_with_effects, six_d_fit_bias
-    from ..transforms import quaternion_from_matrix, so3_exp, so3_log
+    from ..sim.six_d_campaign import SIX_D_ROBOT, SIX_D_SIGMA_MM, SIX_D_W_MM_PER_RAD, six_d_campaign
+    from ..transforms import quaternion_from_matrix, so3_log
     from .figure_producers_cli import run_cli
 
-    robot, sigma_mm, w, n, seed = "kuka_kr150_r3100", 0.02, 100.0, 60, 3
+    robot, sigma_mm, w, n = SIX_D_ROBOT, SIX_D_SIGMA_MM, SIX_D_W_MM_PER_RAD, 60
+    meas, truth = six_d_campaign(n, 3, effects=True)
     nominal = load_robot(robot)
-    rng = np.random.default_rng(seed)
-    virtual = VirtualRobot.perturbed(nominal, rng)
-    true = virtual.true_model.params.values.copy()
-    for name in ("theta6", "d6", "a6", "alpha6"):
-        i = nominal.params.index(name)
-        true[i] = nominal.params.values[i]
-    virtual = VirtualRobot(nominal, virtual.true_model.with_params(true))
-    model = virtual.true_model
-    q = virtual.random_configurations(n, rng)
-    T_tool = np.eye(4)
-    T_tool[:3, :3], T_tool[:3, 3] = so3_exp([0.25, -0.15, 0.6]), [35.0, -20.0, 180.0]
-    T_inst = np.eye(4)
-    T_inst[:3, :3], T_inst[:3, 3] = so3_exp([0.05, -0.1, 2.0]), [3200.0, -400.0, -600.0]
-    phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
-    T_free = poses_with_effects(model, q, T_inst, T_tool, phases)[1]
-    p = T_free[:, :3, 3] + rng.normal(0, sigma_mm, (n, 3))
-    R = so3_exp(rng.normal(0, sigma_mm / w, (n, 3))) @ T_free[:, :3, :3]
-    meas = Measurements(q, p, joint_names=nominal.controller_joints, rotations=R,
-                        metadata={"robot": robot, "instrument": "6-D probe", "frame": "tracker"})
+    model, q, T_tool, T_inst, T_free, phases = (truth["model"], truth["q"], truth["T_tool"], truth["T_inst"],
+                                                truth["T_free"], truth["phases"])
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
         path = write_measurements(d / "probe.csv", meas, length_unit="mm", angle_unit="deg", orientation="kuka_abc")
