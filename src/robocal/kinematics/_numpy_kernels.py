@@ -197,6 +197,8 @@ def op_twists(q, op_link, op_code, op_axis, op_value, op_param, op_joint, link_p
 
 
 def _unpack(ints, floats):
+    # the same layout as robocal.kinematics._kernels._unpack (robocal.kinematics._packing writes it);
+    # kept here so that this module runs without importing numba (the point of the numpy kernels)
     n_m, n_e, nnz = int(ints[0]), int(ints[1]), int(ints[2])
     o = 3
     mparent = ints[o:o + n_m]
