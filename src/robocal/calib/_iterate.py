@@ -48,6 +48,7 @@ import numpy as np
 from ._cholesky import cholesky_factor, cholesky_solve
 
 MAX_ITERATIONS_REASON = "maximum iterations reached"
+
 #: First-order optimality tolerance: largest |J_j^T r| over max_j |J_j| * |r| (scaled, weighted).
 #: Where the line search stalls at a true minimum this is ~sqrt(2 eps) * s_min / s_max < 2e-8.
 GTOL = 1e-6
@@ -111,7 +112,7 @@ class DampedGaussNewton:
     weights per pose slot, cost, damping ``lam``, iteration count and stop reason."""
 
     def __init__(self, problem, state, r, J, labels, active, *, method, loss, f_scale, prior_weight, rcond,
-                 ftol, xtol, chi2_tol, progress):
+                 ftol, xtol, chi2_tol, progress, prior_center=None):
         self.problem, self.method, self.loss, self.rcond = problem, method, loss, rcond
         self.ftol, self.xtol, self.chi2_tol, self.progress = ftol, xtol, chi2_tol, progress
         self.prior_weight = prior_weight
@@ -124,7 +125,10 @@ class DampedGaussNewton:
         self.col_scale = self._column_norms(J)
         self.col_scale[self.col_scale == 0] = 1.0
         self.geom = problem.blocks == "geometry"
-        self.p_start = problem.variable_values(state, "geometry") if prior_weight else None
+        # the prior pulls toward the solve's start (``prior_center``: the geometry values of the first
+        # round's start when a later round or an early identifiability look continues from elsewhere)
+        self.p_start = None if not prior_weight else (
+            problem.variable_values(state, "geometry") if prior_center is None else np.asarray(prior_center, dtype=float))
         self.weights = np.ones(self.n_slots)
         self.f_scale = f_scale
         if loss != "linear":

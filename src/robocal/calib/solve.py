@@ -176,7 +176,8 @@ def _refine_identifiable(problem, res, state0, kw):
         ident = analyse_identifiability(J, problem.names, problem.blocks, column_blocks=problem.column_blocks)
         iters = res.iterations
         before, err_before = res.residuals_before, res.point_errors_before
-        res = _solve_once(problem, state0=res.state, ident=ident, **kw)
+        center = problem.variable_values(start, "geometry") if kw.get("prior_weight") else None
+        res = _solve_once(problem, state0=res.state, ident=ident, prior_center=center, **kw)
         res.iterations += iters
         res.residuals_before, res.point_errors_before = before, err_before
         res.initial = problem.initial_values() if state0 is None else _state_values(problem, start)
@@ -226,7 +227,8 @@ def _state_values(problem: Problem, state) -> np.ndarray:
 def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f_scale: float | None = None,
           max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
-          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0=None, progress=None, ident=None) -> CalibrationResult:
+          reject_outliers: bool = True, chi2_tol: float = 1e-3, state0=None, progress=None, ident=None,
+          prior_center=None) -> CalibrationResult:
     """Identify the problem's free variables.
 
     method: ``"lm"`` (Levenberg-Marquardt) or ``"svd"`` (truncated-SVD Gauss-Newton, (3-9, 3-10)).
@@ -247,6 +249,9 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
         few hundredths of a standard deviation of the optimum);
         ``ftol`` (relative cost change) and ``xtol`` (scaled step) stop it too.
     progress: optional callable ``progress(iteration, cost)``.
+    ident: the identifiability verdicts to use (a later round); None: analysed at the start.
+    prior_center: geometry values the prior pulls toward (a later round: the first round's start,
+        so every round minimises the same cost).
     """
     if method not in ("lm", "svd"):
         raise ValueError(f"method must be 'lm' or 'svd', got {method!r}")
@@ -289,7 +294,7 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
         J = None
         gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
     else:
-        gn = DampedGaussNewton(problem, state, r, J, labels, active, **kw)
+        gn = DampedGaussNewton(problem, state, r, J, labels, active, prior_center=prior_center, **kw)
     gn.run_phase(1, max_iterations)
     if r0 is None:
         r0 = gn.r0
