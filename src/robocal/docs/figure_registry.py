@@ -527,7 +527,7 @@ FIGURES += [
 ]
 
 
-_IKT = r"for the first command, on this machine: [0-9.]+ s, the GA chose "
+_IKT = r"for the first command, 2026-11-23 on the shared 2-core VM: [0-9.]+ s, the GA chose "
 FIGURES += [
     Figure("kinematics:ik-train centres", _KM, _IKT + _N + " centres", "ik_net/cli_example", "centres", rel_tol=0.0),
     Figure("kinematics:ik-train validation position", _KM, _IKT + r"[0-9]+ centres, validation median\s+position error "
