@@ -16,31 +16,8 @@ from robocal.calib import _lm_compiled, _normal
 from robocal.calib.solve import NotConvergedWarning
 from robocal.robots import load_robot
 from robocal.sim import LaserTracker, VirtualRobot
-from robocal.sim.campaign_effects import measure_with_effects
-
-
-def _campaign(robot="abb_irb140", n_poses=80, seed=11, n_targets=1, missing=False, identifiable_only=False):
-    nominal = load_robot(robot)
-    vr = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0)
-    rng = np.random.default_rng(seed)
-    tracker = LaserTracker.placed(seed, n_targets, sigma_mm=0.02)
-    q = vr.random_configurations(n_poses, rng, margin=0.1)
-    pts = np.array(measure_with_effects(vr, tracker, q, "realistic", seed + 1)["points"])
-    if missing:
-        pts[3, 0] = np.nan
-        pts[7, -1] = np.nan
-    targets = [Target(f"r{k}", None, tuple(tracker.reflectors[k] + 2.0), free=(k != 1))
-               for k in range(n_targets)]
-    problem = CalibrationProblem(nominal, q, targets, pts, base_initial="fit", point_sigma_mm=0.02)
-    if identifiable_only:  # the geometry the data determine, every other model parameter fixed
-        from robocal.calib import analyse_identifiability
-
-        J = problem.evaluate(problem.initial_state())[1]
-        keep = set(analyse_identifiability(J, problem.names, problem.blocks).identifiable)
-        problem = CalibrationProblem(nominal, q, targets, pts, base_initial="fit", point_sigma_mm=0.02,
-                                     free=[n for n in problem.free_params if n in keep])
-    truth = tracker.T_tracker_world @ vr.true_model.T_world_base
-    return problem, truth, tracker
+from robocal.sim.tracker_campaigns import effects_tracker_campaign as _campaign
+from robocal.sim.tracker_campaigns import plain_tracker_campaign as _robot_campaign
 
 
 def _solve(problem, monkeypatch, loop, **kw):
@@ -163,17 +140,6 @@ def test_compile_ahead_gives_the_solver_s_specialisation(monkeypatch):
     monkeypatch.setattr(_lm_kernels, "lm_points", lambda *a: seen.append(a))
     _lm_compiled.compile_kernels()
     assert [typeof(a) for a in seen[0]] == [typeof(a) for a in real]
-
-
-def _robot_campaign(robot, seed=5, n_poses=80):
-    nominal = load_robot(robot)
-    vr = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0)
-    rng = np.random.default_rng(seed)
-    tracker = LaserTracker.placed(seed, 1, sigma_mm=0.02)
-    q = vr.random_configurations(n_poses, rng, margin=0.1)
-    pts = np.array(tracker.measure(vr, q, rng).points)
-    return CalibrationProblem(nominal, q, [Target("r0", None, tuple(tracker.reflectors[0] + 2.0))], pts,
-                              base_initial="fit", point_sigma_mm=0.02)
 
 
 def test_compiled_loop_on_coupled_joints(monkeypatch):

@@ -5,34 +5,13 @@ the planner's sigma for a weakly identified parameter is what the calibration re
 
 from __future__ import annotations
 
-import warnings
-
-import numpy as np
-
-from robocal.calib import CalibrationProblem, Target, solve
-from robocal.robots import load_robot
-from robocal.sim import VirtualRobot
-from robocal.workflows.calibration.plan_poses import plan_cell, plan_in_cell
-
-TOOL = (0.0, 0.0, 100.0)
+from robocal.workflows.calibration.plan_verdict import plan_and_calibrations
 
 
 def test_plan_and_calibration_agree_on_the_same_40_poses():
-    model = load_robot("ur10")
-    cell = plan_cell(model, None, (2500.0, 0.0, 500.0), TOOL)
-    plan = plan_in_cell(model, cell, count=40, candidates=400, seed=0, efficiency=False)
-    q = plan["q"]
+    plan, results = plan_and_calibrations((11, 12, 13))
     predicted = set(plan["identifiable"])
-    rng = np.random.default_rng(7)
-    for seed in (11, 12, 13):
-        true = VirtualRobot.perturbed(model, seed).true_model
-        T = true.fk(q)
-        pts = T[:, :3, 3] + T[:, :3, :3] @ np.array(TOOL) + rng.normal(0.0, 0.02, (len(q), 3))
-        problem = CalibrationProblem(model, q, [Target("reflector", point=TOOL)], pts[:, None], base_initial="fit",
-                                     point_sigma_mm=0.02)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            res = solve(problem)
+    for res in results:
         got = {n.replace("point.", "reflector.") for n in res.identifiability.identifiable}
         assert got == predicted, (sorted(got ^ predicted))
         # a5 rests on the sub-mm lever a real robot's deviations give: sigma of mm, in both

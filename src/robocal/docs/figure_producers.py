@@ -15,6 +15,7 @@ from .figure_producers_cli import CLI_PRODUCERS
 from .figure_producers_handeye import HANDEYE_PRODUCERS
 from .figure_producers_datasets import DATASET_PRODUCERS, DATASETS_NEEDED, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
+from .figure_producers_speed import SLOW_SPEED_PRODUCERS, SPEED_PRODUCERS
 from .figure_producers_thermal import THERMAL_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
@@ -537,6 +538,7 @@ PRODUCERS = {
     **BENCH_PRODUCERS,
     **THERMAL_PRODUCERS,
     **SETUP_PRODUCERS,
+    **SPEED_PRODUCERS,
     **HANDEYE_PRODUCERS,
     **DATASET_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
@@ -597,7 +599,7 @@ def datasets_needed(producer: str) -> tuple:
 
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
-SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
+SLOW_PRODUCERS = {*SLOW_SPEED_PRODUCERS, "dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, *SLOW_DATASET_PRODUCERS, "ik_net/cli_example",
                   # thermal.md: the experiment with one effect alone (~6-10 s each), the ideal drift; testing.md's at-the-robot
                   # UR10 (~4 s) and gripper cases (~2 s each; slow to keep the fast set's added CPU under ~8 s) (figsC)

@@ -527,7 +527,7 @@ FIGURES += [
 ]
 
 
-_IKT = r"for the first command, on this machine: [0-9.]+ s, the GA chose "
+_IKT = r"for the first command, 2026-11-23 on the shared 2-core VM: [0-9.]+ s, the GA chose "
 FIGURES += [
     Figure("kinematics:ik-train centres", _KM, _IKT + _N + " centres", "ik_net/cli_example", "centres", rel_tol=0.0),
     Figure("kinematics:ik-train validation position", _KM, _IKT + r"[0-9]+ centres, validation median\s+position error "
@@ -1525,6 +1525,57 @@ FIGURES += [Figure(f"elastic:round trip {k}", "docs/elastic.md", pat, "elastic/r
                 ("full holdout", _RTF + _N, "full.holdout_rms_mm"),
                 ("full optimum", _RTF + r"[0-9.]+ mm against a noise-limited optimum of " + _N, "full.optimum_mm"),
                 ("joint-only holdout", r"the joint-only model leaves " + _N, "joint_only.holdout_rms_mm"))]
+
+
+# docs/calibration.md "One identifiability verdict" and "The compiled LM loop", docs/kinematics.md "Where the
+# learned seed pays off" (figs-speed): the machine-independent figures beside the speed sections
+_CAL = "docs/calibration.md"
+_PV = r"now both identify them with\s+σ\(a5\) of a few mm \(plan "
+FIGURES += [Figure(f"calibration:plan verdict {k}", _CAL, pat, "calibration/plan_verdict", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("plan sigma a5", _PV + _N + " mm", "plan_a5_std_mm"),
+                ("calibrated sigma a5 min", _PV + r"[0-9.]+ mm, calibrations of three simulated robots " + _N + "-",
+                 "calibration_a5_std_mm.min"),
+                ("calibrated sigma a5 max", _PV + r"[0-9.]+ mm, calibrations of three simulated robots [0-9.]+-" + _N
+                 + " mm", "calibration_a5_std_mm.max"))]
+# order of magnitude: "~1e-10" is what rounding in another summation order gives (machine-dependent within x3)
+FIGURES += [Figure("calibration:compiled LM agreement", _CAL, r"estimates equal within 1e-9 σ \(~" + _N + " σ in practice",
+                   "calibration/compiled_lm_agreement", "max_sigma", rel_tol=2.0,
+                   note="order of magnitude of a rounding difference"),
+            Figure("calibration:compiled LM agreement hilti", _CAL, r"the estimates then differ by more \(~" + _N
+                   + " σ on the Hilti", "calibration/compiled_lm_agreement", "hilti.max_sigma", rel_tol=1.0,
+                   note="order of magnitude of a rounding difference"),
+            Figure("calibration:compiled LM hilti iterations", _CAL, r"σ on the Hilti arm after\s+" + _N + r" iterations",
+                   "calibration/compiled_lm_agreement", "hilti.iterations", rel_tol=0.1)]
+_SEED = r"From the middle of the joint ranges damped least\s+squares converges for only "
+FIGURES += [Figure(f"kinematics:ik seed prose {k}", _KM, pat, producer, field, rel_tol=tol)
+            for k, pat, producer, field, tol in (
+                ("middle converged min", _SEED + _N + "-", "ik_seed/ranges", "min.ik.middle.converged", 0.01),
+                ("middle converged max", _SEED + r"[0-9]+-" + _N + " %", "ik_seed/ranges", "max.ik.middle.converged", 0.01),
+                ("middle on branch min", _SEED + r"(?s:.*?)configuration for " + _N + "-", "ik_seed/ranges",
+                 "min.ik.middle.on_branch", 0.05),
+                ("middle on branch max", _SEED + r"(?s:.*?)configuration for [0-9]+-" + _N + " %", "ik_seed/ranges",
+                 "max.ik.middle.on_branch", 0.01),
+                ("network converged", r"network's seed " + _N + " % converge", "ik_seed/ranges", "min.ik.network.converged",
+                 0.01),
+                ("network on branch min", r"% converge, " + _N + "-", "ik_seed/ranges", "min.ik.network.on_branch", 0.01),
+                ("network on branch max", r"% converge, [0-9]+-" + _N + " % on the trained", "ik_seed/ranges",
+                 "max.ik.network.on_branch", 0.01),
+                ("network median iterations", r"on the trained branch, in a median of " + _N + " iterations", "ik_seed/ranges",
+                 "max.ik.network.median_it", 0.0),
+                ("middle median iterations min", r"iterations instead of\s+" + _N + "-", "ik_seed/ranges",
+                 "min.ik.middle.median_it", 0.0),
+                ("middle median iterations max", r"iterations instead of\s+[0-9]+-" + _N + ",", "ik_seed/ranges",
+                 "max.ik.middle.median_it", 0.0),
+                ("tilted closed form converged", r"beats the network too \(" + _N + " %", "ik_seed/tilted",
+                 "ik.closed_form.converged", 0.0),
+                ("tilted closed form median iterations", r"beats the network too \([0-9]+ % in a median of " + _N
+                 + " iterations", "ik_seed/tilted", "ik.closed_form.median_it", 0.0),
+                ("irb140 domain back", r"J1 = 175 deg poses there\s+against " + _N + " % on the IRB140", "ik_seed/irb140",
+                 "domain.back_percent", 0.05),
+                ("GA structures", r"the GA evaluates\s+~" + _N + " structures", "ik_seed/ranges", "mean.ga.evaluations", 0.1),
+                ("GA gain", r"structures and gains ~" + _N + " % in validation RMS", "ik_seed/ranges",
+                 "mean.ga.gain_percent", 0.1))]
 
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
