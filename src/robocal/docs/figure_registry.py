@@ -1527,4 +1527,63 @@ FIGURES += [Figure(f"elastic:round trip {k}", "docs/elastic.md", pat, "elastic/r
                 ("joint-only holdout", r"the joint-only model leaves " + _N, "joint_only.holdout_rms_mm"))]
 
 
+# --- figs-testing: docs/closed-chain.md, docs/testing.md, docs/tcp.md (issue 25 item 3) ---------------------------
+# closed-chain.md "A cell with the effects the model lacks": the set-up of tests/test_closed_chain_effects.py through
+# the command line, judged by robocal.sim.closed_chain_judge (seed 0 fast; seeds 1-3 and the study's max |z| slow)
+_CCE, _CCE0 = "| cell | at-robot RMS (max) [mm]", "closed_chain_effects/seed0"
+for _cell_label in ("ideal", "realistic"):
+    FIGURES += _table("docs/closed-chain.md", {_cell_label: _cell_label}, _CCE0,
+                      [(0, 0, "rms_mm"), (0, 1, "max_mm"), (2, 0, "residual_rms_mm"), (3, 0, "chi2_error"),
+                       (3, 1, "chi2_residual"), (4, 0, "e_op_mm")] + ([(1, 0, "miss_rms_mm")] if _cell_label == "realistic" else []),
+                      prefix="closed-chain:effects ", rel_tol=0.02, after=_CCE)
+FIGURES += [Figure("closed-chain:effects ideal max |z| (study seed 0)", "docs/closed-chain.md", _cell("ideal", 5, 0, after=_CCE),
+                   "closed_chain/study", "0.max_abs_z", rel_tol=0.0),
+            Figure("closed-chain:effects realistic max |z| (study)", "docs/closed-chain.md", _cell("realistic", 5, 0, after=_CCE),
+                   "closed_chain_effects/z", "max_abs_z", rel_tol=0.02)]
+_CCP = r"The noise \(spot spread(?s:.*?)"
+FIGURES += [Figure(f"closed-chain:effects prose {k}", "docs/closed-chain.md", _CCP + pat, f"closed_chain_effects/seed{s}", f,
+                   rel_tol=tol)
+            for k, pat, s, f, tol in (
+                ("sigma rms", r"gives σ_rms " + _N, 0, "realistic.sigma_rms_mm", 0.02),
+                ("noise rms 99.9", r"of its RMS " + _N + " mm", 0, "realistic.noise_rms_999_mm", 0.02),
+                ("chi2 bound", r"freedom \(99\.9 %: " + _N, 0, "chi2_bound", 0.0),
+                ("rms ratio", r"RMS " + _N + "× the ideal cell's", 0, "rms_ratio", 0.02),
+                ("seed 1 chi2", r"Seeds 1–3: error − miss χ² " + _N, 1, "realistic.chi2_residual", 0.02),
+                ("seed 2 chi2", r"Seeds 1–3: error − miss χ² [0-9.]+ /\s+" + _N, 2, "realistic.chi2_residual", 0.02),
+                ("seed 3 chi2", r"Seeds 1–3: error − miss χ² [0-9.]+ /\s+[0-9.]+ / " + _N, 3, "realistic.chi2_residual", 0.02),
+                *((f"seed {s} rms", r"at-robot RMS " + r"[0-9.]+ / " * (s - 1) + _N, s, "realistic.rms_mm", 0.02)
+                  for s in (1, 2, 3)),
+                *((f"seed {s} ideal rms", r"at-robot RMS [0-9./ ]+ mm against " + r"[0-9.]+ / " * (s - 1) + _N, s,
+                   "ideal.rms_mm", 0.02) for s in (1, 2, 3)),
+                ("reading realistic", r"accuracy at the robot \(" + _N + " mm instead", 0, "realistic.rms_mm", 0.02),
+                ("reading ideal", r"mm instead of " + _N + r" mm\)", 0, "ideal.rms_mm", 0.02))]
+# testing.md's summary of the same cell
+_TCC = r"`test_closed_chain_effects\.py::test_realistic_cell_lands_at_truth_plus_its_first_order_miss`(?s:.*?)"
+FIGURES += [Figure(f"testing:closed-chain effects {k}", "docs/testing.md", _TCC + pat, p, f, rel_tol=tol)
+            for k, pat, p, f, tol in (
+                ("chi2 residual", r"\(χ² " + _N + " in", _CCE0, "realistic.chi2_residual", 0.02),
+                ("chi2 bound", r"in 18 modes against " + _N, _CCE0, "chi2_bound", 0.0),
+                ("residual rms", r"modes against [0-9.]+; RMS " + _N, _CCE0, "realistic.residual_rms_mm", 0.02),
+                ("noise rms 99.9", r"modes against [0-9.]+; RMS [0-9.]+ mm against " + _N, _CCE0, "realistic.noise_rms_999_mm",
+                 0.02),
+                ("chi2 error", r"far beyond it \(χ² " + _N, _CCE0, "realistic.chi2_error", 0.02),
+                ("rms", r"far beyond it \(χ² [0-9.]+, RMS " + _N, _CCE0, "realistic.rms_mm", 0.02),
+                ("ideal rms", r"against the ideal cell's " + _N, _CCE0, "ideal.rms_mm", 0.02),
+                ("max z realistic", r"max \|z\| of the parameters " + _N, "closed_chain_effects/z", "max_abs_z", 0.02),
+                ("max z ideal", r"max \|z\| of the parameters [0-9.]+ \(ideal " + _N, "closed_chain/study", "0.max_abs_z", 0.0))]
+
+# closed-chain.md: the identifiability table's theta1 sigma, the Gaussian expectations, the honest reading's ratios
+FIGURES += [Figure(f"closed-chain:theta1 sigma {k}", "docs/closed-chain.md", r"\"barely observable\": σ ≈ " + pat,
+                   "closed_chain/held_sigma", f"theta1.{k}", rel_tol=0.02)
+            for k, pat in (("min", _N), ("max", r"[0-9.]+–" + _N))]
+FIGURES += [Figure("closed-chain:gaussian P(one beyond 3 sigma of 22)", "docs/closed-chain.md",
+                   r"With 22 Gaussian estimates per seed\s+~" + _N + " %", "formulas/gaussian", "p_any_beyond_3.22", rel_tol=0.0),
+            Figure("closed-chain:gaussian median of the largest of 22", "docs/closed-chain.md",
+                   r"median of the largest of 22 \|z\|: about " + _N, "formulas/gaussian", "median_max_abs_z.22", rel_tol=0.0)]
+_HR = r"gets within a factor of "
+FIGURES += [Figure(f"closed-chain:honest reading ratio {k}", "docs/closed-chain.md", _HR + pat, "closed_chain/study",
+                   f"{k}.ratio", rel_tol=0.01)
+            for k, pat in (("min", _N), ("max", r"[0-9.]+–" + _N), ("median", r"[0-9.]+–[0-9.]+ \(median " + _N))]
+
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
