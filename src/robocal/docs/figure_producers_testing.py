@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import functools
 
-__all__ = ["TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z"]
+__all__ = ["TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z", "closed_chain_held_sigma",
+           "gaussian_formulas", "six_d_import"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -87,9 +88,79 @@ def gaussian_formulas() -> dict:
             "binom_100_0.9_le_80": float(binom.cdf(80, 100, 0.9))}
 
 
+@functools.lru_cache(maxsize=None)
+def six_d_import() -> dict:
+    """docs/testing.md, the ``test_six_d_import.py`` rows (the set-up of its ``realistic`` fixture):
+    the UR10 6-D campaign with the ``realistic`` effects (:func:`robocal.sim.six_d_exports.probe_campaign`,
+    seed 11) written as a Leica T-Mac export and an RTDE log, ``robocal import ... --orientation rpy``,
+    ``robocal calibrate ur10 --sigma 0.02 --holdout 0``, the first-order bias from the hidden truth
+    (:func:`robocal.sim.first_order.six_d_fit_bias`); then ``robocal correct`` on 8 tool-pose targets
+    (seed 99) and the true robot with the campaign's effects, as warm as at its end, at the
+    corrected joints. ~3 s of CPU.
+
+    Fields ``rot_z.after.{0|1|2|max}``, ``rot_z.plain.{0|1|2|max}`` (probe rotation |error / sigma|
+    after / before the bias), ``residual_rms_mm``, ``residual_pred_mm`` (first-order misfit plus
+    noise); at the robot ``pos.{landing|miss|diff|sigma}.{min|max}`` [mm] and
+    ``rot.{landing|miss|diff|sigma}.{min|max}`` [deg] (landing error, first-order miss, their
+    vector difference, the noise sigma)."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..sim.first_order import poses_with_effects, six_d_fit_bias
+    from ..sim.six_d_exports import (PROBE_ROBOT, PROBE_SIGMA_MM, PROBE_W_MM_PER_RAD, export_times, probe_campaign,
+                                     probe_tool, read_corrected_joints, write_leica_tmac, write_pose_targets,
+                                     write_rtde_log)
+    from ..transforms import so3_log
+    from .figure_producers_cli import run_cli
+
+    sigma, w, seed = PROBE_SIGMA_MM, PROBE_W_MM_PER_RAD, 11
+    c = probe_campaign(60, seed, effects=True)
+    q, virtual, T_inst, T_free, tool = c["q"], c["virtual"], c["T_inst"], c["T_free"], probe_tool()
+    joints = ("J1", "J2", "J3", "J4", "J5", "J6")
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        leica = write_leica_tmac(d / "tmac.csv", c["T"], export_times(len(q)))
+        rtde = write_rtde_log(d / "rtde.csv", q)
+        run_cli("import", leica, "--joints", rtde, "--robot", PROBE_ROBOT, "--orientation", "rpy", "--out", d / "m.csv")
+        run_cli("calibrate", PROBE_ROBOT, d / "m.csv", "--out", d / "cal", "--sigma", sigma, "--holdout", 0, "--no-report")
+        res = json.loads((d / "cal" / "result.json").read_text())
+        q_t = virtual.random_configurations(8, np.random.default_rng(99), margin=0.2)
+        targets = T_inst @ virtual.true_poses(q_t) @ tool
+        write_pose_targets(d / "t.csv", targets, q_t, joints)
+        run_cli("correct", d / "cal" / "calibrated_robot.toml", d / "t.csv", "--out", d / "c.csv")
+        q_c = read_corrected_joints(d / "c.csv", joints)
+    estimated = [p["name"] for p in res["model_parameters"] if p["estimated"]]
+    fit = (virtual.true_model, estimated, q, T_inst, tool, T_free, w)
+    bias = six_d_fit_bias(*fit)
+    tf = res["tool_frame"]
+    T_fit = np.array(tf["T_flange_measured"])
+    err, std = so3_log(T_fit[:3, :3] @ tool[:3, :3].T), np.array(tf["std_rotvec_rad"])
+    after, plain = np.abs(err - bias["tool_rotvec"]) / std, np.abs(err) / std
+    n_var = len(estimated) + 12
+    out = {**{f"rot_z.after.{k}": float(after[k]) for k in range(3)}, "rot_z.after.max": float(after.max()),
+           **{f"rot_z.plain.{k}": float(plain[k]) for k in range(3)}, "rot_z.plain.max": float(plain.max()),
+           "residual_rms_mm": float(res["residuals"]["after"]["rms"]),
+           "residual_pred_mm": float(np.hypot(bias["residual_rms_mm"], sigma * np.sqrt(3 * (1 - n_var / (6 * len(q))))))}
+    reached = poses_with_effects(virtual.true_model, q_c, T_inst, tool, c["phases"], after_campaign=True)[1]
+    first = six_d_fit_bias(*fit, q_at=q_c, T_at=reached, noise_mm=sigma)
+    d_pos = reached[:, :3, 3] - targets[:, :3, 3]
+    d_rot = so3_log(reached[:, :3, :3] @ np.swapaxes(targets[:, :3, :3], 1, 2))
+    miss_pos, miss_rot = first["miss_at"][:, :3], first["miss_at"][:, 3:]
+    vals = {"pos.landing": np.linalg.norm(d_pos, axis=1), "pos.miss": np.linalg.norm(miss_pos, axis=1),
+            "pos.diff": np.linalg.norm(d_pos - miss_pos, axis=1), "pos.sigma": np.asarray(first["sigma_at_mm"]),
+            "rot.landing": np.degrees(np.linalg.norm(d_rot, axis=1)), "rot.miss": np.degrees(np.linalg.norm(miss_rot, axis=1)),
+            "rot.diff": np.degrees(np.linalg.norm(d_rot - miss_rot, axis=1)),
+            "rot.sigma": np.degrees(np.asarray(first["sigma_at_rad"]))}
+    out.update({f"{k}.{s}": float(getattr(np, s)(v)) for k, v in vals.items() for s in ("min", "max")})
+    return out
+
+
 TESTING_PRODUCERS = {"closed_chain/held_sigma": closed_chain_held_sigma, "formulas/gaussian": gaussian_formulas,
                      **{f"closed_chain_effects/seed{s}": functools.partial(closed_chain_effects, s) for s in range(4)},
-                     "closed_chain_effects/z": closed_chain_effects_z}
+                     "closed_chain_effects/z": closed_chain_effects_z, "six_d/import_realistic": six_d_import}
 
 #: longer than ~5 s, or run only for history-like seed rows: with ``--all``
 SLOW_TESTING_PRODUCERS = {"closed_chain/held_sigma", "closed_chain_effects/seed1", "closed_chain_effects/seed2",

@@ -1585,5 +1585,20 @@ FIGURES += [Figure(f"closed-chain:honest reading ratio {k}", "docs/closed-chain.
                    f"{k}.ratio", rel_tol=0.01)
             for k, pat in (("min", _N), ("max", r"[0-9.]+–" + _N), ("median", r"[0-9.]+–[0-9.]+ \(median " + _N))]
 
+# testing.md: the test_six_d_import.py rows (robocal.sim.six_d_exports: the UR10 campaign as vendor exports; fast)
+_SDI = "six_d/import_realistic"
+_SDIR = r"the same, UR10 through `import` \| rotation \\\|z\\\| ≤ "
+FIGURES += [Figure(f"testing:six-d import exports {f}", "docs/testing.md", _SDIR + pat, _SDI, f, rel_tol=0.02)
+            for f, pat in (("rot_z.after.max", _N), ("residual_rms_mm", r"[0-9.]+, residual " + _N),
+                           ("residual_pred_mm", r"[0-9.]+, residual [0-9.]+ mm vs " + _N))]
+for _label, _fields in (
+        ("`test_six_d_import.py::test_correct_on_effects_the_model_lacks_lands_where_first_order_theory_says`",
+         ("pos.landing.min", "pos.landing.max", "pos.miss.min", "pos.miss.max", "pos.diff.max", "pos.sigma.min",
+          "pos.sigma.max")),
+        ("`test_six_d_import.py::test_correct_on_effects_…`",
+         ("rot.landing.min", "rot.landing.max", "rot.diff.max", "rot.sigma.min", "rot.sigma.max"))):
+    FIGURES += [Figure(f"testing:six-d import {_label.split('::')[1][:40]} {f}", "docs/testing.md", _cell(_label, 1, k), _SDI, f,
+                       rel_tol=0.02) for k, f in enumerate(_fields)]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
