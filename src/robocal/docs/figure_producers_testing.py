@@ -1,5 +1,5 @@
-"""Producers of docs/testing.md's and docs/closed-chain.md's documented figures that come from the
-set-ups of the tests with effects the model lacks (:mod:`robocal.docs.figures`): the closed-chain
+"""Producers of the documented figures of docs/testing.md and docs/closed-chain.md measured on the
+set-ups of the tests with effects the model lacks (robocal.docs.figures): the closed-chain
 cell judged at the true robot, the UR10 6-D campaign imported from vendor exports, the camera
 self-calibrations and the hand-eye refinement on robots that differ from their models. The set-ups
 live in :mod:`robocal.sim` and are shared with the tests (same draws). Each producer returns a flat

@@ -1,6 +1,6 @@
 """The closed-chain calibration judged at the hidden true robot of a cell with effects the model
-lacks (issue 25, item 4; ``robocal closed-chain simulate --effects realistic``), to first order
-from the effects' stated sizes. Used by ``tests/test_closed_chain_effects.py`` and by the documented
+lacks, to first order from the effects' stated sizes (issue 25, item 4; the cell of
+``robocal closed-chain simulate --effects realistic``). Used by ``tests/test_closed_chain_effects.py`` and by the documented
 figures of docs/closed-chain.md and docs/testing.md (:mod:`robocal.docs.figures`).
 
 The claim judged is the one a user relies on: where the calibrated model puts a tool point, against
