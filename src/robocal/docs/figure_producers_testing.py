@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 
 __all__ = ["TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z", "closed_chain_held_sigma",
-           "gaussian_formulas", "six_d_import"]
+           "gaussian_formulas", "handeye_link_errors", "self_calibration_effects", "six_d_import"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -158,9 +158,46 @@ def six_d_import() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def self_calibration_effects(robot: str) -> dict:
+    """docs/testing.md, camera self-calibration with link-length errors (0.2 mm) and a bent board
+    (0.4 mm): the set-ups of ``tests/test_self_calibration_nao.py`` (``nao``: seed 5, 40 views per
+    arm) and ``tests/test_self_calibration.py`` (``justin``: seed 16, 25 views per hand), 0.3 px
+    corner noise (:mod:`robocal.sim.cameras.self_calibration_effects`). <1 s of CPU each.
+
+    Fields ``effect_rms_px`` (the effects' corner displacement), ``variance_factor``,
+    ``naive_max_abs_z`` (error / reported sigma), ``corrected_max_abs_z`` ((error - first-order
+    bias) / corner-noise sigma), ``bias_max_deg``, ``n_offsets``."""
+    import numpy as np
+
+    from ..sim.cameras.self_calibration_effects import justin_effects_case, nao_effects_case
+
+    c = nao_effects_case() if robot == "nao" else justin_effects_case()
+    return {"effect_rms_px": c["effect_rms_px"], "variance_factor": float(c["result"].variance_factor),
+            "naive_max_abs_z": float(np.abs(c["z_naive"]).max()), "corrected_max_abs_z": float(np.abs(c["z_noise"]).max()),
+            "bias_max_deg": float(np.degrees(max(abs(v) for v in c["delta"].values()))), "n_offsets": float(len(c["names"]))}
+
+
+@functools.lru_cache(maxsize=None)
+def handeye_link_errors() -> dict:
+    """docs/testing.md, the hand-eye refinement with joint offsets on a robot whose links are 0.1 mm /
+    0.01 deg off (the set-up of ``tests/test_handeye_refine.py``,
+    :func:`robocal.sim.cameras.handeye_effects.handeye_link_error_case`). <1 s of CPU.
+
+    Fields ``z_plain.max`` (max |error / sigma|), ``z_after.max`` (after the first-order bias)."""
+    import numpy as np
+
+    from ..sim.cameras.handeye_effects import handeye_link_error_case
+
+    c = handeye_link_error_case()
+    return {"z_plain.max": float(np.abs(c["z_plain"]).max()), "z_after.max": float(np.abs(c["z_after"]).max())}
+
+
 TESTING_PRODUCERS = {"closed_chain/held_sigma": closed_chain_held_sigma, "formulas/gaussian": gaussian_formulas,
                      **{f"closed_chain_effects/seed{s}": functools.partial(closed_chain_effects, s) for s in range(4)},
-                     "closed_chain_effects/z": closed_chain_effects_z, "six_d/import_realistic": six_d_import}
+                     "closed_chain_effects/z": closed_chain_effects_z, "six_d/import_realistic": six_d_import,
+                     **{f"self_calibration_effects/{r}": functools.partial(self_calibration_effects, r) for r in ("nao", "justin")},
+                     "handeye/link_errors": handeye_link_errors}
 
 #: longer than ~5 s, or run only for history-like seed rows: with ``--all``
 SLOW_TESTING_PRODUCERS = {"closed_chain/held_sigma", "closed_chain_effects/seed1", "closed_chain_effects/seed2",

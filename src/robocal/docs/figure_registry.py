@@ -1600,5 +1600,24 @@ for _label, _fields in (
     FIGURES += [Figure(f"testing:six-d import {_label.split('::')[1][:40]} {f}", "docs/testing.md", _cell(_label, 1, k), _SDI, f,
                        rel_tol=0.02) for k, f in enumerate(_fields)]
 
+# testing.md: camera self-calibration (NAO, DLR Justin) and the hand-eye refinement on robots with link errors (fast;
+# the set-ups of robocal.sim.cameras.self_calibration_effects / handeye_effects, shared with their tests)
+_NAO, _JUS = "self_calibration_effects/nao", "self_calibration_effects/justin"
+FIGURES += [Figure(f"testing:self-calibration effects {k}", "docs/testing.md", pat, p, f, rel_tol=tol)
+            for k, pat, p, f, tol in (
+                ("nao effect rms", r"The effects move the corners by " + _N + " px RMS. robocal", _NAO, "effect_rms_px", 0.01),
+                ("nao variance factor", r"robocal's variance factor\s+\(" + _N + r"\)", _NAO, "variance_factor", 0.02),
+                ("nao naive max z", r"The plain check fails \(max\s+\|z\| = " + _N, _NAO, "naive_max_abs_z", 0.03),
+                ("nao corrected max z", r"passes with the corner-noise σ \(max\s+\|z\| = " + _N, _NAO, "corrected_max_abs_z",
+                 0.03),
+                ("justin effect rms", r"the effects move the corners by " + _N + " px RMS against", _JUS, "effect_rms_px", 0.01),
+                ("justin variance factor", r"The variance factor is " + _N, _JUS, "variance_factor", 0.02),
+                ("justin naive max z", r"The plain check gives max \|z\| = " + _N, _JUS, "naive_max_abs_z", 0.03),
+                ("justin corrected max z", r"bias-corrected check gives max \|z\| = " + _N, _JUS, "corrected_max_abs_z", 0.03),
+                ("handeye plain max z", r"corrections off(?s:.*?)plain\s+max \|z\| " + _N, "handeye/link_errors", "z_plain.max",
+                 0.03),
+                ("handeye after max z", r"corrections off(?s:.*?)after the first-order bias " + _N, "handeye/link_errors",
+                 "z_after.max", 0.03))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
