@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 
 __all__ = ["TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z", "closed_chain_held_sigma",
-           "gaussian_formulas", "handeye_link_errors", "self_calibration_effects", "six_d_import"]
+           "gaussian_formulas", "handeye_link_errors", "self_calibration_effects", "six_d_import", "tracker_effects"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -193,11 +193,45 @@ def handeye_link_errors() -> dict:
     return {"z_plain.max": float(np.abs(c["z_plain"]).max()), "z_after.max": float(np.abs(c["z_after"]).max())}
 
 
+@functools.lru_cache(maxsize=None)
+def tracker_effects() -> dict:
+    """docs/testing.md "The effects the model lacks": the set-up of ``tests/test_calibration.py``'s
+    realistic case (:func:`robocal.sim.campaign_effects_fit.effects_campaign_fit`, seeds 0-1, 100
+    training and 200 held-out poses, 0.02 mm) on the KR 150 and the UR10. <1 s of CPU.
+
+    Fields per robot ``{kr150|ur10}.``: ``holdout_rms_mm.{0|1}`` (per seed), ``holdout_rms_mm``
+    (pooled over the seeds), ``ratio`` (pooled hold-out RMS / first-order prediction),
+    ``floor_rms_mm`` (pooled noise floor), ``naive_max_abs_z``, ``bias_max_abs_z``; over both robots
+    ``naive_max_abs_z.{min|max}`` (over the four campaigns' maxima), ``floor_rms_mm.{min|max}``, ``ratio_deviation_percent``
+    (largest |ratio - 1| [%])."""
+    import numpy as np
+
+    from ..sim.campaign_effects_fit import effects_campaign_fit
+
+    out = {}
+    for key, name in (("kr150", "kuka_kr150_r3100"), ("ur10", "ur10")):
+        runs = [effects_campaign_fit(name, seed, tool_mm=(30.0, 40.0, 100.0), sigma_mm=0.02) for seed in range(2)]
+        for s, c in enumerate(runs):
+            out[f"{key}.holdout_rms_mm.{s}"] = float(np.sqrt(c["holdout_mse"]))
+        ho, pred, floor = (np.mean([c[k] for c in runs]) for k in ("holdout_mse", "predicted_mse", "floor_mse"))
+        out.update({f"{key}.holdout_rms_mm": float(np.sqrt(ho)), f"{key}.ratio": float(np.sqrt(ho / pred)),
+                    f"{key}.floor_rms_mm": float(np.sqrt(floor)),
+                    f"{key}.naive_max_abs_z": float(max(np.abs(c["z_naive"]).max() for c in runs)),
+                    f"{key}.bias_max_abs_z": float(max(np.abs(c["z_bias"]).max() for c in runs))})
+        out.update({f"{key}.naive_max_abs_z.{s}": float(np.abs(c["z_naive"]).max()) for s, c in enumerate(runs)})
+    per_campaign = [out[f"{k}.naive_max_abs_z.{s}"] for k in ("kr150", "ur10") for s in range(2)]
+    out["naive_max_abs_z.min"], out["naive_max_abs_z.max"] = min(per_campaign), max(per_campaign)
+    out["floor_rms_mm.min"] = min(out["kr150.floor_rms_mm"], out["ur10.floor_rms_mm"])
+    out["floor_rms_mm.max"] = max(out["kr150.floor_rms_mm"], out["ur10.floor_rms_mm"])
+    out["ratio_deviation_percent"] = 100.0 * max(abs(out["kr150.ratio"] - 1.0), abs(out["ur10.ratio"] - 1.0))
+    return out
+
+
 TESTING_PRODUCERS = {"closed_chain/held_sigma": closed_chain_held_sigma, "formulas/gaussian": gaussian_formulas,
                      **{f"closed_chain_effects/seed{s}": functools.partial(closed_chain_effects, s) for s in range(4)},
                      "closed_chain_effects/z": closed_chain_effects_z, "six_d/import_realistic": six_d_import,
                      **{f"self_calibration_effects/{r}": functools.partial(self_calibration_effects, r) for r in ("nao", "justin")},
-                     "handeye/link_errors": handeye_link_errors}
+                     "handeye/link_errors": handeye_link_errors, "calibration/tracker_effects": tracker_effects}
 
 #: longer than ~5 s, or run only for history-like seed rows: with ``--all``
 SLOW_TESTING_PRODUCERS = {"closed_chain/held_sigma", "closed_chain_effects/seed1", "closed_chain_effects/seed2",

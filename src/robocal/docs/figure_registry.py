@@ -1619,5 +1619,16 @@ FIGURES += [Figure(f"testing:self-calibration effects {k}", "docs/testing.md", p
                 ("handeye after max z", r"corrections off(?s:.*?)after the first-order bias " + _N, "handeye/link_errors",
                  "z_after.max", 0.03))]
 
+# testing.md "The effects the model lacks": tests/test_calibration.py's realistic case (robocal.sim.campaign_effects_fit)
+_TE = "calibration/tracker_effects"
+FIGURES += [Figure(f"testing:tracker effects {k}", "docs/testing.md", pat, _TE, f, rel_tol=tol)
+            for k, pat, f, tol in (
+                ("naive max z min", r"max \|error/σ\| was " + _N, "naive_max_abs_z.min", 0.02),
+                ("naive max z max", r"max \|error/σ\| was [0-9]+–" + _N, "naive_max_abs_z.max", 0.02),
+                ("kr150 holdout", r"plus the noise floor to within 2 %: " + _N + " mm on the KR150", "kr150.holdout_rms_mm", 0.02),
+                ("ur10 holdout", r"mm on the KR150 and\s+" + _N + " mm on the UR10", "ur10.holdout_rms_mm", 0.02),
+                ("kr150 floor", r"mm on the UR10, against " + _N + " mm at the noise floor", "kr150.floor_rms_mm", 0.02),
+                ("ur10 floor", r"mm on the UR10, against " + _N + " mm at the noise floor", "ur10.floor_rms_mm", 0.02))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
