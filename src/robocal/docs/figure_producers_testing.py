@@ -10,7 +10,8 @@ from __future__ import annotations
 import functools
 
 __all__ = ["TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z", "closed_chain_held_sigma",
-           "gaussian_formulas", "handeye_link_errors", "self_calibration_effects", "six_d_import", "tracker_effects"]
+           "gaussian_formulas", "handeye_link_errors", "self_calibration_effects", "six_d_import", "tcp_realism_cells", "thermal_table_5_2",
+           "tracker_effects"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -227,12 +228,55 @@ def tracker_effects() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def thermal_table_5_2() -> dict:
+    """docs/testing.md "Table 5-2": the set-up of ``tests/test_thermal_screening.py``
+    (``run_thermal_seeds(preset="realistic", seeds=6, first_seed=1, n_cycles=90)``); lambda [%] as
+    ``{rms|max}.{screening|evaluation}.{column}.{median|q25|q75|min|max}``. ~15 s of CPU."""
+    from ..workflows.thermal.seeds import run_thermal_seeds
+    from .figure_producers import _flat
+
+    r = run_thermal_seeds(preset="realistic", seeds=6, first_seed=1, n_cycles=90)
+    return {**_flat(r["tables"]), "n_not_converged": float(r["fits"]["not_converged"])}
+
+
+@functools.lru_cache(maxsize=None)
+def tcp_realism_cells(preset: str) -> dict:
+    """docs/testing.md, ``test_tcp_realism.py``: the set-up of its ``cells`` fixture,
+    ``tcp_accuracy_study(preset=PRESET, seeds=20, first_seed=1, repeats=3)`` (the ideal preset with
+    the cross-laser only). ~10 s of CPU (realistic).
+
+    Fields ``check.{q25|median|q75}`` (cross-laser arm check [mm]); realistic also
+    ``pb_minus_off_axis.{max|median}`` (parallel barriers: |TCP error - the bent tool's off-axis
+    distance| [mm]) and ``beyond_tcp_mm`` = sqrt(median(check^2 - accuracy^2))."""
+    import math
+
+    import numpy as np
+
+    from ..workflows.tool.accuracy import tcp_accuracy_study
+
+    methods = ("cross_laser", "parallel_barriers") if preset == "realistic" else ("cross_laser",)
+    r = tcp_accuracy_study(preset=preset, seeds=20, first_seed=1, repeats=3, methods=methods)
+    chk = r["summary"]["cross_laser"]["check_mm"]
+    out = {f"check.{k}": float(chk[k]) for k in ("q25", "median", "q75")}
+    if preset == "realistic":
+        d = np.array([abs(c["parallel_barriers"]["accuracy_mm"] - c["tcp_off_axis_mm"]) for c in r["per_seed"]])
+        acc = np.array([c["cross_laser"]["accuracy_mm"] for c in r["per_seed"]])
+        chk_all = np.array([c["cross_laser"]["check_mm"] for c in r["per_seed"]])
+        out.update({"pb_minus_off_axis.max": float(d.max()), "pb_minus_off_axis.median": float(np.median(d)),
+                    "beyond_tcp_mm": math.sqrt(max(float(np.median(chk_all**2 - acc**2)), 0.0))})
+    return out
+
+
 TESTING_PRODUCERS = {"closed_chain/held_sigma": closed_chain_held_sigma, "formulas/gaussian": gaussian_formulas,
                      **{f"closed_chain_effects/seed{s}": functools.partial(closed_chain_effects, s) for s in range(4)},
                      "closed_chain_effects/z": closed_chain_effects_z, "six_d/import_realistic": six_d_import,
                      **{f"self_calibration_effects/{r}": functools.partial(self_calibration_effects, r) for r in ("nao", "justin")},
-                     "handeye/link_errors": handeye_link_errors, "calibration/tracker_effects": tracker_effects}
+                     "handeye/link_errors": handeye_link_errors, "calibration/tracker_effects": tracker_effects,
+                     "thermal/table_5_2_seeds_1_6": thermal_table_5_2,
+                     **{f"tcp/realism_cells_{p}": functools.partial(tcp_realism_cells, p) for p in ("realistic", "ideal")}}
 
 #: longer than ~5 s, or run only for history-like seed rows: with ``--all``
 SLOW_TESTING_PRODUCERS = {"closed_chain/held_sigma", "closed_chain_effects/seed1", "closed_chain_effects/seed2",
-                          "closed_chain_effects/seed3", "closed_chain_effects/z"}
+                          "closed_chain_effects/seed3", "closed_chain_effects/z", "thermal/table_5_2_seeds_1_6",
+                          "tcp/realism_cells_realistic", "tcp/realism_cells_ideal"}

@@ -1630,5 +1630,24 @@ FIGURES += [Figure(f"testing:tracker effects {k}", "docs/testing.md", pat, _TE, 
                 ("kr150 floor", r"mm on the UR10, against " + _N + " mm at the noise floor", "kr150.floor_rms_mm", 0.02),
                 ("ur10 floor", r"mm on the UR10, against " + _N + " mm at the noise floor", "ur10.floor_rms_mm", 0.02))]
 
+# testing.md "Table 5-2": tests/test_thermal_screening.py's 6 seeds (slow), the binomial tails of the sign tests (formulas)
+FIGURES += [Figure(f"testing:table 5-2 seeds 1-6 {c}", "docs/testing.md", r"Measured on seeds 1–6: " + r"[0-9.]+,?\s+(?:and\s+)?" * k + _N,
+                   "thermal/table_5_2_seeds_1_6", f"rms.evaluation.{c}.median", rel_tol=0.0)
+            for k, c in enumerate(("before", "traditional", "screened"))]
+FIGURES += [Figure(f"testing:sign test {k}", "docs/testing.md", pat, "formulas/gaussian", f, rel_tol=0.0)
+            for k, pat, f in (("P(Bin(100, 1/2) >= 65)", r"P\(Bin\(100, ½\) ≥ 65\) = " + _N, "binom_100_half_ge_65"),
+                              ("P(Bin(100, 0.9) <= 80)", r"P\(Bin\(100, 0\.9\) ≤ 80\) = " + _N, "binom_100_0.9_le_80"))]
+
+# testing.md: tests/test_tcp_realism.py's 20 cells x 3 repeats (tcp_accuracy_study; slow)
+_TR, _TRR, _TRI = r"`test_tcp_realism\.py`: `TCP_MEDIANS`(?s:.*?)", "tcp/realism_cells_realistic", "tcp/realism_cells_ideal"
+FIGURES += [Figure(f"testing:tcp realism {k}", "docs/testing.md", _TR + pat, p, f, rel_tol=0.01)
+            for k, pat, p, f in (
+                ("check q25", r"measured " + _N + "–[0-9.]+ mm, 3 repeats", _TRR, "check.q25"),
+                ("check q75", r"measured [0-9.]+–" + _N + " mm, 3 repeats", _TRR, "check.q75"),
+                ("ideal check q25", r"the ideal cell's\s+" + _N + "–", _TRI, "check.q25"),
+                ("ideal check q75", r"the ideal cell's\s+[0-9.]+–" + _N + " mm would fail", _TRI, "check.q75"),
+                ("barriers minus off-axis max", r"in every cell \(measured ≤ " + _N + " mm", _TRR, "pb_minus_off_axis.max"),
+                ("check beyond the TCP", r"= 0\.58 mm \(measured " + _N + " mm", _TRR, "beyond_tcp_mm"))]
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
