@@ -10,8 +10,8 @@ from __future__ import annotations
 import functools
 
 __all__ = ["TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z", "closed_chain_held_sigma",
-           "gaussian_formulas", "handeye_link_errors", "self_calibration_effects", "six_d_import", "tcp_realism_cells", "thermal_table_5_2",
-           "tracker_effects"]
+           "gaussian_formulas", "handeye_link_errors", "positioner_reference", "self_calibration_effects", "six_d_import", "tcp_realism_cells", "thermal_table_5_2",
+           "touchup_gate", "tracker_effects"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -268,12 +268,66 @@ def tcp_realism_cells(preset: str) -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def positioner_reference() -> dict:
+    """docs/testing.md, ``test_positioner_real_data.py``: robocal's positioner calibration (seed 0,
+    150 training records) against the independent screw-axis fit of
+    :mod:`robocal.workflows.datasets.positioner_reference` on the same records, with the same three
+    target points and with the target origin alone. ~2 s of CPU.
+
+    Fields ``robocal.{angle_deg|normal_mm|sigma_angle_deg|sigma_normal_mm}``,
+    ``reference3.{...}`` and ``reference1.{...}`` (three points / origin alone),
+    ``difference.{angle_deg|normal_mm}`` (|robocal - reference3|) and ``sigma_ratio_deviation``
+    (largest |robocal sigma / reference sigma - 1|)."""
+    import numpy as np
+
+    from ..io.datasets import read_ros_industrial_positioner
+    from ..workflows.datasets.positioner_reference import reference_axes
+    from ..workflows.datasets.ros_industrial_positioner import calibrate_positioner
+
+    ds = read_ros_industrial_positioner()
+    run = calibrate_positioner(seed=0, n_train=150, data=ds)
+    train = np.asarray(run["train"])
+    T, q = ds.per_pose["T_camera_target"][train], ds.joints[train]
+    got = np.array([run["axes"]["angle_deg"], run["axes"]["common_normal_mm"]])
+    table = {p["name"]: p for p in run["result"].parameter_table()}
+    sig = np.array([np.degrees(table["alpha1"]["std"]), table["a1"]["std"]])
+    out = {"robocal.angle_deg": float(got[0]), "robocal.normal_mm": float(got[1]),
+           "robocal.sigma_angle_deg": float(sig[0]), "robocal.sigma_normal_mm": float(sig[1])}
+    for n in (3, 1):
+        ref, sigma, _ = reference_axes(T, q, n_points=n)
+        out.update({f"reference{n}.angle_deg": float(ref[0]), f"reference{n}.normal_mm": float(ref[1]),
+                    f"reference{n}.sigma_angle_deg": float(sigma[0]), f"reference{n}.sigma_normal_mm": float(sigma[1])})
+        if n == 3:
+            out["difference.angle_deg"], out["difference.normal_mm"] = (float(v) for v in np.abs(got - ref))
+            out["sigma_ratio_deviation"] = float(np.max(np.abs(sig / sigma - 1.0)))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def touchup_gate() -> dict:
+    """docs/tcp.md's touch-up gates: the set-up of ``tests/test_tool_gates.py`` (seven touch poses,
+    0.05 mm noise, seed 3, :func:`robocal.sim.tool.touch_poses.touch_poses`; pose 5 moved 5 mm), the
+    four-point fit. Fields ``rms_mm`` (the fit's RMS, what the RMS gate alone saw) and
+    ``tcp_error_mm`` (its TCP against the true one)."""
+    import numpy as np
+
+    from ..sim.tool.touch_poses import TCP_TRUE_MM, touch_poses
+    from ..tcp.touchup import four_point_tcp
+
+    T = touch_poses(7, np.random.default_rng(3), noise=0.05)
+    T[4, :3, 3] += np.array([3.0, -4.0, 0.0])  # 5 mm off
+    fit = four_point_tcp(T)
+    return {"rms_mm": float(fit.rms_mm), "tcp_error_mm": float(np.linalg.norm(fit.tcp_mm - TCP_TRUE_MM))}
+
+
 TESTING_PRODUCERS = {"closed_chain/held_sigma": closed_chain_held_sigma, "formulas/gaussian": gaussian_formulas,
                      **{f"closed_chain_effects/seed{s}": functools.partial(closed_chain_effects, s) for s in range(4)},
                      "closed_chain_effects/z": closed_chain_effects_z, "six_d/import_realistic": six_d_import,
                      **{f"self_calibration_effects/{r}": functools.partial(self_calibration_effects, r) for r in ("nao", "justin")},
                      "handeye/link_errors": handeye_link_errors, "calibration/tracker_effects": tracker_effects,
                      "thermal/table_5_2_seeds_1_6": thermal_table_5_2,
+                     "ros_industrial_positioner/reference": positioner_reference, "tcp/touchup_gate": touchup_gate,
                      **{f"tcp/realism_cells_{p}": functools.partial(tcp_realism_cells, p) for p in ("realistic", "ideal")}}
 
 #: longer than ~5 s, or run only for history-like seed rows: with ``--all``

@@ -1649,5 +1649,30 @@ FIGURES += [Figure(f"testing:tcp realism {k}", "docs/testing.md", _TR + pat, p, 
                 ("barriers minus off-axis max", r"in every cell \(measured ≤ " + _N + " mm", _TRR, "pb_minus_off_axis.max"),
                 ("check beyond the TCP", r"= 0\.58 mm \(measured " + _N + " mm", _TRR, "beyond_tcp_mm"))]
 
+# testing.md: test_positioner_real_data.py's independent screw-axis reference (robocal.workflows.datasets.positioner_reference)
+_PR, _PRP = r"`test_positioner_axes_agree_with_an_independent_screw_axis_fit`(?s:.*?)", "ros_industrial_positioner/reference"
+_UPPER = "an upper bound: the solvers' stopping points (checked from 0 to ~2x the printed value)"
+FIGURES += [Figure(f"testing:positioner reference {k}", "docs/testing.md", _PR + pat, _PRP, f, rel_tol=tol, note=note)
+            for k, pat, f, tol, note in (
+                ("angle", r"same three target points it gives\s+" + _N + "°", "reference3.angle_deg", 0.0, ""),
+                ("sigma angle", r"it gives\s+[0-9.]+° \(σ " + _N, "reference3.sigma_angle_deg", 0.02, ""),
+                ("normal", r"it gives\s+[0-9.]+° \(σ [0-9.]+°\) and " + _N + " mm", "reference3.normal_mm", 0.0, ""),
+                ("sigma normal", r"it gives\s+[0-9.]+° \(σ [0-9.]+°\) and [0-9.]+ mm \(σ " + _N, "reference3.sigma_normal_mm",
+                 0.02, ""),
+                ("difference angle", r"differences under " + _N + "°", "difference.angle_deg", 1.0, _UPPER),
+                ("difference normal", r"differences under [0-9e.-]+° / " + _N + " mm", "difference.normal_mm", 1.0, _UPPER),
+                ("sigma ratio", r"\(measured: within " + _N + r"\)", "sigma_ratio_deviation", 1.0, _UPPER),
+                ("origin alone angle", r"the target origin alone, gives\s+" + _N + "°", "reference1.angle_deg", 0.0, ""),
+                ("origin alone sigma angle", r"the target origin alone, gives\s+[0-9.]+° \(σ " + _N, "reference1.sigma_angle_deg",
+                 0.02, ""),
+                ("origin alone normal", r"the target origin alone, gives\s+[0-9.]+° \(σ [0-9.]+°\) / " + _N + " mm",
+                 "reference1.normal_mm", 0.0, ""),
+                ("origin alone sigma normal", r"the target origin alone, gives\s+[0-9.]+° \(σ [0-9.]+°\) / [0-9.]+ mm \(σ " + _N,
+                 "reference1.sigma_normal_mm", 0.02, ""))]
+
+# tcp.md: the touch-up leave-one-out gate's example (tests/test_tool_gates.py's set-up, robocal.sim.tool.touch_poses)
+FIGURES.append(Figure("tcp:touch-up gate tcp error with one pose 5 mm off", "docs/tcp.md",
+                      r"let it through with the TCP " + _N + " mm off", "tcp/touchup_gate", "tcp_error_mm", rel_tol=0.02))
+
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
