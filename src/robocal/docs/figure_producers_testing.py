@@ -1,17 +1,20 @@
-"""Producers of the documented figures of docs/testing.md and docs/closed-chain.md measured on the
-set-ups of the tests with effects the model lacks (robocal.docs.figures): the closed-chain
-cell judged at the true robot, the UR10 6-D campaign imported from vendor exports, the camera
-self-calibrations and the hand-eye refinement on robots that differ from their models. The set-ups
-live in :mod:`robocal.sim` and are shared with the tests (same draws). Each producer returns a flat
-``{field: value}`` dict and is cached."""
+"""Producers of the documented figures of docs/testing.md, docs/closed-chain.md and docs/tcp.md measured
+on the set-ups of tests (robocal.docs.figures): the closed-chain cell judged at the true robot, the
+tracker campaign, the UR10 6-D campaign imported from vendor exports, the camera self-calibrations
+and the hand-eye refinement on robots that differ from their models, the positioner's independent
+reference fit, table 5-2 on six seeds, the tool-frame cells and the touch-up gate; closed-form
+statistics quoted as expectations. The set-ups live in :mod:`robocal.sim` (and
+:mod:`robocal.workflows.datasets.positioner_reference`) and are shared with the tests (same draws).
+Each producer returns a flat ``{field: value}`` dict and is cached."""
 
 from __future__ import annotations
 
 import functools
 
-__all__ = ["TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z", "closed_chain_held_sigma",
-           "gaussian_formulas", "handeye_link_errors", "positioner_reference", "self_calibration_effects", "six_d_import", "tcp_realism_cells", "thermal_table_5_2",
-           "touchup_gate", "tracker_effects"]
+__all__ = ["SLOW_TESTING_PRODUCERS", "TESTING_PRODUCERS", "closed_chain_effects", "closed_chain_effects_z",
+           "closed_chain_held_sigma", "gaussian_formulas", "handeye_link_errors", "positioner_reference",
+           "self_calibration_effects", "six_d_import", "tcp_realism_cells", "thermal_table_5_2", "touchup_gate",
+           "tracker_effects"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -330,7 +333,8 @@ TESTING_PRODUCERS = {"closed_chain/held_sigma": closed_chain_held_sigma, "formul
                      "ros_industrial_positioner/reference": positioner_reference, "tcp/touchup_gate": touchup_gate,
                      **{f"tcp/realism_cells_{p}": functools.partial(tcp_realism_cells, p) for p in ("realistic", "ideal")}}
 
-#: longer than ~5 s, or run only for history-like seed rows: with ``--all``
+#: run with ``--all``: longer than ~5 s of CPU (table 5-2, the tool-frame cells, the study's z), reading the
+#: 10-seed closed-chain study (theta1's sigma), or ~1.5 s each for the seeds 1-3 quoted in prose
 SLOW_TESTING_PRODUCERS = {"closed_chain/held_sigma", "closed_chain_effects/seed1", "closed_chain_effects/seed2",
                           "closed_chain_effects/seed3", "closed_chain_effects/z", "thermal/table_5_2_seeds_1_6",
                           "tcp/realism_cells_realistic", "tcp/realism_cells_ideal"}
