@@ -202,64 +202,13 @@ def test_joint_offsets_on_a_robot_with_link_errors_land_at_truth_plus_their_firs
     (``pixel_sigma`` given, not scaled by the misfit): every offset within 3 sigma of truth + bias,
     and the plain "within 3 sigma of truth" fails (the link errors matter). Measured (seed 7, robot
     seed 21): error / sigma -6.4 / -8.0 / -5.8 / -14.7 plain, -0.79 / -0.17 / -0.05 / -0.22 after
-    the bias (-0.013 / -0.015 / -0.012 / -0.108 deg; sigma 0.002-0.0075 deg)."""
-    from robocal.robots import load_robot
-    from robocal.sim import VirtualRobot
-    from robocal.sim.cameras.handeye_points import CAMERA_MODELS
+    the bias (-0.013 / -0.015 / -0.012 / -0.108 deg; sigma 0.002-0.0075 deg). The set-up:
+    :func:`robocal.sim.cameras.handeye_effects.handeye_link_error_case`."""
+    from robocal.sim.cameras.handeye_effects import handeye_link_error_case
 
-    robot = load_robot("abb_irb140")
-    rng = np.random.default_rng(7)
-    n = 20
-    q = np.radians([0.0, 20.0, -10.0, 0.0, 40.0, 0.0]) + rng.uniform(-0.35, 0.35, (n, 6))
-    true_offsets = np.radians([0.0, 0.03, -0.04, 0.05, -0.03, 0.0])
-    names = [f"theta{k}" for k in range(1, 7)]
-    idx = [robot.params.index(nm) for nm in names]
-    p_model = robot.params.values.copy()  # what the refinement can represent: nominal links, true offsets
-    p_model[idx] += true_offsets
-    p_links = VirtualRobot.perturbed(robot, 21, length_sigma_mm=0.1, angle_sigma_deg=0.01,
-                                     offset_sigma_deg=0.0).true_model.params.values.copy()
-    p_links[idx] = p_model[idx]  # the offsets as above, every other parameter off its nominal value
-
-    def flange(p):
-        return robot.kinematics_with(q, p, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
-
-    X = board_points()
-    T_ft = _T(so3_exp(np.array([0.0, np.pi, 0.0])), [-100.0, -70.0, 20.0])
-    F_model = flange(p_model)
-    centre = (F_model @ T_ft)[:, :3, 3].mean(0)
-    normal = -(F_model @ T_ft)[:, :3, 2].mean(0)
-    T_bc = look_at(centre + 700.0 * normal / np.linalg.norm(normal), centre)
-    camera = CAMERA_MODELS["brown"]
-
-    def corners(p=p_links, Tbc=T_bc, Tft=T_ft):
-        T_ct = invert_transforms(Tbc)[None] @ flange(p) @ Tft
-        P = np.einsum("nij,pj->npi", T_ct[:, :3, :3], X) + T_ct[:, None, :3, 3]
-        return camera.project(P.reshape(-1, 3)).pixels.reshape(n, len(X), 2)
-
-    uv = corners() + rng.normal(0, 0.1, (n, len(X), 2))
-    F_nominal = robot.kinematics_with(q, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
-    res = refine_hand_eye(F_nominal, uv, X, camera, setup="eye_to_hand", joints=q, robot=robot, joint_offsets=True,
-                          pixel_sigma=0.1, robot_pose_sigma=None)
+    c = handeye_link_error_case(seed=7, robot_seed=21)
+    res, err, bias, sigma = c["result"], c["error"], c["bias"], c["sigma"]
     assert res.converged and set(res.identifiability.dropped_names) == {"theta1", "theta6"}
-
-    h = 1e-6
-    base = corners(p=p_model).ravel()
-    e = corners().ravel() - base
-    cols = []
-    for i in idx[1:5]:
-        p = p_model.copy()
-        p[i] += h
-        cols.append(corners(p=p).ravel())
-    for k in range(6):
-        w = np.zeros(6)
-        w[k] = h
-        step = _T(so3_exp(w[:3]), w[3:])
-        cols.append(corners(p=p_model, Tbc=T_bc @ step).ravel())
-        cols.append(corners(p=p_model, Tft=T_ft @ step).ravel())
-    J = (np.array(cols) - base).T / h
-    bias = np.linalg.lstsq(J, e, rcond=None)[0][:4]  # rad
-    err = res.joint_offsets_rad[1:5] - true_offsets[1:5]
-    sigma = np.array([np.sqrt(res.covariance[i, i]) for i in map(res.variable_names.index, names[1:5])])
     assert np.all(np.abs(err - bias) < 3 * sigma), (err, bias, sigma)
     assert np.max(np.abs(err) / sigma) > 3, (err, sigma)
 

@@ -126,7 +126,7 @@ def test_six_d_correct_on_effects_the_model_lacks_lands_where_first_order_theory
     predicted 0.008-0.017 deg, difference <= 0.0056 deg against sigma 0.0032-0.0040 deg."""
     from _first_order import poses_with_effects, six_d_fit_bias
 
-    from robocal.transforms import quaternion_from_matrix
+    from robocal.sim.six_d_exports import read_corrected_joints, write_pose_targets
 
     meas, truth = six_d_campaign(effects=True)
     path = write_measurements(tmp_path / "probe.csv", meas, length_unit="mm", angle_unit="deg",
@@ -138,17 +138,11 @@ def test_six_d_correct_on_effects_the_model_lacks_lands_where_first_order_theory
     model, T_inst, T_tool = truth["model"], truth["T_inst"], truth["T_tool"]
     q_t = VirtualRobot(load_robot(ROBOT), model).random_configurations(8, np.random.default_rng(99), margin=0.2)
     targets = T_inst @ model.fk(q_t) @ T_tool  # poses the true robot (without effects) takes: reachable
-    quat = quaternion_from_matrix(targets[:, :3, :3])
-    rows = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: quaternion",
-            "# frame: world", "name,x,y,z,qw,qx,qy,qz," + ",".join(f"A{j + 1}" for j in range(6))]
-    rows += [",".join([f"T{k}"] + [repr(float(v)) for v in (*targets[k, :3, 3], *quat[k], *np.degrees(q_t[k]))])
-             for k in range(len(q_t))]
-    (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
+    joints = [f"A{j + 1}" for j in range(6)]
+    write_pose_targets(tmp_path / "t.csv", targets, q_t, joints)
     r = run("correct", tmp_path / "cal" / "calibrated_robot.toml", tmp_path / "t.csv", "--out", tmp_path / "c.csv")
     assert r.exit_code == 0, r.output
-    lines = [x for x in (tmp_path / "c.csv").read_text().splitlines() if not x.startswith("#")]
-    cols = lines[0].split(",")
-    q_c = np.radians([[float(row.split(",")[cols.index(f"A{j + 1}")]) for j in range(6)] for row in lines[1:]])
+    q_c = read_corrected_joints(tmp_path / "c.csv", joints)
     phases = np.random.default_rng(3 + 1000).uniform(0.0, 2 * np.pi, (2, 6))  # as six_d_campaign(seed=3)
     reached = poses_with_effects(model, q_c, T_inst, T_tool, phases, after_campaign=True)[1]
     first = six_d_fit_bias(model, estimated, truth["q"], T_inst, T_tool, truth["T_free"], W_MM_PER_RAD, q_at=q_c,

@@ -15,77 +15,42 @@ from click.testing import CliRunner
 
 from robocal.cli import main
 from robocal.robots import load_robot
-from robocal.sim import VirtualRobot
-from robocal.transforms import euler_from_matrix, so3_exp, so3_log
+from robocal.sim.six_d_exports import (
+    EXPORT_T0,
+    PROBE_SIGMA_MM,
+    PROBE_W_MM_PER_RAD,
+    probe_campaign,
+    probe_tool,
+    read_corrected_joints,
+    write_leica_tmac,
+    write_pose_targets,
+    write_rtde_log,
+)
+from robocal.transforms import so3_log
 
-SIGMA_MM = 0.02
-W = 100.0  # mm per rad: the CLI's default rotation weight (0.02 mm ~ 0.0115 deg)
-T0 = datetime(2022, 10, 11, 15, 6, 48, 43000)
+SIGMA_MM = PROBE_SIGMA_MM
+W = PROBE_W_MM_PER_RAD  # mm per rad: the CLI's default rotation weight (0.02 mm ~ 0.0115 deg)
+T0 = EXPORT_T0
+true_tool = probe_tool
+write_leica, write_rtde = write_leica_tmac, write_rtde_log  # the exports' writers (robocal.sim.six_d_exports)
 
 
 def run(*args):
     return CliRunner().invoke(main, [str(a) for a in args])
 
 
-def true_tool():
-    T = np.eye(4)
-    T[:3, :3] = so3_exp([0.3, -0.2, 0.9])
-    T[:3, 3] = [20.0, -35.0, 140.0]
-    return T
-
-
 def simulate(n=60, seed=11, truth=False, effects=False):
     """Joints and measured probe poses (N, 4, 4) in the tracker frame (and, with ``truth``, the
-    virtual robot and the tracker's frame T_inst). ``effects``: the ``realistic`` campaign effects
-    (tests/_first_order.py ``poses_with_effects``, phases from ``seed + 1000``); with ``truth`` the
-    noise-free measured poses are returned last."""
-    nominal = load_robot("ur10")
-    rng = np.random.default_rng(seed)
-    virtual = VirtualRobot.perturbed(nominal, rng, joint_noise_deg=0.0)
-    true = virtual.true_model.params.values.copy()
-    for name in ("theta6", "d6", "a6", "alpha6"):  # the probe frame carries the last link's placement
-        i = nominal.params.index(name)
-        true[i] = nominal.params.values[i]
-    virtual = VirtualRobot(nominal, virtual.true_model.with_params(true))
-    q = virtual.random_configurations(n, rng)
-    T_inst = np.eye(4)
-    T_inst[:3, :3] = so3_exp([0.02, -0.05, 2.4])
-    T_inst[:3, 3] = [2800.0, 900.0, -350.0]
-    if effects:
-        from _first_order import poses_with_effects
-
-        phases = np.random.default_rng(seed + 1000).uniform(0.0, 2 * np.pi, (2, q.shape[1]))
-        T = poses_with_effects(virtual.true_model, q, T_inst, true_tool(), phases)[1]
-    else:
-        T = T_inst @ virtual.true_poses(q) @ true_tool()
-    T_free = T.copy()
-    T[:, :3, 3] += rng.normal(0, SIGMA_MM, (n, 3))
-    T[:, :3, :3] = so3_exp(rng.normal(0, SIGMA_MM / W, (n, 3))) @ T[:, :3, :3]
+    virtual robot and the tracker's frame T_inst): :func:`robocal.sim.six_d_exports.probe_campaign`.
+    With ``effects`` and ``truth`` the noise-free measured poses are returned last."""
+    c = probe_campaign(n, seed, effects=effects)
     if effects and truth:
-        return q, T, virtual, T_inst, rng, T_free
-    return (q, T, virtual, T_inst, rng) if truth else (q, T)
+        return c["q"], c["T"], c["virtual"], c["T_inst"], c["rng"], c["T_free"]
+    return (c["q"], c["T"], c["virtual"], c["T_inst"], c["rng"]) if truth else (c["q"], c["T"])
 
 
 def _stamp(t: datetime) -> str:
     return t.strftime("%d.%m.%Y %H:%M:%S.") + f"{t.microsecond // 1000:03d}"
-
-
-def write_leica(path, T, times):
-    rpy = np.degrees(euler_from_matrix(T[:, :3, :3], "rpy"))
-    lines = ["Leica T-Mac 6DoF export;;;;;;;", "Units: Millimeters;;;;;;;",
-             "Name;X;Y;Z;Rx [deg];Ry [deg];Rz [deg];Time"]
-    for k, (p, r, t) in enumerate(zip(T[:, :3, 3], rpy, times)):
-        cells = [f"P{k + 1:03d}"] + [f"{v:.4f}".replace(".", ",") for v in (*p, *r)] + [f"'{_stamp(t)}"]
-        lines.append(";".join(cells))
-    path.write_text("\n".join(lines) + "\n", encoding="latin-1")
-    return path
-
-
-def write_rtde(path, q):
-    lines = ["timestamp " + " ".join(f"actual_q_{j}" for j in range(6))]
-    lines += [f"{12.5 + 4.0 * k:.3f} " + " ".join(f"{v:.9f}" for v in row) for k, row in enumerate(q)]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
 
 
 @pytest.fixture(scope="module")
@@ -247,22 +212,13 @@ def _correct_targets(cal_dir, virtual, T_inst, tmp_path):
     """Tool-pose targets in the tracker frame (8 poses of the true robot, seed 99), corrected with
     ``cal_dir``'s calibrated_robot.toml; returns (targets (8, 4, 4) [mm], corrected joints (8, 6)
     [rad])."""
-    from robocal.transforms import quaternion_from_matrix
-
+    joints = ("J1", "J2", "J3", "J4", "J5", "J6")
     q_t = virtual.random_configurations(8, np.random.default_rng(99), margin=0.2)
     targets = T_inst @ virtual.true_poses(q_t) @ true_tool()
-    quat = quaternion_from_matrix(targets[:, :3, :3])
-    rows = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: quaternion",
-            "# frame: world", "name,x,y,z,qw,qx,qy,qz,J1,J2,J3,J4,J5,J6"]
-    rows += [",".join([f"T{k}"] + [repr(float(v)) for v in (*targets[k, :3, 3], *quat[k], *np.degrees(q_t[k]))])
-             for k in range(len(q_t))]
-    (tmp_path / "t.csv").write_text("\n".join(rows) + "\n")
+    write_pose_targets(tmp_path / "t.csv", targets, q_t, joints)
     r = run("correct", cal_dir / "calibrated_robot.toml", tmp_path / "t.csv", "--out", tmp_path / "c.csv")
     assert r.exit_code == 0, r.output
-    lines = [x for x in (tmp_path / "c.csv").read_text().splitlines() if not x.startswith("#")]
-    cols = lines[0].split(",")
-    q_c = np.radians([[float(row.split(",")[cols.index(j)]) for j in ("J1", "J2", "J3", "J4", "J5", "J6")]
-                      for row in lines[1:]])
+    q_c = read_corrected_joints(tmp_path / "c.csv", joints)
     return targets, q_c
 
 

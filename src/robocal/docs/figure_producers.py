@@ -16,6 +16,7 @@ from .figure_producers_handeye import HANDEYE_PRODUCERS
 from .figure_producers_datasets import DATASET_PRODUCERS, DATASETS_NEEDED, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
 from .figure_producers_speed import SLOW_SPEED_PRODUCERS, SPEED_PRODUCERS
+from .figure_producers_testing import SLOW_TESTING_PRODUCERS, TESTING_PRODUCERS
 from .figure_producers_thermal import THERMAL_PRODUCERS
 
 __all__ = ["PRODUCERS", "SLOW_PRODUCERS", "datasets_needed", "repository_root"]
@@ -541,6 +542,7 @@ PRODUCERS = {
     **SPEED_PRODUCERS,
     **HANDEYE_PRODUCERS,
     **DATASET_PRODUCERS,
+    **TESTING_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -613,5 +615,5 @@ SLOW_PRODUCERS = {*SLOW_SPEED_PRODUCERS, "dlr_justin/elastic-joint", "dlr_justin
                   "handeye/camera_real/test_set_charuco", "handeye/camera_real/test_set_10x10",
                   "handeye/variants_real/test_set_charuco", "handeye/variants_real/test_set_10x10",
                   "handeye/gate_shifted", "handeye/study_summary", "handeye/board_shape",
-                  "handeye/detection_rendered",
+                  "handeye/detection_rendered", *SLOW_TESTING_PRODUCERS,
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

@@ -291,7 +291,8 @@ def six_d_at_robot() -> dict:
     from ..sim import VirtualRobot
     from ..sim.first_order import poses_with_effects, six_d_fit_bias
     from ..sim.six_d_campaign import SIX_D_ROBOT, SIX_D_SIGMA_MM, SIX_D_W_MM_PER_RAD, six_d_campaign
-    from ..transforms import quaternion_from_matrix, so3_log
+    from ..sim.six_d_exports import read_corrected_joints, write_pose_targets
+    from ..transforms import so3_log
     from .figure_producers_cli import run_cli
 
     robot, sigma_mm, w, n = SIX_D_ROBOT, SIX_D_SIGMA_MM, SIX_D_W_MM_PER_RAD, 60
@@ -306,14 +307,10 @@ def six_d_at_robot() -> dict:
         res = json.loads((d / "cal" / "result.json").read_text())
         q_t = VirtualRobot(nominal, model).random_configurations(8, np.random.default_rng(99), margin=0.2)
         targets = T_inst @ model.fk(q_t) @ T_tool
-        quat = quaternion_from_matrix(targets[:, :3, :3])
-        rows = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: quaternion",
-                "# frame: world", "name,x,y,z,qw,qx,qy,qz," + ",".join(f"A{j + 1}" for j in range(6))]
-        rows += [",".join([f"T{k}"] + [repr(float(v)) for v in (*targets[k, :3, 3], *quat[k], *np.degrees(q_t[k]))])
-                 for k in range(len(q_t))]
-        (d / "t.csv").write_text("\n".join(rows) + "\n")
+        joints = [f"A{j + 1}" for j in range(6)]
+        write_pose_targets(d / "t.csv", targets, q_t, joints)
         run_cli("correct", d / "cal" / "calibrated_robot.toml", d / "t.csv", "--out", d / "c.csv")
-        lines = [x for x in (d / "c.csv").read_text().splitlines() if not x.startswith("#")]
+        q_c = read_corrected_joints(d / "c.csv", joints)
     estimated = [p["name"] for p in res["model_parameters"] if p["estimated"]]
     bias = six_d_fit_bias(model, estimated, q, T_inst, T_tool, T_free, w)
     tf = res["tool_frame"]
@@ -324,8 +321,6 @@ def six_d_at_robot() -> dict:
            **{f"rot_z.after.{k}": float(abs(err[k] - bias["tool_rotvec"][k]) / std[k]) for k in range(3)},
            "residual_rms_mm": float(res["residuals"]["after"]["rms"]),
            "residual_pred_mm": float(np.hypot(bias["residual_rms_mm"], sigma_mm * np.sqrt(3 * (1 - n_var / (6 * n)))))}
-    cols = lines[0].split(",")
-    q_c = np.radians([[float(row.split(",")[cols.index(f"A{j + 1}")]) for j in range(6)] for row in lines[1:]])
     reached = poses_with_effects(model, q_c, T_inst, T_tool, phases, after_campaign=True)[1]
     first = six_d_fit_bias(model, estimated, q, T_inst, T_tool, T_free, w, q_at=q_c, T_at=reached, noise_mm=sigma_mm)
     d_pos = reached[:, :3, 3] - targets[:, :3, 3]

@@ -1576,6 +1576,152 @@ FIGURES += [Figure(f"kinematics:ik seed prose {k}", _KM, pat, producer, field, r
                 ("GA structures", r"the GA evaluates\s+~" + _N + " structures", "ik_seed/ranges", "mean.ga.evaluations", 0.1),
                 ("GA gain", r"structures and gains ~" + _N + " % in validation RMS", "ik_seed/ranges",
                  "mean.ga.gain_percent", 0.1))]
+# --- figs-testing: docs/closed-chain.md, docs/testing.md, docs/tcp.md (issue 25 item 3) ---------------------------
+# closed-chain.md "A cell with the effects the model lacks": the set-up of tests/test_closed_chain_effects.py through
+# the command line, judged by robocal.sim.closed_chain_judge (seed 0 fast; seeds 1-3 and the study's max |z| slow)
+_CCE, _CCE0 = "| cell | at-robot RMS (max) [mm]", "closed_chain_effects/seed0"
+for _cell_label in ("ideal", "realistic"):
+    FIGURES += _table("docs/closed-chain.md", {_cell_label: _cell_label}, _CCE0,
+                      [(0, 0, "rms_mm"), (0, 1, "max_mm"), (2, 0, "residual_rms_mm"), (3, 0, "chi2_error"),
+                       (3, 1, "chi2_residual"), (4, 0, "e_op_mm")] + ([(1, 0, "miss_rms_mm")] if _cell_label == "realistic" else []),
+                      prefix="closed-chain:effects ", rel_tol=0.02, after=_CCE)
+FIGURES += [Figure("closed-chain:effects ideal max |z| (study seed 0)", "docs/closed-chain.md", _cell("ideal", 5, 0, after=_CCE),
+                   "closed_chain/study", "0.max_abs_z", rel_tol=0.0),
+            Figure("closed-chain:effects realistic max |z| (study)", "docs/closed-chain.md", _cell("realistic", 5, 0, after=_CCE),
+                   "closed_chain_effects/z", "max_abs_z", rel_tol=0.02)]
+_CCP = r"The noise \(spot spread(?s:.*?)"
+FIGURES += [Figure(f"closed-chain:effects prose {k}", "docs/closed-chain.md", _CCP + pat, f"closed_chain_effects/seed{s}", f,
+                   rel_tol=tol)
+            for k, pat, s, f, tol in (
+                ("sigma rms", r"gives σ_rms " + _N, 0, "realistic.sigma_rms_mm", 0.02),
+                ("noise rms 99.9", r"of its RMS " + _N + " mm", 0, "realistic.noise_rms_999_mm", 0.02),
+                ("chi2 bound", r"freedom \(99\.9 %: " + _N, 0, "chi2_bound", 0.0),
+                ("rms ratio", r"RMS " + _N + "× the ideal cell's", 0, "rms_ratio", 0.02),
+                ("seed 1 chi2", r"Seeds 1–3: error − miss χ² " + _N, 1, "realistic.chi2_residual", 0.02),
+                ("seed 2 chi2", r"Seeds 1–3: error − miss χ² [0-9.]+ /\s+" + _N, 2, "realistic.chi2_residual", 0.02),
+                ("seed 3 chi2", r"Seeds 1–3: error − miss χ² [0-9.]+ /\s+[0-9.]+ / " + _N, 3, "realistic.chi2_residual", 0.02),
+                *((f"seed {s} rms", r"at-robot RMS " + r"[0-9.]+ / " * (s - 1) + _N, s, "realistic.rms_mm", 0.02)
+                  for s in (1, 2, 3)),
+                *((f"seed {s} ideal rms", r"at-robot RMS [0-9./ ]+ mm against " + r"[0-9.]+ / " * (s - 1) + _N, s,
+                   "ideal.rms_mm", 0.02) for s in (1, 2, 3)),
+                ("reading realistic", r"accuracy at the robot \(" + _N + " mm instead", 0, "realistic.rms_mm", 0.02),
+                ("reading ideal", r"mm instead of " + _N + r" mm\)", 0, "ideal.rms_mm", 0.02))]
+# testing.md's summary of the same cell
+_TCC = r"`test_closed_chain_effects\.py::test_realistic_cell_lands_at_truth_plus_its_first_order_miss`(?s:.*?)"
+FIGURES += [Figure(f"testing:closed-chain effects {k}", "docs/testing.md", _TCC + pat, p, f, rel_tol=tol)
+            for k, pat, p, f, tol in (
+                ("chi2 residual", r"\(χ² " + _N + " in", _CCE0, "realistic.chi2_residual", 0.02),
+                ("chi2 bound", r"in 18 modes against " + _N, _CCE0, "chi2_bound", 0.0),
+                ("residual rms", r"modes against [0-9.]+; RMS " + _N, _CCE0, "realistic.residual_rms_mm", 0.02),
+                ("noise rms 99.9", r"modes against [0-9.]+; RMS [0-9.]+ mm against " + _N, _CCE0, "realistic.noise_rms_999_mm",
+                 0.02),
+                ("chi2 error", r"far beyond it \(χ² " + _N, _CCE0, "realistic.chi2_error", 0.02),
+                ("rms", r"far beyond it \(χ² [0-9.]+, RMS " + _N, _CCE0, "realistic.rms_mm", 0.02),
+                ("ideal rms", r"against the ideal cell's " + _N, _CCE0, "ideal.rms_mm", 0.02),
+                ("max z realistic", r"max \|z\| of the parameters " + _N, "closed_chain_effects/z", "max_abs_z", 0.02),
+                ("max z ideal", r"max \|z\| of the parameters [0-9.]+ \(ideal " + _N, "closed_chain/study", "0.max_abs_z", 0.0))]
+
+# closed-chain.md: the identifiability table's theta1 sigma, the Gaussian expectations, the honest reading's ratios
+FIGURES += [Figure(f"closed-chain:theta1 sigma {k}", "docs/closed-chain.md", r"\"barely observable\": σ ≈ " + pat,
+                   "closed_chain/held_sigma", f"theta1.{k}", rel_tol=0.02)
+            for k, pat in (("min", _N), ("max", r"[0-9.]+–" + _N))]
+FIGURES += [Figure("closed-chain:gaussian P(one beyond 3 sigma of 22)", "docs/closed-chain.md",
+                   r"With 22 Gaussian estimates per seed\s+~" + _N + " %", "formulas/gaussian", "p_any_beyond_3.22", rel_tol=0.0),
+            Figure("closed-chain:gaussian median of the largest of 22", "docs/closed-chain.md",
+                   r"median of the largest of 22 \|z\|: about " + _N, "formulas/gaussian", "median_max_abs_z.22", rel_tol=0.0)]
+_HR = r"gets within a factor of "
+FIGURES += [Figure(f"closed-chain:honest reading ratio {k}", "docs/closed-chain.md", _HR + pat, "closed_chain/study",
+                   f"{k}.ratio", rel_tol=0.01)
+            for k, pat in (("min", _N), ("max", r"[0-9.]+–" + _N), ("median", r"[0-9.]+–[0-9.]+ \(median " + _N))]
+
+# testing.md: the test_six_d_import.py rows (robocal.sim.six_d_exports: the UR10 campaign as vendor exports; fast)
+_SDI = "six_d/import_realistic"
+_SDIR = r"the same, UR10 through `import` \| rotation \\\|z\\\| ≤ "
+FIGURES += [Figure(f"testing:six-d import exports {f}", "docs/testing.md", _SDIR + pat, _SDI, f, rel_tol=0.02)
+            for f, pat in (("rot_z.after.max", _N), ("residual_rms_mm", r"[0-9.]+, residual " + _N),
+                           ("residual_pred_mm", r"[0-9.]+, residual [0-9.]+ mm vs " + _N))]
+for _label, _fields in (
+        ("`test_six_d_import.py::test_correct_on_effects_the_model_lacks_lands_where_first_order_theory_says`",
+         ("pos.landing.min", "pos.landing.max", "pos.miss.min", "pos.miss.max", "pos.diff.max", "pos.sigma.min",
+          "pos.sigma.max")),
+        ("`test_six_d_import.py::test_correct_on_effects_…`",
+         ("rot.landing.min", "rot.landing.max", "rot.diff.max", "rot.sigma.min", "rot.sigma.max"))):
+    FIGURES += [Figure(f"testing:six-d import {_label.split('::')[1][:40]} {f}", "docs/testing.md", _cell(_label, 1, k), _SDI, f,
+                       rel_tol=0.02) for k, f in enumerate(_fields)]
+
+# testing.md: camera self-calibration (NAO, DLR Justin) and the hand-eye refinement on robots with link errors (fast;
+# the set-ups of robocal.sim.cameras.self_calibration_effects / handeye_effects, shared with their tests)
+_NAO, _JUS = "self_calibration_effects/nao", "self_calibration_effects/justin"
+FIGURES += [Figure(f"testing:self-calibration effects {k}", "docs/testing.md", pat, p, f, rel_tol=tol)
+            for k, pat, p, f, tol in (
+                ("nao effect rms", r"The effects move the corners by " + _N + " px RMS. robocal", _NAO, "effect_rms_px", 0.01),
+                ("nao variance factor", r"robocal's variance factor\s+\(" + _N + r"\)", _NAO, "variance_factor", 0.02),
+                ("nao naive max z", r"The plain check fails \(max\s+\|z\| = " + _N, _NAO, "naive_max_abs_z", 0.03),
+                ("nao corrected max z", r"passes with the corner-noise σ \(max\s+\|z\| = " + _N, _NAO, "corrected_max_abs_z",
+                 0.03),
+                ("justin effect rms", r"the effects move the corners by " + _N + " px RMS against", _JUS, "effect_rms_px", 0.01),
+                ("justin variance factor", r"The variance factor is " + _N, _JUS, "variance_factor", 0.02),
+                ("justin naive max z", r"The plain check gives max \|z\| = " + _N, _JUS, "naive_max_abs_z", 0.03),
+                ("justin corrected max z", r"bias-corrected check gives max \|z\| = " + _N, _JUS, "corrected_max_abs_z", 0.03),
+                ("handeye plain max z", r"corrections off(?s:.*?)plain\s+max \|z\| " + _N, "handeye/link_errors", "z_plain.max",
+                 0.03),
+                ("handeye after max z", r"corrections off(?s:.*?)after the first-order bias " + _N, "handeye/link_errors",
+                 "z_after.max", 0.03))]
+
+# testing.md "The effects the model lacks": tests/test_calibration.py's realistic case (robocal.sim.campaign_effects_fit)
+_TE = "calibration/tracker_effects"
+FIGURES += [Figure(f"testing:tracker effects {k}", "docs/testing.md", pat, _TE, f, rel_tol=tol)
+            for k, pat, f, tol in (
+                ("naive max z min", r"max \|error/σ\| was " + _N, "naive_max_abs_z.min", 0.02),
+                ("naive max z max", r"max \|error/σ\| was [0-9]+–" + _N, "naive_max_abs_z.max", 0.02),
+                ("kr150 holdout", r"plus the noise floor to within 2 %: " + _N + " mm on the KR150", "kr150.holdout_rms_mm", 0.02),
+                ("ur10 holdout", r"mm on the KR150 and\s+" + _N + " mm on the UR10", "ur10.holdout_rms_mm", 0.02),
+                ("kr150 floor", r"mm on the UR10, against " + _N + " mm at the noise floor", "kr150.floor_rms_mm", 0.02),
+                ("ur10 floor", r"mm on the UR10, against " + _N + " mm at the noise floor", "ur10.floor_rms_mm", 0.02))]
+
+# testing.md "Table 5-2": tests/test_thermal_screening.py's 6 seeds (slow), the binomial tails of the sign tests (formulas)
+FIGURES += [Figure(f"testing:table 5-2 seeds 1-6 {c}", "docs/testing.md", r"Measured on seeds 1–6: " + r"[0-9.]+,?\s+(?:and\s+)?" * k + _N,
+                   "thermal/table_5_2_seeds_1_6", f"rms.evaluation.{c}.median", rel_tol=0.0)
+            for k, c in enumerate(("before", "traditional", "screened"))]
+FIGURES += [Figure(f"testing:sign test {k}", "docs/testing.md", pat, "formulas/gaussian", f, rel_tol=0.0)
+            for k, pat, f in (("P(Bin(100, 1/2) >= 65)", r"P\(Bin\(100, ½\) ≥ 65\) = " + _N, "binom_100_half_ge_65"),
+                              ("P(Bin(100, 0.9) <= 80)", r"P\(Bin\(100, 0\.9\) ≤ 80\) = " + _N, "binom_100_0.9_le_80"))]
+
+# testing.md: tests/test_tcp_realism.py's 20 cells x 3 repeats (tcp_accuracy_study; slow)
+_TR, _TRR, _TRI = r"`test_tcp_realism\.py`: `TCP_MEDIANS`(?s:.*?)", "tcp/realism_cells_realistic", "tcp/realism_cells_ideal"
+FIGURES += [Figure(f"testing:tcp realism {k}", "docs/testing.md", _TR + pat, p, f, rel_tol=0.01)
+            for k, pat, p, f in (
+                ("check q25", r"measured " + _N + "–[0-9.]+ mm, 3 repeats", _TRR, "check.q25"),
+                ("check q75", r"measured [0-9.]+–" + _N + " mm, 3 repeats", _TRR, "check.q75"),
+                ("ideal check q25", r"the ideal cell's\s+" + _N + "–", _TRI, "check.q25"),
+                ("ideal check q75", r"the ideal cell's\s+[0-9.]+–" + _N + " mm would fail", _TRI, "check.q75"),
+                ("barriers minus off-axis max", r"in every cell \(measured ≤ " + _N + " mm", _TRR, "pb_minus_off_axis.max"),
+                ("check beyond the TCP", r"= 0\.58 mm \(measured " + _N + " mm", _TRR, "beyond_tcp_mm"))]
+
+# testing.md: test_positioner_real_data.py's independent screw-axis reference (robocal.workflows.datasets.positioner_reference)
+_PR, _PRP = r"`test_positioner_axes_agree_with_an_independent_screw_axis_fit`(?s:.*?)", "ros_industrial_positioner/reference"
+_UPPER = "an upper bound: the solvers' stopping points (checked from 0 to ~2x the printed value)"
+FIGURES += [Figure(f"testing:positioner reference {k}", "docs/testing.md", _PR + pat, _PRP, f, rel_tol=tol, note=note)
+            for k, pat, f, tol, note in (
+                ("angle", r"same three target points it gives\s+" + _N + "°", "reference3.angle_deg", 0.0, ""),
+                ("sigma angle", r"it gives\s+[0-9.]+° \(σ " + _N, "reference3.sigma_angle_deg", 0.02, ""),
+                ("normal", r"it gives\s+[0-9.]+° \(σ [0-9.]+°\) and " + _N + " mm", "reference3.normal_mm", 0.0, ""),
+                ("sigma normal", r"it gives\s+[0-9.]+° \(σ [0-9.]+°\) and [0-9.]+ mm \(σ " + _N, "reference3.sigma_normal_mm",
+                 0.02, ""),
+                ("difference angle", r"differences under " + _N + "°", "difference.angle_deg", 1.0, _UPPER),
+                ("difference normal", r"differences under [0-9e.-]+° / " + _N + " mm", "difference.normal_mm", 1.0, _UPPER),
+                ("sigma ratio", r"\(measured: within " + _N + r"\)", "sigma_ratio_deviation", 1.0, _UPPER),
+                ("origin alone angle", r"the target origin alone, gives\s+" + _N + "°", "reference1.angle_deg", 0.0, ""),
+                ("origin alone sigma angle", r"the target origin alone, gives\s+[0-9.]+° \(σ " + _N, "reference1.sigma_angle_deg",
+                 0.02, ""),
+                ("origin alone normal", r"the target origin alone, gives\s+[0-9.]+° \(σ [0-9.]+°\) / " + _N + " mm",
+                 "reference1.normal_mm", 0.0, ""),
+                ("origin alone sigma normal", r"the target origin alone, gives\s+[0-9.]+° \(σ [0-9.]+°\) / [0-9.]+ mm \(σ " + _N,
+                 "reference1.sigma_normal_mm", 0.02, ""))]
+
+# tcp.md: the touch-up leave-one-out gate's example (tests/test_tool_gates.py's set-up, robocal.sim.tool.touch_poses)
+FIGURES.append(Figure("tcp:touch-up gate tcp error with one pose 5 mm off", "docs/tcp.md",
+                      r"let it through with the TCP " + _N + " mm off", "tcp/touchup_gate", "tcp_error_mm", rel_tol=0.02))
 
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

@@ -134,7 +134,7 @@ def _run_seed(seed: int, *, robot: str = "abb_irb140", plates: int = 2, targets:
            "true_model": workspace_rms(cell.robot.true_model, q_read, measured)}
     return {"seed": seed, "n_held_spots": n_poses, "E_OP_before_mm": float(np.mean(problem.spot_errors(res0.state))),
             "E_OP_after_mm": float(np.mean(problem.spot_errors(result.state))), "z": z, "max_abs_z": max(abs(v) for v in z.values()), "n_checked": len(z),
-            "held": hold, "dropped": list(result.identifiability.dropped_names), "gauge_truth_rms_mm": truth_rms,
+            "held": hold, "held_std": {w["name"]: float(w["std"]) for w in weak}, "dropped": list(result.identifiability.dropped_names), "gauge_truth_rms_mm": truth_rms,
             "workspace_rms_mm": rms, "ratio_closed_chain_to_tracker": rms["closed_chain"] / rms["tracker"],
             "converged": result.converged and not warns}
 

@@ -88,12 +88,14 @@ def _one_seed(seed: int, effects: BarrierEffects, repeats: int, methods, model, 
     tool0 = straight_tool()
     rng_tool = np.random.default_rng(s_tool)
     bent, _ = tool0.collided(rng_tool)
+    t, a = bent.tcp_flange_mm, bent.axis_flange  # the collision's TCP off the tool axis (what (4-6, 4-7) miss) [mm]
+    off_axis_mm = float(np.linalg.norm(t - (t @ a) * a))
     if effects.runout_mm > 0 or effects.runout_deg > 0:
         bent = bent.with_runout(effects.runout_mm, effects.runout_deg, rng_tool)
     arm = MeasuringArm(effects.arm_noise_mm, effects.arm_registration_mm, effects.arm_registration_deg,
                        np.random.default_rng(s_arm))
     rep_seeds = s_rep.spawn(int(repeats))
-    out = {"seed": int(seed), "tcp_true_mm": bent.tcp_flange_mm.tolist()}
+    out = {"seed": int(seed), "tcp_true_mm": bent.tcp_flange_mm.tolist(), "tcp_off_axis_mm": off_axis_mm}
     T_true = bent.T_flange_tool
     if "cross_laser" in methods:
         from ...tcp.sensor import calibrate_sensor
@@ -143,7 +145,8 @@ def tcp_accuracy_study(*, preset="realistic", seeds: int = 20, first_seed: int =
                        methods=METHODS, settings: CrossLaserSettings | None = None, progress=None) -> dict:
     """Run the study (module docstring) for seeds ``first_seed ..``; ``preset``: ``"ideal"``,
     ``"realistic"`` or a :class:`BarrierEffects`. Returns ``settings``, ``per_seed`` (every
-    metric per method), ``summary`` (``{method: {metric: {median, q25, q75, min, max, n}}}``),
+    metric per method, the true TCP ``tcp_true_mm`` and its distance from the bent tool's axis
+    ``tcp_off_axis_mm``), ``summary`` (``{method: {metric: {median, q25, q75, min, max, n}}}``),
     ``thesis_rms_mm`` and ``elapsed_s``."""
     if seeds < 1 or repeats < 2:
         raise ValueError(f"need seeds >= 1 and repeats >= 2, got {seeds}, {repeats}")
