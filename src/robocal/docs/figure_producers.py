@@ -13,6 +13,7 @@ from pathlib import Path
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
 from .figure_producers_handeye import HANDEYE_PRODUCERS
+from .figure_producers_pages import PAGES_PRODUCERS, SLOW_PAGES_PRODUCERS
 from .figure_producers_datasets import DATASET_PRODUCERS, DATASETS_NEEDED, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
 from .figure_producers_thermal import THERMAL_PRODUCERS
@@ -539,6 +540,7 @@ PRODUCERS = {
     **SETUP_PRODUCERS,
     **HANDEYE_PRODUCERS,
     **DATASET_PRODUCERS,
+    **PAGES_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -597,7 +599,7 @@ def datasets_needed(producer: str) -> tuple:
 
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
-SLOW_PRODUCERS = {"dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
+SLOW_PRODUCERS = {*SLOW_PAGES_PRODUCERS, "dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, *SLOW_DATASET_PRODUCERS, "ik_net/cli_example",
                   # thermal.md: the experiment with one effect alone (~6-10 s each), the ideal drift; testing.md's at-the-robot
                   # UR10 (~4 s) and gripper cases (~2 s each; slow to keep the fast set's added CPU under ~8 s) (figsC)

@@ -1527,4 +1527,9 @@ FIGURES += [Figure(f"elastic:round trip {k}", "docs/elastic.md", pat, "elastic/r
                 ("joint-only holdout", r"the joint-only model leaves " + _N, "joint_only.holdout_rms_mm"))]
 
 
+# ---- the pages of branch figs-pages (iso9283, reliability, robots, fleet, thermal, ...) ----
+from .figure_registry_pages import PAGE_FIGURES  # noqa: E402  (it uses Figure, _N and _cell above)
+
+FIGURES += PAGE_FIGURES
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

@@ -1,0 +1,115 @@
+"""Producers of the documented figures of docs/iso9283.md, docs/reliability.md, docs/robots.md,
+docs/fleet.md, docs/thermal.md and the smaller pages that no other producer computes
+(:mod:`robocal.docs.figures`). Each runs the page's commands or the test's own set-up (shared with
+the test through ``robocal.sim``) and returns a flat ``{field: value}`` dict; cached."""
+
+from __future__ import annotations
+
+import functools
+import json
+import tempfile
+from pathlib import Path
+
+__all__ = ["PAGES_PRODUCERS", "SLOW_PAGES_PRODUCERS", "iso9283_simulated_run"]
+
+
+# ------------------------------------------------------------------------------------ iso9283.md
+def iso9283_simulated_run(folder: Path) -> tuple:
+    """The simulated ISO 9283 test of an IRB 140 through the command line (``tests/test_iso9283.py``'s
+    fixture and docs/iso9283.md "Is the instrument good enough?"): ``iso9283 plan abb_irb140
+    --drift-hours 1``, ``simulate iso9283 --seed 4 --instrument-at 3500,0,300``, and ``iso9283
+    evaluate --mpe 15um+6um/m`` of the tracker file and of the truth file, in ``folder``.
+
+    Returns
+    -------
+    (dict, dict)
+        The plan's JSON and ``{"run.csv" | "run.truth.csv": evaluation JSON}``.
+    """
+    from .figure_producers_cli import run_cli as run
+
+    d = Path(folder)
+    plan = json.loads(run("iso9283", "plan", "abb_irb140", "--out", d / "plan", "--drift-hours", 1, "--json"))
+    run("simulate", "iso9283", "abb_irb140", d / "plan", "--seed", 4, "--out", d / "run.csv", "--instrument-at",
+        "3500,0,300")
+    out = {name: json.loads(run("iso9283", "evaluate", d / "plan", d / name, "--out", d / ("ev-" + name), "--mpe",
+                                "15um+6um/m", "--instrument-at", "3500,0,300", "--json"))
+           for name in ("run.csv", "run.truth.csv")}
+    return plan, out
+
+
+@functools.lru_cache(maxsize=None)
+def iso9283_adequacy() -> dict:
+    """docs/iso9283.md "Is the instrument good enough?": the RP of P1-P5 measured by the tracker
+    (``RP.min``, ``RP.max`` [mm]) and how many of them (``RP.inadequate``) and of the APs
+    (``AP.adequate``) the adequacy judges so (:func:`iso9283_simulated_run`; ~2.5 s)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        _, out = iso9283_simulated_run(Path(tmp))
+    run = out["run.csv"]["runs"][0]
+    rp = [p["RP_mm"] for p in run["pose"].values()]
+    ade = run["adequacy"]
+    return {"RP.min": min(rp), "RP.max": max(rp),
+            "RP.inadequate": float(sum(not v["adequate"] for k, v in ade.items() if k.startswith("RP_mm."))),
+            "AP.adequate": float(sum(v["adequate"] for k, v in ade.items() if k.startswith("AP_mm.")))}
+
+
+@functools.lru_cache(maxsize=None)
+def verify_backlash_trials() -> dict:
+    """docs/iso9283.md "Backlash" (``tests/test_verify.py``'s set-up, :mod:`robocal.sim.verify_trials`):
+    a 0.1 deg backlash of each of J1-J5, 100 checks each; the smallest and largest share [%] over the
+    joints of checks ``detected``, ``named`` (as that joint's backlash) and ``offset_named`` (a
+    0.05 deg offset jump on the same data named an offset). ~6 s of CPU."""
+    from ..sim.verify_trials import backlash_trials
+
+    rows = [backlash_trials(j) for j in range(5)]
+    out = {}
+    for k in ("detected", "named", "offset_named"):
+        share = [100.0 * r[k] / r["trials"] for r in rows]
+        out[f"{k}.min"], out[f"{k}.max"] = min(share), max(share)
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def verify_backlash_command() -> dict:
+    """docs/iso9283.md "Backlash", through the command line (the page's commands, as
+    ``tests/test_verify.py::test_verify_command_names_a_backlash_from_approach_columns``):
+    ``simulate tracker abb_irb140 --poses 60 --seed 3``, ``calibrate``, a 10-pose check (seed 3)
+    whose J2 readings are moved by +-0.075 deg by approach side (:func:`robocal.sim.verify_trials.
+    with_backlash_columns`, seed 7), ``verify --json`` (exit 6). Fields ``T``, ``threshold``,
+    ``remaining_T``, ``remaining_threshold``, ``backlash_deg``, ``backlash_std_deg``. ~1.5 s of CPU."""
+    import re
+
+    from ..sim.verify_trials import with_backlash_columns
+    from .figure_producers_cli import run_cli as run
+
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        run("simulate", "tracker", "abb_irb140", "--poses", 60, "--seed", 3, "--out", d / "c.csv")
+        run("calibrate", "abb_irb140", d / "c.csv", "--out", d / "cal")
+        run("simulate", "tracker", "abb_irb140", "--poses", 10, "--seed", 3, "--out", d / "v.csv")
+        (d / "b.csv").write_text(with_backlash_columns((d / "v.csv").read_text(), "J2", 0.15, seed=7))
+        r = json.loads(run("verify", d / "cal", d / "b.csv", "--json", ok=(6,)))
+    m = re.search(r"remaining T = ([0-9.]+) <= ([0-9.]+)", " ".join(r["reasons"]))
+    return {"T": r["statistic"], "threshold": r["threshold"], "remaining_T": float(m.group(1)),
+            "remaining_threshold": float(m.group(2)), "backlash_deg": r["suspect_offset"]["value"],
+            "backlash_std_deg": r["suspect_offset"]["std"], "exit_code": 6.0}
+
+
+@functools.lru_cache(maxsize=None)
+def iso9283_wear_per_day() -> dict:
+    """docs/iso9283.md "Over the robot's life": the worn robot's RP trend slope per day [mm]
+    (``fleet status``'s, producer ``iso9283/wear``): how much the trend "now" grows a day."""
+    from .figure_producers import PRODUCERS
+
+    w = PRODUCERS["iso9283/wear"]()
+    return {"worn.RP.slope_mm_per_day": w["status.worn.RP.slope_mm_per_30_days"] / 30.0}
+
+
+PAGES_PRODUCERS = {
+    "iso9283/adequacy": iso9283_adequacy,
+    "iso9283/verify_backlash_trials": verify_backlash_trials,
+    "iso9283/verify_backlash_command": verify_backlash_command,
+    "iso9283/wear_per_day": iso9283_wear_per_day,
+}
+
+#: longer than ~5 s of CPU: run with ``--all`` / ``ROBOCAL_SLOW=1``
+SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials"}

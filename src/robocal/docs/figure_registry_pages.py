@@ -1,0 +1,45 @@
+"""Registered figures of docs/iso9283.md, reliability.md, robots.md, fleet.md, thermal.md and smaller pages.
+
+The registry (:mod:`robocal.docs.figure_registry`) appends them; producers: :mod:`robocal.docs.figure_producers_pages`
+unless named otherwise."""
+
+from __future__ import annotations
+
+from .figure_registry import _N, Figure
+
+__all__ = ["PAGE_FIGURES"]
+
+PAGE_FIGURES: list = []
+
+# ---- docs/iso9283.md ----
+_ISO = "docs/iso9283.md"
+_BL = r"Measured \(`tests/test_verify\.py`, IRB 140, 10 poses with random approach sides(?s:.*?)"
+_BC = r"moved by ±0\.075° by approach side\): "
+PAGE_FIGURES += [Figure(f"iso9283:{k}", _ISO, pat, prod, field, rel_tol=tol)
+                 for k, pat, prod, field, tol in (
+                     ("adequacy RP low", r"inadequate for every RP \(≈ " + _N, "iso9283/adequacy", "RP.min", 0.0),
+                     ("adequacy RP high", r"inadequate for every RP \(≈ [0-9.]+–" + _N, "iso9283/adequacy", "RP.max",
+                      0.0),
+                     ("backlash detected", _BL + r"is detected in " + _N + " %", "iso9283/verify_backlash_trials",
+                      "detected.min", 0.0),
+                     ("backlash named low", _BL + r"backlash in " + _N + "–", "iso9283/verify_backlash_trials",
+                      "named.min", 0.0),
+                     ("backlash named high", _BL + r"backlash in [0-9]+–" + _N + " %", "iso9283/verify_backlash_trials",
+                      "named.max", 0.0),
+                     ("backlash offset stays offset", _BL + r"stays an offset in " + _N + " %",
+                      "iso9283/verify_backlash_trials", "offset_named.min", 0.0),
+                     ("verify T", _BC + r"T = " + _N, "iso9283/verify_backlash_command", "T", 0.01),
+                     ("verify threshold", _BC + r"T = [0-9.]+ > " + _N, "iso9283/verify_backlash_command", "threshold",
+                      0.0),
+                     ("verify remaining T", _BC + r"(?s:.*?)remaining\s+T = " + _N, "iso9283/verify_backlash_command",
+                      "remaining_T", 0.02),
+                     ("verify remaining threshold", _BC + r"(?s:.*?)remaining\s+T = [0-9.]+ <= " + _N,
+                      "iso9283/verify_backlash_command", "remaining_threshold", 0.0),
+                     ("verify backlash", _BC + r"(?s:.*?)`J2 backlash \+" + _N, "iso9283/verify_backlash_command",
+                      "backlash_deg", 0.005),
+                     ("verify backlash std", _BC + r"(?s:.*?)`J2 backlash \+[0-9.]+ ± " + _N,
+                      "iso9283/verify_backlash_command", "backlash_std_deg", 0.02),
+                     ("verify exit", _BC + r"(?s:.*?) deg`, exit " + _N, "iso9283/verify_backlash_command",
+                      "exit_code", 0.0),
+                     ("wear RP trend per day", r"so it grows by " + _N + " mm a day", "iso9283/wear_per_day",
+                      "worn.RP.slope_mm_per_day", 0.0))]
