@@ -37,6 +37,7 @@ from robocal.tcp import (
     tool_data_all,
     tool_rotation_5d,
 )
+from robocal.sim.tool.touch_poses import P_REF_MM, TCP_TRUE_MM, touch_poses
 from robocal.tcp.tool_data import CONTROLLERS
 from robocal.transforms import pose_from_transform, rot_axis, rot_x, rot_y, rot_z, transform_from_pose
 
@@ -57,21 +58,9 @@ def _transform(R, p):
 # 4-point
 # ---------------------------------------------------------------------------------------------
 
-TCP_TRUE = np.array([12.0, -7.0, 180.0])
-P_REF = np.array([900.0, 100.0, 300.0])
-
-
-def _touch_poses(n, rng, tilt_deg=(25.0, 45.0), noise=0.0, tcp=TCP_TRUE):
-    """Flange poses whose TCP touches P_REF: tool pointing down, tilted about varied axes."""
-    T = []
-    for i in range(n):
-        az = 2 * math.pi * i / n + rng.uniform(-0.3, 0.3)
-        tilt = math.radians(rng.uniform(*tilt_deg))
-        spin = rng.uniform(-math.pi, math.pi)
-        R = rot_z(az) @ rot_x(tilt) @ rot_y(math.pi) @ rot_z(spin)
-        p = P_REF - R @ tcp + rng.normal(0.0, noise, 3)
-        T.append(_transform(R, p))
-    return np.array(T)
+TCP_TRUE = TCP_TRUE_MM
+P_REF = P_REF_MM
+_touch_poses = touch_poses  # written once in robocal.sim.tool.touch_poses (also docs/reliability.md's producer)
 
 
 def test_sphere_center_hand_case():

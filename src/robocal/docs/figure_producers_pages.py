@@ -104,12 +104,74 @@ def iso9283_wear_per_day() -> dict:
     return {"worn.RP.slope_mm_per_day": w["status.worn.RP.slope_mm_per_30_days"] / 30.0}
 
 
+# -------------------------------------------------------------------------------- reliability.md
+@functools.lru_cache(maxsize=None)
+def lm_stop_linear() -> dict:
+    """docs/reliability.md "One convergence policy" (``tests/test_lm_stop_linear.py``'s problem,
+    :mod:`robocal.sim.solver_problems`): the chi-square rule's stop on the slowly contracting problem,
+    ``iterations`` and ``excess`` (cost above the minimum in residual variances). ~0.1 s."""
+    import warnings
+
+    from ..calib import solve
+    from ..sim.solver_problems import excess_in_variances, large_residual_problem
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = solve(large_residual_problem(), max_iterations=1000, auto_identifiable=False)
+    excess, _ = excess_in_variances(res)
+    return {"iterations": float(res.iterations), "excess": excess, "converged": float(res.converged)}
+
+
+@functools.lru_cache(maxsize=None)
+def camera_gate_stretched() -> dict:
+    """docs/reliability.md "Camera" (``tests/test_handeye_gate.py``'s set-up): ``simulate camera
+    --images 8 --seed 4``; ``camera calibrate`` on the clean images (``clean_rms_px``) and on the
+    set with every other image stretched 1.3 x sideways (:func:`robocal.sim.cameras.image_faults.
+    stretch_every_other_image`; ``stretched_rms_px``, ``stretched_exit`` = 3)."""
+    import shutil
+
+    from ..sim.cameras.image_faults import stretch_every_other_image
+    from .figure_producers_cli import run_cli as run
+
+    board = "charuco:9x7:30mm:22mm:DICT_5X5_100"
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        run("simulate", "camera", "--out", d / "cell", "--images", 8, "--seed", 4)
+        shutil.copytree(d / "cell" / "images", d / "mixed")
+        stretch_every_other_image(d / "mixed", 1.3)
+        run("camera", "calibrate", d / "mixed", "--board", board, "--out", d / "c", ok=(3,))
+        bad = json.loads((d / "c" / "camera_calibration.json").read_text())
+        run("camera", "calibrate", d / "cell" / "images", "--board", board, "--out", d / "clean")
+        good = json.loads((d / "clean" / "camera_calibration.json").read_text())
+    return {"stretched_rms_px": float(bad["reprojection_rms_px"]), "clean_rms_px": float(good["reprojection_rms_px"]),
+            "stretched_exit": 3.0}
+
+
+@functools.lru_cache(maxsize=None)
+def touchup_one_pose_off() -> dict:
+    """docs/reliability.md's gate table (``tests/test_tool_gates.py``'s set-up): seven touch-up poses
+    (:func:`robocal.sim.tool.touch_poses.touch_poses`, seed 3, 0.05 mm noise), the fifth moved by
+    (3, -4, 0) mm; the four-point fit's TCP error [mm] (``tcp_error_mm``) and its RMS (``rms_mm``)."""
+    import numpy as np
+
+    from ..sim.tool.touch_poses import TCP_TRUE_MM, touch_poses
+    from ..tcp.touchup import four_point_tcp
+
+    T = touch_poses(7, np.random.default_rng(3), noise=0.05)
+    T[4, :3, 3] += np.array([3.0, -4.0, 0.0])
+    fit = four_point_tcp(T)
+    return {"tcp_error_mm": float(np.linalg.norm(fit.tcp_mm - TCP_TRUE_MM)), "rms_mm": float(fit.rms_mm)}
+
+
 PAGES_PRODUCERS = {
     "iso9283/adequacy": iso9283_adequacy,
     "iso9283/verify_backlash_trials": verify_backlash_trials,
     "iso9283/verify_backlash_command": verify_backlash_command,
     "iso9283/wear_per_day": iso9283_wear_per_day,
+    "reliability/lm_stop_linear": lm_stop_linear,
+    "reliability/camera_gate": camera_gate_stretched,
+    "reliability/touchup_one_pose_off": touchup_one_pose_off,
 }
 
 #: longer than ~5 s of CPU: run with ``--all`` / ``ROBOCAL_SLOW=1``
-SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials"}
+SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate"}

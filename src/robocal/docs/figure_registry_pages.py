@@ -43,3 +43,25 @@ PAGE_FIGURES += [Figure(f"iso9283:{k}", _ISO, pat, prod, field, rel_tol=tol)
                       "exit_code", 0.0),
                      ("wear RP trend per day", r"so it grows by " + _N + " mm a day", "iso9283/wear_per_day",
                       "worn.RP.slope_mm_per_day", 0.0))]
+
+# ---- docs/reliability.md ----
+_REL = "docs/reliability.md"
+_DR = "handeye/default_real/"
+PAGE_FIGURES += [Figure(f"reliability:{k}", _REL, pat, prod, field, rel_tol=tol)
+                 for k, pat, prod, field, tol in (
+                     ("lm stop iterations", r"the rule above stops after " + _N, "reliability/lm_stop_linear",
+                      "iterations", 0.0),
+                     ("lm stop excess", r"the rule above stops after [0-9]+,\s+" + _N + " above it",
+                      "reliability/lm_stop_linear", "excess", 0.05),
+                     ("handeye angle charuco", r"ROS-Industrial sets " + _N + " and", _DR + "test_set_charuco",
+                      "gate.angle_mismatch_deg", 0.02),
+                     ("handeye angle 10x10", r"ROS-Industrial sets [0-9.]+ and " + _N + " deg", _DR + "test_set_10x10",
+                      "gate.angle_mismatch_deg", 0.02),
+                     ("camera charuco rms", r"ROS-Industrial ChArUco set " + _N + " px",
+                      "handeye/camera_real/test_set_charuco", "rms_px", 0.0),
+                     ("camera rendered rms", r"rendered images " + _N + r" px\) fails", "reliability/camera_gate",
+                      "clean_rms_px", 0.1),
+                     ("camera stretched rms", r"sideways\s+\(another camera, a resampling\): " + _N + " px, refused",
+                      "reliability/camera_gate", "stretched_rms_px", 0.02),
+                     ("touch-up tcp off", r"the RMS gate alone passed it, TCP " + _N + " mm off",
+                      "reliability/touchup_one_pose_off", "tcp_error_mm", 0.0))]
