@@ -13,7 +13,7 @@ from pathlib import Path
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
 from .figure_producers_handeye import HANDEYE_PRODUCERS
-from .figure_producers_pages import PAGES_PRODUCERS, SLOW_PAGES_PRODUCERS
+from .figure_producers_pages import PAGES_DATASETS_NEEDED, PAGES_PRODUCERS, SLOW_PAGES_PRODUCERS
 from .figure_producers_datasets import DATASET_PRODUCERS, DATASETS_NEEDED, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
 from .figure_producers_thermal import THERMAL_PRODUCERS
@@ -586,6 +586,8 @@ def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     if producer in DATASETS_NEEDED:
         return DATASETS_NEEDED[producer]
+    if producer in PAGES_DATASETS_NEEDED:
+        return PAGES_DATASETS_NEEDED[producer]
     head = producer.split("/")[0]
     if producer.startswith(("handeye/default_real/", "handeye/camera_real/", "handeye/gate_shifted",
                             "handeye/variants_real/")):

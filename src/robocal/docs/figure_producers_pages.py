@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["PAGES_PRODUCERS", "SLOW_PAGES_PRODUCERS", "iso9283_simulated_run"]
+__all__ = ["PAGES_DATASETS_NEEDED", "PAGES_PRODUCERS", "SLOW_PAGES_PRODUCERS", "iso9283_simulated_run"]
 
 
 # ------------------------------------------------------------------------------------ iso9283.md
@@ -163,6 +163,88 @@ def touchup_one_pose_off() -> dict:
     return {"tcp_error_mm": float(np.linalg.norm(fit.tcp_mm - TCP_TRUE_MM)), "rms_mm": float(fit.rms_mm)}
 
 
+# ------------------------------------------------------------------------------------- robots.md
+@functools.lru_cache(maxsize=None)
+def robot_file_checks() -> dict:
+    """docs/robots.md, computed from the robot files: ``ur10e.zero.{x|y|z}`` (the flange at q = 0
+    [mm]); ``nao.camera_top.{x|z}`` and ``nao.left_hand.{x|y|z}`` at the zero pose [mm];
+    ``bx200l.reach_mm``: the largest horizontal distance of the wrist centre (origin of link 4's
+    frame) from the J1 axis within the J2/J3 limits (a 201 x 201 grid refined by L-BFGS-B)."""
+    import numpy as np
+    from scipy.optimize import minimize
+
+    from ..robots import load_robot
+
+    out = {}
+    T = load_robot("ur10e").fk(np.zeros((1, 6)))[0]
+    out.update({f"ur10e.zero.{c}": float(T[i, 3]) for i, c in enumerate("xyz")})
+    nao = load_robot("nao_h25")
+    q = np.zeros((1, nao.n_joints))
+    cam = nao.fk(q, "camera_top")[0]
+    hand = nao.fk(q, "left_hand")[0]
+    out.update({"nao.camera_top.x": float(cam[0, 3]), "nao.camera_top.z": float(cam[2, 3])})
+    out.update({f"nao.left_hand.{c}": float(hand[i, 3]) for i, c in enumerate("xyz")})
+    m = load_robot("kawasaki_bx200l")
+    lo, hi = m.limits[1:3, 0], m.limits[1:3, 1]
+
+    def reach(x):
+        qq = np.zeros((len(x), 6))
+        qq[:, 1:3] = x
+        p = m.link_frames(qq)[:, 3, :3, 3]
+        return np.hypot(p[:, 0], p[:, 1])
+
+    A, B = np.meshgrid(np.linspace(lo[0], hi[0], 201), np.linspace(lo[1], hi[1], 201), indexing="ij")
+    grid = np.column_stack([A.ravel(), B.ravel()])
+    x0 = grid[np.argmax(reach(grid))]
+    r = minimize(lambda x: -reach(x[None])[0], x0, bounds=list(zip(lo, hi)), method="L-BFGS-B")
+    out["bx200l.reach_mm"] = float(-r.fun)
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def boby_nominal_all_poses() -> dict:
+    """docs/robots.md "How these files were checked", FANUC: on the ``boby_fanuc`` data, the nominal
+    ``fanuc_r2000ic_165f`` with a fitted base and 3 SMR points (started 250 mm out on the flange
+    axis) over all 36 poses: ``rms``, ``mean``, ``max`` [mm] of the point errors."""
+    import numpy as np
+
+    from ..calib import Target
+    from ..io.datasets import read_boby_fanuc
+    from ..robots import load_robot
+    from ..workflows.datasets._fitting import error_stats, fit
+
+    ds = read_boby_fanuc()
+    targets = [Target(n, None, (0.0, 0.0, 250.0)) for n in ds.targets]
+    p, r = fit(load_robot("fanuc_r2000ic_165f"), ds.joints, targets, ds.points, free=[])
+    pred = p.predict_points(r.state, q=ds.joints, stations=np.zeros(ds.n_poses, int))
+    return {**error_stats(pred, ds.points), "converged": float(r.converged)}
+
+
+@functools.lru_cache(maxsize=None)
+def hilti_flat_rigid_per_station() -> dict:
+    """docs/robots.md "How these files were checked", Hilti: the nominal ``hilti_trailblazer`` URDF
+    (prism at the tool frame) and one rigid fit (Kabsch) per station (column height x solution
+    space) of all its points on ``flat``; ``rms``, ``mean``, ``max`` [mm] over every point."""
+    import numpy as np
+
+    from ..calib import Target, rigid_fit
+    from ..io.datasets import read_hilti_trailblazer
+    from ..robots import load_robot
+    from ..workflows.datasets._fitting import error_stats, points_in_base
+
+    flat = read_hilti_trailblazer("flat")
+    pred = points_in_base(load_robot("hilti_trailblazer"), flat.joints, [Target("prism", None, (0.0, 0.0, 0.0))])[:, 0]
+    fitted, measured = [], []
+    for g in range(len(flat.station_labels)):
+        sel = flat.stations == g
+        if sel.sum() < 3:
+            continue
+        T = rigid_fit(pred[sel], flat.points[sel, 0])
+        fitted.append(pred[sel] @ T[:3, :3].T + T[:3, 3])
+        measured.append(flat.points[sel, 0])
+    return error_stats(np.concatenate(fitted), np.concatenate(measured))
+
+
 PAGES_PRODUCERS = {
     "iso9283/adequacy": iso9283_adequacy,
     "iso9283/verify_backlash_trials": verify_backlash_trials,
@@ -171,7 +253,13 @@ PAGES_PRODUCERS = {
     "reliability/lm_stop_linear": lm_stop_linear,
     "reliability/camera_gate": camera_gate_stretched,
     "reliability/touchup_one_pose_off": touchup_one_pose_off,
+    "robots/file_checks": robot_file_checks,
+    "robots/boby_nominal_all_poses": boby_nominal_all_poses,
+    "robots/hilti_flat_rigid": hilti_flat_rigid_per_station,
 }
+
+#: the data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer of this module reads
+PAGES_DATASETS_NEEDED = {"robots/boby_nominal_all_poses": ("boby_fanuc",), "robots/hilti_flat_rigid": ("hilti_trailblazer",)}
 
 #: longer than ~5 s of CPU: run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate"}

@@ -65,3 +65,23 @@ PAGE_FIGURES += [Figure(f"reliability:{k}", _REL, pat, prod, field, rel_tol=tol)
                       "reliability/camera_gate", "stretched_rms_px", 0.02),
                      ("touch-up tcp off", r"the RMS gate alone passed it, TCP " + _N + " mm off",
                       "reliability/touchup_one_pose_off", "tcp_error_mm", 0.0))]
+
+# ---- docs/robots.md ----
+_ROB = "docs/robots.md"
+_RF = "robots/file_checks"
+PAGE_FIGURES += [Figure(f"robots:{k}", _ROB, pat, prod, field, rel_tol=tol)
+                 for k, pat, prod, field, tol in (
+                     ("bx200l reach", r"largest wrist-centre reach of " + _N + " mm", _RF, "bx200l.reach_mm", 0.0),
+                     ("ur10e zero x", r"At q = 0 the flange is at \(" + _N, _RF, "ur10e.zero.x", 0.0),
+                     ("ur10e zero y", r"At q = 0 the flange is at \([−-]?[0-9.]+, " + _N, _RF, "ur10e.zero.y", 0.0),
+                     ("ur10e zero z", r"At q = 0 the flange is at \([−-]?[0-9.]+, [−-]?[0-9.]+, " + _N, _RF,
+                      "ur10e.zero.z", 0.0),
+                     ("nao hands x", r"the hands are at \(" + _N, _RF, "nao.left_hand.x", 0.0),
+                     ("nao hands y", r"the hands are at \([0-9.]+, \+-" + _N, _RF, "nao.left_hand.y", 0.0),
+                     ("nao hands z", r"the hands are at \([0-9.]+, \+-[0-9.]+, " + _N, _RF, "nao.left_hand.z", 0.0),
+                     ("nao camera x", r"and the top camera at \(" + _N, _RF, "nao.camera_top.x", 0.0),
+                     ("nao camera z", r"and the top camera at \([0-9.]+, 0, " + _N, _RF, "nao.camera_top.z", 0.0),
+                     ("boby nominal rms all poses", r"nominal DH plus a fitted base and 3 SMR points gives " + _N,
+                      "robots/boby_nominal_all_poses", "rms", 0.0),
+                     ("hilti flat rigid per station", r"A rigid fit per station on `flat\.yaml` gives " + _N,
+                      "robots/hilti_flat_rigid", "rms", 0.0))]
