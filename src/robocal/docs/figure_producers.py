@@ -350,7 +350,9 @@ def _fleet_pose_sets() -> dict:
     r = pose_set_selection("ur10", sets=12, count=40, candidates=800)
     return {**{f"spread.{k}": float(v) for k, v in r["spread_mm"].items()},
             "relative_spread_percent": 100.0 * float(r["best"]["relative_spread"]),
-            "n_within_noise": float(len(r["within_noise"]))}
+            "n_within_noise": float(len(r["within_noise"])),
+            "holdout_rms_mm.min": min(float(x["holdout_rms_mm"]) for x in r["sets"]),
+            "holdout_rms_mm.max": max(float(x["holdout_rms_mm"]) for x in r["sets"])}
 
 
 @functools.lru_cache(maxsize=None)

@@ -245,6 +245,38 @@ def hilti_flat_rigid_per_station() -> dict:
     return error_stats(np.concatenate(fitted), np.concatenate(measured))
 
 
+# -------------------------------------------------------------------------------------- fleet.md
+def monte_carlo_test_plan():
+    """The pose plan of docs/fleet.md's Monte-Carlo figure and of ``tests/test_fleet.py``'s
+    Monte-Carlo test: UR10, 30 D-optimal poses of 400 feasible candidates (seed 2), as
+    ``robocal plan-poses`` plans them. Returns the joints (30, 6) [rad]."""
+    from ..calib.plan import plan_campaign
+    from ..robots import load_robot
+    from ..workflows.calibration.plan_poses import candidate_poses
+
+    model = load_robot("ur10")
+    qk, _ = candidate_poses(model, 30, 400, 2)
+    return qk[plan_campaign(model, qk, 30)["indices"]]
+
+
+@functools.lru_cache(maxsize=None)
+def fleet_monte_carlo() -> dict:
+    """docs/fleet.md "monte-carlo": ``monte_carlo_plan`` (serial) of :func:`monte_carlo_test_plan`,
+    200 samples, 0.02 mm, 200 check poses, seed 4: ``after.median`` [mm], ``predicted`` [mm] (the
+    first-order prediction), ``ratio`` and ``unconverged`` (samples stopped at the iteration limit).
+    ~6 s of CPU."""
+    import numpy as np
+
+    from ..workflows.fleet.study import monte_carlo_plan
+
+    r = monte_carlo_plan("ur10", monte_carlo_test_plan(), client=None, samples=200, noise_mm=0.02, check_poses=200,
+                         seed=4)
+    med = float(np.median(r["rms_after_mm"]))
+    return {"after.median": med, "predicted": float(r["predicted_model_std_mm"]),
+            "ratio": med / float(r["predicted_model_std_mm"]), "unconverged": float(len(r["unconverged_samples"])),
+            "samples": float(r["samples"])}
+
+
 PAGES_PRODUCERS = {
     "iso9283/adequacy": iso9283_adequacy,
     "iso9283/verify_backlash_trials": verify_backlash_trials,
@@ -256,10 +288,11 @@ PAGES_PRODUCERS = {
     "robots/file_checks": robot_file_checks,
     "robots/boby_nominal_all_poses": boby_nominal_all_poses,
     "robots/hilti_flat_rigid": hilti_flat_rigid_per_station,
+    "fleet/monte_carlo": fleet_monte_carlo,
 }
 
 #: the data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer of this module reads
 PAGES_DATASETS_NEEDED = {"robots/boby_nominal_all_poses": ("boby_fanuc",), "robots/hilti_flat_rigid": ("hilti_trailblazer",)}
 
 #: longer than ~5 s of CPU: run with ``--all`` / ``ROBOCAL_SLOW=1``
-SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate"}
+SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate", "fleet/monte_carlo"}

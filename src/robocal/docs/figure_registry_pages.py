@@ -85,3 +85,15 @@ PAGE_FIGURES += [Figure(f"robots:{k}", _ROB, pat, prod, field, rel_tol=tol)
                       "robots/boby_nominal_all_poses", "rms", 0.0),
                      ("hilti flat rigid per station", r"A rigid fit per station on `flat\.yaml` gives " + _N,
                       "robots/hilti_flat_rigid", "rms", 0.0))]
+
+# ---- docs/fleet.md ----
+_MC = r"fleet:monte-carlo`: UR10(?s:.*?)"
+PAGE_FIGURES += [Figure(f"fleet:monte-carlo {k}", "docs/fleet.md", _MC + pat, "fleet/monte_carlo", field, rel_tol=tol)
+                 for k, pat, field, tol in (
+                     ("median after", r"the Monte-Carlo median is\s+" + _N + " mm", "after.median", 0.0),
+                     ("predicted", r"mm against " + _N + " mm predicted", "predicted", 0.0),
+                     ("ratio", r"mm predicted, " + _N + "x the prediction", "ratio", 0.0),
+                     ("unconverged", r"the prediction; " + _N + r" of the 200 solves", "unconverged", 0.0))]
+PAGE_FIGURES += [Figure(f"fleet:pose-sets holdout {k}", "docs/fleet.md", r"which dominated it:\s+" + pat, "fleet/pose_sets",
+                        f"holdout_rms_mm.{k}", rel_tol=0.0)
+                 for k, pat in (("min", _N + "-"), ("max", r"[0-9.]+-" + _N + " mm over the 12 sets"))]
