@@ -266,9 +266,15 @@ def _thermal_seeds(preset: str) -> dict:
     from ..workflows.thermal.seeds import run_thermal_seeds
 
     r = run_thermal_seeds(preset=preset, seeds=20, first_seed=1, n_cycles=90, resamples=20)
+    # per seed: the screened lambda [%] (rms statistic) of its evaluation runs, lowest first
+    per_seed = {f"seed.{x['seed']}.evaluation.screened.{k}": v for x in r["per_seed"]
+                for k, v in enumerate(sorted(row["lambda"]["rms"]["screened"] for row in x["rows"]
+                                             if row["role"] == "evaluation"))}
     return {**_flat(r["tables"]), "n_not_converged": float(r["fits"]["not_converged"]),
             **{f"ordering.{k}": 100.0 * v for k, v in _flat(r["ordering"]).items()},
-            **{f"selection.{k}": 100.0 * float(v) for k, v in r["selection"].items()}}
+            **{f"selection.{k}": 100.0 * float(v) for k, v in r["selection"].items()},
+            **{f"bootstrap.{k}": 100.0 * float(v) for k, v in (r["bootstrap_frequency"] or {}).items()},
+            **per_seed}
 
 
 @functools.lru_cache(maxsize=None)

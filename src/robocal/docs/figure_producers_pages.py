@@ -277,6 +277,135 @@ def fleet_monte_carlo() -> dict:
             "samples": float(r["samples"])}
 
 
+# ------------------------------------------------------------------------------------ thermal.md
+@functools.lru_cache(maxsize=None)
+def thermal_drift_identification() -> dict:
+    """docs/thermal.md "2. Drift identification", measured on ``tests/test_thermal_core.py``'s cell
+    (:mod:`robocal.sim.thermal.drift_setup`): the eight known deltas from 20 noise-free poses (seed 5):
+    ``linear.max_error`` (the single linear solve's largest error, mm or rad), ``linear.rms_after_mm``,
+    ``exact2.max_error`` (2 iterations); from 6 poses with 0.02 mm noise (seeds 100-109): the RMS error
+    over the seeds per delta, ``noisy.lengths_mm.{min|max}`` and ``noisy.angles_deg.{min|max}``, the
+    condition numbers ``noisy.condition.{min|max}``, the largest ``noisy.max_abs_z`` and the RMS of the
+    reported sigmas of the angles ``noisy.angles_sigma_deg.{min|max}``. ~1 s."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..sim.thermal.drift_setup import CENTRE_MM, DELTA, FOV_MM, P_E_MM, SUBSET, sensor_frame, warm_params
+    from ..thermal import design_sphere_poses, identify_drift, predict_sphere
+
+    kuka = load_robot("kuka_kr150_r3100")
+    rng = np.random.default_rng(5)
+    T_sb = sensor_frame(rng)
+    q = design_sphere_poses(kuka, CENTRE_MM, P_E_MM, 20, rng, spread_mm=FOV_MM, tilt_deg=60)
+    Pw = predict_sphere(kuka, T_sb, P_E_MM, q, params=warm_params(kuka))
+    lin = identify_drift(kuka, T_sb, P_E_MM, q, Pw, subset=SUBSET)
+    exact = identify_drift(kuka, T_sb, P_E_MM, q, Pw, subset=SUBSET, iterations=2)
+    out = {"linear.max_error": float(np.abs(lin.delta - DELTA).max()), "linear.rms_after_mm": float(lin.rms_after_mm),
+           "exact2.max_error": float(np.abs(exact.delta - DELTA).max())}
+    err, z, cond, sig = [], [], [], []
+    for seed in range(10):
+        rng = np.random.default_rng(100 + seed)
+        T_sb = sensor_frame(rng)
+        q = design_sphere_poses(kuka, CENTRE_MM, P_E_MM, 6, rng, spread_mm=FOV_MM, tilt_deg=60)
+        Pw = predict_sphere(kuka, T_sb, P_E_MM, q, params=warm_params(kuka)) + rng.normal(0, 0.02, (6, 3))
+        r = identify_drift(kuka, T_sb, P_E_MM, q, Pw, subset=SUBSET, point_sigma_mm=0.02)
+        err.append(r.delta - DELTA)
+        z.append((r.delta - DELTA) / r.std)
+        sig.append(r.std)
+        cond.append(float(r.condition_number))
+    rms = np.sqrt(np.mean(np.square(err), axis=0))
+    rms_sig = np.sqrt(np.mean(np.square(sig), axis=0))
+    lengths, angles = rms[:5], np.degrees(rms[5:])
+    out.update({"noisy.lengths_mm.min": float(lengths.min()), "noisy.lengths_mm.max": float(lengths.max()),
+                "noisy.angles_deg.min": float(angles.min()), "noisy.angles_deg.max": float(angles.max()),
+                "noisy.angles_sigma_deg.min": float(np.degrees(rms_sig[5:]).min()),
+                "noisy.angles_sigma_deg.max": float(np.degrees(rms_sig[5:]).max()),
+                "noisy.condition.min": min(cond), "noisy.condition.max": max(cond),
+                "noisy.max_abs_z": float(np.abs(z).max())})
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def thermal_compensation_steps() -> dict:
+    """docs/thermal.md "3. Compensation" on ``tests/test_thermal_core.py``'s program (50 taught points,
+    seed 7, the known warm deltas): ``drift_before_max_mm``; the position error [mm] left after one
+    and two Newton steps (``{one_step|two_steps}.{median_mm|max_mm}``); with the defaults ``iterations_max``, ``all_converged``, and position
+    only ``position_only.iterations_max``. ~0.1 s."""
+    import numpy as np
+
+    from ..robots import load_robot
+    from ..sim.thermal.drift_setup import taught_program, warm_params
+    from ..thermal import compensate_program
+
+    kuka = load_robot("kuka_kr150_r3100")
+    q = taught_program(kuka, 50, np.random.default_rng(7))
+    Xw = warm_params(kuka)
+    out = {}
+    for k, name in ((1, "one_step"), (2, "two_steps")):
+        e = compensate_program(kuka, Xw, q, max_iterations=k, tol_mm=0.0, tol_rad=0.0).position_error_mm
+        out.update({f"{name}.median_mm": float(np.median(e)), f"{name}.max_mm": float(e.max())})
+    full = compensate_program(kuka, Xw, q)
+    po = compensate_program(kuka, Xw, q, position_only=True)
+    return {**out, "drift_before_max_mm": float(full.drift_before_mm.max()),
+            "iterations_max": float(full.iterations.max()), "all_converged": float(full.all_converged),
+            "position_only.iterations_max": float(po.iterations.max())}
+
+
+@functools.lru_cache(maxsize=None)
+def thermal_orthonormality() -> dict:
+    """docs/thermal.md "1. System calibration": the thesis-penalty method's raw rotation
+    orthonormality error ``|R R^T - I|_F`` on the 20 seeds of the system-calibration set-up
+    (:func:`robocal.docs.figure_producers_setups.system_calibration_seed`): ``median``, ``max``."""
+    import numpy as np
+
+    from .figure_producers_setups import system_calibration_seed
+
+    e = [system_calibration_seed(seed).thesis.orthonormality_error for seed in range(20)]
+    return {"median": float(np.median(e)), "max": float(np.max(e))}
+
+
+@functools.lru_cache(maxsize=None)
+def thermal_deformation_transfer() -> dict:
+    """docs/thermal.md "What is outside the model, measured" (``tests/test_thermal_realism.py``'s set-up,
+    :func:`robocal.sim.thermal.deformation_transfer.deformation_transfer`): the realistic cells 3, 4, 5
+    at motor temperatures 9/25/22/16/7/5 K; the largest shares [%] of the bending outside the span at
+    the monitored points (``bend.span.max``) and left by the fit on the sphere poses (``bend.transfer.max``);
+    the sag's smallest in-span share at the car body (``sag.in_span.min`` = 100 - span) and its range
+    left by the sphere fit (``sag.transfer.{min|max}``). ~1 s."""
+    import numpy as np
+
+    from ..sim.thermal.deformation_transfer import TRANSFER_MOTOR_TEMPERATURES_K, deformation_transfer
+    from ..sim.thermal.simulator import ThermalCell
+
+    rows = []
+    for seed in (3, 4, 5):
+        cell = ThermalCell.standard(seed, preset="realistic")
+        rows.append(deformation_transfer(cell, TRANSFER_MOTOR_TEMPERATURES_K, "bend")
+                    + deformation_transfer(cell, TRANSFER_MOTOR_TEMPERATURES_K, "sag"))
+    bend_span, bend_transfer, _, sag_span, sag_transfer, _ = 100.0 * np.array(rows).T
+    return {"bend.span.max": float(bend_span.max()), "bend.transfer.max": float(bend_transfer.max()),
+            "sag.in_span.min": float(100.0 - sag_span.max()), "sag.transfer.min": float(sag_transfer.min()),
+            "sag.transfer.max": float(sag_transfer.max())}
+
+
+@functools.lru_cache(maxsize=None)
+def thermal_selection_ranges() -> dict:
+    """docs/thermal.md "Screening robustness", the prose under the table (producer ``thermal/realistic``,
+    20 seeds with 20 bootstrap resamples each): the five most often screened parameters' smallest and
+    largest share [%] over the seeds and the resamples (``five.{min|max}``), and the largest share of
+    any other parameter (``others.max``)."""
+    from .figure_producers import PRODUCERS
+
+    r = PRODUCERS["thermal/realistic"]()
+    five = ("a2", "theta3", "d4", "beta2", "alpha4")
+    shares = {k.split(".", 1)[1]: [] for k in r if k.startswith(("selection.", "bootstrap."))}
+    for k, v in r.items():
+        if k.startswith(("selection.", "bootstrap.")):
+            shares[k.split(".", 1)[1]].append(v)
+    return {"five.min": min(min(shares[n]) for n in five), "five.max": max(max(shares[n]) for n in five),
+            "others.max": max(max(v) for n, v in shares.items() if n not in five)}
+
+
 PAGES_PRODUCERS = {
     "iso9283/adequacy": iso9283_adequacy,
     "iso9283/verify_backlash_trials": verify_backlash_trials,
@@ -289,10 +418,16 @@ PAGES_PRODUCERS = {
     "robots/boby_nominal_all_poses": boby_nominal_all_poses,
     "robots/hilti_flat_rigid": hilti_flat_rigid_per_station,
     "fleet/monte_carlo": fleet_monte_carlo,
+    "thermal_core/identification": thermal_drift_identification,
+    "thermal_core/compensation": thermal_compensation_steps,
+    "thermal_core/orthonormality": thermal_orthonormality,
+    "thermal_core/deformation_transfer": thermal_deformation_transfer,
+    "thermal/selection_ranges": thermal_selection_ranges,
 }
 
 #: the data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer of this module reads
 PAGES_DATASETS_NEEDED = {"robots/boby_nominal_all_poses": ("boby_fanuc",), "robots/hilti_flat_rigid": ("hilti_trailblazer",)}
 
 #: longer than ~5 s of CPU: run with ``--all`` / ``ROBOCAL_SLOW=1``
-SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate", "fleet/monte_carlo"}
+SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate", "fleet/monte_carlo",
+                        "thermal/selection_ranges"}

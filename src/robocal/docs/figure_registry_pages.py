@@ -97,3 +97,79 @@ PAGE_FIGURES += [Figure(f"fleet:monte-carlo {k}", "docs/fleet.md", _MC + pat, "f
 PAGE_FIGURES += [Figure(f"fleet:pose-sets holdout {k}", "docs/fleet.md", r"which dominated it:\s+" + pat, "fleet/pose_sets",
                         f"holdout_rms_mm.{k}", rel_tol=0.0)
                  for k, pat in (("min", _N + "-"), ("max", r"[0-9.]+-" + _N + " mm over the 12 sets"))]
+
+# ---- docs/thermal.md ----
+_TH = "docs/thermal.md"
+_ID = r"Measured: 8 deltas \(a1, a2(?s:.*?)"
+_CP = r"Thermal drifts are small, so the first step leaves\s+~"
+_OUT = r"\*\*What is outside the model, measured\*\*(?s:.*?)"
+PAGE_FIGURES += [Figure(f"thermal:{k}", _TH, pat, prod, field, rel_tol=tol)
+                 for k, pat, prod, field, tol in (
+                     ("orthonormality", r"orthonormal to ~" + _N + r" \(`orthonormality_error`", "thermal_core/orthonormality",
+                      "median", 0.5),
+                     ("second-order remainder", r"\(Gauss–Newton\), removing the ~" + _N + " mm", "thermal_core/identification",
+                      "linear.rms_after_mm", 0.5),
+                     ("exact with 2 iterations", _ID + r"exact to " + _N + " with 2 iterations", "thermal_core/identification",
+                      "exact2.max_error", 0.5),
+                     ("linear max error", _ID + r"off by\s+at most " + _N, "thermal_core/identification", "linear.max_error",
+                      0.1),
+                     ("linear residual", _ID + r"\(mm or rad; residual " + _N + " mm", "thermal_core/identification",
+                      "linear.rms_after_mm", 0.5),
+                     ("noisy condition low", _ID + r"condition ≈ " + _N, "thermal_core/identification", "noisy.condition.min",
+                      0.0),
+                     ("noisy condition high", _ID + r"condition ≈ [0-9]+–" + _N, "thermal_core/identification",
+                      "noisy.condition.max", 0.0),
+                     ("noisy lengths low", _ID + r"RMS errors " + _N, "thermal_core/identification", "noisy.lengths_mm.min",
+                      0.0),
+                     ("noisy lengths high", _ID + r"RMS errors [0-9.]+–" + _N, "thermal_core/identification",
+                      "noisy.lengths_mm.max", 0.0),
+                     ("noisy angles low", _ID + r"for the lengths and\s+" + _N, "thermal_core/identification",
+                      "noisy.angles_deg.min", 0.0),
+                     ("noisy angles high", _ID + r"for the lengths and\s+[0-9.]+–" + _N, "thermal_core/identification",
+                      "noisy.angles_deg.max", 0.0),
+                     ("compensation one step median", _CP + _N + " mm \\(median", "thermal_core/compensation",
+                      "one_step.median_mm", 0.5),
+                     ("compensation one step max", _CP + r"[0-9e.−-]+ mm \(median; up to " + _N, "thermal_core/compensation",
+                      "one_step.max_mm", 0.0),
+                     ("compensation two steps median", _CP + r"(?s:.*?)and the second ~" + _N, "thermal_core/compensation",
+                      "two_steps.median_mm", 0.5),
+                     ("compensation two steps max", _CP + r"(?s:.*?)and the second ~[0-9e.−-]+ mm \(up to " + _N,
+                      "thermal_core/compensation", "two_steps.max_mm", 0.1),
+                     ("compensation drift", _CP + r"(?s:.*?)measured on 50 program points with " + _N + " mm drift",
+                      "thermal_core/compensation", "drift_before_max_mm", 0.0),
+                     ("compensation iterations", _CP + r"(?s:.*?)after ≤ " + _N + " iterations", "thermal_core/compensation",
+                      "iterations_max", 0.0),
+                     ("compensation iterations position only", _CP + r"(?s:.*?)iterations \(≤ " + _N + " for position only",
+                      "thermal_core/compensation", "position_only.iterations_max", 0.0),
+                     ("bending span", _OUT + r"span of the 24 free parameters to " + _N + " %",
+                      "thermal_core/deformation_transfer", "bend.span.max", 0.05),
+                     ("bending transfer", _OUT + r"carries over to the car body to ~" + _N + " %",
+                      "thermal_core/deformation_transfer", "bend.transfer.max", 0.0),
+                     ("sag in span", _OUT + r"the car body alone it is " + _N + " % a parameter change",
+                      "thermal_core/deformation_transfer", "sag.in_span.min", 0.0),
+                     ("sag transfer low", _OUT + r"poses leaves " + _N + "–", "thermal_core/deformation_transfer",
+                      "sag.transfer.min", 0.0),
+                     ("sag transfer high", _OUT + r"poses leaves [0-9]+–" + _N + " % of it", "thermal_core/deformation_transfer",
+                      "sag.transfer.max", 0.0),
+                     ("seed 9 second evaluation run", r"and scored [0-9.]+ % and\s+" + _N + " %", "thermal/realistic",
+                      "seed.9.evaluation.screened.1", 0.0),
+                     ("five selected low", r"α4 — are selected in " + _N + "–", "thermal/selection_ranges", "five.min", 0.005),
+                     ("five selected high", r"α4 — are selected in [0-9]+–" + _N + " %", "thermal/selection_ranges",
+                      "five.max", 0.0),
+                     ("others selected high", r"almost equally well \(each [0-9]+–" + _N + " %", "thermal/selection_ranges",
+                      "others.max", 0.0))]
+_TG = r"With the true geometry \(a robot\s+file, as a geometric calibration gives\)(?s:.*?)"
+PAGE_FIGURES += [Figure(f"thermal:calibrate-sensor true geometry {k}", _TH, _TG + pat, prod, field, rel_tol=0.02)
+                 for k, pat, prod, field in (
+                     ("realistic frame", r"give the frame within " + _N + " mm", "thermal_cli/realistic",
+                      "sensor_true.at_point_mm"),
+                     ("realistic rotation", r"at\s+the measurement volume, " + _N + "°", "thermal_cli/realistic",
+                      "sensor_true.rotation_deg"),
+                     ("realistic P_e", r"and `P_e` within " + _N + " mm on this realistic cell", "thermal_cli/realistic",
+                      "sensor_true.P_e_mm"),
+                     ("ideal frame", r"preset's cell \(the test's\) " + _N + " mm", "thermal_cli/ideal",
+                      "sensor_true.at_point_mm"),
+                     ("ideal rotation", r"preset's cell \(the test's\) [0-9.]+ mm, " + _N + "°", "thermal_cli/ideal",
+                      "sensor_true.rotation_deg"),
+                     ("ideal P_e", r"preset's cell \(the test's\) [0-9.]+ mm, [0-9.]+° and " + _N + " mm", "thermal_cli/ideal",
+                      "sensor_true.P_e_mm"))]
