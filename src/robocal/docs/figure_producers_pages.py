@@ -10,7 +10,8 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["PAGES_DATASETS_NEEDED", "PAGES_PRODUCERS", "SLOW_PAGES_PRODUCERS", "iso9283_simulated_run"]
+__all__ = ["PAGES_DATASETS_NEEDED", "PAGES_PRODUCERS", "SLOW_PAGES_PRODUCERS", "iso9283_simulated_run",
+           "monte_carlo_test_plan", "parallel_beta_campaign", "rendered_board_views", "rokae_style_robot_file"]
 
 
 # ------------------------------------------------------------------------------------ iso9283.md
@@ -406,6 +407,218 @@ def thermal_selection_ranges() -> dict:
             "others.max": max(max(v) for n, v in shares.items() if n not in five)}
 
 
+# ------------------------------------------------------------------- self-calibration-simulator.md
+@functools.lru_cache(maxsize=None)
+def self_calibration_rendered(robot: str, seed: int) -> dict:
+    """docs/self-calibration-simulator.md "Measured": ``simulate_self_calibration(ROBOT, seed=SEED,
+    n_images_per_chain=40)`` (NAO: both hands; the KR 150: the world board; the other settings default)
+    rendered into a temporary folder and detected (``detect_images``, as ``tests/test_self_calibration_sim.py``
+    checks smaller runs): ``full.{detected|total}``, ``partial.{rejected|total}`` and the corner error
+    of the used full views against the true projection, ``rms_px`` (RMS of the per-corner distance) and
+    ``max_px``. ~25-45 s of CPU."""
+    import numpy as np
+
+    from ..io.detection import detect_images
+    from ..io.images import list_images
+    from ..sim.cameras.self_calibration import simulate_self_calibration
+
+    chains = ("left_hand", "right_hand") if robot == "nao_h25" else ("world",)
+    with tempfile.TemporaryDirectory() as tmp:
+        r = simulate_self_calibration(robot, chains=chains, n_images_per_chain=40, seed=seed, out_dir=Path(tmp))
+        dets = detect_images(list_images(Path(tmp) / "images"), r.board)
+    full = np.asarray(r.fully_visible, bool)
+    used = np.array([d.used for d in dets])
+    err = np.concatenate([np.linalg.norm(d.image_points - p, axis=1)
+                          for d, p, f in zip(dets, r.image_points_true, full) if f and d.used])
+    return {"full.detected": float(np.sum(used & full)), "full.total": float(full.sum()),
+            "partial.rejected": float(np.sum(~used & ~full)), "partial.total": float((~full).sum()),
+            "rms_px": float(np.sqrt(np.mean(err ** 2))), "max_px": float(err.max())}
+
+
+@functools.lru_cache(maxsize=None)
+def self_calibration_rendered_range() -> dict:
+    """The smallest and largest corner-error RMS [px] of the three runs of :func:`self_calibration_rendered`
+    (``rms_px.{min|max}``): the prose under the table."""
+    rms = [self_calibration_rendered(r, s)["rms_px"] for r, s in SELF_CALIBRATION_RUNS]
+    return {"rms_px.min": min(rms), "rms_px.max": max(rms)}
+
+
+#: the runs of docs/self-calibration-simulator.md's table: (robot, seed)
+SELF_CALIBRATION_RUNS = (("nao_h25", 1), ("nao_h25", 7), ("kuka_kr150_r3100", 3))
+
+
+@functools.lru_cache(maxsize=None)
+def bent_board_gap() -> dict:
+    """docs/self-calibration-simulator.md, the bent-board row (``tests/test_self_calibration_sim.py::
+    test_bent_board_images_follow_the_bent_corners``' call): ``simulate_self_calibration("nao_h25",
+    chains=("left_hand",), n_images_per_chain=2, partial_fraction=0, board_bow_mm=0.4, seed=4)``; per
+    view the largest distance [px] of the bent board's true corners from a flat board's projection in
+    the same pose: ``gap_px.{min|max}`` over the views. ~0.1 s."""
+    import numpy as np
+
+    from ..sim.cameras.self_calibration import simulate_self_calibration
+
+    r = simulate_self_calibration("nao_h25", chains=("left_hand",), n_images_per_chain=2, partial_fraction=0.0,
+                                  board_bow_mm=0.4, seed=4)
+    X = r.board.object_points()
+    gaps = [float(np.max(np.linalg.norm(r.camera.project((T[:3, :3] @ X.T).T + T[:3, 3]).pixels - p, axis=1)))
+            for p, T in zip(r.image_points_true, r.T_camera_board)]
+    return {"gap_px.min": min(gaps), "gap_px.max": max(gaps)}
+
+
+# ----------------------------------------------------------------------------------- datasets.md
+@functools.lru_cache(maxsize=None)
+def positioner_reference_fit() -> dict:
+    """docs/datasets.md "ros_industrial_positioner": the independent screw-axis fit
+    (:func:`robocal.docs.reference_screw_fit.reference_axes`, no robocal code) on the 150 training
+    records of seed 0 (``calibrate_positioner(seed=0, n_train=150)``'s split, as
+    ``tests/test_positioner_real_data.py``), with the target origin alone: ``origin.angle_deg``,
+    ``origin.common_normal_mm`` and their sigmas ``origin.{angle|common_normal}_sigma``. ~3 s."""
+    import numpy as np
+
+    from ..io.datasets import read_ros_industrial_positioner
+    from ..workflows.datasets.ros_industrial_positioner import calibrate_positioner
+    from .reference_screw_fit import reference_axes
+
+    ds = read_ros_industrial_positioner()
+    run = calibrate_positioner(seed=0, n_train=150, data=ds)
+    train = np.asarray(run["train"])
+    (angle, normal), (s_angle, s_normal), _ = reference_axes(ds.per_pose["T_camera_target"][train], ds.joints[train],
+                                                             n_points=1)
+    return {"origin.angle_deg": float(angle), "origin.common_normal_mm": float(normal),
+            "origin.angle_sigma": float(s_angle), "origin.common_normal_sigma": float(s_normal)}
+
+
+# ------------------------------------------------------------------------------------ handeye.md
+def rendered_board_views(spec: str, n_images: int = 3, seed: int = 3, noise_seed: int = 11) -> tuple:
+    """Rendered views of a board with known truth (``tests/test_camera_detection.py``'s set-up and
+    docs/handeye.md's detection figures): the default camera, ``n_images`` hand-eye poses (``seed``),
+    the board's texture rendered with the renderer's blur, lighting and noise (``noise_seed``).
+
+    Returns
+    -------
+    (Board, Camera, truth, list of images, BoardRenderer)
+        ``truth.T_camera_target`` (n_images, 4, 4) [mm]; images (H, W) uint8.
+    """
+    import numpy as np
+
+    from ..io.boards import board_image, parse_board
+    from ..sim.cameras.camera_cell import default_camera, simulate_hand_eye_poses
+    from ..sim.cameras.camera_render import BoardRenderer
+    from ..workflows.cameras.camera_simulate import _texel_mm
+
+    board = parse_board(spec)
+    cam = default_camera()
+    truth = simulate_hand_eye_poses(board.object_points(), n_images=n_images, camera=cam, front_z=board.front_z,
+                                    seed=seed)
+    texture, affine = board_image(board, _texel_mm(board))
+    renderer = BoardRenderer(cam, texture, affine)
+    rng = np.random.default_rng(noise_seed)
+    return board, cam, truth, [renderer.render(T, rng) for T in truth.T_camera_target], renderer
+
+
+@functools.lru_cache(maxsize=None)
+def checkerboard_classic_vs_sb() -> dict:
+    """docs/handeye.md "Side by side with OpenCV", the corner finder: the three rendered 9 x 6
+    checkerboard views of :func:`rendered_board_views`; the corner RMS [px] against the exact
+    projections of robocal's classic path (``findChessboardCorners`` + ``cornerSubPix``, ``classic``)
+    and of ``findChessboardCornersSB`` with ``NORMALIZE_IMAGE`` with and without ``ACCURACY``
+    (``sb.{min|max}``; its corner order taken as the one closer to the truth). ~1 s."""
+    import cv2
+    import numpy as np
+
+    from ..io.detection import detect_board
+
+    board, cam, truth, images, _ = rendered_board_views("checkerboard:9x6:30mm")
+    obj = board.object_points()
+    classic, sb = [], {"accuracy": [], "plain": []}
+    for im, T in zip(images, truth.T_camera_target):
+        tp = cam.project((T[:3, :3] @ obj.T).T + T[:3, 3]).pixels
+        classic.append(np.linalg.norm(detect_board(im, board).image_points - tp, axis=1))
+        for k, flags in (("accuracy", cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_ACCURACY),
+                         ("plain", cv2.CALIB_CB_NORMALIZE_IMAGE)):
+            _, corners = cv2.findChessboardCornersSB(im, (board.cols, board.rows), flags=flags)
+            c = corners.reshape(-1, 2).astype(float)
+            c = min((c, c[::-1]), key=lambda x: float(np.linalg.norm(x - tp)))
+            sb[k].append(np.linalg.norm(c - tp, axis=1))
+
+    def rms(e):
+        return float(np.sqrt(np.mean(np.concatenate(e) ** 2)))
+
+    return {"classic": rms(classic), "sb.min": min(rms(v) for v in sb.values()), "sb.max": max(rms(v) for v in sb.values())}
+
+
+# -------------------------------------------------------------------------------- robot-files.md
+#: a Rokae-style 6-axis arm in Craig's modified DH as its vendor tables write it (J2 || J3; illustrative
+#: dimensions of a 7 kg arm): name, alpha [deg], a [mm], theta [deg], d [mm], limits [deg]
+ROKAE_STYLE_MDH = [("J1", 0.0, 0.0, 0.0, 380.0, 170), ("J2", -90.0, 30.0, -90.0, 0.0, 130),
+                   ("J3", 0.0, 340.0, 0.0, 0.0, 150), ("J4", -90.0, 35.0, 0.0, 345.0, 170),
+                   ("J5", 90.0, 0.0, 0.0, 0.0, 115), ("J6", -90.0, 0.0, 0.0, 80.0, 350)]
+
+
+def rokae_style_robot_file(path, with_beta: bool) -> Path:
+    """Write :data:`ROKAE_STYLE_MDH` as a robot file at ``path``, with ``beta = 0.0`` lines on every
+    joint or without any."""
+    lines = ['format = "robocal-robot/1"', 'name = "rokae_style"', 'model = "mdh"', 'length_unit = "mm"',
+             'angle_unit = "deg"', 'source = "test: Rokae-style MDH table, illustrative dimensions"']
+    for name, alpha, a, theta, d, lim in ROKAE_STYLE_MDH:
+        lines += ["", "[[joints]]", f'name = "{name}"', f"alpha = {alpha}", f"a = {a}"]
+        lines += ["beta = 0.0"] if with_beta else []
+        lines += [f"theta = {theta}", f"d = {d}", f"limits = [{-lim}.0, {lim}.0]"]
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return Path(path)
+
+
+def parallel_beta_campaign(folder) -> dict:
+    """docs/robot-files.md's parallel-axis measurement and ``tests/test_parallel_beta.py``'s campaign:
+    the Rokae-style arm with hidden errors (seed 7: 0.2 mm lengths, 0.03 deg offsets) and its J3 axis
+    really tilted (beta3 = 0.05 deg), 80 poses measured at the flange with 0.01 mm noise; ``robocal
+    calibrate`` (``--sigma 0.01 --fix a6,theta6,d6``) of the file without ``beta`` lines (``plain``),
+    with them (``declared``) and with ``beta3`` held (``no_beta``). Returns ``{key: (stdout, result.json)}``."""
+    import math
+
+    import numpy as np
+
+    from ..io.measurements import Measurements, write_measurements
+    from ..robots import load_robot
+    from ..sim import VirtualRobot
+    from .figure_producers_cli import run_cli as run
+
+    d = Path(folder)
+    plain = rokae_style_robot_file(d / "rokae_plain.toml", with_beta=False)
+    declared = rokae_style_robot_file(d / "rokae_beta.toml", with_beta=True)
+    nominal = load_robot(declared)
+    rng = np.random.default_rng(7)
+    virtual = VirtualRobot.perturbed(nominal, rng, angle_sigma_deg=0.0, length_sigma_mm=0.2,
+                                     offset_sigma_deg=0.03, joint_noise_deg=0.0)
+    true = virtual.true_model.with_params(beta3=math.radians(0.05))
+    virtual = VirtualRobot(nominal, true)
+    q = virtual.random_configurations(80, rng)
+    p = virtual.true_poses(q)[:, :3, 3] + rng.normal(0, 0.01, (80, 3))
+    data = write_measurements(d / "m.csv", Measurements(q, p, joint_names=nominal.controller_joints,
+                                                        metadata={"robot": "rokae_style"}),
+                              length_unit="mm", angle_unit="deg")
+    out = {}
+    # the target sits at the flange origin: the last link's a6, theta6, d6 trade off with it
+    for key, robot, fix in (("plain", plain, "a6,theta6,d6"), ("declared", declared, "a6,theta6,d6"),
+                            ("no_beta", plain, "a6,theta6,d6,beta3")):
+        text = run("calibrate", robot, data, "--out", d / key, "--sigma", 0.01, "--no-report", "--fix", fix,
+                   ok=(0,) if key != "no_beta" else (0, 3, 4))
+        out[key] = (text, json.loads((d / key / "result.json").read_text()))
+    return out
+
+
+@functools.lru_cache(maxsize=None)
+def parallel_beta_holdout() -> dict:
+    """The held-out RMS [mm] of :func:`parallel_beta_campaign`'s three calibrations
+    (``{plain|declared|no_beta}.holdout_rms_mm``) and ``no_beta_over_plain``. ~2 s."""
+    with tempfile.TemporaryDirectory() as tmp:
+        c = parallel_beta_campaign(tmp)
+    out = {f"{k}.holdout_rms_mm": float(v[1]["validation"]["after"]["rms"]) for k, v in c.items()}
+    out["no_beta_over_plain"] = out["no_beta.holdout_rms_mm"] / out["plain.holdout_rms_mm"]
+    return out
+
+
 PAGES_PRODUCERS = {
     "iso9283/adequacy": iso9283_adequacy,
     "iso9283/verify_backlash_trials": verify_backlash_trials,
@@ -423,11 +636,19 @@ PAGES_PRODUCERS = {
     "thermal_core/orthonormality": thermal_orthonormality,
     "thermal_core/deformation_transfer": thermal_deformation_transfer,
     "thermal/selection_ranges": thermal_selection_ranges,
+    **{f"self_calibration_sim/{r}/{k}": functools.partial(self_calibration_rendered, r, k) for r, k in SELF_CALIBRATION_RUNS},
+    "self_calibration_sim/rendered_range": self_calibration_rendered_range,
+    "self_calibration_sim/bent_board": bent_board_gap,
+    "datasets/positioner_reference": positioner_reference_fit,
+    "handeye/classic_vs_sb": checkerboard_classic_vs_sb,
+    "robot_files/parallel_beta": parallel_beta_holdout,
 }
 
 #: the data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer of this module reads
-PAGES_DATASETS_NEEDED = {"robots/boby_nominal_all_poses": ("boby_fanuc",), "robots/hilti_flat_rigid": ("hilti_trailblazer",)}
+PAGES_DATASETS_NEEDED = {"robots/boby_nominal_all_poses": ("boby_fanuc",), "robots/hilti_flat_rigid": ("hilti_trailblazer",),
+                         "datasets/positioner_reference": ("ros_industrial_handeye",)}
 
 #: longer than ~5 s of CPU: run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate", "fleet/monte_carlo",
-                        "thermal/selection_ranges"}
+                        "thermal/selection_ranges", "self_calibration_sim/rendered_range",
+                        *(f"self_calibration_sim/{r}/{k}" for r, k in SELF_CALIBRATION_RUNS)}

@@ -173,3 +173,32 @@ PAGE_FIGURES += [Figure(f"thermal:calibrate-sensor true geometry {k}", _TH, _TG 
                       "sensor_true.rotation_deg"),
                      ("ideal P_e", r"preset's cell \(the test's\) [0-9.]+ mm, [0-9.]+° and " + _N + " mm", "thermal_cli/ideal",
                       "sensor_true.P_e_mm"))]
+
+# ---- docs/datasets.md ----
+_OA = r"fitted to the target origin\s+alone it gives "
+PAGE_FIGURES += [Figure(f"datasets:positioner reference origin alone {k}", "docs/datasets.md", _OA + pat,
+                        "datasets/positioner_reference", field, rel_tol=tol)
+                 for k, pat, field, tol in (
+                     ("angle", _N + "°", "origin.angle_deg", 1e-6),
+                     ("common normal", r"[0-9.]+° / " + _N + " mm", "origin.common_normal_mm", 0.002),
+                     ("angle sigma", r"[0-9.]+° / [0-9.]+ mm \(σ " + _N, "origin.angle_sigma", 0.02),
+                     ("common normal sigma", r"[0-9.]+° / [0-9.]+ mm \(σ [0-9.]+° / " + _N, "origin.common_normal_sigma",
+                      0.02))]
+
+# ---- docs/handeye.md ----
+_SB = r"images the classic path is the more accurate: "
+PAGE_FIGURES += [Figure(f"handeye:classic vs SB {k}", "docs/handeye.md", _SB + pat, "handeye/classic_vs_sb", field,
+                        rel_tol=0.02)
+                 for k, pat, field in (("classic", _N + " against", "classic"),
+                                       ("SB low", r"[0-9.]+ against " + _N + "-", "sb.min"),
+                                       ("SB high", r"[0-9.]+ against [0-9.]+-" + _N + " px", "sb.max"))]
+
+# ---- docs/robot-files.md ----
+_PB = r"Measured \(`tests/test_parallel_beta\.py`(?s:.*?)"
+PAGE_FIGURES += [Figure(f"robot-files:parallel beta {k}", "docs/robot-files.md", _PB + pat, "robot_files/parallel_beta",
+                        field, rel_tol=0.02)
+                 for k, pat, field in (("holdout", r"held-out RMS " + _N + " mm with or without", "plain.holdout_rms_mm"),
+                                       ("holdout declared", r"held-out RMS " + _N + " mm with or without",
+                                        "declared.holdout_rms_mm"),
+                                       ("holdout beta3 held", r"the held-out error is " + _N + " mm",
+                                        "no_beta.holdout_rms_mm"))]
