@@ -5,7 +5,7 @@ unless named otherwise."""
 
 from __future__ import annotations
 
-from .figure_registry import _N, Figure
+from .figure_registry import _N, Figure, _cell
 
 __all__ = ["PAGE_FIGURES"]
 
@@ -202,3 +202,21 @@ PAGE_FIGURES += [Figure(f"robot-files:parallel beta {k}", "docs/robot-files.md",
                                         "declared.holdout_rms_mm"),
                                        ("holdout beta3 held", r"the held-out error is " + _N + " mm",
                                         "no_beta.holdout_rms_mm"))]
+
+# ---- docs/self-calibration-simulator.md ----
+_SCS = "docs/self-calibration-simulator.md"
+_BOW = r"\| 0 \(off\); 0\.4 mm moves NAO corners by "
+PAGE_FIGURES += [Figure(f"self-calibration-simulator:bent board {k}", _SCS, _BOW + pat, "self_calibration_sim/bent_board",
+                        field, rel_tol=0.0)
+                 for k, pat, field in (("low", _N + "-", "gap_px.min"), ("high", r"[0-9.]+-" + _N + " px", "gap_px.max"))]
+for _row, (_robot, _seed) in ((r"`nao_h25`, both hands, seed 1", ("nao_h25", 1)),
+                              (r"`nao_h25`, both hands, seed 7", ("nao_h25", 7)),
+                              (r"`kuka_kr150_r3100`, world board, seed 3", ("kuka_kr150_r3100", 3))):
+    PAGE_FIGURES += [Figure(f"self-calibration-simulator:rendered {_robot} seed {_seed} {f}", _SCS, _cell(_row, c, k),
+                            f"self_calibration_sim/{_robot}/{_seed}", f, rel_tol=0.0)
+                     for c, k, f in ((0, 0, "full.detected"), (0, 1, "full.total"), (1, 0, "partial.rejected"),
+                                     (1, 1, "partial.total"), (2, 0, "rms_px"), (2, 1, "max_px"))]
+_RR = r"The rendered images add their own corner error \(RMS "
+PAGE_FIGURES += [Figure(f"self-calibration-simulator:rendered rms {k}", _SCS, _RR + pat, "self_calibration_sim/rendered_range",
+                        field, rel_tol=0.0)
+                 for k, pat, field in (("low", _N + "-", "rms_px.min"), ("high", r"[0-9.]+-" + _N + " px", "rms_px.max"))]
