@@ -11,7 +11,8 @@ import tempfile
 from pathlib import Path
 
 __all__ = ["PAGES_DATASETS_NEEDED", "PAGES_PRODUCERS", "SLOW_PAGES_PRODUCERS", "iso9283_simulated_run",
-           "monte_carlo_test_plan", "parallel_beta_campaign", "rendered_board_views", "rokae_style_robot_file"]
+           "monte_carlo_test_plan", "parallel_beta_campaign", "justin_head_capture", "rendered_board_views",
+           "rokae_style_robot_file"]
 
 
 # ------------------------------------------------------------------------------------ iso9283.md
@@ -619,6 +620,153 @@ def parallel_beta_holdout() -> dict:
     return out
 
 
+# ---------------------------------------------------------------------------- self-calibration.md
+@functools.lru_cache(maxsize=None)
+def nao_rendered_pipeline() -> dict:
+    """docs/self-calibration.md "End to end on rendered NAO images" (the run of
+    ``benchmarks/bench_self_calibration.py --nao``): ``simulate_self_calibration("nao_h25",
+    n_images_per_chain=40, seed=0)`` rendered to a temporary folder, then the whole pipeline
+    ``self_calibrate(..., board_on=left_hand,right_hand, joint_noise_deg=0.05)``. Fields ``n_images``,
+    ``n_used``, ``n_misassigned`` (used images put on the other hand), ``n_identifiable``,
+    ``max_abs_z`` and ``max_error_deg`` of the identifiable offsets against the simulator's truth,
+    ``sigma_deg.{min|max}``, ``rms_px`` (back-projection with the joints as read). ~40-60 s."""
+    import numpy as np
+
+    from ..sim.cameras.self_calibration import simulate_self_calibration
+    from ..workflows.cameras.self_calibration import self_calibrate
+
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        run = simulate_self_calibration("nao_h25", n_images_per_chain=40, seed=0, out_dir=root)
+        s = self_calibrate("nao_h25", images=root / "images", joints=root / "joint_log.csv", frames=root / "frames.csv",
+                           board=run.board.spec, camera_end_effector="camera_top", board_on=["left_hand", "right_hand"],
+                           camera_file=root / "camera.json", joint_noise_deg=0.05)
+    chain = dict(zip(run.images, run.chain_of_image))
+    used = [im for im in s["images"] if im["used"]]
+    off = {o["name"]: o for o in s["joint_offsets"]}
+    err, z, sig = [], [], []
+    for r in s["joint_report"]:
+        if r["identifiable"]:
+            o = off[r["name"]]
+            e = o["value"] - run.joint_offsets_rad[r["joint"]]
+            err.append(abs(e))
+            z.append(abs(e) / o["sigma"])
+            sig.append(o["sigma"])
+    return {"n_images": float(s["n_images"]), "n_used": float(len(used)),
+            "n_misassigned": float(sum(im["board_on"] != chain[im["name"]] for im in used)),
+            "n_identifiable": float(len(z)), "max_abs_z": float(max(z)), "max_error_deg": float(np.degrees(max(err))),
+            "sigma_deg.min": float(np.degrees(min(sig))), "sigma_deg.max": float(np.degrees(max(sig))),
+            "rms_px": float(s["reprojection_rms_px"])}
+
+
+#: the board and the views per arm of :func:`justin_head_capture`
+JUSTIN_CAPTURE_BOARD = "checkerboard:7x4:25mm"
+JUSTIN_CAPTURE_PER_ARM = 4
+
+
+def justin_head_capture(root) -> tuple:
+    """Rendered head-camera images of a board in each hand of the DLR Justin tree with three joint
+    offsets (theta23 +1.5, theta15 -2.0, theta7 +1.0 deg), 4 views per arm (seed 7), a joint log on
+    another clock and a frames file in ``root`` (``tests/test_self_calibration_pipeline.py``'s
+    capture and docs/self-calibration.md's figures). Returns ``(root, offsets [rad], image names,
+    image times, log times, logged joints)``."""
+    import numpy as np
+
+    from ..camera import Camera
+    from ..io.boards import board_image, parse_board
+    from ..io.camera_files import write_camera_json
+    from ..io.images import write_png
+    from ..io.joint_log_files import write_frames, write_joint_log
+    from ..robots import load_robot
+    from ..sim.cameras.camera_render import BoardRenderer
+    from ..sim.cameras.self_calibration import capture_schedule
+    from ..sim.cameras.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations
+    from ..transforms import so3_exp, transforms_from
+
+    cam = Camera(800.0, 800.0, 319.5, 239.5, (-0.1, 0.05, 0.0, 0.0, 0.0), "brown", (640, 480))
+    boards = {"left": transforms_from(so3_exp(np.array([0.1, -0.2, 0.3])), np.array([10.0, 20.0, 120.0])),
+              "right": transforms_from(so3_exp(np.array([-0.2, 0.1, 2.0])), np.array([-15.0, 5.0, 110.0]))}
+    mount = transforms_from(so3_exp(np.array([0.01, -0.02, 0.015])), np.array([3.0, -2.0, 5.0]))
+    n_per_arm = JUSTIN_CAPTURE_PER_ARM
+    root = Path(root)
+    m = load_robot("dlr_justin19")
+    rng = np.random.default_rng(7)
+    offsets = {"theta23": np.radians(1.5), "theta15": np.radians(-2.0), "theta7": np.radians(1.0)}
+    truth = m.params.values.copy()
+    for n, v in offsets.items():
+        truth[m.params.names.index(n)] += v
+    true_model = m.with_params(truth)
+    board = parse_board(JUSTIN_CAPTURE_BOARD)
+    X = board.object_points()
+    texture, affine = board_image(board, 1.0)
+    renderer = BoardRenderer(cam, texture, affine)
+    q, T = [], []
+    for c in ("left", "right"):
+        qc = visible_configurations(true_model, cam, X, camera_end_effector="head", T_ee_camera=mount, carrier=c,
+                                    T_carrier_board=boards[c], n=n_per_arm, rng=rng, q_center=np.zeros(19),
+                                    q_spread=np.pi, front_z=board.front_z, pitch_mm=board.pitch_mm,
+                                    limits=ViewLimits(margin_px=30.0, depth_mm=(50.0, np.inf), max_tilt_deg=55.0))
+        q.append(qc)
+        T.append(camera_board_poses(true_model, qc, "head", mount, c, boards[c]))
+    q, T = np.concatenate(q), np.concatenate(T)
+    images = root / "images"
+    images.mkdir(parents=True)
+    names = [f"frame_{i:03d}.png" for i in range(len(q))]
+    for n, Ti in zip(names, T):
+        write_png(images / n, renderer.render(Ti, rng))
+    t_img, t_log, pose = capture_schedule(len(q), rng)
+    q_log = np.where(pose[:, None] >= 0, q[np.clip(pose, 0, None)], 0.0)
+    write_joint_log(root / "joints.csv", t_log, q_log, m.controller_joints)
+    write_frames(root / "frames.csv", names, t_img)
+    write_camera_json(root / "camera.json", cam)
+    return root, offsets, names, t_img, t_log, q_log
+
+
+@functools.lru_cache(maxsize=None)
+def justin_reading_noise() -> dict:
+    """docs/self-calibration.md "the joint-reading noise by default" (``tests/test_self_calibration_pipeline.py::
+    test_joint_reading_noise_is_estimated_by_default``): :func:`justin_head_capture` with 0.05 deg
+    reading noise added to the log (seed 5); the pipeline (``self_calibrate``) by default, which
+    first solves with the readings taken as exact and then estimates the noise
+    (``estimate_joint_noise``; the exact solve is recorded on the way): ``exact.variance_factor``,
+    ``exact.max_abs_z`` (the three offsets' largest |error| / sigma), ``default.max_abs_z``,
+    ``default.joint_noise_deg``. ~5 s."""
+    from unittest import mock
+
+    import numpy as np
+
+    from ..io.joint_log_files import write_frames, write_joint_log
+    from ..robots import load_robot
+    from ..workflows.cameras import self_calibration as workflow
+
+    seen = {}
+
+    def recording(solve_with):
+        seen["exact"] = solve_with(None)
+        return estimate(solve_with)
+
+    estimate = workflow.estimate_joint_noise
+    with tempfile.TemporaryDirectory() as tmp:
+        root, offsets, names, t_img, t_log, q_log = justin_head_capture(Path(tmp) / "capture")
+        alt = Path(tmp) / "noisy"
+        alt.mkdir()
+        write_frames(alt / "frames.csv", names, t_img)
+        noisy = q_log + np.radians(0.05) * np.random.default_rng(5).normal(size=q_log.shape)
+        write_joint_log(alt / "joints.csv", t_log, noisy, load_robot("dlr_justin19").controller_joints)
+        with mock.patch.object(workflow, "estimate_joint_noise", recording):
+            s = workflow.self_calibrate("dlr_justin19", images=root / "images", joints=alt / "joints.csv",
+                                        frames=alt / "frames.csv", board=JUSTIN_CAPTURE_BOARD, camera_end_effector="head",
+                                        board_on=["left", "right"], camera_file=root / "camera.json")
+    ex = seen["exact"]
+    got = {n: (v, sg) for n, v, sg in zip(ex.joint_offset_names, ex.joint_offsets, ex.joint_offset_sigma)}
+    out = {"exact.variance_factor": float(ex.variance_factor),
+           "exact.max_abs_z": float(max(abs(got[n][0] - v) / got[n][1] for n, v in offsets.items()))}
+    got = {j["name"]: j for j in s["joint_offsets"]}
+    out["default.max_abs_z"] = float(max(abs(got[n]["value"] - v) / got[n]["sigma"] for n, v in offsets.items()))
+    out["default.joint_noise_deg"] = float(s["joint_noise_deg"] or 0.0)
+    return out
+
+
 PAGES_PRODUCERS = {
     "iso9283/adequacy": iso9283_adequacy,
     "iso9283/verify_backlash_trials": verify_backlash_trials,
@@ -642,6 +790,8 @@ PAGES_PRODUCERS = {
     "datasets/positioner_reference": positioner_reference_fit,
     "handeye/classic_vs_sb": checkerboard_classic_vs_sb,
     "robot_files/parallel_beta": parallel_beta_holdout,
+    "self_calibration/nao_rendered": nao_rendered_pipeline,
+    "self_calibration/justin_reading_noise": justin_reading_noise,
 }
 
 #: the data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer of this module reads
@@ -650,5 +800,6 @@ PAGES_DATASETS_NEEDED = {"robots/boby_nominal_all_poses": ("boby_fanuc",), "robo
 
 #: longer than ~5 s of CPU: run with ``--all`` / ``ROBOCAL_SLOW=1``
 SLOW_PAGES_PRODUCERS = {"iso9283/verify_backlash_trials", "reliability/camera_gate", "fleet/monte_carlo",
-                        "thermal/selection_ranges", "self_calibration_sim/rendered_range",
+                        "thermal/selection_ranges", "self_calibration_sim/rendered_range", "self_calibration/nao_rendered",
+                        "self_calibration/justin_reading_noise",
                         *(f"self_calibration_sim/{r}/{k}" for r, k in SELF_CALIBRATION_RUNS)}

@@ -220,3 +220,24 @@ _RR = r"The rendered images add their own corner error \(RMS "
 PAGE_FIGURES += [Figure(f"self-calibration-simulator:rendered rms {k}", _SCS, _RR + pat, "self_calibration_sim/rendered_range",
                         field, rel_tol=0.0)
                  for k, pat, field in (("low", _N + "-", "rms_px.min"), ("high", r"[0-9.]+-" + _N + " px", "rms_px.max"))]
+
+# ---- docs/self-calibration.md ----
+_NR = r"self-calibration:nao rendered`\): "
+PAGE_FIGURES += [Figure(f"self-calibration:nao rendered {k}", "docs/self-calibration.md", _NR + pat,
+                        "self_calibration/nao_rendered", field, rel_tol=tol)
+                 for k, pat, field, tol in (
+                     ("used", _N + " of the", "n_used", 0.0),
+                     ("images", r"[0-9]+ of the " + _N + " images", "n_images", 0.0),
+                     ("wrong hand", r"(?s:.*?)to the right hand \(" + _N + " wrong", "n_misassigned", 0.0),
+                     ("identifiable", r"(?s:.*?)the " + _N + r" identifiable offsets", "n_identifiable", 0.0),
+                     ("max |z|", r"(?s:.*?)identifiable offsets within " + _N, "max_abs_z", 0.02),
+                     ("max error", r"(?s:.*?)\(errors <= " + _N + "°", "max_error_deg", 0.02),
+                     ("sigma low", r"(?s:.*?)sigmas " + _N + "-", "sigma_deg.min", 0.02),
+                     ("sigma high", r"(?s:.*?)sigmas [0-9.]+-" + _N + "°", "sigma_deg.max", 0.02),
+                     ("rms", r"(?s:.*?)back-projection RMS " + _N + " px", "rms_px", 0.01))]
+_RN = r"Measured by `pytest tests/test_self_calibration_pipeline\.py` \(DLR Justin head camera(?s:.*?)"
+PAGE_FIGURES += [Figure(f"self-calibration:justin reading noise {k}", "docs/self-calibration.md", _RN + pat,
+                        "self_calibration/justin_reading_noise", field, rel_tol=tol)
+                 for k, pat, field, tol in (
+                     ("exact variance factor", r"taken as exact, variance factor " + _N, "exact.variance_factor", 0.02),
+                     ("exact offsets sigma", r"variance factor [0-9.]+ and offsets " + _N, "exact.max_abs_z", 0.03))]
