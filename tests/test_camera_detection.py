@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from robocal.io.boards import BoardSpecError, board_image, parse_board
+from robocal.docs.figure_producers_pages import rendered_board_views
 from robocal.io.detection import detect_board
 from robocal.sim.cameras.camera_cell import default_camera, simulate_hand_eye_poses
 from robocal.sim.cameras.camera_render import BoardRenderer
@@ -27,14 +28,7 @@ def _truth_pixels(camera, T, obj):
 @pytest.fixture(scope="module", params=BOARDS)
 def rendered(request):
     """3 views of a board (seeded), rendered and detected."""
-    board = parse_board(request.param)
-    obj = board.object_points()
-    cam = default_camera()
-    truth = simulate_hand_eye_poses(obj, n_images=3, camera=cam, front_z=board.front_z, seed=3)
-    texture, affine = board_image(board, _texel_mm(board))
-    renderer = BoardRenderer(cam, texture, affine)
-    rng = np.random.default_rng(11)
-    images = [renderer.render(T, rng) for T in truth.T_camera_target]
+    board, cam, truth, images, renderer = rendered_board_views(request.param)  # also docs/handeye.md's producers
     detections = [detect_board(im, board, name=f"v{i}") for i, im in enumerate(images)]
     return board, cam, truth, images, detections, renderer
 

@@ -314,14 +314,10 @@ def test_chunk_size_keeps_task_overhead_under_five_percent():
 
 
 def test_monte_carlo_plan_on_dask_equals_the_serial_loop_and_the_first_order_prediction(client):
+    from robocal.docs.figure_producers_pages import monte_carlo_test_plan  # also docs/fleet.md's figure
     from robocal.workflows.fleet.study import monte_carlo_plan
-    from robocal.workflows.calibration.plan_poses import candidate_poses
-    from robocal.calib.plan import plan_campaign
-    from robocal.robots import load_robot
 
-    model = load_robot("ur10")
-    qk, _ = candidate_poses(model, 30, 400, 2)
-    q_plan = qk[plan_campaign(model, qk, 30)["indices"]]
+    q_plan = monte_carlo_test_plan()
     kw = dict(samples=14, noise_mm=0.02, check_poses=100, seed=4)
     dask_run = monte_carlo_plan("ur10", q_plan, client=client, **kw)
     serial = monte_carlo_plan("ur10", q_plan, client=None, **kw)

@@ -95,21 +95,12 @@ def test_mpe_and_adequacy_flip_where_theory_says():
 
 @pytest.fixture(scope="module")
 def iso_run(tmp_path_factory):
-    """Plan, simulate and evaluate the ISO test of an IRB 140 through the command line."""
+    """Plan, simulate and evaluate the ISO test of an IRB 140 through the command line (the set-up
+    docs/iso9283.md's adequacy figures are produced from: robocal.docs.figure_producers_pages)."""
+    from robocal.docs.figure_producers_pages import iso9283_simulated_run
+
     d = tmp_path_factory.mktemp("iso")
-    run = CliRunner().invoke
-    r = run(main, ["iso9283", "plan", "abb_irb140", "--out", str(d / "plan"), "--drift-hours", "1", "--json"])
-    assert r.exit_code == 0, r.output
-    plan = json.loads(r.output)
-    r = run(main, ["simulate", "iso9283", "abb_irb140", str(d / "plan"), "--seed", "4", "--out", str(d / "run.csv"),
-                   "--instrument-at", "3500,0,300"])
-    assert r.exit_code == 0, r.output
-    out = {}
-    for name in ("run.csv", "run.truth.csv"):
-        r = run(main, ["iso9283", "evaluate", str(d / "plan"), str(d / name), "--out", str(d / ("ev-" + name)),
-                       "--mpe", "15um+6um/m", "--instrument-at", "3500,0,300", "--json"])
-        assert r.exit_code == 0, r.output
-        out[name] = json.loads(r.output)
+    plan, out = iso9283_simulated_run(d)
     return d, plan, out
 
 

@@ -18,46 +18,10 @@ import pytest
 
 from robocal.calib import solve
 from robocal.calib._iterate import remaining_decrease_bound
-from robocal.calib.blocks import VectorBlock
-from robocal.calib.core import Problem
-from robocal.calib.residuals.base import ResidualBlock
+from robocal.sim.solver_problems import C, N_POSES, X0, excess_in_variances, large_residual_problem
 
-C = 0.99          # Gauss-Newton contraction factor near the minimum
-N_POSES = 2000
-X0 = 1.0
-
-
-class _LargeResidual(ResidualBlock, register=False):
-    """Rows (x + 1, C x^2 + x - 1) per pose (a test double, not a measurement kind)."""
-
-    kind = "large_residual"
-
-    def __init__(self, block, n_poses):
-        self.block = block
-        super().__init__((block,), np.repeat(np.arange(n_poses), 2), None)
-
-    def evaluate(self, ev, jacobian):
-        x = float(ev[self.block][0])
-        n = self.n_rows // 2
-        r = np.tile([x + 1.0, C * x * x + x - 1.0], n)
-        if not jacobian:
-            return r, None
-        # jac is the derivative of the prediction: r(x + d) ~ r - jac d
-        return r, {self.block: -np.tile([1.0, 2.0 * C * x + 1.0], n)[:, None]}
-
-
-def _problem():
-    block = VectorBlock("x", ["x"], ["1"], np.array([X0]))
-    return Problem([block], [_LargeResidual(block, N_POSES)], n_poses=N_POSES)
-
-
-def _excess_in_variances(res):
-    """(cost - cost at the minimum) in residual variances: 2 (C - C*) / s^2, s^2 = 2 C* / (M - n)."""
-    x = float(res.values[0])
-    cost = 0.5 * N_POSES * ((x + 1.0) ** 2 + (C * x * x + x - 1.0) ** 2)
-    cost_min = float(N_POSES)
-    s2 = 2.0 * cost_min / (2 * N_POSES - 1)
-    return 2.0 * (cost - cost_min) / s2, x
+_problem = large_residual_problem
+_excess_in_variances = excess_in_variances
 
 
 def test_the_minimum_is_where_the_docstring_says():

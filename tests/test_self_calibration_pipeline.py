@@ -13,62 +13,19 @@ import pytest
 from click.testing import CliRunner
 
 from robocal.cli.main import main as cli
-from robocal.io.boards import board_image, parse_board
-from robocal.io.camera_files import write_camera_json
+from robocal.docs.figure_producers_pages import JUSTIN_CAPTURE_BOARD, JUSTIN_CAPTURE_PER_ARM, justin_head_capture
 from robocal.io.joint_log_files import write_frames, write_joint_log
 from robocal.io.images import write_png
 from robocal.robots import load_robot
-from robocal.sim.cameras.self_calibration import capture_schedule
-from robocal.sim.cameras.self_calibration_views import ViewLimits, camera_board_poses, visible_configurations
-from robocal.camera import Camera
-from robocal.sim.cameras.camera_render import BoardRenderer
-from robocal.transforms import so3_exp, transforms_from
 
-CAM = Camera(800.0, 800.0, 319.5, 239.5, (-0.1, 0.05, 0.0, 0.0, 0.0), "brown", (640, 480))
-BOARDS = {"left": transforms_from(so3_exp(np.array([0.1, -0.2, 0.3])), np.array([10.0, 20.0, 120.0])),
-          "right": transforms_from(so3_exp(np.array([-0.2, 0.1, 2.0])), np.array([-15.0, 5.0, 110.0]))}
-MOUNT = transforms_from(so3_exp(np.array([0.01, -0.02, 0.015])), np.array([3.0, -2.0, 5.0]))
-
-
-BOARD = "checkerboard:7x4:25mm"
-N_PER_ARM = 4
+BOARD = JUSTIN_CAPTURE_BOARD
+N_PER_ARM = JUSTIN_CAPTURE_PER_ARM
 
 
 @pytest.fixture(scope="module")
 def capture(tmp_path_factory):
-    root = tmp_path_factory.mktemp("selfcal")
-    m = load_robot("dlr_justin19")
-    rng = np.random.default_rng(7)
-    offsets = {"theta23": np.radians(1.5), "theta15": np.radians(-2.0), "theta7": np.radians(1.0)}
-    truth = m.params.values.copy()
-    for n, v in offsets.items():
-        truth[m.params.names.index(n)] += v
-    true_model = m.with_params(truth)
-    board = parse_board(BOARD)
-    X = board.object_points()
-    texture, affine = board_image(board, 1.0)
-    renderer = BoardRenderer(CAM, texture, affine)
-    q, on, T = [], [], []
-    for c in ("left", "right"):
-        qc = visible_configurations(true_model, CAM, X, camera_end_effector="head", T_ee_camera=MOUNT, carrier=c,
-                                    T_carrier_board=BOARDS[c], n=N_PER_ARM, rng=rng, q_center=np.zeros(19),
-                                    q_spread=np.pi, front_z=board.front_z, pitch_mm=board.pitch_mm,
-                                    limits=ViewLimits(margin_px=30.0, depth_mm=(50.0, np.inf), max_tilt_deg=55.0))
-        q.append(qc)
-        on += [c] * N_PER_ARM
-        T.append(camera_board_poses(true_model, qc, "head", MOUNT, c, BOARDS[c]))
-    q, T = np.concatenate(q), np.concatenate(T)
-    images = root / "images"
-    images.mkdir()
-    names = [f"frame_{i:03d}.png" for i in range(len(q))]
-    for n, Ti in zip(names, T):
-        write_png(images / n, renderer.render(Ti, rng))
-    t_img, t_log, pose = capture_schedule(len(q), rng)
-    q_log = np.where(pose[:, None] >= 0, q[np.clip(pose, 0, None)], 0.0)
-    write_joint_log(root / "joints.csv", t_log, q_log, m.controller_joints)
-    write_frames(root / "frames.csv", names, t_img)
-    write_camera_json(root / "camera.json", CAM)
-    return root, offsets, names, t_img, t_log, q_log
+    """The rendered capture, written once in robocal.docs.figure_producers_pages (docs/self-calibration.md)."""
+    return justin_head_capture(tmp_path_factory.mktemp("selfcal"))
 
 
 def _run(root, *extra, joints="joints.csv", frames="frames.csv"):

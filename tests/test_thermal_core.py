@@ -1,7 +1,6 @@
 """Thermal compensation core: system calibration (thesis 3.3), the drift model (3-5 ... 3-10) and
 the compensation of a taught program by iterative IK. Seeded simulations on the KR150 R3100."""
 
-import math
 
 import numpy as np
 import pytest
@@ -26,14 +25,13 @@ from robocal.thermal import (
     predict_sphere,
     thesis_linear_system,
 )
-from robocal.transforms import invert_transforms, rot_x, so3_exp
+from robocal.sim.thermal.drift_setup import (
+    CENTRE_MM, DELTA, FOV_MM, P_E_MM, SUBSET, sensor_frame, taught_program, warm_params,
+)
+from robocal.transforms import so3_exp
 
-P_E = np.array([25.0, -40.0, 160.0])          # sphere on a stem, off the joint-6 axis [mm]
-CENTRE = np.array([1900.0, 300.0, 700.0])     # measurement volume centre, base frame [mm]
-FOV = (250.0, 200.0, 150.0)                   # half sizes of the volume (570 x 430 mm field of view)
-# the screened-like subset: lengths and angles (thesis table 5-1 style) and their true deltas
-SUBSET = ["a1", "a2", "a3", "d4", "d6", "beta2", "theta3", "alpha4"]
-DELTA = np.array([0.10, 0.20, -0.15, 0.05, 0.12, math.radians(0.005), math.radians(-0.004), math.radians(0.005)])
+# the cell, written once in robocal.sim.thermal.drift_setup (also docs/thermal.md's producers)
+P_E, CENTRE, FOV = P_E_MM, CENTRE_MM, FOV_MM
 
 
 @pytest.fixture(scope="module")
@@ -41,19 +39,8 @@ def kuka():
     return load_robot("kuka_kr150_r3100")
 
 
-def _sensor(rng):
-    """A sensor 700 mm below the measurement volume looking up, with a random roll and tilt."""
-    T_bs = np.eye(4)
-    T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
-    T_bs[:3, 3] = CENTRE + [0.0, 0.0, -700.0]
-    return invert_transforms(T_bs)
-
-
-def _warm_params(model, names=SUBSET, delta=DELTA):
-    X = model.params.values.copy()
-    for n, d in zip(names, delta):
-        X[model.params.index(n)] += d
-    return X
+_sensor = sensor_frame
+_warm_params = warm_params
 
 
 # ------------------------------------------------------------------------------------- system calibration
@@ -327,12 +314,7 @@ def test_rank_deficient_subset_is_reported_not_solved(kuka):
 
 
 # ------------------------------------------------------------------------------------- compensation
-def _program(model, n, rng):
-    """Taught joints well inside the limits and away from the wrist singularity (|q5| > 10 deg)."""
-    lo, hi = model.limits[:, 0], model.limits[:, 1]
-    q = rng.uniform(lo + 0.15 * (hi - lo), hi - 0.15 * (hi - lo), (4 * n, model.n_joints))
-    q = q[np.abs(q[:, 4]) > math.radians(10)]
-    return q[:n]
+_program = taught_program
 
 
 def test_compensation_reaches_taught_poses_in_3_iterations(kuka):

@@ -17,6 +17,7 @@ from robocal.sim.thermal.deformation import (
     link_geometry,
     link_twists,
 )
+from robocal.sim.thermal.deformation_transfer import TRANSFER_MOTOR_TEMPERATURES_K, deformation_transfer
 from robocal.sim.thermal.effects import HallTemperature, HeatResponse, LinkDeformation, thermal_effects
 from robocal.sim.thermal.measurement import add_outliers, approach_sides, backlash_offsets, distance_noise
 from robocal.sim.thermal.response import hall_temperature, motor_temperatures
@@ -201,35 +202,7 @@ def test_gravity_torques_are_the_potential_energy_gradient(kr150):
     assert np.all(np.abs(tau[0]) <= ref + 1e-9) and abs(tau[0, 1]) > 1000.0    # joint 2 carries the arm
 
 
-def _transfer(cell, temps, which):
-    """``(share of the drift at the monitored points outside the 24-parameter span there, share
-    left there by the best parameter fit on the sphere poses, rms drift there [mm])`` for the
-    bending or the warm sag alone at motor temperatures ``temps``."""
-    from robocal.sim.thermal.deformation import sag_offsets
-
-    m, X, geom, dfm = cell.robot.true_model, cell.robot.true_model.params.values, cell.realism.geometry, LinkDeformation()
-    fs = cell.T_flange_sensor
-    pm = np.tile([0.0, 0.0, 250.0], (len(cell.q_monitor), 1)) @ fs[:3, :3].T + fs[:3, 3]  # held-sensor points
-    ps = np.tile(cell.P_e, (len(cell.q_sphere), 1))
-    tw = link_twists(geom, temps[None], dfm, 6)[0]
-
-    def moved(q):
-        if which == "bend":
-            return apply_link_twists(m, q, cell._flange(q, X), tw)
-        return cell._flange(q + sag_offsets(m, q, geom, temps, dfm), X)
-
-    def drift_and_jac(q, pts):
-        x = lambda T: np.einsum("kij,kj->ki", T[:, :3, :3], pts) + T[:, :3, 3]  # noqa: E731
-        k = np.arange(len(q))
-        J = m.identification_jacobian(q, points=pts)[k, k][:, :, m.params.free].reshape(-1, 24)
-        return (x(moved(q)) - x(cell._flange(q, X))).ravel(), J
-
-    dm, Jm = drift_and_jac(cell.q_monitor, pm)
-    ds, Js = drift_and_jac(cell.q_sphere, ps)
-    span = dm - Jm @ np.linalg.lstsq(Jm, dm, rcond=None)[0]
-    transfer = dm - Jm @ np.linalg.lstsq(Js, ds, rcond=1e-10)[0]
-    n = np.linalg.norm(dm)
-    return np.linalg.norm(span) / n, np.linalg.norm(transfer) / n, float(np.sqrt(np.mean(dm ** 2)))
+_transfer = deformation_transfer  # written once in robocal.sim.thermal.deformation_transfer (docs/thermal.md's producer)
 
 
 def test_bending_is_a_parameter_change_the_warm_sag_only_locally():
@@ -237,7 +210,7 @@ def test_bending_is_a_parameter_change_the_warm_sag_only_locally():
     is a change of the 24 free parameters (at the monitored points and fitted from the sphere
     poses alike, to ~2 %); the sag that softens with the heat is one locally (2 % outside the span
     at the car body) but not between the sphere and the car-body poses (measured 5-66 % left)."""
-    temps = np.array([9.0, 25.0, 22.0, 16.0, 7.0, 5.0])
+    temps = TRANSFER_MOTOR_TEMPERATURES_K
     rows = []
     for seed in (3, 4, 5):
         cell = ThermalCell.standard(seed, preset="realistic")

@@ -10,26 +10,7 @@ from click.testing import CliRunner
 
 from robocal.cli import main
 from robocal.performance.verify import verify_positions
-from robocal.robots import load_robot
-
-
-#: a reflector on a tool 150 mm beyond the flange and 100 mm off its axis (a typical SMR holder)
-REFLECTOR = np.array([0.0, 100.0, 150.0])
-
-
-def _points(model, q):
-    T = model.fk(q)
-    return T[:, :3, :3] @ REFLECTOR + T[:, :3, 3]
-
-
-def _jacobian(model, q, h=1e-6):
-    n = q.shape[1]
-    J = np.empty((len(q), 3, n))
-    for j in range(n):
-        dq = np.zeros(n)
-        dq[j] = h
-        J[:, :, j] = (_points(model, q + dq) - _points(model, q - dq)) / (2 * h)
-    return J
+from robocal.sim.verify_trials import backlash_trials, offset_jump_trials, with_backlash_columns
 
 
 def test_false_alarm_rate_is_the_stated_one():
@@ -56,25 +37,11 @@ def test_false_alarm_rate_is_the_stated_one():
 @pytest.mark.parametrize("joint", [0, 1, 2, 3, 4])
 def test_an_offset_jump_of_005_deg_is_detected_and_named(joint):
     """A 0.05 deg jump of J1..J5 on an IRB 140, 10 random poses, tracker noise 0.02 mm, calibration
-    uncertainty 0.01 mm per coordinate, a reflector 150 mm beyond the flange: detected in >= 95 %, the joint named in >= 80 % of 100 trials."""
-    model = load_robot("abb_irb140")
-    rng = np.random.default_rng(10 + joint)
-    lo, hi = model.limits[:, 0], model.limits[:, 1]
-    detected = named = 0
-    for _ in range(100):
-        q = lo + (hi - lo) * rng.uniform(0.2, 0.8, (10, 6))
-        pred = _points(model, q)
-        dq = np.zeros(6)
-        dq[joint] = np.radians(0.05)
-        truth = _points(model, q + dq)
-        meas = truth + rng.normal(0, 0.02, truth.shape)
-        C = np.tile(np.eye(3) * 0.01 ** 2, (10, 1, 1))
-        v = verify_positions(meas, pred, instrument_sigma_mm=0.02, prediction_covariance_mm2=C,
-                             joint_jacobian=_jacobian(model, q), joint_names=model.controller_joints)
-        detected += v.decision != "ok"
-        named += v.suspect_joint == model.controller_joints[joint]
-    assert detected >= 95
-    assert named >= 80
+    uncertainty 0.01 mm per coordinate, a reflector 150 mm beyond the flange: detected in >= 95 %, the
+    joint named in >= 80 % of 100 trials (robocal.sim.verify_trials, also docs/iso9283.md's producer)."""
+    r = offset_jump_trials(joint)
+    assert r["detected"] >= 95
+    assert r["named"] >= 80
 
 
 def test_verify_command_ok_and_fault(tmp_path):
@@ -128,36 +95,13 @@ def test_a_backlash_of_01_deg_is_detected_and_named_from_the_approach_directions
     """A 0.1 deg backlash of any of J1-J5 (the joint stops b/2 short in the direction it moved:
     the simulator's model of backlash), 10 poses approached from random sides, the rest as above:
     detected in >= 95 %, named as that joint's backlash in >= 80 % of 100 trials; an offset jump of
-    the same joint with the same approach data stays an offset."""
-    model = load_robot("abb_irb140")
-    rng = np.random.default_rng(40 + joint)
-    lo, hi = model.limits[:, 0], model.limits[:, 1]
+    the same joint with the same approach data stays an offset (robocal.sim.verify_trials)."""
     b = np.radians(0.1)
-    detected = named = offset_named = 0
-    for _ in range(100):
-        q = lo + (hi - lo) * rng.uniform(0.2, 0.8, (10, 6))
-        s = rng.choice([-1.0, 1.0], size=(10, 6))
-        pred = _points(model, q)
-        q_true = q.copy()
-        q_true[:, joint] -= 0.5 * b * s[:, joint]
-        meas = _points(model, q_true) + rng.normal(0, 0.02, (10, 3))
-        C = np.tile(np.eye(3) * 0.01 ** 2, (10, 1, 1))
-        J = _jacobian(model, q)
-        v = verify_positions(meas, pred, instrument_sigma_mm=0.02, prediction_covariance_mm2=C, joint_jacobian=J,
-                             joint_names=model.controller_joints, approach_signs=s)
-        detected += v.decision != "ok"
-        if v.suspect_joint == model.controller_joints[joint] and v.suspect_cause == "backlash":
-            named += 1
-            assert v.suspect_offset == pytest.approx(b, abs=0.5 * b)
-        dq = np.zeros(6)
-        dq[joint] = np.radians(0.05)
-        meas_o = _points(model, q + dq) + rng.normal(0, 0.02, (10, 3))
-        v = verify_positions(meas_o, pred, instrument_sigma_mm=0.02, prediction_covariance_mm2=C, joint_jacobian=J,
-                             joint_names=model.controller_joints, approach_signs=s)
-        offset_named += v.suspect_joint == model.controller_joints[joint] and v.suspect_cause == "offset"
-    assert detected >= 95
-    assert named >= 80
-    assert offset_named >= 80
+    r = backlash_trials(joint)
+    assert r["detected"] >= 95
+    assert r["named"] >= 80
+    assert r["offset_named"] >= 80
+    assert all(e == pytest.approx(b, abs=0.5 * b) for e in r["backlash_estimates_rad"])
 
 
 def test_verify_command_names_a_backlash_from_approach_columns(tmp_path):
@@ -172,16 +116,7 @@ def test_verify_command_names_a_backlash_from_approach_columns(tmp_path):
                       "--out", str(tmp_path / "v.csv")]).exit_code == 0
     lines = (tmp_path / "v.csv").read_text().splitlines()
     head = [i for i, s in enumerate(lines) if not s.startswith("#")][0]
-    cols = lines[head].split(",")
-    k = cols.index("J2")
-    rng = np.random.default_rng(7)
-    out = lines[:head] + [lines[head] + "," + ",".join(f"approach_J{j}" for j in range(1, 7))]
-    for s in lines[head + 1:]:
-        v = s.split(",")
-        sign = rng.choice([-1, 1], size=6)
-        v[k] = repr(float(v[k]) + 0.5 * 0.15 * float(sign[1]))
-        out.append(",".join(v + [f"{x:+d}" for x in sign]))
-    (tmp_path / "b.csv").write_text("\n".join(out) + "\n")
+    (tmp_path / "b.csv").write_text(with_backlash_columns((tmp_path / "v.csv").read_text(), "J2", 0.15, seed=7))
     r = run(main, ["verify", str(tmp_path / "cal"), str(tmp_path / "b.csv"), "--json"])
     assert r.exit_code == 6, r.output
     res = json.loads(r.output)

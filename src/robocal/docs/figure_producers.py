@@ -13,6 +13,7 @@ from pathlib import Path
 from .figure_producers_bench import BENCH_PRODUCERS
 from .figure_producers_cli import CLI_PRODUCERS
 from .figure_producers_handeye import HANDEYE_PRODUCERS
+from .figure_producers_pages import PAGES_DATASETS_NEEDED, PAGES_PRODUCERS, SLOW_PAGES_PRODUCERS
 from .figure_producers_datasets import DATASET_PRODUCERS, DATASETS_NEEDED, SLOW_DATASET_PRODUCERS, report_text
 from .figure_producers_setups import SETUP_PRODUCERS
 from .figure_producers_speed import SLOW_SPEED_PRODUCERS, SPEED_PRODUCERS
@@ -267,9 +268,15 @@ def _thermal_seeds(preset: str) -> dict:
     from ..workflows.thermal.seeds import run_thermal_seeds
 
     r = run_thermal_seeds(preset=preset, seeds=20, first_seed=1, n_cycles=90, resamples=20)
+    # per seed: the screened lambda [%] (rms statistic) of its evaluation runs, lowest first
+    per_seed = {f"seed.{x['seed']}.evaluation.screened.{k}": v for x in r["per_seed"]
+                for k, v in enumerate(sorted(row["lambda"]["rms"]["screened"] for row in x["rows"]
+                                             if row["role"] == "evaluation"))}
     return {**_flat(r["tables"]), "n_not_converged": float(r["fits"]["not_converged"]),
             **{f"ordering.{k}": 100.0 * v for k, v in _flat(r["ordering"]).items()},
-            **{f"selection.{k}": 100.0 * float(v) for k, v in r["selection"].items()}}
+            **{f"selection.{k}": 100.0 * float(v) for k, v in r["selection"].items()},
+            **{f"bootstrap.{k}": 100.0 * float(v) for k, v in (r["bootstrap_frequency"] or {}).items()},
+            **per_seed}
 
 
 @functools.lru_cache(maxsize=None)
@@ -351,7 +358,9 @@ def _fleet_pose_sets() -> dict:
     r = pose_set_selection("ur10", sets=12, count=40, candidates=800)
     return {**{f"spread.{k}": float(v) for k, v in r["spread_mm"].items()},
             "relative_spread_percent": 100.0 * float(r["best"]["relative_spread"]),
-            "n_within_noise": float(len(r["within_noise"]))}
+            "n_within_noise": float(len(r["within_noise"])),
+            "holdout_rms_mm.min": min(float(x["holdout_rms_mm"]) for x in r["sets"]),
+            "holdout_rms_mm.max": max(float(x["holdout_rms_mm"]) for x in r["sets"])}
 
 
 @functools.lru_cache(maxsize=None)
@@ -543,6 +552,7 @@ PRODUCERS = {
     **HANDEYE_PRODUCERS,
     **DATASET_PRODUCERS,
     **TESTING_PRODUCERS,
+    **PAGES_PRODUCERS,
     "boby_fanuc/geometric": lambda: _dataset("boby_fanuc", "geometric"),
     "boby_fanuc/elastic-joint": lambda: _dataset("boby_fanuc", "elastic-joint"),
     "dlr_justin/geometric": lambda: _dataset("dlr_justin", "geometric"),
@@ -588,6 +598,8 @@ def datasets_needed(producer: str) -> tuple:
     """The data sets (folders under ``robocal.io.datasets.datasets_root()``) a producer reads."""
     if producer in DATASETS_NEEDED:
         return DATASETS_NEEDED[producer]
+    if producer in PAGES_DATASETS_NEEDED:
+        return PAGES_DATASETS_NEEDED[producer]
     head = producer.split("/")[0]
     if producer.startswith(("handeye/default_real/", "handeye/camera_real/", "handeye/gate_shifted",
                             "handeye/variants_real/")):
@@ -601,7 +613,7 @@ def datasets_needed(producer: str) -> tuple:
 
 
 #: producers longer than ~10 s of CPU: their figures run with ``--all`` / ``ROBOCAL_SLOW=1``
-SLOW_PRODUCERS = {*SLOW_SPEED_PRODUCERS, "dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
+SLOW_PRODUCERS = {*SLOW_SPEED_PRODUCERS, *SLOW_PAGES_PRODUCERS, "dlr_justin/elastic-joint", "dlr_justin/elastic-full", "hilti_trailblazer/elastic-full", "fleet/pose_sets",
                   "handeye/fair_comparison", "handeye/study", *BENCH_PRODUCERS, *SLOW_DATASET_PRODUCERS, "ik_net/cli_example",
                   # thermal.md: the experiment with one effect alone (~6-10 s each), the ideal drift; testing.md's at-the-robot
                   # UR10 (~4 s) and gripper cases (~2 s each; slow to keep the fast set's added CPU under ~8 s) (figsC)

@@ -239,7 +239,8 @@ def thermal_seed_2024(preset: str) -> dict:
     screen RUN1 --json`` and ``--params`` (the set screened on run 1) on runs 2 and 3: λ [%] as
     ``run{k}.lambda.{before|traditional|screened}``; ``robocal thermal calibrate-sensor`` with the
     nominal model on run 1's cold spheres, ``--truth``: ``sensor.residual_rms_mm`` and the errors
-    ``sensor.{rotation_deg|at_point_mm|P_e_mm|...}``."""
+    ``sensor.{rotation_deg|at_point_mm|P_e_mm|...}``; with a robot file of the true parameters:
+    ``sensor_true.{rotation_deg|at_point_mm|P_e_mm|...}``."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "cell"
@@ -253,6 +254,16 @@ def thermal_seed_2024(preset: str) -> dict:
                                  "--truth", d / "run1" / "truth.json", "--json"))
         out["sensor.residual_rms_mm"] = float(cal["results"][0]["residual_rms_mm"])
         out.update({f"sensor.{k}": float(v) for k, v in cal["errors"]["least-squares"].items()})
+        # the same with the true geometry (a robot file of the truth's parameters, as a geometric calibration gives)
+        from ..robots import load_robot
+        from ..robots.writer import save_robot
+
+        truth = json.loads((d / "run1" / "truth.json").read_text())
+        m = load_robot(truth["robot"])
+        save_robot(m.with_params([truth["true_parameters"][n] for n in m.params.names]), Path(tmp) / "true_robot.toml")
+        cal = json.loads(run_cli("thermal", "calibrate-sensor", Path(tmp) / "true_robot.toml", d / "run1" / "sphere_cold.csv",
+                                 "--truth", d / "run1" / "truth.json", "--json"))
+        out.update({f"sensor_true.{k}": float(v) for k, v in cal["errors"]["least-squares"].items()})
         first = json.loads(run_cli("thermal", "screen", d / "run1", "--json"))
         runs = {1: first}
         for k in (2, 3):

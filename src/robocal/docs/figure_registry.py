@@ -1723,5 +1723,9 @@ FIGURES += [Figure(f"testing:positioner reference {k}", "docs/testing.md", _PR +
 FIGURES.append(Figure("tcp:touch-up gate tcp error with one pose 5 mm off", "docs/tcp.md",
                       r"let it through with the TCP " + _N + " mm off", "tcp/touchup_gate", "tcp_error_mm", rel_tol=0.02))
 
+# ---- the pages of branch figs-pages (iso9283, reliability, robots, fleet, thermal, ...) ----
+from .figure_registry_pages import PAGE_FIGURES  # noqa: E402  (it uses Figure, _N and _cell above)
+
+FIGURES += PAGE_FIGURES
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

@@ -7,7 +7,7 @@ too few points were found (the image is then not used). :func:`detect_images` do
 list of files, reporting progress.
 
 Sub-pixel refinement: checkerboard corners by ``cornerSubPix`` (11 x 11 window; on rendered images
-with known truth 0.035 px RMS against 0.048-0.071 px for ``findChessboardCornersSB``, which is
+with known truth 0.045 px RMS against 0.087-0.090 px for ``findChessboardCornersSB`` (docs/handeye.md), which is
 used when the classic detector finds no board); ChArUco corners are refined by OpenCV's
 ``CharucoDetector`` itself and, as an alternative set (``refined_points``), again by
 ``cornerSubPix`` with a window kept clear of the markers; circle centres are blob centroids

@@ -1,0 +1,46 @@
+"""The thermal-core test cell (tests/test_thermal_core.py and docs/thermal.md's measured
+identification and compensation figures): a KR150 R3100, a sensor 700 mm below a measurement volume,
+a sphere off the joint-6 axis, and a screened-like subset of eight parameters with known warm deltas."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...transforms import invert_transforms, rot_x, so3_exp
+
+__all__ = ["CENTRE_MM", "DELTA", "FOV_MM", "P_E_MM", "SUBSET", "sensor_frame", "taught_program", "warm_params"]
+
+P_E_MM = np.array([25.0, -40.0, 160.0])          # sphere on a stem, off the joint-6 axis [mm]
+CENTRE_MM = np.array([1900.0, 300.0, 700.0])     # measurement volume centre, base frame [mm]
+FOV_MM = (250.0, 200.0, 150.0)                   # half sizes of the volume (570 x 430 mm field of view)
+#: the screened-like subset: lengths and angles (thesis table 5-1 style) and their true deltas [mm | rad]
+SUBSET = ["a1", "a2", "a3", "d4", "d6", "beta2", "theta3", "alpha4"]
+DELTA = np.array([0.10, 0.20, -0.15, 0.05, 0.12, math.radians(0.005), math.radians(-0.004), math.radians(0.005)])
+
+
+def sensor_frame(rng) -> np.ndarray:
+    """``T_sensor_base`` (4, 4) [mm]: a sensor 700 mm below the measurement volume looking up, with a
+    random roll and tilt drawn from ``rng``."""
+    T_bs = np.eye(4)
+    T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
+    T_bs[:3, 3] = CENTRE_MM + [0.0, 0.0, -700.0]
+    return invert_transforms(T_bs)
+
+
+def warm_params(model, names=SUBSET, delta=DELTA) -> np.ndarray:
+    """The model's parameter vector with ``delta`` added to the parameters ``names``."""
+    X = model.params.values.copy()
+    for n, d in zip(names, delta):
+        X[model.params.index(n)] += d
+    return X
+
+
+def taught_program(model, n: int, rng) -> np.ndarray:
+    """``n`` taught joints (n, n_joints) [rad] well inside the limits and away from the wrist
+    singularity (|q5| > 10 deg)."""
+    lo, hi = model.limits[:, 0], model.limits[:, 1]
+    q = rng.uniform(lo + 0.15 * (hi - lo), hi - 0.15 * (hi - lo), (4 * n, model.n_joints))
+    q = q[np.abs(q[:, 4]) > math.radians(10)]
+    return q[:n]
