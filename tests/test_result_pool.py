@@ -75,10 +75,13 @@ def test_other_sizes_and_clear_get_new_memory(pool):
     first = m.fk(_q(4))
     address = _address(first)
     del first
-    other = m.fk(_q(5, N + 8))  # another size: new memory, the kept block stays kept... until replaced
+    other = m.fk(_q(5, N + 8))  # another size: new memory, and the kept block is let go first
     assert _address(other) != address
+    assert pool._kept is None
     del other
+    assert pool._kept is not None
     pool.clear()
+    assert pool._kept is None
     again = m.fk(_q(4))
     np.testing.assert_allclose(again, m.fk(_q(4), out=np.empty((N, 4, 4))), rtol=0, atol=1e-12)
 

@@ -12,8 +12,8 @@ Safety: the memory is never shared by two live results. Each array handed out is
 block through a lease made for that call alone (a ``ctypes`` array over the block); every view,
 slice or ``memoryview`` of the result keeps the lease alive (numpy's base chain and the buffer
 protocol hold it), and only the lease's collection puts the block back. One block at most is kept,
-so the memory held beyond the caller's arrays is at most the size of the last large result dropped;
-:func:`clear` lets it go.
+so the memory held beyond the caller's arrays is at most the size of the last large result dropped,
+and a request of another size lets it go before it asks for new memory; :func:`clear` lets it go.
 """
 
 from __future__ import annotations
@@ -50,12 +50,10 @@ def empty(shape: tuple[int, ...]) -> np.ndarray:
     nbytes = 8 * int(np.prod(shape, dtype=np.int64))
     if nbytes < MIN_BYTES:
         return np.empty(shape)
-    with _lock:
-        block = _kept
-        if block is not None and block.nbytes == nbytes:
-            _kept = None
-        else:
-            block = None
+    with _lock:  # the kept block is taken, or let go before new memory is asked for (no two held)
+        block, _kept = _kept, None
+    if block is not None and block.nbytes != nbytes:
+        block = None
     if block is None:
         block = np.empty(nbytes, dtype=np.uint8)
     lease = (ctypes.c_char * nbytes).from_buffer(block)
