@@ -73,11 +73,11 @@ def test_memory_a_live_view_uses_is_never_reused(pool, keep):
 def test_other_sizes_and_clear_get_new_memory(pool):
     m = load_robot("ur10")
     first = m.fk(_q(4))
-    address = _address(first)
     del first
-    other = m.fk(_q(5, N + 8))  # another size: new memory, and the kept block is let go first
-    assert _address(other) != address
-    assert pool._kept is None
+    assert pool._kept is not None
+    other = m.fk(_q(5, N + 8))  # another size: the kept block is let go before new memory is asked for
+    assert pool._kept is None  # (the allocator may then hand out the same addresses again)
+    np.testing.assert_allclose(other, m.fk(_q(5, N + 8), out=np.empty((N + 8, 4, 4))), rtol=0, atol=1e-12)
     del other
     assert pool._kept is not None
     pool.clear()
