@@ -22,6 +22,7 @@ from ..transforms import invert_transforms
 from ._backend import kernel as _kernel
 from ._kernel_loader import kernels as _kernels
 from ._packing import pack_fused
+from ._result_pool import empty as _pooled_empty
 from ._threads import PARALLEL_MIN, run_ranges
 from .links import (
     ANGLE_PARAMS,
@@ -370,7 +371,9 @@ class RobotModel:
         Returns (N, 4, 4) [mm] (or (4, 4) for a single configuration) for the named end effector
         (default: the first, the flange of a single-chain robot). out: optional float64
         C-contiguous array of that shape to write into (returned); saves the allocation of a
-        large batch. Batches of :data:`~robocal.kinematics._threads.PARALLEL_MIN` poses or more
+        large batch. Without it, a result from 32 MiB up (262,144 poses) reuses the memory of the
+        last such result dropped (:mod:`~robocal.kinematics._result_pool`; never memory a live
+        array uses), so a loop of ``T = fk(q)`` runs near the speed of ``out=``. Batches of :data:`~robocal.kinematics._threads.PARALLEL_MIN` poses or more
         are shared between the cores.
         """
         if (out is None and end_effector is None and type(q) is np.ndarray and q.shape == self._one_q
@@ -386,7 +389,8 @@ class RobotModel:
         e = self.end_effector_index(end_effector)
         shape = (4, 4) if single else (len(q2), 4, 4)
         if out is None:
-            out = np.empty(shape)
+            # a large result reuses the memory of the last one dropped (no page faults), never shared
+            out = _pooled_empty(shape) if big else np.empty(shape)
         elif (not isinstance(out, np.ndarray) or out.shape != shape or out.dtype != _F64
               or not out.flags.c_contiguous or not out.flags.writeable):
             raise ValueError(f"{self.name}: out must be a writeable C-contiguous float64 array of shape {shape}")
