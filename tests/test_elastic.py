@@ -16,14 +16,14 @@ from robocal.robots import load_robot
 from robocal.sim import LaserTracker, VirtualRobot
 from robocal.sim.elastic import ElasticTruth
 
-SIGMA = 0.02
-TOOL = np.array([30.0, 40.0, 250.0])
-# a KR150-class mass model (simulation numbers: kg, centre of mass in each DH link frame [mm])
-MASSES = {"A1": (450.0, (0.0, 150.0, 0.0)), "A2": (280.0, (-600.0, 0.0, 150.0)),
-          "A3": (220.0, (-60.0, -40.0, 0.0)), "A4": (70.0, (0.0, 0.0, -300.0)),
-          "A5": (30.0, (0.0, 20.0, 0.0)), "A6": (8.0, (0.0, 0.0, -20.0))}
-PAYLOAD = ("flange", 120.0, (0.0, 50.0, 200.0))
-COMPLIANCE = {"A1": 0.15, "A2": 0.25, "A3": 0.4, "A4": 1.5, "A5": 2.0, "A6": 3.0}  # mrad/kNm, hidden
+from robocal.sim.elastic_campaigns import (KR150_COMPLIANCE, KR150_LATERAL, KR150_MASSES, KR150_PAYLOAD, KR150_TOOL,
+                                          SIGMA_MM, kr150_correction_cell, kr150_elastic_campaign, kr150_mass_model_file,
+                                          reached_error_mm, write_flange_targets)
+
+SIGMA = SIGMA_MM
+TOOL = KR150_TOOL
+# a KR150-class mass model, the payload and the hidden compliances [mrad/kNm] (robocal.sim.elastic_campaigns)
+MASSES, PAYLOAD, COMPLIANCE = KR150_MASSES, KR150_PAYLOAD, KR150_COMPLIANCE
 
 
 def test_gravity_torques_are_the_derivative_of_the_potential_energy():
@@ -49,15 +49,9 @@ def test_gravity_torques_are_the_derivative_of_the_potential_energy():
 
 
 def _elastic_campaign(seed, n_train=100, n_hold=100, reflectors=TOOL[None], measurements=False):
-    nominal = load_robot("kuka_kr150_r3100")
-    truth = ElasticTruth(COMPLIANCE, MASSES, payload=PAYLOAD, hardening=0.0002)
-    robot = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0).with_elastic(truth)
-    tracker = LaserTracker.placed(seed + 100, reflectors=reflectors, sigma_mm=SIGMA)
-    rng = np.random.default_rng(seed + 200)
-    q = robot.random_configurations(n_train + n_hold, rng, margin=0.1)
-    meas = tracker.measure(robot, q, rng)
-    out = (nominal, robot, q, meas.points, tracker.true_points(robot, q), n_train)
-    return out + (meas,) if measurements else out
+    c = kr150_elastic_campaign(seed, n_train, n_hold, reflectors=reflectors)
+    out = (c.nominal, c.robot, c.q, c.points, c.true_points, c.n_train)
+    return out + (c.measurements,) if measurements else out
 
 
 def _fit(nominal, q, pts, elastic, **kw):
@@ -117,13 +111,7 @@ def test_a_payload_without_mass_is_refused():
 
 def _robot_with_masses(tmp_path):
     """The KR150 robot file with an [elastic] section holding the mass model (written, then read)."""
-    from robocal.calib.elastic import ElasticDescription, bodies_from_masses
-    from robocal.robots import save_robot
-
-    nominal = load_robot("kuka_kr150_r3100")
-    desc = ElasticDescription({}, bodies_from_masses(MASSES), mass_model=True)
-    path = save_robot(nominal.replace(extra={**nominal.extra, "elastic": desc}), tmp_path / "kr150_masses.toml")
-    return path, desc
+    return kr150_mass_model_file(tmp_path)
 
 
 def test_robot_file_elastic_section_round_trips(tmp_path):
@@ -158,18 +146,8 @@ def test_calibrate_elastic_then_correct_puts_the_deflecting_robot_on_target(tmp_
     from robocal.io.measurements import write_measurements
 
     path, _ = _robot_with_masses(tmp_path)
-    nominal = load_robot(path)
-    truth = ElasticTruth(COMPLIANCE, MASSES, payload=PAYLOAD, hardening=0.0002)
-    # the last link's geometry trades off against the single reflector (held at nominal by the
-    # identifiability analysis): keep it exact so the flange of the calibrated file is the true one
-    last = [n.endswith("6") for n in nominal.params.names]
-    keep = nominal.with_free(np.asarray(nominal.params.free) & ~np.asarray(last))
-    robot = VirtualRobot.perturbed(keep, 3, joint_noise_deg=0.0).with_elastic(truth)
-    robot = VirtualRobot(nominal, robot.true_model, elastic=truth)  # same model, the file's mass model
-    tracker = LaserTracker.placed(103, reflectors=TOOL[None], sigma_mm=SIGMA)
-    rng = np.random.default_rng(7)
-    q = robot.random_configurations(120, rng, margin=0.1)
-    write_measurements(tmp_path / "m.csv", tracker.measure(robot, q, rng))
+    robot, tracker, measurements = kr150_correction_cell(path)
+    write_measurements(tmp_path / "m.csv", measurements)
     run = CliRunner().invoke(main, ["calibrate", str(path), str(tmp_path / "m.csv"), "--out", str(tmp_path / "cal"),
                                     "--elastic", "joint", "--payload", "120@0,50,200", "--noise", "0.02"])
     assert run.exit_code == 0, run.output
@@ -185,27 +163,14 @@ def test_calibrate_elastic_then_correct_puts_the_deflecting_robot_on_target(tmp_
     for j in ("A2", "A3"):
         assert comp[j] == pytest.approx(COMPLIANCE[j], rel=0.02)
     # flange targets in the tracker frame (the calibrated file's world), reachable by the true robot
-    from robocal.transforms import pose_from_transform
-
-    T_inst = tracker.T_tracker_world
-    T_goal = T_inst @ robot.true_poses(robot.random_configurations(5, np.random.default_rng(8), 0.2))
-    rows = [f"P{i}," + ",".join(f"{v:.9f}" for v in pose_from_transform(T, "kuka_abc")) for i, T in enumerate(T_goal)]
-    head = ["# format: robocal-targets/1", "# length_unit: mm", "# angle_unit: deg", "# orientation: kuka_abc",
-            "# frame: world", "name,x,y,z,rx,ry,rz"]
-    (tmp_path / "t.csv").write_text("\n".join(head + rows) + "\n")
+    T_goal = write_flange_targets(robot, tracker, tmp_path / "t.csv")
     err = {}
     for label, extra in (("elastic", ["--payload", "120@0,50,200"]), ("rigid", [])):
         out = tmp_path / f"corr_{label}.csv"
         r = CliRunner().invoke(main, ["correct", str(tmp_path / "cal" / "calibrated_robot.toml"),
                                       str(tmp_path / "t.csv"), "--out", str(out)] + extra)
         assert r.exit_code == 0, r.output
-        import csv
-
-        with open(out, newline="") as fh:
-            recs = list(csv.DictReader(line for line in fh if not line.startswith("#")))
-        q_cmd = np.radians([[float(rec[j]) for j in nominal.controller_joints] for rec in recs])
-        reached = T_inst @ robot.true_poses(q_cmd)
-        err[label] = np.linalg.norm(reached[:, :3, 3] - T_goal[:, :3, 3], axis=1).max()
+        err[label] = reached_error_mm(robot, tracker, out, T_goal).max()
     # measured: elastic 0.017 mm (the calibration's own error), rigid 2.7 mm (the deflection)
     assert err["elastic"] < 0.1 and err["rigid"] > 10 * err["elastic"], err
 
@@ -280,7 +245,7 @@ def test_measured_orientations_see_the_deflection_too():
     assert rot_rms["geometric"] > 3 * rot_rms["elastic"], rot_rms
 
 
-LATERAL = {"A2": (0.05, 0.08), "A3": (0.1, 0.06), "A4": (0.4, 0.3)}  # mrad/kNm, hidden
+LATERAL = KR150_LATERAL  # mrad/kNm, hidden
 
 
 def test_simulated_full_elastic_round_trip():

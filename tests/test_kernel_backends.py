@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from robocal.kinematics import _backend
+from robocal.kinematics._backend_agreement import backend_difference, every_kernel_output
 from robocal.robots import list_robots, load_robot
 
 
@@ -26,33 +27,12 @@ def kernels_mode():
     _backend.set_kernels("auto")
 
 
-def _everything(model, rng):
-    n_e = len(model.end_effectors)
-    lim = np.clip(np.asarray(model.limits, dtype=float), -3.0, 3.0)
-    q = np.ascontiguousarray(rng.uniform(lim[:, 0], lim[:, 1], (23, model.n_joints)))
-    free = np.sort(rng.choice(len(model.params), size=max(1, len(model.params) // 2), replace=False)).astype(np.int64)
-    points = rng.normal(0.0, 50.0, (4, 3))
-    ee = rng.integers(0, n_e, 4).astype(np.int64)
-    root = np.eye(4)
-    root[:3, :3] = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    root[:3, 3] = (100.0, -50.0, 20.0)
-    params = model.params.values + rng.normal(0.0, 1e-3, len(model.params))
-    out = list(model.target_points(q, params, points, ee, free, root=root))
-    out += list(model.target_points(q, params, points, ee, np.arange(len(model.params)), want_jacobian=False))
-    out += list(model.kinematics_with(q, params, root))
-    out += list(model.twists(q[:5]))
-    out += [model.fk(q, e) for e in range(n_e)]
-    out += [model.link_frames(q), model.fk(q[0]), model.jacobian(q[:3])]
-    return [np.asarray(a, dtype=float) for a in out]
+_everything = every_kernel_output
 
 
 @pytest.mark.parametrize("name", list_robots())
 def test_numpy_kernels_equal_compiled(name, kernels_mode):
-    model = load_robot(name)
-    results = {}
-    for mode in ("compiled", "numpy"):
-        kernels_mode(mode)
-        results[mode] = _everything(model, np.random.default_rng(3))
+    results = backend_difference(load_robot(name), seed=3)
     for a, b in zip(results["compiled"], results["numpy"]):
         assert a.shape == b.shape
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-9)

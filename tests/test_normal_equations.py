@@ -11,27 +11,13 @@ import warnings
 import numpy as np
 import pytest
 
-from robocal.calib import CalibrationProblem, Target, solve
+from robocal.calib import CalibrationProblem, solve
 from robocal.calib import _normal
-from robocal.robots import load_robot
-from robocal.sim import LaserTracker, VirtualRobot
+from robocal.sim.tracker_campaigns import reflector_campaign
 
 
 def _problem(n_poses=60, seed=5, three_targets=False, missing=False):
-    nominal = load_robot("ur10")
-    robot = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0)
-    rng = np.random.default_rng(seed)
-    tracker = LaserTracker.placed(seed, 3 if three_targets else 1, sigma_mm=0.02)
-    q = robot.random_configurations(n_poses, rng, margin=0.1)
-    pts = np.array(tracker.measure(robot, q, rng).points)
-    if missing:
-        pts[3, 0] = np.nan
-        pts[7, -1] = np.nan
-    targets = [Target(f"r{k}", None, tuple(tracker.reflectors[k] + 2.0), free=(k == 0))
-               for k in range(pts.shape[1])]
-    problem = CalibrationProblem(nominal, q, targets, pts, base_initial="fit", point_sigma_mm=0.02)
-    truth = tracker.T_tracker_world @ robot.true_model.T_world_base
-    return problem, truth
+    return reflector_campaign("ur10", n_poses=n_poses, seed=seed, three_targets=three_targets, missing=missing)
 
 
 def _both(problem, monkeypatch, **kw):
@@ -54,7 +40,8 @@ def test_normal_equations_give_the_general_solution(monkeypatch, three_targets, 
     assert fast.identifiability.identifiable == general.identifiability.identifiable
     assert [d["why"] for d in fast.identifiability.dropped] == [d["why"] for d in general.identifiability.dropped]
     ok = np.isfinite(general.std)
-    # equal to rounding: 1e-6 of a standard deviation (they differ by ~1e-10 in practice)
+    # equal to rounding: 1e-6 of a standard deviation (they differ by ~1e-10 in practice: docs/calibration.md,
+    # figure "calibration:normal equations agreement")
     assert np.all(np.abs(fast.values - general.values)[ok] <= 1e-6 * general.std[ok])
     np.testing.assert_allclose(fast.std[ok], general.std[ok], rtol=1e-8)
     assert fast.rms_after == pytest.approx(general.rms_after, rel=1e-9)
