@@ -8,7 +8,8 @@ from __future__ import annotations
 import functools
 import os
 
-__all__ = ["SLOW_SPEED_PRODUCERS", "SPEED_PRODUCERS", "compiled_lm_agreement", "ik_seed_ranges", "plan_verdict"]
+__all__ = ["SLOW_SPEED_PRODUCERS", "SPEED_PRODUCERS", "compiled_lm_agreement", "demo_kernel_shift", "ik_seed_ranges",
+           "kernel_backend_agreement", "normal_equations_agreement", "plan_verdict"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -104,7 +105,82 @@ def ik_seed_ranges() -> dict:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def normal_equations_agreement() -> dict:
+    """docs/calibration.md "Point-only problems ... normal equations": the normal-equations path
+    (``robocal.calib._normal``) against the general path (the full Jacobian; ``_normal.supports``
+    patched to refuse) on the campaigns of tests/test_normal_equations.py
+    (:func:`robocal.sim.tracker_campaigns.reflector_campaign`: UR10, 60 poses, seed 5; one
+    reflector, and three reflectors with two missing points).
+
+    Fields ``max_sigma`` (the largest estimate difference in sigma over both campaigns) and
+    ``same_iterations`` (1 when both took the same iterations and stop reason on each)."""
+    import warnings
+    from unittest import mock
+
+    from ..calib import _normal, solve
+    from ..sim.tracker_campaigns import reflector_campaign
+
+    gaps, same = [], True
+    for three, missing in ((False, False), (True, True)):
+        problem, _ = reflector_campaign("ur10", three_targets=three, missing=missing)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fast = solve(problem)
+            with mock.patch.object(_normal, "supports", lambda p: False):
+                general = solve(problem)
+        gaps.append(_sigma_gap(fast, general))
+        same = same and fast.iterations == general.iterations and fast.reason == general.reason
+    return {"max_sigma": max(gaps), "same_iterations": float(same)}
+
+
+@functools.lru_cache(maxsize=None)
+def kernel_backend_agreement() -> dict:
+    """docs/calibration.md "Kernels: numpy first": every kinematics kernel's output computed by the
+    numpy and by the compiled kernels on every shipped robot (tests/test_kernel_backends.py's
+    comparison, :func:`robocal.kinematics._backend_agreement.backend_difference`, seed 3).
+
+    Fields ``max_abs`` (the largest difference over every output of every robot: mm, rad and their
+    derivatives) and ``max_relative`` (the largest difference of an output over its largest
+    magnitude)."""
+    from ..kinematics._backend_agreement import backend_difference
+    from ..robots import list_robots, load_robot
+
+    runs = [backend_difference(load_robot(name), seed=3) for name in list_robots()]
+    return {"max_abs": max(r["max_abs"] for r in runs), "max_relative": max(r["max_relative"] for r in runs)}
+
+
+@functools.lru_cache(maxsize=None)
+def demo_kernel_shift() -> dict:
+    """docs/calibration.md "Kernels: numpy first": ``robocal demo --poses 100`` (seed 7) run twice,
+    with the numpy and with the compiled kernels (``ROBOCAL_KERNELS=numpy`` / ``compiled``; the mode
+    restored afterwards).
+
+    Fields ``max_shift_mm`` (the largest difference of an ISO 9283 characteristic in mm, before or
+    after calibration) and ``at_circle_before_mm`` (the circle path's AT before, numpy kernels)."""
+    import tempfile
+    from pathlib import Path
+
+    from ..kinematics import _backend
+    from ..workflows.demo import run_demo
+
+    old, runs = _backend._mode, {}
+    try:
+        for mode in ("numpy", "compiled"):
+            _backend.set_kernels(mode)
+            with tempfile.TemporaryDirectory() as tmp:
+                r = run_demo(Path(tmp) / "demo", seed=7, n_poses=100, history=False)
+            runs[mode] = {c["characteristic"]: (float(c["before"]), float(c["after"])) for c in r["iso9283"]["comparison"]}
+    finally:
+        _backend.set_kernels(old)
+    shifts = [abs(a - b) for k, v in runs["numpy"].items() if k.endswith("_mm") for a, b in zip(v, runs["compiled"][k])]
+    return {"max_shift_mm": max(shifts), "at_circle_before_mm": runs["numpy"]["AT_mm_circle"][0]}
+
+
 SPEED_PRODUCERS = {"calibration/plan_verdict": plan_verdict, "calibration/compiled_lm_agreement": compiled_lm_agreement,
-                   "ik_seed/ranges": ik_seed_ranges}
-#: compiling the LM loop takes ~10 s of CPU on a fresh cache; the IK seed runs train three networks
-SLOW_SPEED_PRODUCERS = {"calibration/compiled_lm_agreement", "ik_seed/ranges"}
+                   "ik_seed/ranges": ik_seed_ranges, "calibration/normal_equations_agreement": normal_equations_agreement,
+                   "calibration/kernel_backend_agreement": kernel_backend_agreement,
+                   "calibration/demo_kernel_shift": demo_kernel_shift}
+#: compiling the LM loop takes ~10 s of CPU on a fresh cache; the IK seed runs train three networks; the
+#: demo twice takes ~10-15 s
+SLOW_SPEED_PRODUCERS = {"calibration/compiled_lm_agreement", "ik_seed/ranges", "calibration/demo_kernel_shift"}

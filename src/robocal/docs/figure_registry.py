@@ -1514,14 +1514,21 @@ FIGURES += [Figure(f"self-calibration:nao cli {k}", "docs/self-calibration.md", 
 
 _RTJ = r"A1 reported unidentifiable\s+by name, holdout "
 _RTF = r"the six lateral compliances within 1\.7 σ, holdout\s+"
+# the joint round trip: tests/test_elastic.py's set-up (robocal.sim.elastic_campaigns), fast (~2.5 s; figs-last)
+FIGURES += [Figure(f"elastic:round trip {k}", "docs/elastic.md", pat, "elastic/joint_round_trip", field, rel_tol=0.02)
+            for k, pat, field in (
+                ("joint seed 0 holdout", _RTJ + _N, "realistic.0.holdout_rms_mm"),
+                ("joint seed 1 holdout", _RTJ + r"[0-9.]+ / " + _N, "realistic.1.holdout_rms_mm"),
+                ("joint seed 0 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of " + _N,
+                 "realistic.0.optimum_mm"),
+                ("joint seed 1 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of [0-9.]+ / " + _N,
+                 "realistic.1.optimum_mm"),
+                ("joint seed 0 holdout, truth as modelled",
+                 r"\(seeds 0 / 1; a truth without the unmodelled effects gives " + _N, "modelled.0.holdout_rms_mm"),
+                ("joint seed 1 holdout, truth as modelled",
+                 r"\(seeds 0 / 1; a truth without the unmodelled effects gives [0-9.]+ / " + _N, "modelled.1.holdout_rms_mm"))]
 FIGURES += [Figure(f"elastic:round trip {k}", "docs/elastic.md", pat, "elastic/round_trips", field, rel_tol=0.02)
             for k, pat, field in (
-                ("joint seed 0 holdout", _RTJ + _N, "joint.0.holdout_rms_mm"),
-                ("joint seed 1 holdout", _RTJ + r"[0-9.]+ / " + _N, "joint.1.holdout_rms_mm"),
-                ("joint seed 0 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of " + _N,
-                 "joint.0.optimum_mm"),
-                ("joint seed 1 optimum", _RTJ + r"[0-9.]+ / [0-9.]+ mm against a noise-limited optimum of [0-9.]+ / " + _N,
-                 "joint.1.optimum_mm"),
                 ("full holdout", _RTF + _N, "full.holdout_rms_mm"),
                 ("full optimum", _RTF + r"[0-9.]+ mm against a noise-limited optimum of " + _N, "full.optimum_mm"),
                 ("joint-only holdout", r"the joint-only model leaves " + _N, "joint_only.holdout_rms_mm"))]
@@ -1727,5 +1734,27 @@ FIGURES.append(Figure("tcp:touch-up gate tcp error with one pose 5 mm off", "doc
 from .figure_registry_pages import PAGE_FIGURES  # noqa: E402  (it uses Figure, _N and _cell above)
 
 FIGURES += PAGE_FIGURES
+
+# docs/calibration.md "normal equations" and "Kernels: numpy first", docs/elastic.md's closed loop through
+# `robocal correct` (figs-last): rounding differences are checked to their order of magnitude (0-10x the printed value)
+_ROUNDING = "order of magnitude of a rounding difference"
+FIGURES += [
+    Figure("calibration:normal equations agreement", _CAL, r"estimates equal to ~" + _N + " of their σ",
+           "calibration/normal_equations_agreement", "max_sigma", rel_tol=2.0, note=_ROUNDING),
+    Figure("calibration:kernel backends agreement", _CAL, r"equal to rounding on every shipped robot, at most ~" + _N + " mm",
+           "calibration/kernel_backend_agreement", "max_abs", rel_tol=9.0, note=_ROUNDING),
+    Figure("calibration:kernel backends relative", _CAL, r"Rounding differs\s+between the two \(~" + _N + " of an output",
+           "calibration/kernel_backend_agreement", "max_relative", rel_tol=9.0, note=_ROUNDING),
+    Figure("calibration:demo AT circle", _CAL, r"circle-path accuracy AT \(" + _N + r" mm,\s+`robocal demo --poses 100`",
+           "demo/poses100", "iso.AT_mm_circle.before"),
+    Figure("calibration:demo ISO 9283 shift between kernels", _CAL,
+           r"with today's\s+kernels the demo's ISO 9283 figures differ by ~" + _N + " mm",
+           "calibration/demo_kernel_shift", "max_shift_mm", rel_tol=9.0, note=_ROUNDING),
+    Figure("elastic:correct closed loop elastic", "docs/elastic.md", r"reaches the corrected targets within " + _N + " mm",
+           "elastic/correct_closed_loop", "elastic_mm", rel_tol=0.02),
+    Figure("elastic:correct closed loop rigid", "docs/elastic.md",
+           r"file without the deflection compensation leaves " + _N + " mm", "elastic/correct_closed_loop", "rigid_mm",
+           rel_tol=0.02),
+]
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

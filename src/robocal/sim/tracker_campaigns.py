@@ -1,6 +1,6 @@
 """The laser-tracker campaigns of tests/test_compiled_lm.py, tests/test_normal_equations.py and of
-docs/calibration.md "Normal equations" and "The compiled LM loop": a perturbed robot (no joint noise) measured by a placed tracker (0.02 mm), built as the
-point-only ``CalibrationProblem`` the compiled Levenberg-Marquardt loop applies to. Written once, so
+docs/calibration.md's normal-equations paragraph and "The compiled LM loop": a perturbed robot (no
+joint noise) measured by a placed tracker (0.02 mm), built as the point-only ``CalibrationProblem`` the compiled Levenberg-Marquardt loop applies to. Written once, so
 the test and the documented figure use the same draws."""
 
 from __future__ import annotations
