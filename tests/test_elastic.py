@@ -13,12 +13,10 @@ from robocal.calib.elastic import ElasticModel, Payload
 from robocal.calib.gravity import GravityTorques
 from robocal.calib.residuals.examples import example_robot
 from robocal.robots import load_robot
-from robocal.sim import LaserTracker, VirtualRobot
-from robocal.sim.elastic import ElasticTruth
-
+from robocal.sim import VirtualRobot
 from robocal.sim.elastic_campaigns import (KR150_COMPLIANCE, KR150_LATERAL, KR150_MASSES, KR150_PAYLOAD, KR150_TOOL,
-                                          SIGMA_MM, kr150_correction_cell, kr150_elastic_campaign, kr150_mass_model_file,
-                                          reached_error_mm, write_flange_targets)
+                                          SIGMA_MM, kr150_correction_cell, kr150_elastic_campaign, kr150_elastic_truth,
+                                          kr150_mass_model_file, reached_error_mm, write_flange_targets)
 
 SIGMA = SIGMA_MM
 TOOL = KR150_TOOL
@@ -253,14 +251,8 @@ def test_simulated_full_elastic_round_trip():
     the model superposes them to first order at the commanded one): the full model recovers the
     lateral compliances of those joints within 3 sigma and reaches the noise floor; the joint-only
     model does not."""
-    nominal = load_robot("kuka_kr150_r3100")
-    truth = ElasticTruth(COMPLIANCE, MASSES, payload=PAYLOAD, hardening=0.0, lateral=LATERAL)
-    robot = VirtualRobot.perturbed(nominal, 4, joint_noise_deg=0.0).with_elastic(truth)
-    tracker = LaserTracker.placed(104, reflectors=TOOL[None], sigma_mm=SIGMA)
-    rng = np.random.default_rng(204)
-    q = robot.random_configurations(250, rng, margin=0.1)
-    pts, true_pts = tracker.measure(robot, q, rng).points, tracker.true_points(robot, q)
-    n = 150
+    c = kr150_elastic_campaign(4, 150, 100, truth=kr150_elastic_truth(hardening=0.0, lateral=LATERAL))
+    nominal, q, pts, true_pts, n = c.nominal, c.q, c.points, c.true_points, c.n_train
     out = {}
     for label, lateral in (("full", True), ("joint", False)):
         el = ElasticModel(masses=MASSES, payload=Payload(PAYLOAD[1], PAYLOAD[2], "flange"), compliance_initial=0.0,

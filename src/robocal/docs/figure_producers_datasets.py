@@ -553,58 +553,33 @@ def _expected_holdout_rms(prob, res, q_hold, sigma: float) -> float:
 
 @functools.lru_cache(maxsize=None)
 def elastic_round_trips() -> dict:
-    """docs/elastic.md's round trips, the set-ups of ``tests/test_elastic.py``: a KR150 R3100 carrying
-    120 kg with the hidden :data:`ELASTIC_COMPLIANCE`, one reflector at (30, 40, 250) mm, 0.02 mm
-    tracker, mass model and payload known. ``joint.{0,1}.holdout_rms_mm`` / ``.optimum_mm``: 100 + 100
-    poses (seeds 0, 1; torques at the deflected pose, ``hardening=0.0002``); ``full.holdout_rms_mm`` /
-    ``full.optimum_mm`` and ``joint_only.holdout_rms_mm``: 150 + 100 poses (seed 4, lateral compliances of
-    A2-A4 hidden), the full and the joint-only model. Holdout: RMS of the predicted against the true
-    reflector positions [mm]."""
+    """docs/elastic.md's full round trip, the set-up of ``tests/test_elastic.py``'s
+    ``test_simulated_full_elastic_round_trip`` (:func:`robocal.sim.elastic_campaigns.kr150_elastic_campaign`,
+    seed 4, 150 + 100 poses, lateral compliances of A2-A4 hidden, no stiffening): ``full.holdout_rms_mm`` /
+    ``full.optimum_mm`` and ``joint_only.holdout_rms_mm`` / ``joint_only.optimum_mm``, the full and the
+    joint-only model; ``n_not_converged``. Holdout: RMS of the predicted against the true reflector
+    positions [mm]. (The joint round trip of seeds 0 and 1: ``elastic/joint_round_trip``.)"""
     import numpy as np
 
     from ..calib import CalibrationProblem, Target, solve
     from ..calib.elastic import ElasticModel, Payload
-    from ..robots import load_robot
-    from ..sim import LaserTracker, VirtualRobot
-    from ..sim.elastic import ElasticTruth
+    from ..sim.elastic_campaigns import (KR150_LATERAL, KR150_MASSES, KR150_PAYLOAD, SIGMA_MM, kr150_elastic_campaign,
+                                         kr150_elastic_truth)
 
-    sigma, tool = 0.02, np.array([[30.0, 40.0, 250.0]])
-    lateral = {"A2": (0.05, 0.08), "A3": (0.1, 0.06), "A4": (0.4, 0.3)}
-    nominal = load_robot("kuka_kr150_r3100")
-    payload = Payload(ELASTIC_PAYLOAD[1], ELASTIC_PAYLOAD[2], "flange")
-
-    def fit_and_judge(q, pts, true_pts, n, elastic, **kw):
-        prob = CalibrationProblem(nominal, q[:n], [Target("r1", None, (0.0, 0.0, 50.0))], pts[:n], point_sigma_mm=sigma,
-                                  base_initial="fit", elastic=elastic)
-        res = solve(prob, **kw)
-        pred = prob.predict_points(res.state, q=q[n:])
-        return (float(np.sqrt(np.mean(np.sum((pred - true_pts[n:]) ** 2, axis=-1)))),
-                _expected_holdout_rms(prob, res, q[n:], sigma), res.converged)
-
-    out, conv = {}, []
-    for seed in (0, 1):
-        truth = ElasticTruth(ELASTIC_COMPLIANCE, ELASTIC_MASSES, payload=ELASTIC_PAYLOAD, hardening=0.0002)
-        robot = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0).with_elastic(truth)
-        tracker = LaserTracker.placed(seed + 100, reflectors=tool, sigma_mm=sigma)
-        rng = np.random.default_rng(seed + 200)
-        q = robot.random_configurations(200, rng, margin=0.1)
-        el = ElasticModel(masses=ELASTIC_MASSES, payload=payload, compliance_initial=0.0)
-        h, o, c = fit_and_judge(q, tracker.measure(robot, q, rng).points, tracker.true_points(robot, q), 100, el)
-        out[f"joint.{seed}.holdout_rms_mm"], out[f"joint.{seed}.optimum_mm"] = h, o
-        conv.append(c)
-    truth = ElasticTruth(ELASTIC_COMPLIANCE, ELASTIC_MASSES, payload=ELASTIC_PAYLOAD, hardening=0.0, lateral=lateral)
-    robot = VirtualRobot.perturbed(nominal, 4, joint_noise_deg=0.0).with_elastic(truth)
-    tracker = LaserTracker.placed(104, reflectors=tool, sigma_mm=sigma)
-    rng = np.random.default_rng(204)
-    q = robot.random_configurations(250, rng, margin=0.1)
-    pts, true_pts = tracker.measure(robot, q, rng).points, tracker.true_points(robot, q)
+    c = kr150_elastic_campaign(4, 150, 100, truth=kr150_elastic_truth(hardening=0.0, lateral=KR150_LATERAL))
+    n, out, conv = c.n_train, {}, []
     for label, with_lateral in (("full", True), ("joint_only", False)):
-        el = ElasticModel(masses=ELASTIC_MASSES, payload=payload, compliance_initial=0.0,
-                          joints=("A2", "A3", "A4", "A5", "A6"), lateral=with_lateral, lateral_joints=tuple(lateral))
-        h, o, c = fit_and_judge(q, pts, true_pts, 150, el, max_iterations=200)
-        out[f"{label}.holdout_rms_mm"], out[f"{label}.optimum_mm"] = h, o
-        conv.append(c)
-    out["n_not_converged"] = float(sum(not c for c in conv))
+        el = ElasticModel(masses=KR150_MASSES, payload=Payload(KR150_PAYLOAD[1], KR150_PAYLOAD[2], "flange"),
+                          compliance_initial=0.0, joints=("A2", "A3", "A4", "A5", "A6"), lateral=with_lateral,
+                          lateral_joints=tuple(KR150_LATERAL))
+        prob = CalibrationProblem(c.nominal, c.q[:n], [Target("r1", None, (0.0, 0.0, 50.0))], c.points[:n],
+                                  point_sigma_mm=SIGMA_MM, base_initial="fit", elastic=el)
+        res = solve(prob, max_iterations=200)
+        pred = prob.predict_points(res.state, q=c.q[n:])
+        out[f"{label}.holdout_rms_mm"] = float(np.sqrt(np.mean(np.sum((pred - c.true_points[n:]) ** 2, axis=-1))))
+        out[f"{label}.optimum_mm"] = _expected_holdout_rms(prob, res, c.q[n:], SIGMA_MM)
+        conv.append(res.converged)
+    out["n_not_converged"] = float(sum(not x for x in conv))
     return out
 
 
