@@ -9,22 +9,8 @@ revolution), J2/J3 gravity sag (3 mrad/kNm) and a 20 ppm warm-up over the sessio
 relies on: where the calibrated model puts a tool point, against where the true robot (with its
 effects) puts it, over held-out configurations, after the best base frame and tool point (the
 closed chain cannot see either). The tolerance comes from the effects' stated sizes, to first order
-(the judging code, :func:`robocal.sim.closed_chain_judge.judge`, shared with the documented figures
-of docs/closed-chain.md):
-
-* the fit's variables (identified geometry, laser mount, spots) are biased by
-  ``delta = -(W J)^+ W e``: ``e`` the in-plate displacement of every held spot's ray by the
-  effects (the hidden truth's geometry with and without them, at the file's joints), ``J`` the
-  in-plate residuals' Jacobian by central differences of the ray-plate geometry written out here
-  (not robocal's residual code), ``W`` the fit's weights (1 / 0.05 mm per spot axis, 1 / 0.02 mm
-  per known spacing);
-* at a held-out configuration the true tool point misses the calibrated one by
-  ``e_at - J_at delta`` (``e_at``: the effects at that configuration, the arm as warm as at the
-  end), less its best base frame / tool point part;
-* the rest is noise: the spot spread (uniform in the 0.1 mm disc: 0.05 mm per axis) and the joint
-  readout (0.001 deg noise, 0.001 deg quantisation), propagated through ``(W J)^+ W`` to the tool
-  point; ``sigma_rms`` is its expected RMS. The readout's 0.0005 deg cyclic error (both cells,
-  ~0.006 mm) is left in the noise.
+(the judging code and its first-order derivation: :mod:`robocal.sim.closed_chain_judge`, shared with
+the documented figures of docs/closed-chain.md).
 
 Asserted: RMS over the held-out poses of ``|error - predicted miss| <= 3 sigma_rms``, and the
 effects are visible: the at-robot RMS exceeds the ideal cell's (same seed) and 3 sigma_rms.
