@@ -59,7 +59,24 @@ def _dataset(name: str, model: str) -> dict:
                     "train_rms_mm.mean": sum(train) / len(train)})
     for s in r.get("sets", []):
         out[f"{s['set']}.holdout_rms_mm"] = s["holdout_rms_mm"]
+    its = r["convergence"].get("iterations") or []
+    if its and its[-1] is not None:  # the solver iterations of the protocol's last fit (its top level)
+        out["iterations.last"] = its[-1]
+    seeds = len(r.get("per_seed_holdout_rms_mm", []) or [])
+    if its and seeds > 1 and len(its) % seeds == 0:  # per seed: the last fit of each seed's levels
+        last = its[len(its) // seeds - 1::len(its) // seeds]
+        out.update({f"iterations.per_seed_last.{k}": v for k, v in enumerate(last)})
+        done = [v for v, bad in zip(last, _not_converged_seeds(r, len(its) // seeds, seeds)) if not bad]
+        if done:
+            out["iterations.per_seed_last_converged.min"] = min(done)
+            out["iterations.per_seed_last_converged.max"] = max(done)
     return out
+
+
+def _not_converged_seeds(r: dict, fits_per_seed: int, seeds: int) -> list:
+    """Per seed: whether the last fit of its levels is among the protocol's non-converged fits."""
+    bad = {int(m.group(1)) for m in (re.match(r"fit (\d+):", x) for x in r["convergence"]["reasons"]) if m}
+    return [(k + 1) * fits_per_seed in bad for k in range(seeds)]
 
 
 @functools.lru_cache(maxsize=None)

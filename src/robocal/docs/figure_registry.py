@@ -1320,8 +1320,6 @@ FIGURES += [
            "elastic/justin_joint_seeds", "min", rel_tol=0.01),
     Figure("elastic:justin joint seeds 0-4 max", "docs/elastic.md", r"holdout mean\s+[0-9.]+-" + _N + r" mm \(`calibrate_justin",
            "elastic/justin_joint_seeds", "max", rel_tol=0.01),
-    Figure("elastic:justin full mean (times paragraph)", "docs/elastic.md", r"holdout " + _N + r" mm mean \(before",
-           "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.01),
 ]
 
 # self-calibration.md: the NAO acceptance's held offsets' truth and the gain of both arms in sigma
@@ -1756,5 +1754,49 @@ FIGURES += [
            r"file without the deflection compensation leaves " + _N + " mm", "elastic/correct_closed_loop", "rigid_mm",
            rel_tol=0.02),
 ]
+
+# Iteration counts of the real-data protocols (the audit counts "N iterations" as a result): the top
+# level's solver iterations from the protocol's convergence record. Path-dependent on a nearly flat
+# cost (docs/elastic.md "What the full model's iterations are spent on"): 20 % tolerance.
+_EL = "docs/elastic.md"
+FIGURES += [Figure(f"elastic:iterations {k}", _EL, pat, producer, field, rel_tol=0.2,
+                   note="solver iterations: path-dependent, 20 %")
+            for k, pat, producer, field in (
+                ("justin joint", r"The joint model needs " + _N + r" and the full model", "dlr_justin/elastic-joint",
+                 "iterations.last"),
+                ("justin full", r"The joint model needs [0-9]+ and the full model " + _N + " LM iterations",
+                 "dlr_justin/elastic-full", "iterations.last"),
+                ("justin full (times)", r"it; " + _N + r" iterations of the full level", "dlr_justin/elastic-full",
+                 "iterations.last"),
+                ("justin full (not done yet)", r"The lumped models converge slowly \(" + _N + " LM iterations",
+                 "dlr_justin/elastic-full", "iterations.last"),
+                ("boby full converged min", r"66 identifiable; " + _N + r"-[0-9]+ iterations for seeds",
+                 "boby_fanuc/elastic-full", "iterations.per_seed_last_converged.min"),
+                ("boby full converged max", r"66 identifiable; [0-9]+-" + _N + r" iterations for seeds",
+                 "boby_fanuc/elastic-full", "iterations.per_seed_last_converged.max"),
+                ("hilti joint", r"LM needs " + _N + r" iterations for `joint`", "hilti_trailblazer/elastic-joint",
+                 "iterations.last"),
+                ("hilti full", r"LM needs [0-9]+ iterations for `joint`,\s+" + _N + r" for `full`",
+                 "hilti_trailblazer/elastic-full", "iterations.last"))]
+FIGURES += [Figure(f"datasets:iterations {k}", "docs/datasets.md", pat, producer, field, rel_tol=0.2,
+                   note="solver iterations: path-dependent, 20 %")
+            for k, pat, producer, field in (
+                ("boby joint max", r"the elastic fits need up to " + _N + r" \(boby joint\)", "boby_fanuc/elastic-joint",
+                 "iterations.per_seed_last_converged.max"),
+                ("justin joint", r"\(boby full, seed 1 at the cap\), " + _N + " / ", "dlr_justin/elastic-joint",
+                 "iterations.last"),
+                ("justin full", r"\(boby full, seed 1 at the cap\), [0-9]+ / " + _N + r" \(Justin", "dlr_justin/elastic-full",
+                 "iterations.last"),
+                ("hilti joint", r"Nielsen's damping rule\), " + _N + r" / [0-9]+ \(Hilti", "hilti_trailblazer/elastic-joint",
+                 "iterations.last"),
+                ("hilti full", r"Nielsen's damping rule\), [0-9]+ / " + _N + r" \(Hilti", "hilti_trailblazer/elastic-full",
+                 "iterations.last"))]
+# kinematics.md: the UR10 row's median DLS iterations (bench_ik_seed.py's joint-box branch)
+FIGURES += [Figure(f"kinematics:ur10 {k}", "docs/kinematics.md", pat, "ik_seed/ur10", field, rel_tol=0.0)
+            for k, pat, field in (
+                ("box middle median iterations", r"only [0-9]+ % in the wanted configuration, " + _N + " iterations",
+                 "ik.box.median_it"),
+                ("network median iterations", r"converged, " + _N + " vs [0-9]+ iterations", "ik.network.median_it"),
+                ("middle median iterations", r"converged, [0-9]+ vs " + _N + " iterations", "ik.middle.median_it"))]
 
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]

@@ -65,27 +65,33 @@ class Convergence:
         One ``"<fit>: <reason>"`` per fit that did not converge (empty when all did).
     what_to_try : str
         The advice printed with the warning.
+    iterations : tuple of int or None
+        Each fit's solver iterations, in order (None where the fit has no count); empty when unknown.
     """
 
     n_fits: int
     not_converged: tuple = ()
     what_to_try: str = DEFAULT_HINT
+    iterations: tuple = ()
 
     @classmethod
     def of(cls, fits, what_to_try: str = DEFAULT_HINT) -> Convergence:
         """From ``fits``: an iterable of ``(label, converged, reason)`` (or ``(label, result)`` with a
         solver result that has ``converged`` and ``reason``/``message``/``iterations``)."""
         fits = list(fits)
-        bad = []
+        bad, iterations = [], []
         for fit in fits:
             if len(fit) == 2:
                 label, res = fit
                 ok, reason = bool(res.converged), fit_reason(res)
+                it = getattr(res, "iterations", None)
+                iterations.append(None if it is None else int(it))
             else:
                 label, ok, reason = fit
+                iterations.append(None)
             if not ok:
                 bad.append(f"{label}: {reason}" if label else str(reason))
-        return cls(len(fits), tuple(bad), what_to_try)
+        return cls(len(fits), tuple(bad), what_to_try, tuple(iterations))
 
     @property
     def converged(self) -> bool:
@@ -116,9 +122,12 @@ class Convergence:
         """Back from :meth:`as_dict` (None: one fit that converged)."""
         if not d:
             return cls(1)
-        return cls(int(d["n_fits"]), tuple(d["reasons"]), d.get("what_to_try", DEFAULT_HINT))
+        return cls(int(d["n_fits"]), tuple(d["reasons"]), d.get("what_to_try", DEFAULT_HINT),
+                   tuple(d.get("iterations", ())))
 
     def as_dict(self) -> dict:
-        """The JSON mark: ``converged``, ``n_fits``, ``n_not_converged``, ``reasons``, ``what_to_try``."""
+        """The JSON mark: ``converged``, ``n_fits``, ``n_not_converged``, ``reasons``, ``what_to_try``,
+        ``iterations`` (each fit's, in order; null where a fit has no count)."""
         return {"converged": self.converged, "n_fits": self.n_fits, "n_not_converged": self.n_not_converged,
-                "reasons": list(self.not_converged), "what_to_try": self.what_to_try}
+                "reasons": list(self.not_converged), "what_to_try": self.what_to_try,
+                "iterations": list(self.iterations)}
