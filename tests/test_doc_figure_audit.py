@@ -40,3 +40,14 @@ def test_the_audit_finds_a_result_and_passes_over_inputs_timings_code_and_citati
         encoding="utf-8")
     found = [(n.line, n.text) for n in audit(tmp_path)]
     assert found == [(2, "0.123"), (12, "1.75")], found
+
+
+def test_an_iteration_count_is_a_result_but_a_cap_is_not(tmp_path):
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "README.md").write_text("Intro.\n", encoding="utf-8")
+    (tmp_path / "docs" / "page.md").write_text(
+        "The full model needs 1324 LM iterations; the seeds need 870-1619 iterations.\n"
+        "The protocol's cap of 1000 iterations, at most 50 iterations, 6 poses and 12 images.\n",
+        encoding="utf-8")
+    found = [(n.line, n.text) for n in audit(tmp_path)]
+    assert found == [(1, "1324"), (1, "870"), (1, "1619")], found
