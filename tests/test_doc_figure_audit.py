@@ -51,3 +51,12 @@ def test_an_iteration_count_is_a_result_but_a_cap_is_not(tmp_path):
         encoding="utf-8")
     found = [(n.line, n.text) for n in audit(tmp_path)]
     assert found == [(1, "1324"), (1, "870"), (1, "1619")], found
+
+
+def test_a_count_out_of_a_total_is_a_result(tmp_path):
+    (tmp_path / "docs").mkdir()
+    (tmp_path / "README.md").write_text("Intro.\n", encoding="utf-8")
+    (tmp_path / "docs" / "page.md").write_text(
+        "The default is closer in 18 of 20 cells; the cap of 1000 iterations.\n", encoding="utf-8")
+    found = [(n.line, n.text) for n in audit(tmp_path)]
+    assert found == [(1, "18")], found

@@ -124,6 +124,8 @@ def _masked(text: str) -> str:
 
 #: an integer followed by this is a solver's iteration count (a result), unless a setting (below)
 _ITERATIONS_AFTER = re.compile(r"(?:\s?(?:[-–/]|to|and|or)\s?\d[\d,]*)*\s(?:LM\s|Gauss-Newton\s|GN\s)?iterations?\b")
+#: an integer followed by this is a count out of a total (``18 of 20 seeds``): a result
+_COUNT_OF_AFTER = re.compile(r"\s(?:of|out of)\s\d[\d,]*\b")
 #: ... a cap or a setting of one, not a result
 _ITERATIONS_SETTING = re.compile(r"(?:cap|caps|limit|max(?:imum)?|at most|up to|within|budget|of|after|--max-iterations)\s*(?:of\s*)?(?:\d[\d,]*\s*(?:[-–/]|to|and|or)\s*)*$", re.I)
 
@@ -134,9 +136,11 @@ def _exempt(masked: str, start: int, end: int, line: str) -> bool:
     before = masked[max(0, start - 40):start]
     text = masked[start:end]
     if "." not in text and "e" not in text and not re.match(r"\s?%", after):
-        if not (_ITERATIONS_AFTER.match(after) and not _ITERATIONS_SETTING.search(before)):
+        if not ((_ITERATIONS_AFTER.match(after) and not _ITERATIONS_SETTING.search(before))
+                or (_COUNT_OF_AFTER.match(after) and not _ITERATIONS_SETTING.search(before))):
             return True  # an integer: a count, an index, a size or a setting (results are printed with decimals)
-        # ... except an iteration count of a solve (``1324 iterations``, ``870-1619 LM iterations``): a result
+        # ... except an iteration count of a solve (``1324 iterations``, ``870-1619 LM iterations``) or a
+        # count out of a total (``18 of 20 seeds``, ``4 of 24 found``): results
     if after[:1].isalpha() and not _UNIT_SUFFIX.match(after):
         return True  # 3rd, 6D, 2x (a name or an ordinal)
     if before[-1:] in "([" and re.search(r"[A-Z]{2}\($", before):
