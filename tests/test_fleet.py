@@ -447,3 +447,20 @@ def test_fleet_calibrate_command_exits_4_when_a_fit_does_not_converge(campaigns,
     assert "2 not converged" in res.output
     assert sum(line.startswith("Warning:") for line in res.output.splitlines()) == 1
     assert not (tmp_path / "out" / "robot-0" / "calibrated_robot.toml").exists()
+
+
+def test_fleet_calibrate_refuses_an_output_that_is_an_input(campaigns, client, tmp_path):
+    # robot-0's measurements kept where its folder's residuals.csv goes: the run would overwrite them
+    keep = tmp_path / "out" / "robot-0" / "residuals.csv"
+    keep.parent.mkdir(parents=True)
+    keep.write_bytes((campaigns / "r0.csv").read_bytes())
+    before = keep.read_bytes()
+    entries = good_entries(campaigns, 2)
+    entries[0]["measurements"] = str(keep)
+    fleet = fleet_toml(tmp_path, entries)
+    res = CliRunner().invoke(main, ["fleet", "calibrate", str(fleet), "--out", str(tmp_path / "out"), "--no-report",
+                                    "--scheduler", client.scheduler.address])
+    assert res.exit_code == 1, res.output
+    last = res.output.strip().splitlines()[-1]
+    assert last.startswith("Error:") and "residuals.csv" in last and "robot 'robot-0' measurements" in last, last
+    assert keep.read_bytes() == before and not (tmp_path / "out" / "summary.json").exists()

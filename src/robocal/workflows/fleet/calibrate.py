@@ -113,6 +113,28 @@ def _worker_threads(client) -> int:
         return 1
 
 
+def _check_outputs_are_not_inputs(fleet, out_dir) -> None:
+    """Before any work: no file the run writes (the summaries, each robot's folder's files) is one of
+    its inputs (the fleet file, a robot's measurements, robot file or cell file), even though a run
+    may resume into ``out_dir``
+    (:class:`~robocal.io.output_paths.OutputIsInputError`, one ``Error:`` line naming both)."""
+    from ...io.output_paths import check_not_inputs
+    from ..calibration.calibrate import OUTPUT_FILES
+    from .robot import STAMP_FILE
+
+    out = Path(out_dir)
+    outputs = [out / n for n in ("summary.json", "summary.html", "summary.svg")]
+    inputs = {"FLEET.toml": fleet.path}
+    for e in fleet.entries:
+        outputs += [out / e.id / n for n in (*OUTPUT_FILES.values(), STAMP_FILE)]
+        inputs[f"robot {e.id!r} measurements"] = e.measurements
+        if e.model_is_file:
+            inputs[f"robot {e.id!r} model"] = e.model
+        if e.cell and Path(e.cell).is_file():
+            inputs[f"robot {e.id!r} cell"] = e.cell
+    check_not_inputs(outputs, inputs)
+
+
 def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: bool = True, progress=None,
                           per_task: int | None = None, allow_unconverged: bool = False) -> dict:
     """Calibrate every robot of ``fleet_file`` into ``out_dir`` (see the module docstring).
@@ -129,6 +151,7 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
     """
     t0 = time.perf_counter()
     fleet = read_fleet(fleet_file)
+    _check_outputs_are_not_inputs(fleet, out_dir)
     out = ensure_writable_dir(out_dir)
     entries = fleet.entries
     if allow_unconverged:
