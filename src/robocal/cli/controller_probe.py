@@ -62,7 +62,7 @@ def probe_program_cmd(robot, language, count, seed, host, port, out_file, overwr
 @click.argument("language", type=click.Choice(["ur", "abb", "kuka", "doosan"]))
 @click.option("--count", default=100, show_default=True, help="Number of joint sets (as probe-program draws them).")
 @click.option("--seed", default=0, show_default=True, help="Seed of the joint sets (same as probe-program's).")
-@click.option("--noise", "noise_mm", default=0.01, show_default=True,
+@click.option("--noise", "noise_mm", metavar="MM", default=0.01, show_default=True,
               help="Resolution of the printed positions [mm] (the virtual controller rounds to it).")
 @click.option("--orientation-noise", "noise_deg", default=0.001, show_default=True,
               help="Resolution of the printed orientations [deg].")
@@ -95,7 +95,7 @@ def probe_simulate_cmd(robot, language, count, seed, noise_mm, noise_deg, out_fi
 @click.argument("pairs", type=FILE)
 @click.option("--controller", "controller_name", default=None, type=click.Choice(["ur", "abb", "kuka", "doosan"]),
               help="Expected controller of the pairs (default: the one their lines name).")
-@click.option("--noise", "noise_mm", default=0.01, show_default=True,
+@click.option("--noise", "noise_mm", metavar="MM", default=0.01, show_default=True,
               help="Resolution of the reported positions [mm] (the rounding of the controller's output).")
 @click.option("--orientation-noise", "noise_deg", default=0.001, show_default=True,
               help="Resolution of the reported orientations [deg].")

@@ -296,7 +296,7 @@ def _study(label, scheduler, workers, fn, *args, **kwargs):
 @click.argument("poses", type=click.Path(dir_okay=False))
 @click.option("--samples", default=200, show_default=True, type=click.IntRange(1, 100_000),
               help="Virtual robots (each its own true parameters; at most 100,000).")
-@click.option("--noise", "noise_mm", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
+@click.option("--noise", "noise_mm", metavar="MM", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
               help="Tracker noise per coordinate [mm], positive.")
 @click.option("--check-poses", default=200, show_default=True, type=click.IntRange(1, 100_000),
               help="Random poses where each result is checked (at most 100,000).")
@@ -355,7 +355,7 @@ def _robot_model(robot):
 @click.option("--count", default=40, show_default=True, type=click.IntRange(1, 10_000), help="Poses per plan (at most 10,000).")
 @click.option("--candidates", default=800, show_default=True, type=click.IntRange(1, 200_000),
               help="Random candidate poses per set (at most 200,000).")
-@click.option("--noise", "sigma_mm", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
+@click.option("--noise", "sigma_mm", metavar="MM", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
               help="Instrument noise per coordinate [mm], positive.")
 @click.option("--tool", type=POINT, default="0,0,100", show_default=True, metavar="X,Y,Z",
               help="Reflector in the flange frame [mm].")

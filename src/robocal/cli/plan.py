@@ -28,7 +28,7 @@ from ._json import json_option, set_json_result
 @click.option("--cell", "cell_file", default=None, type=click.Path(dir_okay=False, exists=True),
               help="Cell file (robocal-cell/1, docs/cells.md; lengths in its length_unit); default: the robot on the "
                    "floor, the floor an obstacle.")
-@click.option("--noise", "sigma_mm", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
+@click.option("--noise", "sigma_mm", metavar="MM", default=0.02, show_default=True, type=click.FloatRange(0.0, min_open=True),
               help="Instrument noise per coordinate [mm], positive.")
 @click.option("--seed", default=0, show_default=True, help="Seed of the candidate poses.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),

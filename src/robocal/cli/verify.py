@@ -16,7 +16,7 @@ __all__ = ["verify"]
 @click.command("verify")
 @click.argument("model", type=click.Path(exists=True))
 @click.argument("measurements", type=click.Path(exists=True, dir_okay=False))
-@click.option("--noise", "noise_mm", default=0.02, show_default=True,
+@click.option("--noise", "noise_mm", metavar="MM", default=0.02, show_default=True,
               help="Instrument noise per coordinate [mm] (standard deviation).")
 @click.option("--false-alarm", "false_alarm_rate", default=0.01, show_default=True,
               help="Probability that a healthy robot is flagged (the test's alpha).")
