@@ -81,7 +81,8 @@ def _not_converged_seeds(r: dict, fits_per_seed: int, seeds: int) -> list:
 
 @functools.lru_cache(maxsize=None)
 def _closed_chain(n_seeds: int, plates: int, known_spacing: bool) -> dict:
-    """docs/closed-chain.md: the study per seed (flattened) and its medians over the seeds."""
+    """docs/closed-chain.md: the study per seed (flattened) and its medians over the seeds; ``n_fits`` /
+    ``n_not_converged`` (all seeds' fits), ``n_within_3_sigma`` (seeds with every parameter within 3 sigma)."""
     import numpy as np
 
     from ..workflows.calibration.closed_chain_study import run_study
@@ -99,6 +100,9 @@ def _closed_chain(n_seeds: int, plates: int, known_spacing: bool) -> dict:
     out["median.max_abs_z"] = float(np.median([r["max_abs_z"] for r in rows]))
     out["max.max_abs_z"] = float(max(r["max_abs_z"] for r in rows))
     out["n_not_converged"] = float(sum(r["n_not_converged"] for r in rows))
+    out["n_fits"] = float(sum(r["n_fits"] for r in rows))
+    # seeds whose every checked parameter lies within 3 reported sigma (the study's own count)
+    out["n_within_3_sigma"] = float(sum(r["max_abs_z"] < 3 for r in rows))
     return out
 
 
@@ -214,10 +218,10 @@ def _markdown_rows(text: str, label_cells: int = 1) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
-def _benchmark_table(script: str, *args) -> dict:
-    """The Markdown table a script of ``benchmarks/`` prints from its ``run(*args)`` (the accuracy
-    studies kept there for their OpenCV / SciPy peers), as :func:`_markdown_rows` with two label
-    cells. ``args`` are hashable (the cache); a tuple is passed on as a list."""
+def _benchmark_text(script: str, *args) -> str:
+    """What a script of ``benchmarks/`` prints from its ``run(*args)`` (the accuracy studies kept
+    there for their OpenCV / SciPy peers). ``args`` are hashable (the cache); a tuple is passed on
+    as a list."""
     import contextlib
     import importlib.util
     import io
@@ -229,7 +233,13 @@ def _benchmark_table(script: str, *args) -> dict:
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         module.run(*(list(a) if isinstance(a, tuple) else a for a in args))
-    return _markdown_rows(buf.getvalue(), label_cells=2)
+    return buf.getvalue()
+
+
+@functools.lru_cache(maxsize=None)
+def _benchmark_table(script: str, *args) -> dict:
+    """The Markdown table of :func:`_benchmark_text` as :func:`_markdown_rows` with two label cells."""
+    return _markdown_rows(_benchmark_text(script, *args), label_cells=2)
 
 
 @functools.lru_cache(maxsize=None)
@@ -281,7 +291,8 @@ def _thermal_seeds(preset: str) -> dict:
     """docs/thermal.md section 6: ``robocal thermal experiment --preset PRESET --seeds 20 --resamples 20``;
     lambda [%] as ``{rms|max}.{screening|evaluation}.{column}.{median|q25|q75|min|max}``; the share of
     runs in the thesis's order [%] as ``ordering.{rms|max}.{role}.{strict_order|screened_not_worse}``;
-    the share of seeds that screen a parameter [%] as ``selection.{name}``."""
+    the share of seeds that screen a parameter [%] as ``selection.{name}``; ``n_screened_equals_stable``: the
+    seeds whose full-run screened set equals the set selected by bootstrap frequency."""
     from ..workflows.thermal.seeds import run_thermal_seeds
 
     r = run_thermal_seeds(preset=preset, seeds=20, first_seed=1, n_cycles=90, resamples=20)
@@ -289,7 +300,10 @@ def _thermal_seeds(preset: str) -> dict:
     per_seed = {f"seed.{x['seed']}.evaluation.screened.{k}": v for x in r["per_seed"]
                 for k, v in enumerate(sorted(row["lambda"]["rms"]["screened"] for row in x["rows"]
                                              if row["role"] == "evaluation"))}
+    # seeds whose full-run screened set is the set selected by bootstrap frequency (order ignored)
+    same = sum(x["stable"] is not None and set(x["screened"]) == set(x["stable"]) for x in r["per_seed"])
     return {**_flat(r["tables"]), "n_not_converged": float(r["fits"]["not_converged"]),
+            "n_screened_equals_stable": float(same),
             **{f"ordering.{k}": 100.0 * v for k, v in _flat(r["ordering"]).items()},
             **{f"selection.{k}": 100.0 * float(v) for k, v in r["selection"].items()},
             **{f"bootstrap.{k}": 100.0 * float(v) for k, v in (r["bootstrap_frequency"] or {}).items()},
@@ -332,7 +346,7 @@ def _ipso(experiment: str) -> dict:
     """docs/calibration.md "IPSO against LM": one experiment of
     ``python -m robocal.workflows.calibration.ipso_study --seeds 20`` (``deg``, ``rad``, ``tracker``:
     20 seeds; ``x30``, ``slip``: 5 seeds): ``{method}.{figure}`` medians, ``{method}.at_floor``
-    (count of seeds), ``floor_mm``, ``nominal_mm``."""
+    and ``{method}.not_at_floor`` (counts of seeds), ``floor_mm``, ``nominal_mm``."""
     import numpy as np
 
     from ..workflows.calibration.ipso_study import compare, er10l_experiment, tracker_experiment
@@ -348,7 +362,8 @@ def _ipso(experiment: str) -> dict:
     for m, r in table.items():
         if isinstance(r, dict):
             out.update({f"{m}.{k}": float(v) for k, v in r.items() if isinstance(v, (int, float))})
-            out[f"{m}.at_floor"] = float(r["at_floor"].split("/")[0])
+            at, n = (int(x) for x in r["at_floor"].split("/"))
+            out[f"{m}.at_floor"], out[f"{m}.not_at_floor"] = float(at), float(n - at)
     return out
 
 
@@ -643,6 +658,6 @@ SLOW_PRODUCERS = {*SLOW_SPEED_PRODUCERS, *SLOW_PAGES_PRODUCERS, "dlr_justin/elas
                   # docs/handeye.md: camera calibrate on the real sets, ~2-5 s CPU each
                   "handeye/camera_real/test_set_charuco", "handeye/camera_real/test_set_10x10",
                   "handeye/variants_real/test_set_charuco", "handeye/variants_real/test_set_10x10",
-                  "handeye/gate_shifted", "handeye/study_summary", "handeye/board_shape",
+                  "handeye/gate_shifted", "handeye/study_summary", "handeye/fair_counts", "handeye/board_shape",
                   "handeye/detection_rendered", *SLOW_TESTING_PRODUCERS,
                   *(p for p in PRODUCERS if p.startswith(("closed_chain/", "thermal/", "ipso/")))}

@@ -360,7 +360,7 @@ def ros_handeye(test_set: str) -> dict:
     ``n_images_used``, ``n_corners``, the camera pose ``position_mm.{0,1,2}``, ``sigma_position_mm.{0,1,2}``,
     ``rotation_vector_deg.{0,1,2}``, ``sigma_rotation_deg.max``, ``rms_mm`` (on the target plane), the linear
     starts ``linear.{method}.difference_position_mm`` / ``.rms_px`` (and ``linear.rms_px.min`` / ``.max``) and
-    ``images.{name}.rms_px`` per image."""
+    ``images.{name}.rms_px`` per image, ``images.n_points.{min|max}`` (corners detected per used image)."""
     from ..io.datasets import datasets_root
 
     src = datasets_root() / "ros_industrial_handeye" / "raw" / test_set / "cal_data.yaml"
@@ -378,6 +378,9 @@ def ros_handeye(test_set: str) -> dict:
     rms = [out[f"linear.{m}.rms_px"] for m in d["linear"]]
     out["linear.rms_px.min"], out["linear.rms_px.max"] = min(rms), max(rms)
     out.update({f"images.{im['name']}.rms_px": float(im["rms_px"]) for im in d["images"] if im.get("rms_px") is not None})
+    points = [im["n_points"] for im in d["images"] if im.get("used") and im.get("n_points") is not None]
+    if points:  # corners detected per used image
+        out["images.n_points.min"], out["images.n_points.max"] = float(min(points)), float(max(points))
     return out
 
 

@@ -102,6 +102,39 @@ def justin_joint_seeds() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def justin_joint_gravity() -> dict:
+    """docs/elastic.md "Without a mass model": ``calibrate_justin(0, model="elastic-joint")``'s
+    identifiability analysis of the elastic level: ``gravity.held`` (lumped gravity parameters held
+    at their start, each naming what it trades off against) and ``gravity.total``."""
+    from ..workflows.datasets.dlr_justin import calibrate_justin
+
+    rep = calibrate_justin(0, model="elastic-joint")["results"]["elastic"].identifiability
+    held = [n for n in rep.dropped_names if n.startswith("gravity.")]
+    kept = [n for n in rep.identifiable if n.startswith("gravity.")]
+    return {"gravity.held": float(len(held)), "gravity.total": float(len(held) + len(kept))}
+
+
+#: docs/datasets.md "Elastic models": the protocols behind each model's convergence counts
+CONVERGENCE_DATASETS = ("boby_fanuc", "dlr_justin", "hilti_trailblazer")
+
+
+def datasets_convergence(model: str) -> dict:
+    """docs/datasets.md "Elastic models": ``robocal datasets run NAME --model MODEL --json``'s
+    ``convergence`` for boby / Justin / Hilti (the producers ``NAME/MODEL``): ``{name}.n_fits``,
+    ``{name}.n_not_converged``, ``all.n_not_converged`` (the three) and ``justin_hilti.n_not_converged``."""
+    from .figure_producers import PRODUCERS
+
+    out = {}
+    for name in CONVERGENCE_DATASETS:
+        r = PRODUCERS[f"{name}/{model}"]()
+        out[f"{name}.n_fits"] = float(r["convergence.n_fits"])
+        out[f"{name}.n_not_converged"] = float(r["convergence.n_not_converged"])
+    out["all.n_not_converged"] = sum(out[f"{n}.n_not_converged"] for n in CONVERGENCE_DATASETS)
+    out["justin_hilti.n_not_converged"] = out["dlr_justin.n_not_converged"] + out["hilti_trailblazer.n_not_converged"]
+    return out
+
+
+@functools.lru_cache(maxsize=None)
 def justin_full_vs_source() -> dict:
     """docs/datasets.md: Justin's elastic-full holdout mean above the source's published 3.12 mm [mm]."""
     return {"above_source_mm": _producer("dlr_justin/elastic-full")["holdout_mean_mm"] - 3.12}
@@ -602,6 +635,9 @@ DATASET_PRODUCERS = {
     "elastic/hilti_gain_joint": lambda: hilti_gain("elastic-joint"),
     "elastic/hilti_gain_full": lambda: hilti_gain("elastic-full"),
     "elastic/justin_joint_seeds": justin_joint_seeds,
+    "elastic/justin_joint_gravity": justin_joint_gravity,
+    **{f"datasets/convergence/{m}": functools.partial(datasets_convergence, m)
+       for m in ("geometric", "elastic-joint", "elastic-full")},
     "datasets/hilti_vs_readme": hilti_vs_readme,
     "datasets/justin_full_vs_source": justin_full_vs_source,
 }
@@ -614,11 +650,16 @@ DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
                    "datasets/boby_joint_seeds": ("boby_fanuc",), "datasets/boby_geometric_seeds": ("boby_fanuc",),
                    "datasets/hilti_vs_readme": ("hilti_trailblazer",), "datasets/justin_full_vs_source": ("dlr_justin",),
                    "elastic/hilti_gain_joint": ("hilti_trailblazer",), "elastic/hilti_gain_full": ("hilti_trailblazer",),
-                   "elastic/justin_joint_seeds": ("dlr_justin",)}
+                   "elastic/justin_joint_seeds": ("dlr_justin",), "elastic/justin_joint_gravity": ("dlr_justin",),
+                   **{f"datasets/convergence/{m}": CONVERGENCE_DATASETS for m in ("geometric", "elastic-joint", "elastic-full")}}
 
 #: slow: more than ~10 s of CPU (the Justin / Hilti elastic-full fits, five Justin elastic fits, five hand-eye /
 #: camera runs per ROS-Industrial set, the NAO joint-noise fits ~22 s) or, to keep the suite's added CPU under
 #: ~8 s, 1-6 s (the 6-D calibrations through the command line, the NAO null directions)
 SLOW_DATASET_PRODUCERS = {"elastic/round_trips", "self_calibration/nao_cli", "self_calibration/nao_null_directions", "self_calibration/nao_joint_noise", "elastic/six_d_cli",
                           *(f"datasets/ros_handeye_variants/{t}" for t in ROS_BOARDS), "elastic/hilti_gain_full",
-                          "elastic/justin_joint_seeds", "datasets/justin_full_vs_source"}
+                          "elastic/justin_joint_seeds", "datasets/justin_full_vs_source",
+                          # Justin's elastic-joint fit (~40 s); the convergence counts of the elastic models (their
+                          # Justin / Hilti runs are slow; geometric: the three fast protocols)
+                          "elastic/justin_joint_gravity", "datasets/convergence/elastic-joint",
+                          "datasets/convergence/elastic-full"}

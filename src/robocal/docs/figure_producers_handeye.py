@@ -10,7 +10,7 @@ import json
 import tempfile
 from pathlib import Path
 
-__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "detection_rendered", "handeye_agreement", "handeye_auto_simulated", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate", "handeye_plain_fit",
+__all__ = ["HANDEYE_PRODUCERS", "camera_board_shape", "camera_calibrate_real", "camera_sag", "detection_rendered", "handeye_agreement", "handeye_auto_simulated", "handeye_fair_counts", "handeye_gate_shifted", "handeye_joint_offsets", "handeye_noise_estimate", "handeye_plain_fit",
            "handeye_refine_cases", "handeye_study_summary", "handeye_variants_real", "controller_probe", "controller_walkthrough", "handeye_default_real",
            "principal_point_rotation", "ur_angle_convention",
            "ur_controller_table"]
@@ -324,7 +324,9 @@ def handeye_study_summary() -> dict:
 
     Fields: ``brown.ratio_3_6_to_8.{min|max}`` (refined translation error at 3-6 images over that at 8),
     ``brown.rot_10_30.median`` [deg] (the rotation floor), ``none.trans_4_30.{min|max}`` [mm] and
-    ``none.rot.{min|max}`` [deg] (no distortion model), ``radial_division.rot_8_30.median`` [deg]."""
+    ``none.rot.{min|max}`` [deg] (no distortion model), ``radial_division.rot_8_30.median`` [deg],
+    ``{none|brown}.rot_refined_better.count`` (image counts, of 9, where the refined rotation error is below
+    Tsai–Lenz's)."""
     import numpy as np
 
     from .figure_producers import PRODUCERS
@@ -338,11 +340,51 @@ def handeye_study_summary() -> dict:
     none_t = [v("none", n, "trans_mm") for n in (4, 5, 6, 8, 10, 15, 20, 30)]
     none_r = [v("none", n, "rot_deg") for n in (3, 4, 5, 6, 8, 10, 15, 20, 30)]
     floor = [v(m, n, "rot_deg") for m in ("radial", "division") for n in (8, 10, 15, 20, 30)]
+    images = (3, 4, 5, 6, 8, 10, 15, 20, 30)
+    better = {m: float(sum(v(m, n, "rot_deg") < t[f"{m}.{n}.linear.rot_deg"] for n in images))
+              for m in ("none", "brown")}
     return {"brown.ratio_3_6_to_8.min": min(ratios), "brown.ratio_3_6_to_8.max": max(ratios),
             "brown.rot_10_30.median": float(np.median([v("brown", n, "rot_deg") for n in (10, 15, 20, 30)])),
             "none.trans_4_30.min": min(none_t), "none.trans_4_30.max": max(none_t),
             "none.rot.min": min(none_r), "none.rot.max": max(none_r),
-            "radial_division.rot_8_30.median": float(np.median(floor))}
+            "radial_division.rot_8_30.median": float(np.median(floor)),
+            **{f"{m}.rot_refined_better.count": c for m, c in better.items()}}
+
+
+#: docs/handeye.md "A fair comparison": the robot pose noise levels (the table's first cell)
+FAIR_LEVELS = ("none (0 / 0)", "0.02 mm / 0.004 deg", "0.2 mm / 0.03 deg", "1 mm / 0.1 deg",
+               "systematic 0.5 mm/m + 0.02 mm / 0.004 deg")
+_OPENCV_LINEAR = ("TSAI", "PARK", "HORAUD", "ANDREFF", "DANIILIDIS", "RW_SHAH", "RW_LI")
+
+
+@functools.lru_cache(maxsize=None)
+def handeye_fair_counts() -> dict:
+    """docs/handeye.md "Where robocal's default wins and where not": counts of seeds out of 20 from
+    ``python benchmarks/handeye_fair_comparison.py --seeds 20`` (the run of the producer
+    ``handeye/fair_comparison``).
+
+    Fields: ``auto_kept.{level}`` (seeds where ``--robot-pose-sigma auto`` kept the estimated noise),
+    ``auto_kept.{min|max}`` over the levels, ``linear_closer.{level}.{min|max}`` (seeds where the
+    default is closer in position than an OpenCV linear method, over the seven methods) and
+    ``closer_1mm_best_linear.{min|max}`` (the same at 1 mm / 0.1 deg against DANIILIDIS, TSAI,
+    HORAUD and PARK, the four with lower medians)."""
+    import re
+
+    from .figure_producers import PRODUCERS, _benchmark_text
+
+    t = PRODUCERS["handeye/fair_comparison"]()
+    text = _benchmark_text("handeye_fair_comparison.py", tuple(range(20)))
+    out = {}
+    for level in FAIR_LEVELS:
+        m = re.search(r"\| " + re.escape(level) + r" \| \(auto kept the estimated noise in ([0-9]+) of", text)
+        out[f"auto_kept.{level}"] = float(m.group(1))
+        wins = [t[f"{level} | OpenCV {k}|2|0"] for k in _OPENCV_LINEAR]
+        out[f"linear_closer.{level}.min"], out[f"linear_closer.{level}.max"] = min(wins), max(wins)
+    kept = [out[f"auto_kept.{level}"] for level in FAIR_LEVELS]
+    out["auto_kept.min"], out["auto_kept.max"] = min(kept), max(kept)
+    best = [t[f"1 mm / 0.1 deg | OpenCV {k}|2|0"] for k in ("DANIILIDIS", "TSAI", "HORAUD", "PARK")]
+    out["closer_1mm_best_linear.min"], out["closer_1mm_best_linear.max"] = min(best), max(best)
+    return out
 
 
 @functools.lru_cache(maxsize=None)
@@ -778,6 +820,7 @@ HANDEYE_PRODUCERS = {
     "handeye/noise_estimate": handeye_noise_estimate,
     "handeye/auto_simulated": handeye_auto_simulated,
     "handeye/study_summary": handeye_study_summary,
+    "handeye/fair_counts": handeye_fair_counts,
     "handeye/refine_cases": handeye_refine_cases,
     "handeye/board_shape": camera_board_shape,
     "handeye/joint_offsets": handeye_joint_offsets,

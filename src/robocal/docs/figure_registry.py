@@ -1799,4 +1799,95 @@ FIGURES += [Figure(f"kinematics:ur10 {k}", "docs/kinematics.md", pat, "ik_seed/u
                 ("network median iterations", r"converged, " + _N + " vs [0-9]+ iterations", "ik.network.median_it"),
                 ("middle median iterations", r"converged, [0-9]+ vs " + _N + " iterations", "ik.middle.median_it"))]
 
+# --- figs-counts: counts out of a total ("18 of 20 seeds"; issue 25 item 3) ---------------------------------
+# handeye.md "A fair comparison": the auto rows of the table and the prose's win counts (handeye/fair_counts
+# derives them from the run of handeye/fair_comparison, slow); counts of seeds: exact
+for _level in ("none (0 / 0)", "0.02 mm / 0.004 deg", "0.2 mm / 0.03 deg", "1 mm / 0.1 deg",
+               "systematic 0.5 mm/m + 0.02 mm / 0.004 deg"):
+    FIGURES.append(Figure(f"handeye:fair {_level} auto kept estimated", "docs/handeye.md",
+                          r"(?m)^\| " + re.escape(_level) + r" \| \(auto kept the estimated noise in " + _N + " of 20",
+                          "handeye/fair_counts", f"auto_kept.{_level}", rel_tol=0.0))
+_P = r"Where robocal's default wins and where not:(?s:.*?)"
+FIGURES += [Figure(f"handeye:fair prose {k}", "docs/handeye.md", _P + pat, prod, field, rel_tol=0.0)
+            for k, pat, prod, field in (
+                ("0.02 closer than baseline", r"0\.125\s+mm, closer in " + _N + " of 20 seeds", _FC,
+                 f"0.02 mm / 0.004 deg | {_B}|2|0"),
+                ("0.2 closer than baseline", r"0\.24 deg\) in " + _N + " of 20 seeds", _FC, f"0.2 mm / 0.03 deg | {_B}|2|0"),
+                ("0.2 linear min", r"and the linear methods in " + _N + "-[0-9]+ of 20", "handeye/fair_counts",
+                 "linear_closer.0.2 mm / 0.03 deg.min"),
+                ("0.2 linear max", r"and the linear methods in [0-9]+-" + _N + " of 20", "handeye/fair_counts",
+                 "linear_closer.0.2 mm / 0.03 deg.max"),
+                ("0.2 closer than former prior", r"although the default is\s+closer in " + _N + " of 20 seeds", _FC,
+                 "0.2 mm / 0.03 deg | robocal prior 0.05 mm / 0.01 deg|2|0"),
+                ("1 closer than best linear min", r"closer in only " + _N + "-[0-9]+ of 20 seeds", "handeye/fair_counts",
+                 "closer_1mm_best_linear.min"),
+                ("1 closer than best linear max", r"closer in only [0-9]+-" + _N + " of 20 seeds", "handeye/fair_counts",
+                 "closer_1mm_best_linear.max"),
+                ("systematic linear min", r"beats the\s+linear methods in " + _N + "-[0-9]+ of 20 seeds",
+                 "handeye/fair_counts", "linear_closer.systematic 0.5 mm/m + 0.02 mm / 0.004 deg.min"),
+                ("systematic linear max", r"beats the\s+linear methods in [0-9]+-" + _N + " of 20 seeds",
+                 "handeye/fair_counts", "linear_closer.systematic 0.5 mm/m + 0.02 mm / 0.004 deg.max"),
+                ("auto kept min", r"`auto` kept the estimated noise in " + _N + "-[0-9]+ of 20", "handeye/fair_counts",
+                 "auto_kept.min"),
+                ("auto kept max", r"`auto` kept the estimated noise in [0-9]+-" + _N + " of 20", "handeye/fair_counts",
+                 "auto_kept.max"))]
+# handeye.md "Do the paper's conclusions hold?": image counts (of 9) where the refined rotation beats Tsai-Lenz
+FIGURES.append(Figure("handeye:study prose brown rotation better cells", "docs/handeye.md",
+                      _ST + r"its rotation is better in " + _N + " of 9 cells with the full", "handeye/study_summary",
+                      "brown.rot_refined_better.count", rel_tol=0.0))
+# calibration.md "Hard cases" (2): the slip experiment's seed counts (ipso/slip, slow)
+FIGURES += [Figure(f"calibration:ipso slip {k}", "docs/calibration.md", pat, "ipso/slip", field, rel_tol=0.0)
+            for k, pat, field in (
+                ("lm fails", r"A 180° slip of theta4: LM from\s+nominal fails in " + _N + " of 5 seeds", "lm.not_at_floor"),
+                ("ipso+lm at floor", r"IPSO\+LM reaches the floor in " + _N + " of 5 seeds", "ipso+lm.at_floor"))]
+# closed-chain.md: the convergence count and the seeds within 3 sigma (closed_chain/study, slow)
+FIGURES += [Figure(f"closed-chain:{k}", "docs/closed-chain.md", pat, "closed_chain/study", field, rel_tol=0.0)
+            for k, pat, field in (
+                ("not converged", r"every fit behind the table converged, " + _N + " of [0-9]+ not converged", "n_not_converged"),
+                ("fits", r"every fit behind the table converged, [0-9]+ of " + _N + " not converged", "n_fits"),
+                ("seeds within 3 sigma", r"Within 3 reported σ: " + _N + r" of 10\s+seeds", "n_within_3_sigma"))]
+# thermal.md "The screened set is not stable": seeds whose full-run set equals the frequency selection
+FIGURES.append(Figure("thermal:screened set equals frequency selection", "docs/thermal.md",
+                      r"the full-run set equals the set selected by frequency in only " + _N + " of 20",
+                      "thermal/realistic", "n_screened_equals_stable", rel_tol=0.0))
+# elastic.md "Without a mass model": Justin's lumped gravity parameters held by the identifiability analysis
+FIGURES += [Figure(f"elastic:justin gravity {k}", "docs/elastic.md", pat, "elastic/justin_joint_gravity", field,
+                   rel_tol=0.0)
+            for k, pat, field in (("held", r"on Justin: " + _N + " of [0-9]+ gravity parameters", "gravity.held"),
+                                  ("total", r"on Justin: [0-9]+ of " + _N + " gravity parameters", "gravity.total"))]
+# datasets.md "Elastic models": the convergence counts (datasets/convergence/MODEL over boby / Justin / Hilti;
+# the totals from each protocol's own record)
+_CV = r"`n_not_converged`: "
+FIGURES += [Figure(f"datasets:convergence {k}", "docs/datasets.md", pat, prod, field, rel_tol=0.0)
+            for k, pat, prod, field in (
+                ("geometric not converged", _CV + _N + " of [0-9]+ / [0-9]+ / [0-9]+ geometric", "datasets/convergence/geometric",
+                 "all.n_not_converged"),
+                *((f"geometric {d} fits", _CV + r"[0-9]+ of " + r"[0-9]+ / " * i + _N + r"(?: / [0-9]+)* geometric",
+                   f"{d}/geometric", "convergence.n_fits") for i, d in enumerate(("boby_fanuc", "dlr_justin", "hilti_trailblazer"))),
+                ("elastic-joint not converged", r" geometric, " + _N + " of [0-9]+ / [0-9]+ / [0-9]+ elastic-joint",
+                 "datasets/convergence/elastic-joint", "all.n_not_converged"),
+                *((f"elastic-joint {d} fits", r" geometric, [0-9]+ of " + r"[0-9]+ / " * i + _N + r"(?: / [0-9]+)* elastic-joint",
+                   f"{d}/elastic-joint", "convergence.n_fits") for i, d in enumerate(("boby_fanuc", "dlr_justin", "hilti_trailblazer"))),
+                ("elastic-full boby not converged", r"elastic-full: \*\*" + _N + r" of [0-9]+\*\* for boby", "boby_fanuc/elastic-full",
+                 "convergence.n_not_converged"),
+                ("elastic-full boby fits", r"elastic-full: \*\*[0-9]+ of " + _N + r"\*\* for boby", "boby_fanuc/elastic-full",
+                 "convergence.n_fits"),
+                ("elastic-full justin hilti not converged", r"identifiable set\), " + _N + r" of [0-9]+ / [0-9]+ for\s+Justin",
+                 "datasets/convergence/elastic-full", "justin_hilti.n_not_converged"),
+                ("elastic-full justin fits", r"identifiable set\), [0-9]+ of " + _N + r" / [0-9]+ for\s+Justin",
+                 "dlr_justin/elastic-full", "convergence.n_fits"),
+                ("elastic-full hilti fits", r"identifiable set\), [0-9]+ of [0-9]+ / " + _N + r" for\s+Justin",
+                 "hilti_trailblazer/elastic-full", "convergence.n_fits"))]
+
+# datasets.md "ros_industrial_handeye": corners detected per ChArUco image (handeye solve) and the images the
+# camera calibration used (camera calibrate, datasets/ros_handeye_variants, slow)
+_TRM = r"CharucoParameters\.tryRefineMarkers`\): "
+FIGURES += [Figure("datasets:ros handeye charuco corners per image min", "docs/datasets.md", _TRM + _N + "-[0-9]+ of 24",
+                   "ros_handeye/test_set_charuco", "images.n_points.min", rel_tol=0.0),
+            Figure("datasets:ros handeye charuco corners per image max", "docs/datasets.md", _TRM + "[0-9]+-" + _N + " of 24",
+                   "ros_handeye/test_set_charuco", "images.n_points.max", rel_tol=0.0),
+            Figure("datasets:ros handeye charuco camera calibrate images", "docs/datasets.md",
+                   r"\(ChArUco: " + _N + " of 16 images", "datasets/ros_handeye_variants/test_set_charuco",
+                   "camera.n_images_used", rel_tol=0.0)]
+
 FIGURES = [dataclasses.replace(f, slow=f.producer in SLOW_PRODUCERS) for f in FIGURES]
