@@ -91,15 +91,10 @@ def test_positioner_axes_agree_with_an_independent_screw_axis_fit():
     unweighted point fit, in both codes: over the seeded splits 0-4 (which share most records)
     robocal gives 89.9762-89.9825 deg and 0.54-0.64 mm, so they are optimistic by about 2-3x
     (docs/datasets.md); the claims here compare estimates on the same records."""
-    from robocal.io.datasets import read_ros_industrial_positioner as read
+    from robocal.workflows.datasets.ros_industrial_positioner import axes_on_training_records
 
-    ds = read(DATASETS)
-    run = calibrate_positioner(seed=0, n_train=150, data=ds)
-    train = np.asarray(run["train"])
-    T, q = ds.per_pose["T_camera_target"][train], ds.joints[train]
-    got = np.array([run["axes"]["angle_deg"], run["axes"]["common_normal_mm"]])
-    table = {p["name"]: p for p in run["result"].parameter_table()}
-    robocal_sigma = np.array([np.degrees(table["alpha1"]["std"]), table["a1"]["std"]])
+    rec = axes_on_training_records(seed=0, n_train=150, root=DATASETS)
+    T, q, got, robocal_sigma = rec["T_camera_target"], rec["joints"], rec["axes"], rec["sigma"]
     ref, sigma, rms = reference_axes(T, q)
     assert rms < 1.0, rms  # mm: the fit found the data's minimum (robocal's training residual is ~0.2 mm)
     assert np.all(np.abs(got - ref) < 0.01 * sigma), (got, ref, sigma)

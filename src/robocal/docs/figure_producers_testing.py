@@ -284,17 +284,11 @@ def positioner_reference() -> dict:
     (largest |robocal sigma / reference sigma - 1|)."""
     import numpy as np
 
-    from ..io.datasets import read_ros_industrial_positioner
     from ..workflows.datasets.positioner_reference import reference_axes
-    from ..workflows.datasets.ros_industrial_positioner import calibrate_positioner
+    from ..workflows.datasets.ros_industrial_positioner import axes_on_training_records
 
-    ds = read_ros_industrial_positioner()
-    run = calibrate_positioner(seed=0, n_train=150, data=ds)
-    train = np.asarray(run["train"])
-    T, q = ds.per_pose["T_camera_target"][train], ds.joints[train]
-    got = np.array([run["axes"]["angle_deg"], run["axes"]["common_normal_mm"]])
-    table = {p["name"]: p for p in run["result"].parameter_table()}
-    sig = np.array([np.degrees(table["alpha1"]["std"]), table["a1"]["std"]])
+    rec = axes_on_training_records(seed=0, n_train=150)
+    T, q, got, sig = rec["T_camera_target"], rec["joints"], rec["axes"], rec["sigma"]
     out = {"robocal.angle_deg": float(got[0]), "robocal.normal_mm": float(got[1]),
            "robocal.sigma_angle_deg": float(sig[0]), "robocal.sigma_normal_mm": float(sig[1])}
     for n in (3, 1):

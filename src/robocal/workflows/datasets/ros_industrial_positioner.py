@@ -29,7 +29,8 @@ from ...kinematics.model import EndEffector, RobotModel
 from ...transforms import so3_log
 from ._fitting import fit, random_split, with_state_targets
 
-__all__ = ["positioner_model", "target_points_mm", "calibrate_positioner", "calibrate_positioner_seeds",
+__all__ = ["positioner_model", "target_points_mm", "calibrate_positioner", "axes_on_training_records",
+           "calibrate_positioner_seeds",
            "pose_errors"]
 
 #: the target points used as measurements, in the target frame [mm]
@@ -120,6 +121,25 @@ def axes_in_camera(problem, result) -> dict:
             "angle_deg": float(np.degrees(np.arccos(np.clip(abs(z0 @ z1), -1.0, 1.0)))),
             "common_normal_mm": float(dist),
             "dropped": [(d["name"], d["why"]) for d in result.identifiability.dropped]}
+
+
+def axes_on_training_records(seed: int = 0, n_train: int = 150, data=None, root=None) -> dict:
+    """robocal's axis estimates on one split's training records, with those records, for a comparison
+    with another estimator on the same data (tests/test_positioner_real_data.py, docs/testing.md).
+
+    Returns ``T_camera_target`` (n_train, 4, 4) [mm] and ``joints`` (n_train, 2) [rad] of the training
+    records, ``axes`` (2,) = (angle between the axes [deg], common normal [mm]) and ``sigma`` (2,)
+    their formal standard deviations (alpha1 in deg, a1 in mm), and ``run`` (:func:`calibrate_positioner`).
+    """
+    from ...io.datasets import read_ros_industrial_positioner
+
+    ds = read_ros_industrial_positioner(root) if data is None else data
+    run = calibrate_positioner(seed=seed, n_train=n_train, data=ds)
+    train = np.asarray(run["train"])
+    table = {p["name"]: p for p in run["result"].parameter_table()}
+    return {"T_camera_target": ds.per_pose["T_camera_target"][train], "joints": ds.joints[train],
+            "axes": np.array([run["axes"]["angle_deg"], run["axes"]["common_normal_mm"]]),
+            "sigma": np.array([np.degrees(table["alpha1"]["std"]), table["a1"]["std"]]), "run": run}
 
 
 def calibrate_positioner_seeds(seeds=range(5), root=None, **kw) -> dict:
