@@ -292,7 +292,8 @@ def thermal_drift_identification() -> dict:
     import numpy as np
 
     from ..robots import load_robot
-    from ..sim.thermal.drift_setup import CENTRE_MM, DELTA, FOV_MM, P_E_MM, SUBSET, sensor_frame, warm_params
+    from ..sim.thermal.drift_setup import (CENTRE_MM, DELTA, FOV_MM, P_E_MM, SUBSET, noisy_six_pose_fits, sensor_frame,
+                                           warm_params)
     from ..thermal import design_sphere_poses, identify_drift, predict_sphere
 
     kuka = load_robot("kuka_kr150_r3100")
@@ -305,12 +306,7 @@ def thermal_drift_identification() -> dict:
     out = {"linear.max_error": float(np.abs(lin.delta - DELTA).max()), "linear.rms_after_mm": float(lin.rms_after_mm),
            "exact2.max_error": float(np.abs(exact.delta - DELTA).max())}
     err, z, cond, sig = [], [], [], []
-    for seed in range(10):
-        rng = np.random.default_rng(100 + seed)
-        T_sb = sensor_frame(rng)
-        q = design_sphere_poses(kuka, CENTRE_MM, P_E_MM, 6, rng, spread_mm=FOV_MM, tilt_deg=60)
-        Pw = predict_sphere(kuka, T_sb, P_E_MM, q, params=warm_params(kuka)) + rng.normal(0, 0.02, (6, 3))
-        r = identify_drift(kuka, T_sb, P_E_MM, q, Pw, subset=SUBSET, point_sigma_mm=0.02)
+    for r in noisy_six_pose_fits(kuka):
         err.append(r.delta - DELTA)
         z.append((r.delta - DELTA) / r.std)
         sig.append(r.std)

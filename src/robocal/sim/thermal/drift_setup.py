@@ -10,7 +10,8 @@ import numpy as np
 
 from ...transforms import invert_transforms, rot_x, so3_exp
 
-__all__ = ["CENTRE_MM", "DELTA", "FOV_MM", "P_E_MM", "SUBSET", "sensor_frame", "taught_program", "warm_params"]
+__all__ = ["CENTRE_MM", "DELTA", "FOV_MM", "P_E_MM", "SUBSET", "noisy_six_pose_fits", "sensor_frame", "taught_program",
+           "warm_params"]
 
 P_E_MM = np.array([25.0, -40.0, 160.0])          # sphere on a stem, off the joint-6 axis [mm]
 CENTRE_MM = np.array([1900.0, 300.0, 700.0])     # measurement volume centre, base frame [mm]
@@ -44,3 +45,19 @@ def taught_program(model, n: int, rng) -> np.ndarray:
     q = rng.uniform(lo + 0.15 * (hi - lo), hi - 0.15 * (hi - lo), (4 * n, model.n_joints))
     q = q[np.abs(q[:, 4]) > math.radians(10)]
     return q[:n]
+
+
+def noisy_six_pose_fits(model, seeds=range(10), noise_mm: float = 0.02) -> list:
+    """The drift identification from 6 sphere poses (18 equations for the 8 deltas of ``SUBSET``) at
+    ``noise_mm`` per coordinate, one fit per seed (``default_rng(100 + seed)``: the sensor frame, the
+    poses, the noise): a list of :class:`~robocal.thermal.DriftResult` whose truth is ``DELTA``."""
+    from ...thermal import design_sphere_poses, identify_drift, predict_sphere
+
+    out = []
+    for seed in seeds:
+        rng = np.random.default_rng(100 + seed)
+        T_sb = sensor_frame(rng)
+        q = design_sphere_poses(model, CENTRE_MM, P_E_MM, 6, rng, spread_mm=FOV_MM, tilt_deg=60)
+        Pw = predict_sphere(model, T_sb, P_E_MM, q, params=warm_params(model)) + rng.normal(0, noise_mm, (6, 3))
+        out.append(identify_drift(model, T_sb, P_E_MM, q, Pw, subset=SUBSET, point_sigma_mm=noise_mm))
+    return out
