@@ -229,33 +229,13 @@ def thermal_system_first_order_bias() -> dict:
     import numpy as np
 
     from ..robots import load_robot
-    from ..sim import VirtualRobot
-    from ..thermal import calibrate_system, design_sphere_poses, predict_sphere
-    from ..transforms import invert_transforms, rot_x, so3_exp
+    from ..sim.thermal.drift_setup import P_E_MM as P_e
+    from ..sim.thermal.drift_setup import off_model_system_calibration
 
     kuka = load_robot("kuka_kr150_r3100")
-    P_e, centre = np.array([25.0, -40.0, 160.0]), np.array([1900.0, 300.0, 700.0])
     naive, corrected, rms, size = [], [], [], []
-    for seed in range(10):
-        rng = np.random.default_rng(seed)
-        T_bs = np.eye(4)
-        T_bs[:3, :3] = so3_exp(np.array([0.0, 0.0, rng.uniform(-3, 3)])) @ rot_x(np.pi) @ so3_exp(rng.normal(0, 0.2, 3))
-        T_bs[:3, 3] = centre + [0.0, 0.0, -700.0]
-        T_sb = invert_transforms(T_bs)
-        q = design_sphere_poses(kuka, centre, P_e, 9, rng, spread_mm=(250.0, 200.0, 150.0), tilt_deg=60)
-        true = VirtualRobot.perturbed(kuka, 500 + seed, length_sigma_mm=0.1, angle_sigma_deg=0.01,
-                                      offset_sigma_deg=0.01).true_model
-        P_true = predict_sphere(true, T_sb, P_e, q)
-        e = P_true - predict_sphere(kuka, T_sb, P_e, q)
-        r = calibrate_system(kuka, q, P_true + rng.normal(0, 0.02, (9, 3)), point_sigma_mm=0.02)
-        h = 1e-6
-        base, cols = predict_sphere(kuka, r.T_sensor_base, r.P_e, q).ravel(), []
-        for k in range(6):
-            D = np.eye(4)
-            D[:3, :3], D[:3, 3] = so3_exp(h * np.eye(6)[k, :3]), h * np.eye(6)[k, 3:]
-            cols.append(predict_sphere(kuka, D @ r.T_sensor_base, r.P_e, q).ravel())
-        cols += [predict_sphere(kuka, r.T_sensor_base, r.P_e + h * np.eye(3)[k], q).ravel() for k in range(3)]
-        bias = np.linalg.lstsq((np.array(cols) - base).T / h, e.ravel(), rcond=None)[0][6:]
+    for seed in range(10):  # written once with tests/test_thermal_core.py
+        r, bias = off_model_system_calibration(kuka, seed)
         size.append(float(np.linalg.norm(bias)))
         naive.append((r.P_e - P_e) / r.std_P_e_mm)
         corrected.append((r.P_e - P_e - bias) / r.std_P_e_mm)

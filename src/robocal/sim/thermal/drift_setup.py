@@ -10,7 +10,8 @@ import numpy as np
 
 from ...transforms import invert_transforms, rot_x, so3_exp
 
-__all__ = ["CENTRE_MM", "DELTA", "FOV_MM", "P_E_MM", "SUBSET", "noisy_six_pose_fits", "sensor_frame", "taught_program",
+__all__ = ["CENTRE_MM", "DELTA", "FOV_MM", "P_E_MM", "SUBSET", "noisy_six_pose_fits", "off_model_system_calibration",
+           "sensor_frame", "taught_program",
            "warm_params"]
 
 P_E_MM = np.array([25.0, -40.0, 160.0])          # sphere on a stem, off the joint-6 axis [mm]
@@ -61,3 +62,32 @@ def noisy_six_pose_fits(model, seeds=range(10), noise_mm: float = 0.02) -> list:
         Pw = predict_sphere(model, T_sb, P_E_MM, q, params=warm_params(model)) + rng.normal(0, noise_mm, (6, 3))
         out.append(identify_drift(model, T_sb, P_E_MM, q, Pw, subset=SUBSET, point_sigma_mm=noise_mm))
     return out
+
+
+def off_model_system_calibration(model, seed: int, noise_mm: float = 0.02):
+    """The system calibration (9 poses, ``noise_mm`` per coordinate) on a true robot 0.1 mm / 0.01 deg
+    per parameter off ``model`` (``VirtualRobot.perturbed(model, 500 + seed)``; ``default_rng(seed)``
+    draws the sensor, the poses and the noise), and the first-order bias of its ``P_e`` from the hidden
+    truth: the last three components of ``J^+ e``, ``e`` the true robot's noise-free sphere centres
+    minus the model's, ``J`` their Jacobian w.r.t. ``T_sensor_base`` and ``P_e`` at the solution
+    (finite differences of ``predict_sphere``). Returns ``(result, bias (3,) [mm])``."""
+    from ...thermal import calibrate_system, design_sphere_poses, predict_sphere
+    from ..robot import VirtualRobot
+
+    rng = np.random.default_rng(seed)
+    T_sb = sensor_frame(rng)
+    q = design_sphere_poses(model, CENTRE_MM, P_E_MM, 9, rng, spread_mm=FOV_MM, tilt_deg=60)
+    true = VirtualRobot.perturbed(model, 500 + seed, length_sigma_mm=0.1, angle_sigma_deg=0.01,
+                                  offset_sigma_deg=0.01).true_model
+    P_true = predict_sphere(true, T_sb, P_E_MM, q)
+    e = P_true - predict_sphere(model, T_sb, P_E_MM, q)
+    r = calibrate_system(model, q, P_true + rng.normal(0, noise_mm, (9, 3)), point_sigma_mm=noise_mm)
+    h = 1e-6
+    base, cols = predict_sphere(model, r.T_sensor_base, r.P_e, q).ravel(), []
+    for k in range(6):
+        D = np.eye(4)
+        D[:3, :3], D[:3, 3] = so3_exp(h * np.eye(6)[k, :3]), h * np.eye(6)[k, 3:]
+        cols.append(predict_sphere(model, D @ r.T_sensor_base, r.P_e, q).ravel())
+    cols += [predict_sphere(model, r.T_sensor_base, r.P_e + h * np.eye(3)[k], q).ravel() for k in range(3)]
+    bias = np.linalg.lstsq((np.array(cols) - base).T / h, e.ravel(), rcond=None)[0][6:]
+    return r, bias
