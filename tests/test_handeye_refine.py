@@ -9,7 +9,10 @@ import pytest
 
 from robocal.handeye import HandEyeError, refine_hand_eye, solve_pnp
 from robocal.handeye.refine import rotation_error_deg
-from robocal.sim.cameras.handeye_points import board_points, look_at, noisy_poses, simulate_hand_eye
+from robocal.sim.cameras.handeye_joint_offsets import (
+    OFFSET_NAMES, TRUE_OFFSETS_RAD, eye_in_hand_campaign, eye_to_hand_campaign,
+)
+from robocal.sim.cameras.handeye_points import look_at, simulate_hand_eye
 from robocal.transforms import invert_transforms, so3_exp
 
 cv2 = pytest.importorskip("cv2")
@@ -145,32 +148,10 @@ def test_degenerate_pose_sets_raise_and_name_the_problem():
 
 
 def test_joint_offsets_are_recovered_and_the_unidentifiable_ones_named():
-    from robocal.robots import load_robot
-
-    robot = load_robot("abb_irb140")
-    rng = np.random.default_rng(7)
-    n = 20
-    q = np.radians([0.0, 20.0, -10.0, 0.0, 40.0, 0.0]) + rng.uniform(-0.35, 0.35, (n, 6))
-    true_offsets = np.radians([0.0, 0.03, -0.04, 0.05, -0.03, 0.0])
-    names = [f"theta{k}" for k in range(1, 7)]
-    idx = [robot.params.index(nm) for nm in names]
-    p_true = robot.params.values.copy()
-    p_true[idx] += true_offsets
-    F_true = robot.kinematics_with(q, p_true, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
-    F_nominal = robot.kinematics_with(q, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
-    # eye-to-hand: a fixed camera looks at a board on the flange
-    X = board_points()
-    T_ft = _T(so3_exp(np.array([0.0, np.pi, 0.0])), [-100.0, -70.0, 20.0])  # board facing away from the flange
-    centre = (F_true @ T_ft)[:, :3, 3].mean(0)
-    normal = -(F_true @ T_ft)[:, :3, 2].mean(0)
-    T_bc = look_at(centre + 700.0 * normal / np.linalg.norm(normal), centre)
-    T_ct = invert_transforms(T_bc)[None] @ F_true @ T_ft
-    from robocal.sim.cameras.handeye_points import CAMERA_MODELS
-
-    camera = CAMERA_MODELS["brown"]
-    P = np.einsum("nij,pj->npi", T_ct[:, :3, :3], X) + T_ct[:, None, :3, 3]
-    uv = camera.project(P.reshape(-1, 3)).pixels.reshape(n, len(X), 2) + rng.normal(0, 0.1, (n, len(X), 2))
-    F_meas = noisy_poses(F_nominal, rng, 0.02, 0.002)
+    # eye-to-hand: a fixed camera looks at a board on the flange (robocal.sim.cameras.handeye_joint_offsets)
+    c = eye_to_hand_campaign()
+    robot, q, F_meas, uv, X, camera = c.robot, c.joints, c.T_base_flange, c.image_points, c.target_points, c.camera
+    names, true_offsets = list(OFFSET_NAMES), TRUE_OFFSETS_RAD
     res = refine_hand_eye(F_meas, uv, X, camera, setup="eye_to_hand", joints=q, robot=robot, joint_offsets=True,
                           robot_pose_sigma=(0.02, 0.002))
     assert res.converged and res.joint_offset_names == tuple(names)
@@ -241,39 +222,10 @@ def test_a_robust_loss_rejects_images_whose_poses_were_swapped():
 
 
 def test_joint_offsets_eye_in_hand():
-    from robocal.robots import load_robot
-    from robocal.sim.cameras.handeye_points import CAMERA_MODELS
-
-    robot = load_robot("abb_irb140")
-    rng = np.random.default_rng(8)
-    names = [f"theta{k}" for k in range(1, 7)]
-    true_offsets = np.radians([0.0, 0.03, -0.04, 0.05, -0.03, 0.0])
-    p_true = robot.params.values.copy()
-    p_true[[robot.params.index(nm) for nm in names]] += true_offsets
-
-    def fk(q, p=None):
-        return robot.kinematics_with(q, p, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
-
-    q0 = np.radians([0.0, 20.0, 10.0, 0.0, 60.0, 0.0])
-    X_fc = _T(np.eye(3), [0.0, 60.0, 80.0])  # the camera on the flange
-    T_bc0 = fk(q0[None], p_true)[0] @ X_fc
-    centre = T_bc0[:3, 3] + 550.0 * T_bc0[:3, 2]
-    Z = np.eye(4)  # the board 550 mm in front of the camera at q0, facing it
-    Z[:3, :3] = np.column_stack([T_bc0[:3, 0], np.cross(-T_bc0[:3, 2], T_bc0[:3, 0]), -T_bc0[:3, 2]])
-    Z[:3, 3] = centre - Z[:3, :3] @ np.array([100.0, 70.0, 0.0])
-    X, camera = board_points(), CAMERA_MODELS["brown"]
-    qs, uvs = [], []
-    while len(qs) < 20:  # random joint poses whose view keeps the whole board in the image
-        q = q0 + rng.uniform(-0.25, 0.25, 6)
-        T_ct = invert_transforms(fk(q[None], p_true) @ X_fc)[0] @ Z
-        P = X @ T_ct[:3, :3].T + T_ct[:3, 3]
-        uv = camera.project(P).pixels
-        if np.all(P[:, 2] > 100) and np.all((uv > 0) & (uv < [1279, 1023])):
-            qs.append(q)
-            uvs.append(uv)
-    q = np.array(qs)
-    uv = np.array(uvs) + rng.normal(0, 0.1, (20, len(X), 2))
-    F_meas = noisy_poses(fk(q), rng, 0.02, 0.002)
+    # the camera on the flange, a board 550 mm in front of it (robocal.sim.cameras.handeye_joint_offsets)
+    c = eye_in_hand_campaign()
+    robot, q, F_meas, uv, X, camera = c.robot, c.joints, c.T_base_flange, c.image_points, c.target_points, c.camera
+    names, true_offsets = list(OFFSET_NAMES), TRUE_OFFSETS_RAD
     res = refine_hand_eye(F_meas, uv, X, camera, joints=q, robot=robot, joint_offsets=True,
                           robot_pose_sigma=(0.02, 0.002))
     # joint 1 turns the board about the base z axis, joint 6 the camera about the flange z axis

@@ -513,19 +513,10 @@ def handeye_joint_offsets() -> dict:
     import numpy as np
 
     from ..handeye import refine_hand_eye
-    from ..robots import load_robot
-    from ..sim.cameras.handeye_points import CAMERA_MODELS, board_points, look_at, noisy_poses
-    from ..transforms import invert_transforms, so3_exp
+    from ..sim.cameras.handeye_joint_offsets import (OFFSET_NAMES, TRUE_OFFSETS_RAD, eye_in_hand_campaign,
+                                                     eye_to_hand_campaign)
 
-    robot = load_robot("abb_irb140")
-    names = [f"theta{k}" for k in range(1, 7)]
-    true_offsets = np.radians([0.0, 0.03, -0.04, 0.05, -0.03, 0.0])
-    p_true = robot.params.values.copy()
-    p_true[[robot.params.index(nm) for nm in names]] += true_offsets
-    camera, X = CAMERA_MODELS["brown"], board_points()
-
-    def fk(q, p=None):
-        return robot.kinematics_with(q, p, T_world_base=np.eye(4), end_effectors=[0])[0][:, 0]
+    names, true_offsets = list(OFFSET_NAMES), TRUE_OFFSETS_RAD
 
     def summary(key, res, without):
         err = np.degrees(res.joint_offsets_rad[1:5] - true_offsets[1:5])
@@ -534,43 +525,12 @@ def handeye_joint_offsets() -> dict:
                 f"{key}.sigma.max": float(sigma.max()), f"{key}.rms_px": float(res.rms_px),
                 f"{key}.without_px": float(without.rms_px)}
 
-    # eye-to-hand: a fixed camera looks at a board on the flange
-    rng = np.random.default_rng(7)
-    q = np.radians([0.0, 20.0, -10.0, 0.0, 40.0, 0.0]) + rng.uniform(-0.35, 0.35, (20, 6))
-    F_true, F_nominal = fk(q, p_true), fk(q)
-    T_ft = _T(so3_exp(np.array([0.0, np.pi, 0.0])), [-100.0, -70.0, 20.0])
-    centre = (F_true @ T_ft)[:, :3, 3].mean(0)
-    normal = -(F_true @ T_ft)[:, :3, 2].mean(0)
-    T_bc = look_at(centre + 700.0 * normal / np.linalg.norm(normal), centre)
-    T_ct = invert_transforms(T_bc)[None] @ F_true @ T_ft
-    P = np.einsum("nij,pj->npi", T_ct[:, :3, :3], X) + T_ct[:, None, :3, 3]
-    uv = camera.project(P.reshape(-1, 3)).pixels.reshape(20, len(X), 2) + rng.normal(0, 0.1, (20, len(X), 2))
-    F_meas = noisy_poses(F_nominal, rng, 0.02, 0.002)
-    res = refine_hand_eye(F_meas, uv, X, camera, setup="eye_to_hand", joints=q, robot=robot, joint_offsets=True,
-                          robot_pose_sigma=(0.02, 0.002))
-    out = summary("e2h", res, refine_hand_eye(F_meas, uv, X, camera, setup="eye_to_hand", robot_pose_sigma=(0.02, 0.002)))
-    # eye-in-hand: the camera on the flange, a board 550 mm in front of it at q0
-    rng = np.random.default_rng(8)
-    q0 = np.radians([0.0, 20.0, 10.0, 0.0, 60.0, 0.0])
-    X_fc = _T(np.eye(3), [0.0, 60.0, 80.0])
-    T_bc0 = fk(q0[None], p_true)[0] @ X_fc
-    Z = np.eye(4)
-    Z[:3, :3] = np.column_stack([T_bc0[:3, 0], np.cross(-T_bc0[:3, 2], T_bc0[:3, 0]), -T_bc0[:3, 2]])
-    Z[:3, 3] = T_bc0[:3, 3] + 550.0 * T_bc0[:3, 2] - Z[:3, :3] @ np.array([100.0, 70.0, 0.0])
-    qs, uvs = [], []
-    while len(qs) < 20:  # random joint poses whose view keeps the whole board in the image
-        qk = q0 + rng.uniform(-0.25, 0.25, 6)
-        T_ct = invert_transforms(fk(qk[None], p_true) @ X_fc)[0] @ Z
-        P = X @ T_ct[:3, :3].T + T_ct[:3, 3]
-        px = camera.project(P).pixels
-        if np.all(P[:, 2] > 100) and np.all((px > 0) & (px < [1279, 1023])):
-            qs.append(qk)
-            uvs.append(px)
-    q = np.array(qs)
-    uv = np.array(uvs) + rng.normal(0, 0.1, (20, len(X), 2))
-    F_meas = noisy_poses(fk(q), rng, 0.02, 0.002)
-    res = refine_hand_eye(F_meas, uv, X, camera, joints=q, robot=robot, joint_offsets=True, robot_pose_sigma=(0.02, 0.002))
-    out.update(summary("e2i", res, refine_hand_eye(F_meas, uv, X, camera, robot_pose_sigma=(0.02, 0.002))))
+    out = {}
+    for key, c in (("e2h", eye_to_hand_campaign()), ("e2i", eye_in_hand_campaign())):  # the tests' campaigns
+        args = (c.T_base_flange, c.image_points, c.target_points, c.camera)
+        res = refine_hand_eye(*args, setup=c.setup, joints=c.joints, robot=c.robot, joint_offsets=True,
+                              robot_pose_sigma=(0.02, 0.002))
+        out.update(summary(key, res, refine_hand_eye(*args, setup=c.setup, robot_pose_sigma=(0.02, 0.002))))
     return out
 
 
