@@ -17,15 +17,13 @@ from robocal.io.boards import board_image, parse_board
 from robocal.io.detection import detect_board
 from robocal.sim.cameras.camera_cell import simulate_hand_eye_poses
 from robocal.sim.cameras.camera_render import BoardRenderer
-from robocal.transforms import invert_transforms, rotation_angle
+from robocal.docs.opencv_reference import opencv_hand_eye_solutions
+from robocal.transforms import rotation_angle
 from robocal.workflows.cameras.camera_simulate import _texel_mm
 
 BOARD = "charuco:9x7:30mm:22mm:DICT_5X5_100"
 SEED = 5
 CORNER_NOISE_PX = 0.3
-
-HAND_EYE = {"TSAI": cv2.CALIB_HAND_EYE_TSAI, "PARK": cv2.CALIB_HAND_EYE_PARK, "HORAUD": cv2.CALIB_HAND_EYE_HORAUD,
-            "ANDREFF": cv2.CALIB_HAND_EYE_ANDREFF, "DANIILIDIS": cv2.CALIB_HAND_EYE_DANIILIDIS}
 
 
 @pytest.fixture(scope="module")
@@ -47,30 +45,9 @@ def cells():
     return board, X, truths, noisy, detection_error
 
 
-def _T(R, t):
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, np.ravel(t)
-    return T
-
-
 def opencv_solutions(F, uv, X, camera, setup) -> dict:
-    """OpenCV end to end on the detections: solvePnP per image, then every calibrateHandEye method
-    and calibrateRobotWorldHandEye (SHAH, LI). Static camera: OpenCV wants the flange poses inverted."""
-    C = []
-    for pts in uv:
-        ok = np.isfinite(pts[:, 0])
-        _, r, t = cv2.solvePnP(X[ok], pts[ok], camera.matrix, np.array(camera.distortion))
-        C.append(_T(cv2.Rodrigues(r)[0], t))
-    C = np.array(C)
-    G = F if setup == "eye_in_hand" else invert_transforms(F)
-    out = {k: _T(*cv2.calibrateHandEye(list(G[:, :3, :3]), list(G[:, :3, 3]), list(C[:, :3, :3]), list(C[:, :3, 3]),
-                                       method=m)) for k, m in HAND_EYE.items()}
-    B = invert_transforms(G)  # OpenCV's base2gripper
-    for k, m in {"RW_SHAH": cv2.CALIB_ROBOT_WORLD_HAND_EYE_SHAH, "RW_LI": cv2.CALIB_ROBOT_WORLD_HAND_EYE_LI}.items():
-        _, _, R_cam_gripper, t_cam_gripper = cv2.calibrateRobotWorldHandEye(
-            list(C[:, :3, :3]), list(C[:, :3, 3]), list(B[:, :3, :3]), list(B[:, :3, 3]), method=m)
-        out[k] = invert_transforms(_T(R_cam_gripper, t_cam_gripper))
-    return out
+    """OpenCV end to end on the detections (robocal.docs.opencv_reference, also the docs' producer)."""
+    return opencv_hand_eye_solutions(F, uv, X, camera, setup)
 
 
 def _errors(T, truth):

@@ -48,7 +48,6 @@ def handeye_rendered() -> dict:
     end to end on the same detections (``solvePnP``, then every ``calibrateHandEye`` method and
     ``calibrateRobotWorldHandEye``). Fields ``detection_rms_px`` and
     ``{eye_in_hand|eye_to_hand}.{robocal|TSAI|PARK|HORAUD|ANDREFF|DANIILIDIS|RW_SHAH|RW_LI}.{rot_deg|trans_mm}``."""
-    import cv2
     import numpy as np
 
     from ..handeye import refine_hand_eye
@@ -56,13 +55,9 @@ def handeye_rendered() -> dict:
     from ..io.detection import detect_board
     from ..sim.cameras.camera_cell import simulate_hand_eye_poses
     from ..sim.cameras.camera_render import BoardRenderer
-    from ..transforms import invert_transforms, rotation_angle
+    from ..transforms import rotation_angle
     from ..workflows.cameras.camera_simulate import _texel_mm
-
-    def pose(R, t):
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = R, np.ravel(t)
-        return T
+    from .opencv_reference import opencv_hand_eye_solutions
 
     board = parse_board("charuco:9x7:30mm:22mm:DICT_5X5_100")
     X = board.object_points()
@@ -77,25 +72,10 @@ def handeye_rendered() -> dict:
     projected = a.camera.project(exact.reshape(-1, 3)).pixels.reshape(uv.shape)
     out = {"detection_rms_px": float(np.sqrt(np.nanmean(np.sum((uv - projected) ** 2, axis=2))))}
     uv = uv + rng.normal(0.0, 0.3, uv.shape)
-    hand_eye = {"TSAI": cv2.CALIB_HAND_EYE_TSAI, "PARK": cv2.CALIB_HAND_EYE_PARK, "HORAUD": cv2.CALIB_HAND_EYE_HORAUD,
-                "ANDREFF": cv2.CALIB_HAND_EYE_ANDREFF, "DANIILIDIS": cv2.CALIB_HAND_EYE_DANIILIDIS}
     for setup, truth in truths.items():
         cam, F = truth.camera, truth.T_base_flange
-        C = []
-        for pts in uv:
-            ok = np.isfinite(pts[:, 0])
-            _, r, t = cv2.solvePnP(X[ok], pts[ok], cam.matrix, np.array(cam.distortion))
-            C.append(pose(cv2.Rodrigues(r)[0], t))
-        C = np.array(C)
-        G = F if setup == "eye_in_hand" else invert_transforms(F)
         found = {"robocal": refine_hand_eye(F, uv, X, cam, setup=setup).camera_pose}
-        found.update({k: pose(*cv2.calibrateHandEye(list(G[:, :3, :3]), list(G[:, :3, 3]), list(C[:, :3, :3]),
-                                                     list(C[:, :3, 3]), method=m)) for k, m in hand_eye.items()})
-        B = invert_transforms(G)
-        for k, m in (("RW_SHAH", cv2.CALIB_ROBOT_WORLD_HAND_EYE_SHAH), ("RW_LI", cv2.CALIB_ROBOT_WORLD_HAND_EYE_LI)):
-            _, _, R_cg, t_cg = cv2.calibrateRobotWorldHandEye(list(C[:, :3, :3]), list(C[:, :3, 3]), list(B[:, :3, :3]),
-                                                              list(B[:, :3, 3]), method=m)
-            found[k] = invert_transforms(pose(R_cg, t_cg))
+        found.update(opencv_hand_eye_solutions(F, uv, X, cam, setup))
         for k, T in found.items():
             out[f"{setup}.{k}.rot_deg"] = float(np.degrees(rotation_angle(T[:3, :3].T @ truth.camera_pose[:3, :3])))
             out[f"{setup}.{k}.trans_mm"] = float(np.linalg.norm(T[:3, 3] - truth.camera_pose[:3, 3]))
