@@ -327,3 +327,46 @@ def test_the_elastic_gate_fails_a_significantly_negative_compliance():
     assert [r["name"] for r in named] == ["compliance.A2", "gravity.A2.hx"]
     ok, named = elastic_reasons(rows[1:])
     assert ok == [] and [r["name"] for r in named] == ["gravity.A2.hx"]
+
+
+def test_only_a_lumped_model_names_growing_column_scales_and_only_those_scales_grow():
+    """robocal.calib._iterate, "Growing column scales": a lumped elastic problem names its
+    compliance and gravity columns, a mass model or a rigid problem none; in a solve's first round
+    those columns' scales never fall and end at least at their columns' final norms, the others keep
+    their start's scale."""
+    from robocal.calib import solve
+    from robocal.calib import _iterate
+
+    nom = load_robot("kuka_kr150_r3100")
+    rng = np.random.default_rng(3)
+    q = rng.uniform(nom.limits[:, 0] * 0.6, nom.limits[:, 1] * 0.6, size=(60, 6))
+    pts = nom.fk(q)[:, :3, 3][:, None, :] + rng.normal(0, 0.02, (60, 1, 3))
+    rigid = CalibrationProblem(nom, q, [Target("t", None, (0.0, 0.0, 0.0))], pts, free=[])
+    assert rigid.growing_scale_columns() is None
+    masses = {nom.links[int(k)].name: (50.0, (100.0, 0.0, 0.0)) for k in nom.moving}
+    with_masses = CalibrationProblem(nom, q, [Target("t", None, (0.0, 0.0, 0.0))], pts, free=[],
+                                     elastic=ElasticModel(masses=masses))
+    assert with_masses.growing_scale_columns() is None
+    lumped = CalibrationProblem(nom, q, [Target("t", None, (0.0, 0.0, 0.0))], pts, free=[],
+                                elastic=ElasticModel())
+    grow = lumped.growing_scale_columns()
+    assert grow.sum() == sum(b.size for b in lumped.deflection.blocks)
+    assert set(np.asarray(lumped.names)[grow]) == {n for b in lumped.deflection.blocks for n in b.names}
+
+    seen = []
+    original = _iterate.DampedGaussNewton._raise_column_scales
+
+    def spy(self):
+        before = self.col_scale.copy()
+        original(self)
+        seen.append((before, self.col_scale.copy(), self.growing_scale.copy()))
+
+    _iterate.DampedGaussNewton._raise_column_scales = spy
+    try:
+        solve(lumped, max_iterations=30)
+    finally:
+        _iterate.DampedGaussNewton._raise_column_scales = original
+    assert seen
+    for before, after, m in seen:
+        assert np.all(after[m] >= before[m]) and np.array_equal(after[~m], before[~m])
+    assert any(np.any(after[m] > before[m]) for before, after, m in seen)

@@ -35,6 +35,20 @@ def test_dlr_justin_joint_compliance_reaches_the_source_figure():
     assert [d["name"] for d in ident["dropped"]] == ["compliance.torso_0"]
 
 
+@_need("dlr_justin")
+def test_dlr_justin_full_model_converges_in_hundreds_not_thousands_of_iterations():
+    """Issue 34 item 3: elastic-full on the protocol's split converges in every round, its full
+    level in 143 iterations here (1324 with the start's column scaling, the first round at the cap
+    of 1000: robocal.calib._iterate, "Growing column scales"), holdout mean 3.29 mm (source 3.12;
+    3.27 at the old stopping point of the same nearly flat cost). Bounds: 2x the iterations,
+    +0.06 mm."""
+    r = calibrate_justin(0, model="elastic-full")
+    full = r["results"]["full"]
+    assert full.converged and all(res.converged for res in r["results"].values())
+    assert full.iterations <= 300, full.iterations
+    assert r["full"]["mean"] < 3.35 and r["full"]["max"] < 9.0, r["full"]
+
+
 @_need("boby_fanuc")
 def test_boby_fanuc_joint_compliance_below_0_40_mm():
     """Seeds 0 and 3 (the best and the worst geometric split), every fit converged (issue 25: the

@@ -24,6 +24,20 @@ anywhere else it is reported as NOT converged, as is reaching the iteration cap.
 lower the cost strictly, and the cost-change and step-size criteria count only for steps whose
 damping is below 1 (a heavily damped step is short wherever it is).
 
+Growing column scales: a problem can name columns (``Problem.growing_scale_columns``) whose norm at
+the start says nothing about their size later on -- a lumped elastic model starts with every first
+moment zero and every compliance equal, so its compliance columns are the torques of point masses
+and its gravity columns scale with compliances still far from their values. For those columns, in
+the first round of :func:`robocal.calib.solve` only, the scale is raised after each accepted step
+to the column's current norm where that is larger (Moré 1978, the rule of MINPACK's ``lmder``):
+with the start's scaling the damping held them back and the first round crawled along the
+lumped model's scale symmetry to the iteration cap (DLR Justin elastic-full: 1000 iterations
+against 68). Later rounds start from the first round's solution, where the columns are
+representative, and keep their start's scaling: raising it there amplifies the lumped model's
+near-symmetric directions (a compliance growing while its body's first moment shrinks) and the
+iteration follows them for hundreds of steps. Only the damping changes; the cost and the stop
+rules do not.
+
 The chi-square criterion: with ``d_k``, ``d_{k-1}``, ``d_{k-2}`` the cost decreases of the last
 three accepted steps of the phase (however damped), ``q = max(d_k / d_{k-1}, d_{k-1} / d_{k-2})`` and the remaining
 decrease ``R_k = d_k q / (1 - q)`` (the geometric tail of steps that keep contracting at ``q``;
@@ -112,7 +126,7 @@ class DampedGaussNewton:
     weights per pose slot, cost, damping ``lam``, iteration count and stop reason."""
 
     def __init__(self, problem, state, r, J, labels, active, *, method, loss, f_scale, prior_weight, rcond,
-                 ftol, xtol, chi2_tol, progress, prior_center=None):
+                 ftol, xtol, chi2_tol, progress, prior_center=None, growing_scale=None):
         self.problem, self.method, self.loss, self.rcond = problem, method, loss, rcond
         self.ftol, self.xtol, self.chi2_tol, self.progress = ftol, xtol, chi2_tol, progress
         self.prior_weight = prior_weight
@@ -124,6 +138,9 @@ class DampedGaussNewton:
         self.n_slots = self.n_poses + 1
         self.col_scale = self._column_norms(J)
         self.col_scale[self.col_scale == 0] = 1.0
+        # columns whose scale follows their norm upward (module docstring, "Growing column scales")
+        self.growing_scale = None if growing_scale is None or not np.any(growing_scale) \
+            else np.asarray(growing_scale, dtype=bool)
         self.geom = problem.blocks == "geometry"
         # the prior pulls toward the solve's start (``prior_center``: the geometry values of the first
         # round's start when a later round or an early identifiability look continues from elsewhere)
@@ -275,11 +292,19 @@ class DampedGaussNewton:
             self.weights[:self.n_poses] = robust_weights(pose_norm, self.loss, self.f_scale)
             self.w_rows = self.row_weights()
         new_cost = self._cost(self.r)
+        if self.growing_scale is not None:
+            self._raise_column_scales()
         self._lower_damping()
         if self.progress:
             self.progress(it, new_cost)
         dcost, self.cost = self.cost - new_cost, new_cost
         return self._converged_after_step(dcost, step_s)
+
+    def _raise_column_scales(self) -> None:
+        """Raise the scale of each :attr:`growing_scale` column to its current norm where that is
+        larger (Moré's rule, MINPACK's ``lmder``; module docstring)."""
+        m = self.growing_scale
+        self.col_scale[m] = np.maximum(self.col_scale[m], self._column_norms(self.J)[m])
 
     def _lower_damping(self) -> None:
         """After a taken step: /10 (``tenfold``) or Nielsen's factor of its gain ratio (``gain``)."""

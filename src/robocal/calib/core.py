@@ -136,6 +136,12 @@ class Problem:
             raise ProblemError(f"no parameter block named {name!r}; blocks: {list(self._by_name)}") from None
 
     # ------------------------------------------------------------------ states
+    def growing_scale_columns(self):
+        """Columns (n,) bool whose scale follows their norm upward in a solve's first round, or None
+        (:mod:`robocal.calib._iterate`, "Growing column scales"). None here; a lumped elastic
+        :class:`~robocal.calib.problem.CalibrationProblem` names its compliance and gravity columns."""
+        return None
+
     def initial_state(self):
         """Every block's initial value (copies), as the problem's state type."""
         return self._make_state([np.array(b.initial, dtype=float) for b in self.parameter_blocks])

@@ -250,6 +250,15 @@ class CalibrationProblem(Problem):
         self._make_state = _state
         self._legacy_slices()
 
+    def growing_scale_columns(self):
+        """The compliance and gravity columns of a lumped elastic model (gravity parameters
+        identified from the data), else None: their norms at the start (first moments zero, every
+        compliance equal) say nothing about their later size (:mod:`robocal.calib._iterate`)."""
+        d = self.deflection
+        if d is None or not d.gravity.n_free:
+            return None
+        return np.isin(self.blocks, ("compliance", "gravity"))
+
     def _legacy_slices(self):
         """Column slices of the four blocks (``_sl_geom``, ``_sl_base``, ``_target_cols``, ``_sl_planes``)."""
         geometry, frames, targets, planes = self.parameter_blocks[:4]

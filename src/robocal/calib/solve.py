@@ -278,6 +278,7 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
     if M < n:
         raise ValueError(f"too few measurements: {M} residuals for {n} unknowns ({problem.n_poses} poses); "
                          f"add poses or fix parameters")
+    first_round = ident is None
     if ident is None:
         ident = analyse_identifiability(J, problem.names, problem.blocks, column_blocks=problem.column_blocks) \
             if auto_identifiable else IdentifiabilityReport.trivial(problem.names)
@@ -294,7 +295,10 @@ def _solve_once(problem: Problem, *, method: str = "lm", loss: str = "linear", f
         J = None
         gn = _normal.NormalEquationsLM(problem, state, r, ne, labels, active, evaluator=evaluator, **kw)
     else:
-        gn = DampedGaussNewton(problem, state, r, J, labels, active, prior_center=prior_center, **kw)
+        # the first round's growing column scales (robocal.calib._iterate: a lumped elastic model)
+        growing = problem.growing_scale_columns() if first_round else None
+        gn = DampedGaussNewton(problem, state, r, J, labels, active, prior_center=prior_center,
+                               growing_scale=growing, **kw)
     gn.run_phase(1, max_iterations)
     if r0 is None:
         r0 = gn.r0
