@@ -102,6 +102,26 @@ def justin_joint_seeds() -> dict:
 
 
 @functools.lru_cache(maxsize=None)
+def justin_full_seeds() -> dict:
+    """docs/elastic.md "How the full model converges": ``calibrate_justin(seed, model="elastic-full")``
+    over seeds 0-4: holdout mean ``min`` / ``max`` / ``mean`` [mm], the full level's iterations
+    (``iterations.min`` / ``iterations.max``, solve and re-solve) and ``n_not_converged`` (every fit
+    of every seed)."""
+    from ..workflows.convergence import recording_fits
+    from ..workflows.datasets.dlr_justin import calibrate_justin
+
+    means, its = [], []
+    with recording_fits() as fits:
+        for seed in range(5):
+            out = calibrate_justin(seed, model="elastic-full")
+            means.append(out["calibrated"]["mean"])
+            its.append(out["results"]["full"].iterations)
+    return {"min": min(means), "max": max(means), "mean": sum(means) / len(means),
+            "iterations.min": float(min(its)), "iterations.max": float(max(its)),
+            "n_not_converged": float(sum(not f.converged for f in fits))}
+
+
+@functools.lru_cache(maxsize=None)
 def justin_joint_gravity() -> dict:
     """docs/elastic.md "Without a mass model": ``calibrate_justin(0, model="elastic-joint")``'s
     identifiability analysis of the elastic level: ``gravity.held`` (lumped gravity parameters held
@@ -635,6 +655,7 @@ DATASET_PRODUCERS = {
     "elastic/hilti_gain_joint": lambda: hilti_gain("elastic-joint"),
     "elastic/hilti_gain_full": lambda: hilti_gain("elastic-full"),
     "elastic/justin_joint_seeds": justin_joint_seeds,
+    "elastic/justin_full_seeds": justin_full_seeds,
     "elastic/justin_joint_gravity": justin_joint_gravity,
     **{f"datasets/convergence/{m}": functools.partial(datasets_convergence, m)
        for m in ("geometric", "elastic-joint", "elastic-full")},
@@ -650,7 +671,7 @@ DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
                    "datasets/boby_joint_seeds": ("boby_fanuc",), "datasets/boby_geometric_seeds": ("boby_fanuc",),
                    "datasets/hilti_vs_readme": ("hilti_trailblazer",), "datasets/justin_full_vs_source": ("dlr_justin",),
                    "elastic/hilti_gain_joint": ("hilti_trailblazer",), "elastic/hilti_gain_full": ("hilti_trailblazer",),
-                   "elastic/justin_joint_seeds": ("dlr_justin",), "elastic/justin_joint_gravity": ("dlr_justin",),
+                   "elastic/justin_joint_seeds": ("dlr_justin",), "elastic/justin_full_seeds": ("dlr_justin",), "elastic/justin_joint_gravity": ("dlr_justin",),
                    **{f"datasets/convergence/{m}": CONVERGENCE_DATASETS for m in ("geometric", "elastic-joint", "elastic-full")}}
 
 #: slow: more than ~10 s of CPU (the Justin / Hilti elastic-full fits, five Justin elastic fits, five hand-eye /
@@ -658,7 +679,7 @@ DATASETS_NEEDED = {"datasets/positioner": ("ros_industrial_handeye",),
 #: ~8 s, 1-6 s (the 6-D calibrations through the command line, the NAO null directions)
 SLOW_DATASET_PRODUCERS = {"elastic/round_trips", "self_calibration/nao_cli", "self_calibration/nao_null_directions", "self_calibration/nao_joint_noise", "elastic/six_d_cli",
                           *(f"datasets/ros_handeye_variants/{t}" for t in ROS_BOARDS), "elastic/hilti_gain_full",
-                          "elastic/justin_joint_seeds", "datasets/justin_full_vs_source",
+                          "elastic/justin_joint_seeds", "elastic/justin_full_seeds", "datasets/justin_full_vs_source",
                           # Justin's elastic-joint fit (~40 s); the convergence counts of the elastic models (their
                           # Justin / Hilti runs are slow; geometric: the three fast protocols)
                           "elastic/justin_joint_gravity", "datasets/convergence/elastic-joint",

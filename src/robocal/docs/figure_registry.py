@@ -196,7 +196,7 @@ FIGURES += [
     Figure("elastic:justin train rms full", "docs/elastic.md", r"Training RMS: Justin [0-9.]+ → [0-9.]+ \(joint\) → " + _N,
            "dlr_justin/elastic-full", "train_rms_mm", rel_tol=0.01, slow=True),
 ]
-for _model, _pat in (("elastic-joint", r"0\.276 mm RMS \(per seed "), ("elastic-full", r"0\.325 mm \(per seed ")):
+for _model, _pat in (("elastic-joint", r"0\.276 mm RMS \(per seed "), ("elastic-full", r"0\.315 mm \(per seed ")):
     FIGURES += [Figure(f"elastic:boby {_model} seed {k}", "docs/elastic.md", _pat + r"(?:[0-9.]+,\s+)" * k + _N,
                        f"boby_fanuc/{_model}", f"per_seed_holdout_rms_mm.{k}", rel_tol=0.01) for k in range(5)]
 
@@ -1318,6 +1318,14 @@ FIGURES += [
            "gain.max", rel_tol=0.05),
     Figure("elastic:justin joint seeds 0-4 min", "docs/elastic.md", r"holdout mean\s+" + _N + r"-[0-9.]+ mm \(`calibrate_justin",
            "elastic/justin_joint_seeds", "min", rel_tol=0.01),
+    Figure("elastic:justin full mean (how)", "docs/elastic.md", r"every fit of the protocol converged, holdout " + _N + " mm mean",
+           "dlr_justin/elastic-full", "holdout_mean_mm", rel_tol=0.005, slow=True),
+    Figure("elastic:justin full seeds 0-4 min", "docs/elastic.md", r"of its full level \([^)]*\), holdout mean " + _N,
+           "elastic/justin_full_seeds", "min", rel_tol=0.01),
+    Figure("elastic:justin full seeds 0-4 max", "docs/elastic.md", r"of its full level \([^)]*\), holdout mean [0-9.]+-" + _N,
+           "elastic/justin_full_seeds", "max", rel_tol=0.01),
+    Figure("elastic:justin full seeds 0-4 mean", "docs/elastic.md", r"of its full level \([^)]*\), holdout mean [0-9.]+-[0-9.]+ mm, "
+           + _N + r" on\s+average", "elastic/justin_full_seeds", "mean", rel_tol=0.01),
     Figure("elastic:justin joint seeds 0-4 max", "docs/elastic.md", r"holdout mean\s+[0-9.]+-" + _N + r" mm \(`calibrate_justin",
            "elastic/justin_joint_seeds", "max", rel_tol=0.01),
 ]
@@ -1768,8 +1776,12 @@ FIGURES += [Figure(f"elastic:iterations {k}", _EL, pat, producer, field, rel_tol
                  "dlr_justin/elastic-full", "iterations.last"),
                 ("justin full (times)", r"it; " + _N + r" iterations of the full level", "dlr_justin/elastic-full",
                  "iterations.last"),
-                ("justin full (not done yet)", r"The lumped models converge slowly \(" + _N + " LM iterations",
+                ("justin full (how)", r"the full level converges in " + _N + r"\s+iterations",
                  "dlr_justin/elastic-full", "iterations.last"),
+                ("justin full seeds 0-4 min", r"converges on every one in " + _N + r"-[0-9]+ iterations\s+of its full level",
+                 "elastic/justin_full_seeds", "iterations.min"),
+                ("justin full seeds 0-4 max", r"converges on every one in [0-9]+-" + _N + r" iterations\s+of its full level",
+                 "elastic/justin_full_seeds", "iterations.max"),
                 ("boby full converged min", r"66 identifiable; " + _N + r"-[0-9]+ iterations for seeds",
                  "boby_fanuc/elastic-full", "iterations.per_seed_last_converged.min"),
                 ("boby full converged max", r"66 identifiable; [0-9]+-" + _N + r" iterations for seeds",
@@ -1783,9 +1795,9 @@ FIGURES += [Figure(f"datasets:iterations {k}", "docs/datasets.md", pat, producer
             for k, pat, producer, field in (
                 ("boby joint max", r"the elastic fits need up to " + _N + r" \(boby joint\)", "boby_fanuc/elastic-joint",
                  "iterations.per_seed_last_converged.max"),
-                ("justin joint", r"\(boby full, seed 1 at the cap\), " + _N + " / ", "dlr_justin/elastic-joint",
+                ("justin joint", r"\(boby full, seed 2 at the cap\), " + _N + " / ", "dlr_justin/elastic-joint",
                  "iterations.last"),
-                ("justin full", r"\(boby full, seed 1 at the cap\), [0-9]+ / " + _N + r" \(Justin", "dlr_justin/elastic-full",
+                ("justin full", r"\(boby full, seed 2 at the cap\), [0-9]+ / " + _N + r" \(Justin", "dlr_justin/elastic-full",
                  "iterations.last"),
                 ("hilti joint", r"Nielsen's damping rule\), " + _N + r" / [0-9]+ \(Hilti", "hilti_trailblazer/elastic-joint",
                  "iterations.last"),
