@@ -123,6 +123,10 @@ def test_the_mode_overrides_the_policy(fresh_policy, kernels_mode):
     kernels_mode("compiled")
     assert _backend.use_compiled("fk_fused_single_checked")
     assert not _backend.compiled_kernels()  # nothing counted or switched by either mode
+    kernels_mode("auto")
+    assert _backend.use_compiled("fk_fused_into", 10**9)
+    kernels_mode("numpy")  # a kernel auto switched earlier in the process runs numpy when numpy is asked for
+    assert not _backend.use_compiled("fk_fused_into", 1)
 
 
 def test_a_small_calibration_imports_no_numba(tmp_path):

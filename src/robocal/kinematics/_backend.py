@@ -84,10 +84,10 @@ def use_compiled(name: str, work: int = 1) -> bool:
     """True when a call of kernel ``name`` over ``work`` poses x points runs compiled (this counts the
     call; see the module docstring). A compiled caller of the kernel (a loop around it) asks this
     first, so that a problem the numpy kernels suit loads nothing."""
-    if _mode == "compiled" or name in _switched:
+    if _mode != "auto":  # a mode set by the user or a benchmark wins over what auto decided so far
+        return _mode == "compiled"
+    if name in _switched:
         return True
-    if _mode != "auto":
-        return False
     (nc, nu), (cc, cu) = COST_S[name]
     t_numpy, t_compiled = nc + nu * work, cc + cu * work
     saving = t_numpy - t_compiled
