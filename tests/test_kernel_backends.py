@@ -145,3 +145,22 @@ def test_a_small_calibration_imports_no_numba(tmp_path):
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True,
                          env={**__import__("os").environ, "ROBOCAL_KERNELS": "auto"})
     assert out.stdout.strip() == "False"
+
+
+def test_a_big_calibration_imports_no_numba(tmp_path):
+    """Issue 34 item 4: a calibration of 12 000 poses (blocks of 4 096 poses, where the numpy kernels run
+    within 2x of compiled ones) loads no numba either: its ~105 MiB would be ~9 KiB per pose here."""
+    from robocal.sim import LaserTracker, VirtualRobot
+
+    rngs = [np.random.default_rng(s) for s in (1, 2, 3)]
+    robot = VirtualRobot.perturbed(load_robot("ur10"), rngs[0], joint_noise_deg=0.0)
+    LaserTracker.placed(rngs[1], 1, sigma_mm=0.02).campaign(robot, 12_000, rngs[2], measurements_path=tmp_path / "m.csv",
+                                                            cell=None)
+    probe = ("import sys\nfrom robocal.cli.main import main\n"
+             f"main(['calibrate', 'ur10', {str(tmp_path / 'm.csv')!r}, '--out', {str(tmp_path / 'out')!r}, '--no-report'], "
+             "standalone_mode=False)\n"
+             "from robocal.kinematics import _backend\nprint(sorted(_backend.compiled_kernels()), 'numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True,
+                         env={**__import__("os").environ, "ROBOCAL_KERNELS": "auto"})
+    assert out.stdout.strip().splitlines()[-1] == "[] False"
+    assert (tmp_path / "out" / "result.json").exists()
