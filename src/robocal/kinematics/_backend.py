@@ -25,7 +25,7 @@ estimated time compiled code would have saved is added up, ski-rental style:
   more kernel: :data:`KERNEL_LOAD_S` when numba's on-disk cache holds it, else
   :data:`KERNEL_COMPILE_S` (the first run after installing compiles only the kernels that pay).
 
-Results agree to rounding (~1e-13 mm; ``tests/test_kernel_backends.py``). ``ROBOCAL_KERNELS=compiled``
+Results agree to rounding (~1e-12 mm; ``tests/test_kernel_backends.py``). ``ROBOCAL_KERNELS=compiled``
 (or :func:`set_kernels`) always uses the compiled kernels (benchmarks of kernel speed),
 ``ROBOCAL_KERNELS=numpy`` never does.
 """
