@@ -1,4 +1,6 @@
-"""The numpy kernels agree with the compiled ones, and a small command runs without numba (issue 34 item 2).
+"""The numpy kernels agree with the compiled ones, a small command and a big calibration run without
+numba, and the switch to compiled code follows the saving-pays-for-the-load policy of
+``robocal.kinematics._backend`` (issue 34 items 2 and 4; decided by counts and estimates, not timings).
 
 Every shipped robot (DH, MDH, Hayati beta, URDF-style, prismatic joints, trees with several end
 effectors): target points and their Jacobian (subsets of free parameters, points on different end

@@ -4,9 +4,10 @@ calibration problem without the full Jacobian.
 For the common robot calibration (a :class:`~robocal.calib.problem.CalibrationProblem` with point
 measurements only, one station, no elastic model, no priors) the solver needs only ``J^T J`` (n, n)
 and ``J^T r`` (n,) of the weighted Jacobian, never J (M, n) itself. :class:`PointNormalEquations`
-computes them over blocks of :data:`POSE_BLOCK` poses: per block, one call of the compiled
-``target_points`` kernel, the block's Jacobian rows (geometry from the kernel, base frame and
-target points in closed form) written into one reused buffer, and its contribution added to
+computes them over blocks of :data:`POSE_BLOCK` poses: per block, one call of the
+``target_points`` kernel (numpy or compiled: :mod:`robocal.kinematics._backend`), the block's
+Jacobian rows (geometry from the kernel, base frame and target points in closed form) written into
+one reused buffer, and its contribution added to
 ``J^T J`` by one matrix product. The per-evaluation memory is that buffer (a few MB), and the work
 skips the per-block dictionaries, scatter copies and weighted copies of the general
 :meth:`~robocal.calib.core.Problem.evaluate` and the scaled copy of J in every iteration.
