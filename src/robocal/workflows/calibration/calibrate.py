@@ -565,19 +565,6 @@ def _csv_number(v) -> str:
     return "" if v is None or not math.isfinite(v) else f"{v:.6g}"
 
 
-def _as_list(values):
-    """An array's values as Python floats (faster to format than numpy scalars); a list unchanged."""
-    return values.tolist() if isinstance(values, np.ndarray) else values
-
-
-def _all_finite(*columns) -> bool:
-    """Whether every value of the columns (lists or arrays of numbers, maybe None) is finite."""
-    try:
-        return all(bool(np.isfinite(np.asarray(c, dtype=float)).all()) for c in columns)
-    except (TypeError, ValueError):  # a None among the values
-        return False
-
-
 def _move_per_pose_to_csv(paths, rdict, files) -> dict:
     """Write the per-point errors (calibration and held-out poses) to ``residuals.csv`` and the accuracy
     map (one row per pose of the file) to ``accuracy_map.csv``, and replace those arrays in ``rdict`` by
@@ -591,11 +578,8 @@ def _move_per_pose_to_csv(paths, rdict, files) -> dict:
         with open(paths["residuals"], "w", encoding="utf-8", newline="\n") as fh:
             fh.write("set,pose_id,target,error_before_mm,error_after_mm\n")
             for name, per in sets:
-                rows = zip(per["pose"], per["target"], per["before"], per["after"])
-                if _all_finite(per["before"], per["after"]):  # the usual case: no per-value check (3x faster)
-                    fh.writelines(f"{name},{p},{t},{b:.6g},{a:.6g}\n" for p, t, b, a in rows)
-                else:
-                    fh.writelines(f"{name},{p},{t},{_csv_number(b)},{_csv_number(a)}\n" for p, t, b, a in rows)
+                fh.writelines(f"{name},{p},{t},{_csv_number(b)},{_csv_number(a)}\n"
+                              for p, t, b, a in zip(per["pose"], per["target"], per["before"], per["after"]))
         files["residuals"] = paths["residuals"]
         ref = {"file": OUTPUT_FILES["residuals"], "n": None,
                "columns": ["set", "pose_id", "target", "error_before_mm", "error_after_mm"], "unit": "mm"}
@@ -609,12 +593,9 @@ def _move_per_pose_to_csv(paths, rdict, files) -> dict:
     if amap and amap.get("pose_ids") is not None:
         with open(paths["accuracy"], "w", encoding="utf-8", newline="\n") as fh:
             fh.write("pose_id,flange_x_mm,flange_y_mm,flange_z_mm,predicted_std_mm\n")
-            rows = zip(amap["pose_ids"], _as_list(amap["flange_position_base_mm"]), _as_list(amap["predicted_std_mm"]))
-            if _all_finite(amap["flange_position_base_mm"], amap["predicted_std_mm"]):
-                fh.writelines(f"{p},{x:.6g},{y:.6g},{z:.6g},{v:.6g}\n" for p, (x, y, z), v in rows)
-            else:
-                fh.writelines(f"{p},{_csv_number(x)},{_csv_number(y)},{_csv_number(z)},{_csv_number(v)}\n"
-                              for p, (x, y, z), v in rows)
+            fh.writelines(f"{p},{_csv_number(x)},{_csv_number(y)},{_csv_number(z)},{_csv_number(v)}\n"
+                          for p, (x, y, z), v in zip(amap["pose_ids"], amap["flange_position_base_mm"],
+                                                     amap["predicted_std_mm"]))
         files["accuracy"] = paths["accuracy"]
         rdict["accuracy_map"] = {k: v for k, v in amap.items()
                                  if k not in ("pose_ids", "flange_position_base_mm", "predicted_std_mm")}
