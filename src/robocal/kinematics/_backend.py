@@ -8,7 +8,7 @@ numba's on-disk cache; the first run after installing compiles instead, 1-2 s of
 numpy kernels (:mod:`robocal.kinematics._numpy_kernels`) cost nothing to load; per call they take
 ~0.1-0.3 ms of Python overhead, so on small calls they are 5-50x slower than compiled code, while on
 big batches (thousands of poses, vectorised) they come within 1.1-2x of it (target points with their
-Jacobian ~1.7x, without ~1.1x; the forward kinematics stays ~10x).
+Jacobian ~1.7x, without ~1.1x; the forward kinematics stays ~7x).
 
 So each call's numpy and compiled times are estimated from its kernel, call count and work (poses x
 points: :data:`COST_S`; deterministic, a run takes the same path on any machine and load), and the
@@ -44,7 +44,7 @@ from ._kernel_loader import kernels as _compiled
 COST_S = {
     "target_points": ((2.5e-4, 8.0e-7), (5.0e-6, 4.7e-7)),
     "op_twists": ((2.5e-4, 1.8e-6), (5.0e-6, 4.2e-7)),
-    "fk_fused_into": ((8.0e-5, 3.6e-7), (4.0e-6, 3.5e-8)),
+    "fk_fused_into": ((8.0e-5, 2.6e-7), (4.0e-6, 3.5e-8)),
     "fk_fused_single_checked": ((8.0e-5, 0.0), (1.2e-6, 0.0)),
 }
 #: Seconds the first compiled kernel of a process costs to load (with ~105 MiB resident).

@@ -6,7 +6,7 @@ process runs them unless compiled code pays for its load (:mod:`robocal.kinemati
 decides): loading numba costs ~0.4 s and ~105 MiB, a compile 1-2 s of CPU per kernel, while a numpy
 evaluation of 100 poses takes well under a millisecond and a big batch (thousands of poses, in blocks
 of :data:`BLOCK` with working arrays reused from block to block inside :func:`reused_work`) runs
-within 1.1-2x of the compiled kernels (the forward kinematics ~10x).
+within 1.1-2x of the compiled kernels (the forward kinematics ~7x).
 """
 
 from __future__ import annotations
@@ -289,18 +289,20 @@ def _unpack(ints, floats):
 
 
 def _compose(G, A, name):
-    """G (N, 3, 4) (C-contiguous) composed with the constant affine A (3, 4): (N, 3, 4), a working
-    array ``name``. One matrix product of the stacked rows (3N, 4) with [A; 0 0 0 1] (4, 4)."""
+    """Frames G (4, 3, N) (column-major: ``G[c, i]`` is row i of column c, a contiguous (N,) row)
+    composed with the constant affine A (3, 4): (4, 3, N), a working array ``name``. One matrix
+    product [A; 0 0 0 1]^T (4, 4) @ G (4, 3N)."""
     A4 = np.zeros((4, 4))
     A4[:3] = A
     A4[3, 3] = 1.0
     out = _work(name, G.shape)
-    np.matmul(G.reshape(-1, 4), A4, out=out.reshape(-1, 4))
+    np.matmul(A4.T, G.reshape(4, -1), out=out.reshape(4, -1))
     return out
 
 
 def _write_poses(dst, G):
-    dst[:, :3] = G
+    """dst (N, 4, 4) = the column-major frames G (4, 3, N) as homogeneous poses."""
+    dst[:, :3] = G.transpose(2, 1, 0)
     dst[:, 3, :3] = 0.0
     dst[:, 3, 3] = 1.0
 
@@ -317,26 +319,27 @@ def fk_fused_into(q, ints, floats, e, out, links, start, stop):
     n_m, n_e, mparent, mtype, cpl_ptr, cpl_idx, ee_anchor, K, E, post, cpl_coef = _unpack(ints, floats)
     qs = q[start:stop]
     N = len(qs)
-    qm = _model_joints(qs, n_m, cpl_ptr, cpl_idx, cpl_coef)
-    G = []
+    qm = _model_joints(qs, n_m, cpl_ptr, cpl_idx, cpl_coef).T.copy()  # (n_m, N)
+    G = []  # each moving link's frames, column-major (4, 3, N): a column's rows are contiguous
     for m in range(n_m):
         p = mparent[m]
         if p < 0:
-            tmp = _work(f"link{m}", (N, 3, 4))
-            tmp[...] = K[m]
+            tmp = _work(f"link{m}", (4, 3, N))
+            tmp[...] = K[m].T[:, :, None]
         else:
             tmp = _compose(G[p], K[m], f"link{m}")
         if mtype[m] == 0:
-            c, s = np.cos(qm[:, m])[:, None], np.sin(qm[:, m])[:, None]
-            x0 = tmp[:, :, 0].copy()
-            x1 = tmp[:, :, 1]
-            tmp[:, :, 0] = c * x0 + s * x1
-            tmp[:, :, 1] = c * x1 - s * x0
+            c, s = np.cos(qm[m]), np.sin(qm[m])
+            x0 = tmp[0].copy()
+            tmp[0] *= c
+            tmp[0] += s * tmp[1]
+            tmp[1] *= c
+            tmp[1] -= s * x0
         else:
-            tmp[:, :, 3] += qm[:, m, None] * tmp[:, :, 2]
+            tmp[3] += qm[m] * tmp[2]
         G.append(tmp)
     a = ee_anchor[e]
-    _write_poses(out[start:stop], np.broadcast_to(E[e], (N, 3, 4)) if a < 0 else _compose(G[a], E[e], "pose"))
+    _write_poses(out[start:stop], np.broadcast_to(E[e].T[:, :, None], (4, 3, N)) if a < 0 else _compose(G[a], E[e], "pose"))
     if links.shape[0] > 0:
         for m in range(n_m):
             _write_poses(links[start:stop, m], _compose(G[m], post[m], "pose"))
