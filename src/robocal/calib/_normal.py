@@ -4,9 +4,10 @@ calibration problem without the full Jacobian.
 For the common robot calibration (a :class:`~robocal.calib.problem.CalibrationProblem` with point
 measurements only, one station, no elastic model, no priors) the solver needs only ``J^T J`` (n, n)
 and ``J^T r`` (n,) of the weighted Jacobian, never J (M, n) itself. :class:`PointNormalEquations`
-computes them over blocks of :data:`POSE_BLOCK` poses: per block, one call of the compiled
-``target_points`` kernel, the block's Jacobian rows (geometry from the kernel, base frame and
-target points in closed form) written into one reused buffer, and its contribution added to
+computes them over blocks of :data:`POSE_BLOCK` poses: per block, one call of the
+``target_points`` kernel (numpy or compiled: :mod:`robocal.kinematics._backend`), the block's
+Jacobian rows (geometry from the kernel, base frame and target points in closed form) written into
+one reused buffer, and its contribution added to
 ``J^T J`` by one matrix product. The per-evaluation memory is that buffer (a few MB), and the work
 skips the per-block dictionaries, scatter copies and weighted copies of the general
 :meth:`~robocal.calib.core.Problem.evaluate` and the scaled copy of J in every iteration.
@@ -22,12 +23,16 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..kinematics._numpy_kernels import reused_work
 from ._iterate import DampedGaussNewton
 
 __all__ = ["NormalEquations", "PointNormalEquations", "NormalEquationsLM", "supports", "POSE_BLOCK"]
 
-#: Poses per block: the block's Jacobian rows (3 K POSE_BLOCK x n floats) stay ~1-2 MB.
-POSE_BLOCK = 2048
+#: Poses per block: the block's Jacobian rows (3 K POSE_BLOCK x n floats) stay ~3 MB; the numpy kernels'
+#: per-call overhead is amortised (at 2 048 poses a UR10 block with its Jacobian took x1.3 the time per pose).
+POSE_BLOCK = 4096
+#: Rows of J added to the triangular factor per QR (:meth:`PointNormalEquations.r_factor`).
+QR_ROWS = 6144
 
 
 class NormalEquations(NamedTuple):
@@ -101,28 +106,34 @@ class PointNormalEquations:
         Rf = np.zeros((0, n))
         root = bases[0]
         row = 0
-        for i0 in range(0, N, self.block):
-            i1 = min(i0 + self.block, N)
-            pts, R, Jg = self.model.target_points(self.q[i0:i1], params, pts_ee, self.ee, self.g_index, jacobian,
-                                                  root=root, q_checked=True)
-            diff = self.measured[i0:i1] - pts
-            if self.all:
-                rb = diff.ravel()
-            else:
-                m = self.mask[i0:i1]
-                rb = diff[m].ravel()
-            rb *= w
-            r[row:row + len(rb)] = rb
-            row += len(rb)
-            if not jacobian:
-                continue
-            Jb = self._block_jacobian(pts, R, Jg, i1 - i0)
-            if not self.all:
-                Jb = Jb.reshape(i1 - i0, K, 3, n)[self.mask[i0:i1]].reshape(-1, n)
-            JtJ += Jb.T @ Jb
-            Jtr += Jb.T @ rb
-            if want_r:
-                Rf = np.linalg.qr(np.vstack([Rf, w * Jb]), mode="r")
+        with reused_work():  # the numpy kernels keep their working arrays from block to block
+            for i0 in range(0, N, self.block):
+                i1 = min(i0 + self.block, N)
+                pts, R, Jg = self.model.target_points(self.q[i0:i1], params, pts_ee, self.ee, self.g_index, jacobian,
+                                                      root=root, q_checked=True)
+                diff = self.measured[i0:i1] - pts
+                if self.all:
+                    rb = diff.ravel()
+                else:
+                    m = self.mask[i0:i1]
+                    rb = diff[m].ravel()
+                rb *= w
+                r[row:row + len(rb)] = rb
+                row += len(rb)
+                if not jacobian:
+                    continue
+                Jb = self._block_jacobian(pts, R, Jg, i1 - i0)
+                if not self.all:
+                    Jb = Jb.reshape(i1 - i0, K, 3, n)[self.mask[i0:i1]].reshape(-1, n)
+                JtJ += Jb.T @ Jb
+                Jtr += Jb.T @ rb
+                if want_r:  # R of [R; w Jb], in parts of QR_ROWS rows (the QR's copies stay ~1-2 MB)
+                    for c0 in range(0, Jb.shape[0], QR_ROWS):
+                        part = Jb[c0:c0 + QR_ROWS]
+                        stacked = np.empty((Rf.shape[0] + part.shape[0], n))
+                        stacked[:Rf.shape[0]] = Rf
+                        np.multiply(part, w, out=stacked[Rf.shape[0]:])
+                        Rf = np.linalg.qr(stacked, mode="r")
         if not jacobian:
             return r, None
         # the rows above are unweighted: J = w * Jb, and rb already carries w
