@@ -87,12 +87,16 @@ def fleet_run(client, fleet_file: Path, out: Path, per_task=None):
 
 
 def _share(fleet_file, out, k, workers, barrier, spans):
-    """One plain process of the ceiling row: warm up, wait for the others, then the loop over its share."""
-    serial_loop(fleet_file, Path(out) / f"warm{k}", limit=len(MODELS))
+    """One plain process of the ceiling row: warm up on its share (as each fleet worker is warmed by the
+    fleet's warm-up run: the kernel policy loads compiled code only once a process's work has paid
+    for it, so a three-robot warm-up left the numba load inside the timed loop), wait for the others,
+    then the loop over its share."""
     from robocal.io.fleet_file import read_fleet
     from robocal.workflows.calibration.calibrate import run_calibration
 
     entries = read_fleet(fleet_file).entries[k::workers]
+    for e in entries:
+        run_calibration(e.model, e.measurements, Path(out) / f"warm{k}" / e.id, report=False, **e.options)
     barrier.wait(timeout=600)
     t0 = time.perf_counter()
     for e in entries:
@@ -150,7 +154,7 @@ def main():
         t0 = time.perf_counter()
         fleet_file = make_fleet(tmp, args.robots, args.poses)
         print(f"simulated the fleet's campaigns in {time.perf_counter() - t0:.1f} s")
-        serial_loop(fleet_file, tmp / "warm", limit=len(MODELS))  # numba kernels loaded, caches warm
+        serial_loop(fleet_file, tmp / "warm")  # the whole fleet once, as the fleet and the plain processes are warmed
         t0 = time.perf_counter()
         # the cluster robocal fleet calibrate starts (single-threaded workers, no worker profiler)
         with fleet_client(workers=workers) as client:
