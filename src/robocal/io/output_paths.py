@@ -68,8 +68,12 @@ def check_not_inputs(outputs, inputs) -> None:
     for _, out in _pairs(outputs):
         p = Path(out)
         try:
+            # an output that does not exist resolves to no existing file, so to no input: one stat
+            # (a fresh fleet run's ~1000 outputs cost ~3 ms instead of ~40 ms of path resolution)
+            if not p.exists():
+                continue
             what_in = by_path.get(p.resolve())
-            if what_in is None and p.exists():
+            if what_in is None:
                 st = p.stat()
                 what_in = by_id.get((st.st_dev, st.st_ino))
         except OSError:
