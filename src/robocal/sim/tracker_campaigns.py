@@ -68,15 +68,9 @@ def effects_tracker_campaign(robot: str = "abb_irb140", n_poses: int = 80, seed:
 
 def plain_tracker_campaign(robot: str, seed: int = 5, n_poses: int = 80) -> CalibrationProblem:
     """A campaign without unmodelled effects: one reflector (starting 2 mm off per coordinate),
-    ``n_poses`` random configurations, tracker noise only (seeded by ``seed``)."""
-    nominal = load_robot(robot)
-    vr = VirtualRobot.perturbed(nominal, seed, joint_noise_deg=0.0)
-    rng = np.random.default_rng(seed)
-    tracker = LaserTracker.placed(seed, 1, sigma_mm=0.02)
-    q = vr.random_configurations(n_poses, rng, margin=0.1)
-    pts = np.array(tracker.measure(vr, q, rng).points)
-    return CalibrationProblem(nominal, q, [Target("r0", None, tuple(tracker.reflectors[0] + 2.0))], pts,
-                              base_initial="fit", point_sigma_mm=0.02)
+    ``n_poses`` random configurations, tracker noise only (seeded by ``seed``): the problem of
+    :func:`reflector_campaign` with one reflector."""
+    return reflector_campaign(robot, n_poses=n_poses, seed=seed)[0]
 
 
 def reflector_campaign(robot: str = "ur10", n_poses: int = 60, seed: int = 5, three_targets: bool = False,
