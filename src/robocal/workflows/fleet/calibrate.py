@@ -122,11 +122,13 @@ def _check_outputs_are_not_inputs(fleet, out_dir) -> None:
     from ..calibration.calibrate import OUTPUT_FILES
     from .robot import STAMP_FILE
 
-    out = Path(out_dir)
-    outputs = [out / n for n in ("summary.json", "summary.html", "summary.svg")]
+    join = os.path.join  # plain strings: ~10 paths per robot
+    out = os.fspath(out_dir)
+    outputs = [join(out, n) for n in ("summary.json", "summary.html", "summary.svg")]
     inputs = {"FLEET.toml": fleet.path}
+    names = (*OUTPUT_FILES.values(), STAMP_FILE)
     for e in fleet.entries:
-        outputs += [out / e.id / n for n in (*OUTPUT_FILES.values(), STAMP_FILE)]
+        outputs += [join(out, e.id, n) for n in names]
         inputs[f"robot {e.id!r} measurements"] = e.measurements
         if e.model_is_file:
             inputs[f"robot {e.id!r} model"] = e.model

@@ -12,7 +12,7 @@ from ...errors import RobocalError
 import contextlib
 import os
 
-__all__ = ["FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "default_workers", "tls_security"]
+__all__ = ["LOCAL_CLUSTER_CONFIG", "FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "default_workers", "tls_security"]
 
 FLEET_EXTRA_HINT = "pip install 'robocal[fleet]'"
 
@@ -105,14 +105,42 @@ def fleet_client(scheduler: str | None = None, workers: int | None = None, *, pr
     n = workers or default_workers()
     import dask
 
-    # The worker's statistical profiler samples every task's stack every 10 ms under the GIL: on
-    # calibrations of ~40 ms it cost ~10-15 % of the fleet's throughput (benchmarks/bench_fleet.py).
-    # The nannies ship this setting to the worker processes.
-    no_profiler = {"distributed.worker.profile.enabled": False}
-    with dask.config.set(no_profiler), distributed.LocalCluster(
+    # Dask's background work held low (LOCAL_CLUSTER_CONFIG); the nannies ship the settings to the
+    # worker processes.
+    with dask.config.set(LOCAL_CLUSTER_CONFIG), distributed.LocalCluster(
             n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
             silence_logs=40) as cluster, distributed.Client(cluster) as client:
         yield client
+
+
+#: Dask settings of the local cluster ``robocal fleet calibrate`` starts. A fleet task is a
+#: calibration of ~20-40 ms, and the local cluster shares the machine's cores with its workers, so
+#: Dask's background work is the fleet's cost (benchmarks/bench_fleet.py; benchmarks/README.md):
+#:
+#: * the worker's statistical profiler samples every task's stack every 10 ms under the GIL
+#:   (~10-15 % of the fleet's throughput on calibrations of ~40 ms);
+#: * every server (scheduler, nannies, workers) measures its event loop's latency every 20 ms, the
+#:   system monitor reads the process's counters every 500 ms and the memory monitor every 100 ms:
+#:   an idle local cluster of two workers took ~70 ms of CPU per second (2026-11-27, 10 s idle,
+#:   all processes), ~3.5 % of a two-core machine; with the settings below ~28 ms. The event loop
+#:   still warns after 3 s without a tick (``distributed.admin.tick.limit``); a worker above its
+#:   memory limit is still paused and its nanny still restarts it, within half a second;
+#: * the GIL-contention monitor (when ``gilknocker`` is installed) samples every millisecond;
+#: * the nannies start their workers with ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc then returns
+#:   freed memory to the system at once and stops adapting its mmap threshold): a calibration's
+#:   many short-lived arrays became page faults, and 50 100-pose calibrations took ~10 % longer
+#:   (2026-11-27, medians of 12 interleaved runs: 1.92 s against 1.72 s). robocal's tasks hold no
+#:   data between tasks, so the memory the workers keep is small; Dask's own advice is this
+#:   variable for workers whose memory is not released.
+LOCAL_CLUSTER_CONFIG = {
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+    "distributed.admin.system-monitor.gil.enabled": False,
+    "distributed.worker.memory.monitor-interval": "500ms",
+    "distributed.deploy.cluster-repr-interval": "10s",
+}
 
 
 def run_tasks(client, fn, items, *, keys=None, progress=None, on_error=None, **kwargs) -> list:
