@@ -130,6 +130,9 @@ def fleet_client(scheduler: str | None = None, workers: int | None = None, *, pr
 #:   still warns after 3 s without a tick (``distributed.admin.tick.limit``); a worker above its
 #:   memory limit is still paused and its nanny still restarts it, within half a second;
 #: * the GIL-contention monitor (when ``gilknocker`` is installed) samples every millisecond;
+#: * work stealing books every task's transitions for a rebalancing that never applies here: the
+#:   fleet's tasks have no dependencies, so the scheduler queues them and hands each worker its next
+#:   task as it frees (``distributed.scheduler.worker-saturation``);
 #: * the nannies start their workers with ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc then returns
 #:   freed memory to the system at once and stops adapting its mmap threshold): a calibration's
 #:   many short-lived arrays became page faults, and 50 100-pose calibrations took ~10 % longer
@@ -139,6 +142,7 @@ def fleet_client(scheduler: str | None = None, workers: int | None = None, *, pr
 LOCAL_CLUSTER_CONFIG = {
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
     "distributed.worker.profile.enabled": False,
+    "distributed.scheduler.work-stealing": False,
     "distributed.admin.tick.interval": "1s",
     "distributed.admin.system-monitor.interval": "5s",
     "distributed.admin.system-monitor.gil.enabled": False,
