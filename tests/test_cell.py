@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from robocal.calib.cell import Box, Instrument, default_cell, feasible, order_poses, path_feasible, \
-    pose_feasibility
+    pose_feasibility, sample_feasible
 from robocal.io.cell_file import CellFileError, read_cell
 from robocal.kinematics.collision import link_segments, segment_box_distance, segment_plane_distance, \
     segment_segment_distance
@@ -160,3 +160,30 @@ def test_link_radius_from_the_robot_file():
     default = pose_feasibility(default_cell(), load_robot("ur10"), q)["mounting_plane"][0]
     thick = pose_feasibility(default_cell(), ur, q)["mounting_plane"][0]
     assert thick and not default
+
+
+def _sample_whole_batches(cell, model, n, rng, margin=0.05, batch=2000):
+    """sample_feasible as a check of every drawn pose (the definition the prefix checks must equal)."""
+    lim = cell.limits(model)
+    lo, hi = lim[:, 0] + margin * (lim[:, 1] - lim[:, 0]), lim[:, 1] - margin * (lim[:, 1] - lim[:, 0])
+    kept, draws = [], 0
+    while sum(len(k) for k in kept) < n:
+        q = rng.uniform(lo, hi, (batch, model.n_joints))
+        draws += batch
+        kept.append(q[feasible(cell, model, q)])
+    return np.vstack(kept)[:n], draws
+
+
+@pytest.mark.parametrize("robot, n, seed", [("ur10", 60, 0), ("ur10", 2500, 1), ("abb_irb140", 3, 2),
+                                            ("kuka_kr150_r3100", 700, 3)])
+def test_sample_feasible_keeps_the_poses_a_check_of_every_draw_keeps(robot, n, seed):
+    """The batch is checked by prefixes until enough poses pass: the same poses, in the same order,
+    and the same draws as checking the whole batch; also in a cell with a tracker, where few pass."""
+    model = load_robot(robot)
+    T = model.replace(T_world_base=np.eye(4)).fk(np.zeros(model.n_joints))
+    tracker = Instrument(tuple(T[:3, 3] + [2500.0, 0.0, 500.0]), acceptance_deg=40.0)
+    for cell in (default_cell((5.0, -10.0, 120.0)), default_cell(instrument=tracker)):
+        got, got_draws = sample_feasible(cell, model, n, np.random.default_rng(seed))
+        want, want_draws = _sample_whole_batches(cell, model, n, np.random.default_rng(seed))
+        assert got_draws == want_draws
+        np.testing.assert_array_equal(got, want)
