@@ -27,9 +27,7 @@ ABB IRB140 robots, each with its own hidden true parameters):
 * an estimate for 1,000 robots from the measured per-robot time and overhead.
 
 Every figure is the median of the repeats (serial and fleet interleaved, so load changes affect both).
-BLAS and numba are held to one thread per process. Every row runs with the allocator settings of
-robocal's own processes (:func:`robocal._allocator.tune_allocator`: the command line and the fleet's
-workers set them; ~12 % of a 100-pose calibration), so the rows compare scheduling, not allocators.
+BLAS and numba are held to one thread per process.
 """
 
 from __future__ import annotations
@@ -93,11 +91,9 @@ def _share(fleet_file, out, k, workers, barrier, spans):
     fleet's warm-up run: the kernel policy loads compiled code only once a process's work has paid
     for it, so a three-robot warm-up left the numba load inside the timed loop), wait for the others,
     then the loop over its share."""
-    from robocal._allocator import tune_allocator
     from robocal.io.fleet_file import read_fleet
     from robocal.workflows.calibration.calibrate import run_calibration
 
-    tune_allocator()  # as in the fleet's workers
     entries = read_fleet(fleet_file).entries[k::workers]
     for e in entries:
         run_calibration(e.model, e.measurements, Path(out) / f"warm{k}" / e.id, report=False, **e.options)
@@ -147,10 +143,7 @@ def main():
     ap.add_argument("--robots-per-task", type=int, default=None,
                     help="robots per Dask task (default: robocal fleet calibrate's automatic choice)")
     args = ap.parse_args()
-    from robocal._allocator import tune_allocator
     from robocal.workflows.fleet.cluster import default_workers, fleet_client
-
-    tune_allocator()  # the serial loop as in robocal's own processes
 
     workers = args.workers or default_workers()
     for line in machine_info([f"fleet       {args.robots} robots x {args.poses} poses, {workers} workers, "

@@ -74,9 +74,6 @@ def main():
     Exit codes of every command (docs/cli.md): 0 success, 1 error (one 'Error:' line), 2 usage
     error, 3 a result that failed the sanity gates (docs/reliability.md), 4 the solver did not
     converge, 5 targets not reached (`correct`, `simulate execute`), 6 `verify`: a mechanical fault suspected. Deprecated option names work with a warning (docs/cli.md)."""
-    from .._allocator import tune_allocator
-
-    tune_allocator()  # glibc's thresholds fixed: ~12 % of a small calibration was page faults
 
 
 @main.command(short_help="The maintenance cycle on a simulated robot, with a report.")

@@ -1,8 +1,8 @@
 """The Dask side of ``robocal fleet``: a client on a local cluster (default) or on a user's cluster
 by address, and running a list of tasks on it with progress.
 
-dask.distributed is the ``fleet`` extra and imported only here (and by :mod:`.worker_plugin`, which
-this module imports), when a fleet command runs (never by ``robocal --help``). Tasks are plain module-level functions of small, picklable arguments (paths,
+dask.distributed is the ``fleet`` extra and imported only here, when a fleet command runs (never by
+``robocal --help``). Tasks are plain module-level functions of small, picklable arguments (paths,
 options): what travels to a worker is the task description, not the data.
 """
 
@@ -110,10 +110,6 @@ def fleet_client(scheduler: str | None = None, workers: int | None = None, *, pr
     with dask.config.set(LOCAL_CLUSTER_CONFIG), distributed.LocalCluster(
             n_workers=n, threads_per_worker=1, processes=processes, dashboard_address=None,
             silence_logs=40) as cluster, distributed.Client(cluster) as client:
-        if processes:  # our own worker processes: the allocator robocal's commands run with
-            from .worker_plugin import TunedAllocator
-
-            client.register_plugin(TunedAllocator(), name="robocal-allocator")
         yield client
 
 
