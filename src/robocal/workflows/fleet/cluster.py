@@ -128,15 +128,8 @@ def fleet_client(scheduler: str | None = None, workers: int | None = None, *, pr
 #: * the GIL-contention monitor (when ``gilknocker`` is installed) samples every millisecond;
 #: * work stealing books every task's transitions for a rebalancing that never applies here: the
 #:   fleet's tasks have no dependencies, so the scheduler queues them and hands each worker its next
-#:   task as it frees (``distributed.scheduler.worker-saturation``);
-#: * the nannies start their workers with ``MALLOC_TRIM_THRESHOLD_=65536`` (glibc then returns
-#:   freed memory to the system at once and stops adapting its mmap threshold): a calibration's
-#:   many short-lived arrays became page faults, and 50 100-pose calibrations took ~10 % longer
-#:   (2026-11-27, medians of 12 interleaved runs: 1.92 s against 1.72 s). robocal's tasks hold no
-#:   data between tasks, so the memory the workers keep is small; Dask's own advice is this
-#:   variable for workers whose memory is not released.
+#:   task as it frees (``distributed.scheduler.worker-saturation``).
 LOCAL_CLUSTER_CONFIG = {
-    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
     "distributed.worker.profile.enabled": False,
     "distributed.scheduler.work-stealing": False,
     "distributed.admin.tick.interval": "1s",
