@@ -166,3 +166,22 @@ def test_a_big_calibration_imports_no_numba(tmp_path):
                          env={**__import__("os").environ, "ROBOCAL_KERNELS": "auto"})
     assert out.stdout.strip().splitlines()[-1] == "[] False"
     assert (tmp_path / "out" / "result.json").exists()
+
+
+def test_programs_are_built_on_first_use_and_survive_pickling():
+    """A model made only to be converted or written never builds the kernels' programs; the first
+    forward kinematics builds them, and a pickled model (a fleet task's) computes the same poses."""
+    import pickle
+
+    from robocal.kinematics.model import _PROGRAM_ATTRIBUTES
+    from robocal.robots import load_robot
+
+    m = load_robot("ur10").with_params(load_robot("ur10").params.values + 1e-3)
+    assert not _PROGRAM_ATTRIBUTES & set(vars(m))
+    m2 = pickle.loads(pickle.dumps(m))
+    q = np.random.default_rng(0).uniform(-2, 2, (5, 6))
+    T = m.fk(q)
+    assert _PROGRAM_ATTRIBUTES <= set(vars(m))
+    np.testing.assert_allclose(m2.fk(q), T, rtol=0, atol=1e-9)
+    with pytest.raises(AttributeError):
+        m.no_such_attribute  # noqa: B018

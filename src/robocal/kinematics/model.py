@@ -137,6 +137,14 @@ def _link_pre_post(link):
     return pre, post, motion
 
 
+#: Attributes of :class:`RobotModel` that :meth:`RobotModel._build_programs` sets (built on first use).
+_PROGRAM_ATTRIBUTES = frozenset({
+    "_op_code", "_op_axis", "_op_value", "_op_param", "_op_joint", "_op_link", "_link_parent", "_cpl", "_fused",
+    "_fused_ints", "_fused_floats", "_one_q", "_no_links", "_ee_ancestors", "_root_affine", "_identity_root",
+    "_target_cache",
+})
+
+
 class RobotModel:
     """Kinematic model of a serial or tree-shaped robot.
 
@@ -190,7 +198,15 @@ class RobotModel:
         fr = np.array(free, dtype=bool)
         fr.setflags(write=False)
         self.params = ParameterTable(tuple(names), vals, tuple(units), fr, np.array(link_of, dtype=np.int64))
-        self._build_programs()
+        # the kernels' programs are built on first use (__getattr__): a model made only to be
+        # converted or written (a calibrated robot's URDF takes three) never needs them
+
+    def __getattr__(self, name):
+        # called only for an attribute the instance lacks: the programs, until they are built
+        if name in _PROGRAM_ATTRIBUTES and "params" in self.__dict__:
+            self._build_programs()
+            return self.__dict__[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     # ------------------------------------------------------------------ construction helpers
     @property
