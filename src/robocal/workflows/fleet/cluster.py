@@ -11,8 +11,14 @@ from ...errors import RobocalError
 
 import contextlib
 import os
+import queue
+import shutil
+import tempfile
+import time
+import uuid
 
-__all__ = ["LOCAL_CLUSTER_CONFIG", "FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "default_workers", "tls_security"]
+__all__ = ["LOCAL_CLUSTER_CONFIG", "FleetClusterError", "import_distributed", "fleet_client", "run_tasks", "run_pulled",
+           "pull_items", "worker_threads", "default_workers", "tls_security"]
 
 FLEET_EXTRA_HINT = "pip install 'robocal[fleet]'"
 
@@ -185,4 +191,149 @@ def run_tasks(client, fn, items, *, keys=None, progress=None, on_error=None, **k
         done += 1
         step(done, total, results[i])
     del futures
+    return results
+
+
+def worker_threads(client) -> int:
+    """Worker threads of ``client``'s cluster (1 when the scheduler cannot say)."""
+    try:
+        return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
+    except Exception:  # an unusual client: assume one slot
+        return 1
+
+
+#: Event topic of :func:`run_pulled`'s progress messages (one topic for every run, so that the
+#: scheduler's bounded event log does not grow by a topic per run; each run's messages carry its token).
+PROGRESS_TOPIC = "robocal-fleet-progress"
+#: Seconds between two progress messages of one long task (:func:`pull_items`): a message per item
+#: cost ~0.8 ms of the scheduler's and client's CPU, on the cores the workers use.
+PROGRESS_INTERVAL_S = 0.5
+#: Above this many item copies (long tasks x items) the items travel to the workers once, scattered.
+_SCATTER_ABOVE = 20_000
+
+
+def _claim(claims_dir: str, index: int) -> bool:
+    """True when this process is the first to claim item ``index`` (a file made with O_EXCL: atomic on
+    a local disk and on NFS v3 and later)."""
+    try:
+        os.close(os.open(os.path.join(claims_dir, str(index)), os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+    except FileExistsError:
+        return False
+    return True
+
+
+class _Raised:
+    """An item's exception, returned by :func:`pull_items` in place of its result."""
+
+    def __init__(self, exc: BaseException):
+        self.exc = exc
+
+
+def pull_items(fn, items, claims_dir: str, token: str, kwargs: dict, interval_s: float = PROGRESS_INTERVAL_S) -> list:
+    """The long task of :func:`run_pulled`: ``fn(item, **kwargs)`` for every item of ``items`` this
+    task claims first in ``claims_dir``, in order; returns ``[(index, result), ...]`` (an exception
+    the function raised in place of its result). Results are
+    also sent as progress events (topic :data:`PROGRESS_TOPIC`, message ``[token, [[index, result],
+    ...]]``), at most one every ``interval_s`` seconds."""
+    try:
+        worker = import_distributed().get_worker()
+    except ValueError:  # not on a worker (a direct call)
+        worker = None
+    done, unsent, last = [], [], time.monotonic()
+    for i, item in enumerate(items):
+        if not _claim(claims_dir, i):
+            continue
+        try:
+            result = fn(item, **kwargs)
+        except Exception as exc:  # one failing item never stops the others
+            done.append((i, _Raised(exc)))
+            continue
+        done.append((i, result))
+        unsent.append([i, result])
+        now = time.monotonic()
+        if worker is not None and now - last >= interval_s:
+            try:
+                worker.log_event(PROGRESS_TOPIC, [token, unsent])
+            except TypeError:  # a result msgpack cannot carry: no progress message, the result still returns
+                pass
+            unsent, last = [], now
+    return done
+
+
+def run_pulled(client, fn, items, *, claims_parent, progress=None, on_error=None, key_prefix: str = "pull",
+               **kwargs) -> list:
+    """``[fn(item, **kwargs) for item in items]`` on ``client``'s cluster as one long task per worker
+    thread, each taking the next unclaimed item until none is left (:func:`pull_items`), in the
+    order of ``items``.
+
+    A Dask task costs the scheduler and the client ~2-4 ms of CPU and the worker a round trip; for
+    items of ~20-40 ms (a fleet robot) on a machine whose cores the workers use, tasks of a few items
+    each left ~10 % of the machine to Dask (benchmarks/README.md). Here the workers share the items
+    through claim files in a temporary folder made in ``claims_parent`` (a folder every worker sees,
+    e.g. the output folder; removed at the end) and report progress in batches.
+
+    progress(done, total, result): as results arrive (at most every :data:`PROGRESS_INTERVAL_S` per
+    task, the rest when a task ends). on_error(item, exc): the result of an item whose function
+    raised (default: re-raise). Items a lost worker had claimed run again as one task each
+    (:func:`run_tasks`); ``fn`` must tolerate that (a fleet robot already finished is skipped by its
+    input hash).
+    """
+    items = list(items)
+    total = len(items)
+    results, have = [None] * total, [False] * total
+    if not items:
+        return results
+    import_distributed()  # a clear error naming the extra
+    token = uuid.uuid4().hex
+    inbox = queue.Queue()
+    done = 0
+
+    def take(i, result):
+        nonlocal done
+        if isinstance(result, _Raised):
+            if on_error is None:
+                raise result.exc
+            result = on_error(items[i], result.exc)
+        if not have[i]:
+            have[i], results[i] = True, result
+            done += 1
+            if progress is not None:
+                progress(done, total, result)
+
+    def on_event(event):
+        msg = event[1]
+        if isinstance(msg, (list, tuple)) and len(msg) == 2 and msg[0] == token:
+            inbox.put(msg[1])
+
+    n_tasks = min(total, worker_threads(client))
+    claims = tempfile.mkdtemp(prefix=".robocal-claims-", dir=os.fspath(claims_parent))
+    client.subscribe_topic(PROGRESS_TOPIC, on_event)
+    try:
+        shared = client.scatter(items, broadcast=False, hash=False) if n_tasks * total > _SCATTER_ABOVE else items
+        futures = [client.submit(pull_items, fn, shared, claims, token, kwargs, key=f"{key_prefix}-{k}-{token}",
+                                 pure=False) for k in range(n_tasks)]
+        for fut in futures:
+            fut.add_done_callback(lambda _f: inbox.put(None))
+        ended = 0
+        while ended < n_tasks:
+            batch = inbox.get()
+            if batch is None:
+                ended += 1
+                continue
+            for i, result in batch:
+                take(int(i), result)
+        for fut in futures:  # the authoritative results (the messages were progress only)
+            if fut.status == "finished":
+                for i, result in fut.result():
+                    take(i, result)
+        del futures
+    finally:
+        client.unsubscribe_topic(PROGRESS_TOPIC)
+        shutil.rmtree(claims, ignore_errors=True)
+    missing = [i for i in range(total) if not have[i]]
+    if missing:  # a long task that raised or whose worker was lost: its items again, one task each
+        again = run_tasks(client, fn, [items[i] for i in missing], on_error=on_error,
+                          keys=[f"{key_prefix}-again-{i}-{token}" for i in missing], **kwargs)
+        for i, result in zip(missing, again):
+            take(i, result)
     return results
