@@ -234,7 +234,10 @@ def pull_items(fn, items, claims_dir: str, token: str, kwargs: dict, interval_s:
     task claims first in ``claims_dir``, in order; returns ``[(index, result), ...]`` (an exception
     the function raised in place of its result). Results are
     also sent as progress events (topic :data:`PROGRESS_TOPIC`, message ``[token, [[index, result],
-    ...]]``), at most one every ``interval_s`` seconds."""
+    ...]]``), at most one every ``interval_s`` seconds and the rest at the end. A worker sends its
+    messages before its task's end on one stream and the scheduler forwards them in order, so the
+    client has every result when the task ends without fetching it (one round trip through the
+    scheduler to the worker, ~4 ms, saved per task); the returned list is the fallback."""
     try:
         worker = import_distributed().get_worker()
     except ValueError:  # not on a worker (a direct call)
@@ -252,12 +255,18 @@ def pull_items(fn, items, claims_dir: str, token: str, kwargs: dict, interval_s:
         unsent.append([i, result])
         now = time.monotonic()
         if worker is not None and now - last >= interval_s:
-            try:
-                worker.log_event(PROGRESS_TOPIC, [token, unsent])
-            except TypeError:  # a result msgpack cannot carry: no progress message, the result still returns
-                pass
+            _send_progress(worker, token, unsent)
             unsent, last = [], now
+    if worker is not None and unsent:  # the rest: the client then need not fetch the task's result
+        _send_progress(worker, token, unsent)
     return done
+
+
+def _send_progress(worker, token: str, results: list) -> None:
+    try:
+        worker.log_event(PROGRESS_TOPIC, [token, results])
+    except TypeError:  # a result msgpack cannot carry: no progress message, the task's result still returns
+        pass
 
 
 def run_pulled(client, fn, items, *, claims_parent, progress=None, on_error=None, key_prefix: str = "pull",
@@ -273,7 +282,8 @@ def run_pulled(client, fn, items, *, claims_parent, progress=None, on_error=None
     e.g. the output folder; removed at the end) and report progress in batches.
 
     progress(done, total, result): as results arrive (at most every :data:`PROGRESS_INTERVAL_S` per
-    task, the rest when a task ends). on_error(item, exc): the result of an item whose function
+    task, the rest when a task ends). Results travel in the progress messages (msgpack: a tuple
+    arrives as a list); a task's own result is fetched only when they did not carry all. on_error(item, exc): the result of an item whose function
     raised (default: re-raise). Items a lost worker had claimed run again as one task each
     (:func:`run_tasks`); ``fn`` must tolerate that (a fleet robot already finished is skipped by its
     input hash).
@@ -322,10 +332,11 @@ def run_pulled(client, fn, items, *, claims_parent, progress=None, on_error=None
                 continue
             for i, result in batch:
                 take(int(i), result)
-        for fut in futures:  # the authoritative results (the messages were progress only)
-            if fut.status == "finished":
-                for i, result in fut.result():
-                    take(i, result)
+        if not all(have):  # results no message carried (an item that raised, a result msgpack cannot carry)
+            for fut in futures:
+                if fut.status == "finished":
+                    for i, result in fut.result():
+                        take(i, result)
         del futures
     finally:
         client.unsubscribe_topic(PROGRESS_TOPIC)
