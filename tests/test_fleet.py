@@ -477,6 +477,29 @@ def test_items_of_a_lost_long_task_run_again_one_task_each(client, tmp_path):
     assert seen == list(range(1, 13))
 
 
+def _heartbeat_ms(dask_worker):
+    return dask_worker.periodic_callbacks["heartbeat"].callback_time
+
+
+def _idle_checks_ms(dask_scheduler):
+    return [dask_scheduler.periodic_callbacks[k].callback_time for k in ("idle-timeout", "no-workers-timeout")]
+
+
+def test_the_local_cluster_holds_dask_background_work_low(tmp_path):
+    """robocal's local cluster: its workers' heartbeats (Dask: every 0.5 s) and its scheduler's idle
+    checks (every 0.25 s) are spaced out (fails if a Dask release renames what quiet_local_scheduler
+    changes), and the workers still run the fleet's long tasks."""
+    from robocal.workflows.fleet.cluster import LOCAL_HEARTBEAT_S, LOCAL_IDLE_CHECK_S, fleet_client
+
+    with fleet_client(workers=2, processes=False) as c:
+        deadline = time.monotonic() + 15  # a worker's first heartbeat answer sets its interval
+        while min(c.run(_heartbeat_ms).values()) < 1000 * LOCAL_HEARTBEAT_S and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert min(c.run(_heartbeat_ms).values()) == pytest.approx(1000 * LOCAL_HEARTBEAT_S)
+        assert c.run_on_scheduler(_idle_checks_ms) == [1000 * LOCAL_IDLE_CHECK_S] * 2
+        assert [r[0] for r in run_pulled(c, _slow_square, range(8), claims_parent=tmp_path)] == [k * k for k in range(8)]
+
+
 def test_fixed_groups_per_task_give_the_same_rows(campaigns, client, tmp_path):
     fleet = fleet_toml(tmp_path, good_entries(campaigns, 3))
     pulled = run_fleet_calibration(fleet, tmp_path / "a", client=client, report=False)["summary"]["robots"]
