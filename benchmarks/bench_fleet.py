@@ -22,8 +22,8 @@ ABB IRB140 robots, each with its own hidden true parameters):
   client, wall time / 1,000 x workers), (b) in the fleet run, wall x workers minus the summed
   in-task time, per robot;
 * the CPU time of the script's own process during the fleet runs (client and scheduler: they
-  share the cores with the workers), per robot and per task (``--robots-per-task`` to compare
-  group sizes);
+  share the cores with the workers), per robot and per task (by default one long task per worker
+  that takes robots one by one; ``--robots-per-task N`` for fixed groups of N, one task each);
 * an estimate for 1,000 robots from the measured per-robot time and overhead.
 
 Every figure is the median of the repeats (serial and fleet interleaved, so load changes affect both).
@@ -141,7 +141,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--workers", type=int, default=None, help="local cluster size (default: usable CPUs)")
     ap.add_argument("--robots-per-task", type=int, default=None,
-                    help="robots per Dask task (default: robocal fleet calibrate's automatic choice)")
+                    help="robots per Dask task in fixed groups (default: robocal fleet calibrate's: each worker "
+                         "takes robots one by one)")
     args = ap.parse_args()
     from robocal.workflows.fleet.cluster import default_workers, fleet_client
 
@@ -192,10 +193,14 @@ def main():
           f"{100 * per_task_overhead / (per_task_overhead + b / n):.1f} % of a task")
     from robocal.workflows.fleet.calibrate import task_groups
 
-    sizes = [len(g) for g in task_groups(range(n), workers, args.robots_per_task)]
+    if args.robots_per_task:
+        n_tasks = len(task_groups(range(n), args.robots_per_task))
+        how = f"fixed groups of {args.robots_per_task} robots"
+    else:
+        n_tasks, how = workers, "one long task per worker, robots taken one by one"
     cc = statistics.median(client_cpu)
     print(f"client process (client + scheduler) CPU in the fleet run: {cc:.2f} s = {1e3 * cc / n:.2f} ms per robot, "
-          f"{1e3 * cc / len(sizes):.2f} ms per task ({len(sizes)} tasks of {min(sizes)}-{max(sizes)} robots)")
+          f"{1e3 * cc / n_tasks:.2f} ms per task ({n_tasks} tasks: {how})")
     est = 1000 * (b / n + per_task_overhead) / workers
     print(f"estimate for 1,000 robots x {args.poses} poses: {est:.0f} s on {workers} workers here; "
           f"{1000 * (b / n + per_task_overhead) / 32:.0f} s on 32 such workers (4 machines x 8 cores), "

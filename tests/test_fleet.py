@@ -27,7 +27,7 @@ from robocal.cli import main  # noqa: E402
 from robocal.io.fleet_file import read_fleet  # noqa: E402
 from robocal.store import HistoryStore  # noqa: E402
 from robocal.workflows.fleet.calibrate import flag_outliers, run_fleet_calibration  # noqa: E402
-from robocal.workflows.fleet.cluster import run_tasks  # noqa: E402
+from robocal.workflows.fleet.cluster import run_pulled, run_tasks  # noqa: E402
 from robocal.workflows.calibration.simulate import simulate_tracker  # noqa: E402
 
 MODELS = ["ur10", "kuka_kr150_r3100", "ur10", "abb_irb140", "ur10", "kuka_kr150_r3100"]
@@ -422,6 +422,93 @@ def test_a_task_that_raises_on_the_cluster_becomes_its_own_failed_row(client):
     assert [d for d, _ in seen] == [1, 2, 3, 4, 5, 6] and {n for _, n in seen} == {6}
     with pytest.raises(ValueError, match="item 3 is broken"):  # without on_error the error is raised
         run_tasks(client, _square_or_raise, range(6))
+
+
+def _slow_square(k):
+    import threading
+
+    time.sleep(0.02)
+    return [k * k, threading.get_ident()]
+
+
+def test_workers_pull_the_items_one_by_one_each_exactly_once(client, tmp_path):
+    """The default execution of a fleet: one long task per worker thread taking the next unclaimed
+    item; results in the order of the items, progress for every item, every worker busy, the claims
+    folder removed."""
+    seen = []
+    out = run_pulled(client, _slow_square, range(30), claims_parent=tmp_path,
+                     progress=lambda done, n, result: seen.append((done, n)))
+    assert [r[0] for r in out] == [k * k for k in range(30)]
+    assert len({r[1] for r in out}) == 2  # both worker threads took items
+    assert [d for d, _ in seen] == list(range(1, 31)) and {n for _, n in seen} == {30}
+    assert list(tmp_path.iterdir()) == []  # the claims folder is gone
+    assert run_pulled(client, _slow_square, [], claims_parent=tmp_path) == []
+
+
+def test_a_pulled_item_that_raises_becomes_its_own_failed_row(client, tmp_path):
+    out = run_pulled(client, _square_or_raise, range(6), claims_parent=tmp_path,
+                     on_error=lambda item, exc: f"failed {item}: {type(exc).__name__}: {exc}")
+    assert out == [0, 1, 4, "failed 3: ValueError: item 3 is broken", 16, 25]
+    with pytest.raises(ValueError, match="item 3 is broken"):
+        run_pulled(client, _square_or_raise, range(6), claims_parent=tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+class _TaskLost(BaseException):
+    """Ends a long task as a lost worker would (Dask marks the task erred; the item loop never sees it)."""
+
+
+def _square_once_lost(k, marker):
+    if k == 4 and not os.path.exists(marker):
+        Path(marker).touch()
+        raise _TaskLost("the worker went away")
+    return k * k
+
+
+def test_items_of_a_lost_long_task_run_again_one_task_each(client, tmp_path):
+    marker = str(tmp_path / "lost-once")
+    claims = tmp_path / "claims"
+    claims.mkdir()
+    seen = []
+    out = run_pulled(client, _square_once_lost, range(12), claims_parent=claims, marker=marker,
+                     progress=lambda done, n, result: seen.append(done))
+    assert os.path.exists(marker)  # the long task was lost once
+    assert out == [k * k for k in range(12)]  # its items (item 4 included) ran again
+    assert seen == list(range(1, 13))
+
+
+def _heartbeat_ms(dask_worker):
+    return dask_worker.periodic_callbacks["heartbeat"].callback_time
+
+
+def _idle_checks_ms(dask_scheduler):
+    return [dask_scheduler.periodic_callbacks[k].callback_time for k in ("idle-timeout", "no-workers-timeout")]
+
+
+def test_the_local_cluster_holds_dask_background_work_low(tmp_path):
+    """robocal's local cluster: its workers' heartbeats (Dask: every 0.5 s) and its scheduler's idle
+    checks (every 0.25 s) are spaced out (fails if a Dask release renames what quiet_local_scheduler
+    changes), and the workers still run the fleet's long tasks."""
+    from robocal.workflows.fleet.cluster import LOCAL_HEARTBEAT_S, LOCAL_IDLE_CHECK_S, fleet_client
+
+    with fleet_client(workers=2, processes=False) as c:
+        deadline = time.monotonic() + 15  # a worker's first heartbeat answer sets its interval
+        while min(c.run(_heartbeat_ms).values()) < 1000 * LOCAL_HEARTBEAT_S and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert min(c.run(_heartbeat_ms).values()) == pytest.approx(1000 * LOCAL_HEARTBEAT_S)
+        assert c.run_on_scheduler(_idle_checks_ms) == [1000 * LOCAL_IDLE_CHECK_S] * 2
+        assert [r[0] for r in run_pulled(c, _slow_square, range(8), claims_parent=tmp_path)] == [k * k for k in range(8)]
+
+
+def test_fixed_groups_per_task_give_the_same_rows(campaigns, client, tmp_path):
+    fleet = fleet_toml(tmp_path, good_entries(campaigns, 3))
+    pulled = run_fleet_calibration(fleet, tmp_path / "a", client=client, report=False)["summary"]["robots"]
+    grouped = run_fleet_calibration(fleet, tmp_path / "b", client=client, report=False, per_task=2)["summary"]["robots"]
+    assert [r["id"] for r in grouped] == [r["id"] for r in pulled] == ["robot-0", "robot-1", "robot-2"]
+    for a, b in zip(pulled, grouped):
+        assert a["status"] == b["status"] == "ok"
+        assert b["holdout_rms_after_mm"] == pytest.approx(a["holdout_rms_after_mm"], rel=1e-9)
+    assert not list((tmp_path / "a").glob(".robocal-claims-*"))
 
 
 def test_a_robot_whose_fit_does_not_converge_gets_no_robot_file_and_exit_4(campaigns, tmp_path, lm_one_iteration):

@@ -101,9 +101,8 @@ def _history_target(db, no_history, out_dir):
 @click.option("--no-history", is_flag=True, help="Do not record the results in a history database.")
 @click.option("--no-report", is_flag=True, help="No report.html per robot (the plots take longer than the solve).")
 @click.option("--robots-per-task", "per_task", type=click.IntRange(min=1), default=None, metavar="N",
-              help="Robots calibrated one after the other in each Dask task (default: up to 4, keeping at "
-                   "least 4 tasks per worker thread; a 100-pose robot takes ~30 ms, short next to the "
-                   "scheduler's cost per task).")
+              help="Robots per Dask task, in fixed groups (default: each worker takes the next robot until "
+                   "none is left, one long task per worker thread; progress every half second).")
 @allow_unconverged_option
 def calibrate_cmd(fleet_file, out_dir, scheduler, workers, db, no_history, no_report, per_task, allow_unconverged):
     """Calibrate every robot of FLEET.toml on a Dask cluster, each robot on its own.

@@ -10,12 +10,13 @@ or ``failed`` with its ``reason``), ``out/summary.html`` and ``out/summary.svg``
 after per robot, outliers flagged). Entries the fleet file could not describe are failed rows too;
 one bad robot never stops the others. See :mod:`robocal.workflows.fleet.robot` for one robot.
 
-Each robot is calibrated on its own (its own inputs, outputs, hash and history cycle); the Dask
-tasks carry a few robots each (:func:`robots_per_task`): a 100-pose calibration takes ~30 ms, and
-the scheduler's and client's work per task (~3.7 ms of CPU in the client process, measured in
-benchmarks/bench_fleet.py) competed with the workers for the same cores. The groups shrink towards
-the end of the list (:func:`task_groups`), so that the workers finish together instead of one
-finishing a full group while the others wait.
+Each robot is calibrated on its own (its own inputs, outputs, hash and history cycle). On a
+cluster, by default, each worker thread runs one long task that takes the next robot nobody has
+taken yet until none is left (:func:`robocal.workflows.fleet.cluster.run_pulled`; the claims are
+files in a temporary folder in ``out_dir``): a 100-pose calibration takes ~20-30 ms, and a Dask
+task per robot or per few robots cost the scheduler and the client ~2-4 ms of CPU each, on the
+cores the workers need (benchmarks/bench_fleet.py). The workers finish within one robot of each
+other. With ``per_task`` the robots go in fixed groups instead, one task each (:func:`task_groups`).
 """
 
 from __future__ import annotations
@@ -31,14 +32,11 @@ import numpy as np
 
 from ...io.atomic import atomic_write_text
 from ...io.fleet_file import read_fleet
-from .cluster import run_tasks
-from .robot import calibrate_entries, failed_row
+from .cluster import run_pulled, run_tasks
+from .robot import calibrate_entries, calibrate_entry, failed_row
 from ..outputs import ensure_writable_dir
 
-__all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "robots_per_task", "task_groups", "run_fleet_calibration"]
-
-#: Largest automatic group of robots per Dask task (a progress step is at most this many robots).
-MAX_ROBOTS_PER_TASK = 8
+__all__ = ["SUMMARY_FORMAT", "OUTLIER_Z", "flag_outliers", "task_groups", "run_fleet_calibration"]
 
 SUMMARY_FORMAT = "robocal-fleet-summary/1"
 #: Modified z-score above which a robot's accuracy after calibration is an outlier (Iglewicz and
@@ -78,39 +76,12 @@ def _lost(entry, exc) -> dict:
     return failed_row(entry.id, f"the task did not finish on the cluster: {type(exc).__name__}: {exc}")
 
 
-def robots_per_task(n_robots: int, n_slots: int, requested: int | None = None) -> int:
-    """Robots per Dask task: ``requested`` if given (>= 1), else as many as keep at least four
-    tasks per worker thread (``n_slots``) for load balance, at most :data:`MAX_ROBOTS_PER_TASK`."""
-    if requested is not None:
-        if int(requested) < 1:
-            raise ValueError(f"robots per task must be at least 1, got {requested}")
-        return int(requested)
-    return int(max(1, min(MAX_ROBOTS_PER_TASK, n_robots // max(4 * n_slots, 1))))
-
-
-def task_groups(entries, n_slots: int, requested: int | None = None) -> list:
-    """``entries`` cut into consecutive groups, one Dask task each: all of ``requested`` robots when
-    given; else guided: each group half of the remaining robots' share per worker thread
-    (``n_slots``), between 1 and :func:`robots_per_task`'s size, so the last groups are single robots
-    (Dask starts tasks roughly in submission order: the workers' last tasks are short and they end
-    within one robot of each other)."""
+def task_groups(entries, per_task: int) -> list:
+    """``entries`` cut into consecutive groups of ``per_task`` robots (>= 1), one Dask task each."""
+    if int(per_task) < 1:
+        raise ValueError(f"robots per task must be at least 1, got {per_task}")
     entries = list(entries)
-    largest = robots_per_task(len(entries), n_slots, requested)
-    if requested is not None:
-        return [entries[i:i + largest] for i in range(0, len(entries), largest)]
-    groups, i = [], 0
-    while i < len(entries):
-        size = max(1, min(largest, (len(entries) - i) // (2 * max(n_slots, 1))))
-        groups.append(entries[i:i + size])
-        i += size
-    return groups
-
-
-def _worker_threads(client) -> int:
-    try:
-        return max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info()["workers"].values()))
-    except Exception:  # an unusual client: assume one slot, i.e. the smallest groups
-        return 1
+    return [entries[i:i + int(per_task)] for i in range(0, len(entries), int(per_task))]
 
 
 def _check_outputs_are_not_inputs(fleet, out_dir) -> None:
@@ -144,8 +115,9 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
     client: a ``distributed.Client`` (:func:`robocal.workflows.fleet.cluster.fleet_client`), or
     None for a plain loop in this process. db: the history database (path or URL) every result
     is recorded in (None: not recorded). report: each robot's report.html (the plots take longer
-    than the solve). progress(done, total, row): after each robot. per_task: robots per Dask task
-    (default :func:`robots_per_task`). A robot whose fit did not converge gets ``status: "not
+    than the solve). progress(done, total, row): after each robot (on a cluster, in batches at most
+    every half second). per_task: robots per Dask task in fixed groups (:func:`task_groups`);
+    default: every worker thread takes robots one by one. A robot whose fit did not converge gets ``status: "not
     converged"`` (no robot file, no history record) unless ``allow_unconverged`` (or the fleet file's
     ``allow_unconverged`` option).
 
@@ -169,21 +141,29 @@ def run_fleet_calibration(fleet_file, out_dir, *, client=None, db=None, report: 
         if client is not None and secret is not None:
             os.environ[PASSWORD_ENV] = secret  # in-process workers read it where they open the database
             db_target = strip_credentials(db_target)
-    groups = task_groups(entries, _worker_threads(client) if client is not None else 1, per_task)
-    keys = [f"calibrate-{g[0].id}-{g[0].index}" + (f"-to-{g[-1].id}-{g[-1].index}" if len(g) > 1 else "")
-            for g in groups]
     done = [0]
 
-    def group_done(_finished, _total, group_rows):
-        for row in group_rows:
-            done[0] += 1
-            if progress is not None:
-                progress(done[0], len(entries), row)
+    def robot_done(_finished, _total, row):
+        done[0] += 1
+        if progress is not None:
+            progress(done[0], len(entries), row)
 
-    results = run_tasks(client, calibrate_entries, groups, keys=keys, progress=group_done,
-                        on_error=lambda group, exc: [_lost(e, exc) for e in group],
-                        out_dir=str(out.resolve()), db=db_target, report=report)
-    rows = [row for group_rows in results for row in group_rows]
+    settings = {"out_dir": str(out.resolve()), "db": db_target, "report": report}
+    if client is not None and per_task is None:  # the workers take the robots one by one
+        rows = run_pulled(client, calibrate_entry, entries, claims_parent=out, progress=robot_done,
+                          on_error=_lost, key_prefix="calibrate", **settings)
+    else:  # fixed groups, one Dask task each (or a loop in this process)
+        groups = task_groups(entries, per_task or 1)
+        keys = [f"calibrate-{g[0].id}-{g[0].index}" + (f"-to-{g[-1].id}-{g[-1].index}" if len(g) > 1 else "")
+                for g in groups]
+
+        def group_done(_finished, _total, group_rows):
+            for row in group_rows:
+                robot_done(None, None, row)
+
+        results = run_tasks(client, calibrate_entries, groups, keys=keys, progress=group_done,
+                            on_error=lambda group, exc: [_lost(e, exc) for e in group], **settings)
+        rows = [row for group_rows in results for row in group_rows]
     for e, row in zip(entries, rows):
         row["index"] = e.index
     rows += [failed_row(p.label(), p.reason, index=p.index, stage="fleet file") for p in fleet.problems]
