@@ -186,7 +186,9 @@ def main():
     print(f"{f'fleet, local cluster ({workers} worker processes)':<44}{f:>12.2f}{1e3 * f / n:>16.1f}")
     print(f"{f'{workers} plain processes (no Dask; the ceiling)':<44}{pp:>12.2f}{1e3 * pp / n:>16.1f}")
     print(f"ratio serial / fleet: {s / f:.2f}x   (ideal {workers}x; plain processes reach {s / pp:.2f}x: "
-          f"the fleet gets {100 * pp / f:.0f} % of that)")
+          f"the fleet gets {100 * pp / f:.1f} % of that; per repeat "
+          f"{', '.join(f'{100 * b / a:.0f}' for a, b in zip(fleet, plain))} %, their median "
+          f"{statistics.median(100 * b / a for a, b in zip(fleet, plain)):.1f} %)")
     print(f"local cluster start-up (not in the fleet time): {start:.1f} s")
     print(f"per-task overhead: empty task {1e3 * empty * workers:.2f} ms of a worker; in the fleet run "
           f"{1e3 * per_task_overhead:.1f} ms per robot (wall x workers - time inside the tasks) = "

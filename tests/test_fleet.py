@@ -269,6 +269,21 @@ def _status_history(db, now):
                     c.add_metric("holdout_rms_after", 0.03, "mm")
 
 
+def test_fleet_file_paths_resolve_through_links_and_dot_dot(tmp_path, campaigns):
+    """A measurement file named through a linked folder, a linked file or '..' is the real file's
+    resolved path (what the output-is-input check and the summary name); a folder is refused."""
+    real = tmp_path / "data"
+    real.mkdir()
+    (real / "r0.csv").write_bytes((campaigns / "r0.csv").read_bytes())
+    (tmp_path / "linked-folder").symlink_to(real)
+    (tmp_path / "linked-file.csv").symlink_to(real / "r0.csv")
+    names = ["linked-folder/r0.csv", "linked-file.csv", "data/../data/r0.csv", str(real / "r0.csv"), "data"]
+    fleet = read_fleet(fleet_toml(tmp_path, [{"id": f"r{i}", "model": "ur10", "measurements": n}
+                                             for i, n in enumerate(names)]))
+    assert [e.measurements for e in fleet.entries] == [(real / "r0.csv").resolve()] * 4
+    assert len(fleet.problems) == 1 and "data not found (it is a folder)" in fleet.problems[0].reason
+
+
 def test_fleet_status_flags_stale_and_drifting_robots(tmp_path, history_db):
     from datetime import datetime, timezone
 

@@ -23,7 +23,9 @@ and the other robots stay usable: one bad robot never stops the others.
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -126,17 +128,29 @@ def _tool(value, where: str):
     return tuple(float(v) for v in value)
 
 
-def _path(base: Path, value, key: str, where: str) -> Path:
+def _path(base: Path, value, key: str, where: str, real_dirs: dict) -> Path:
+    """``value`` (relative to ``base``) as an existing file's resolved path. real_dirs: the resolved
+    folders met so far in this fleet file (one ``realpath`` per folder, not per robot: a fleet's files
+    mostly share a folder; os.path instead of pathlib, ~8 ms of a 100-robot fleet's start before)."""
     if not isinstance(value, str) or not value.strip():
         raise ValueError(f"{where}: {key!r} must be a file name (a string), got {value!r}")
-    p = Path(value)
-    p = p if p.is_absolute() else base / p
-    if not p.is_file():
-        raise ValueError(f"{where}: {key} file {p} not found" + (" (it is a folder)" if p.is_dir() else ""))
-    return p.resolve()
+    full = os.path.join(base, value)  # an absolute value stays as it is
+    try:
+        mode = os.stat(full).st_mode
+    except (OSError, ValueError):
+        mode = 0
+    if not stat.S_ISREG(mode):
+        raise ValueError(f"{where}: {key} file {full} not found" + (" (it is a folder)" if stat.S_ISDIR(mode) else ""))
+    if os.path.islink(full):
+        return Path(os.path.realpath(full))
+    folder, name = os.path.split(full)
+    real = real_dirs.get(folder)
+    if real is None:
+        real = real_dirs[folder] = os.path.realpath(folder)
+    return Path(os.path.join(real, name))
 
 
-def _entry(raw, index: int, base: Path, defaults: dict) -> FleetEntry:
+def _entry(raw, index: int, base: Path, defaults: dict, real_dirs: dict) -> FleetEntry:
     where = f"robot #{index}"
     if not isinstance(raw, dict):
         raise ValueError(f"{where}: expected a [[robot]] table, got {type(raw).__name__}")
@@ -158,13 +172,13 @@ def _entry(raw, index: int, base: Path, defaults: dict) -> FleetEntry:
         raise ValueError(f"{where}: 'model' must be a robot name or a robot file, got {model!r}")
     is_file = model.lower().endswith(_ROBOT_FILE_SUFFIXES) or "/" in model or "\\" in model
     if is_file:
-        model = str(_path(base, model, "model", where))
+        model = str(_path(base, model, "model", where, real_dirs))
     cell = raw.get("cell")
     if cell is not None and not isinstance(cell, str):
         raise ValueError(f"{where}: 'cell' must be a string, got {cell!r}")
     options = defaults | _check_options(raw.get("options", {}), f"{where}: options")
     return FleetEntry(id=rid, model=model, model_is_file=is_file,
-                      measurements=_path(base, raw["measurements"], "measurements", where),
+                      measurements=_path(base, raw["measurements"], "measurements", where, real_dirs),
                       tool=_tool(raw.get("tool"), where), cell=cell, options=options, index=index)
 
 
@@ -194,11 +208,11 @@ def read_fleet(path) -> Fleet:
         raise FleetFileError(path, "no robots: add one [[robot]] table per robot (id, model, measurements)")
     base = path.resolve().parent
     fleet = Fleet(path=path.resolve(), options=defaults)
-    seen = {}
+    seen, real_dirs = {}, {}
     for i, raw in enumerate(robots, start=1):
         rid = raw.get("id") if isinstance(raw, dict) and isinstance(raw.get("id"), str) else None
         try:
-            entry = _entry(raw, i, base, defaults)
+            entry = _entry(raw, i, base, defaults, real_dirs)
         except ValueError as exc:
             fleet.problems.append(EntryProblem(i, rid, f"{path}: {exc}"))
             continue

@@ -98,8 +98,10 @@ def _check_outputs_are_not_inputs(fleet, out_dir) -> None:
     outputs = [join(out, n) for n in ("summary.json", "summary.html", "summary.svg")]
     inputs = {"FLEET.toml": fleet.path}
     names = (*OUTPUT_FILES.values(), STAMP_FILE)
+    fresh = not os.path.isdir(out)
     for e in fleet.entries:
-        outputs += [join(out, e.id, n) for n in names]
+        if not fresh and os.path.isdir(join(out, e.id)):  # no folder, no file in it (one stat, not ~10)
+            outputs += [join(out, e.id, n) for n in names]
         inputs[f"robot {e.id!r} measurements"] = e.measurements
         if e.model_is_file:
             inputs[f"robot {e.id!r} model"] = e.model
