@@ -460,6 +460,14 @@ def test_workers_pull_the_items_one_by_one_each_exactly_once(client, tmp_path):
     assert run_pulled(client, _slow_square, [], claims_parent=tmp_path) == []
 
 
+def test_many_items_travel_to_the_workers_once_scattered(client, tmp_path, monkeypatch):
+    from robocal.workflows.fleet import cluster
+
+    monkeypatch.setattr(cluster, "_SCATTER_ABOVE", 0)  # every run scatters its items
+    out = run_pulled(client, _slow_square, range(6), claims_parent=tmp_path)
+    assert [r[0] for r in out] == [k * k for k in range(6)]
+
+
 def test_a_pulled_item_that_raises_becomes_its_own_failed_row(client, tmp_path):
     out = run_pulled(client, _square_or_raise, range(6), claims_parent=tmp_path,
                      on_error=lambda item, exc: f"failed {item}: {type(exc).__name__}: {exc}")

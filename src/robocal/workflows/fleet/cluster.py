@@ -363,8 +363,10 @@ def run_pulled(client, fn, items, *, claims_parent, progress=None, on_error=None
 
     n_tasks = min(total, worker_threads(client))
     claims = tempfile.mkdtemp(prefix=".robocal-claims-", dir=os.fspath(claims_parent))
+    subscribed = False
     try:
-        shared = client.scatter(items, broadcast=False, hash=False) if n_tasks * total > _SCATTER_ABOVE else items
+        # scattered as one object (a list given to scatter would become one future per item)
+        shared = client.scatter([items], broadcast=False, hash=False)[0] if n_tasks * total > _SCATTER_ABOVE else items
         # one message for all tasks, then the subscription: the client batches its messages to the
         # scheduler 10 ms apart, and a subscription sent first held the tasks back until then (the
         # first progress message comes after PROGRESS_INTERVAL_S or at a task's end; one the
@@ -372,6 +374,7 @@ def run_pulled(client, fn, items, *, claims_parent, progress=None, on_error=None
         futures = client.map(pull_items, range(n_tasks), fn=fn, items=shared, claims_dir=claims, token=token,
                              kwargs=kwargs, key=[f"{key_prefix}-{k}-{token}" for k in range(n_tasks)], pure=False)
         client.subscribe_topic(PROGRESS_TOPIC, on_event)
+        subscribed = True
         for fut in futures:
             fut.add_done_callback(lambda _f: inbox.put(None))
         ended = 0
@@ -389,7 +392,8 @@ def run_pulled(client, fn, items, *, claims_parent, progress=None, on_error=None
                         take(i, result)
         del futures
     finally:
-        client.unsubscribe_topic(PROGRESS_TOPIC)
+        if subscribed:  # Dask raises on a topic never subscribed, which would hide the error on its way
+            client.unsubscribe_topic(PROGRESS_TOPIC)
         shutil.rmtree(claims, ignore_errors=True)
     missing = [i for i in range(total) if not have[i]]
     if missing:  # a long task that raised or whose worker was lost: its items again, one task each
