@@ -523,6 +523,26 @@ def test_the_local_cluster_holds_dask_background_work_low(tmp_path):
         assert [r[0] for r in run_pulled(c, _slow_square, range(8), claims_parent=tmp_path)] == [k * k for k in range(8)]
 
 
+def test_a_calibration_leaves_every_thread_s_warning_filters_alone(campaigns, tmp_path, monkeypatch):
+    """warnings.catch_warnings changes the filters of the whole process: two calibrations side by
+    side in the threads of a fleet worker had left an "ignore" filter behind, and every later warning
+    of the process went unseen. The default calibration path uses none."""
+    import warnings
+
+    from robocal.workflows.calibration.calibrate import run_calibration
+
+    callers = []
+
+    class Spy(warnings.catch_warnings):
+        def __init__(self, *args, **kwargs):
+            callers.append(sys._getframe(1).f_globals.get("__name__", ""))
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(warnings, "catch_warnings", Spy)
+    run_calibration("ur10", campaigns / "r0.csv", tmp_path / "out", report=False, holdout=0.25, seed=3)
+    assert [c for c in callers if c.startswith("robocal")] == []
+
+
 def test_fixed_groups_per_task_give_the_same_rows(campaigns, client, tmp_path):
     fleet = fleet_toml(tmp_path, good_entries(campaigns, 3))
     pulled = run_fleet_calibration(fleet, tmp_path / "a", client=client, report=False)["summary"]["robots"]

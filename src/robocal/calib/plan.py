@@ -79,11 +79,7 @@ def calibration_identifiability(model, q, *, tool=(0.0, 0.0, 100.0), free=None):
         from .identifiability import analyse_identifiability
 
         return analyse_identifiability(J, problem.names, problem.blocks), J, (problem, state)
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = solve(problem)
+    res = solve(problem, warn=False)  # not catch_warnings: it would change every thread's filters
     return res.identifiability, res.jacobian, (problem, res.state)
 
 

@@ -141,8 +141,13 @@ def solve(problem: Problem, *, method: str = "lm", loss: str = "linear", f_scale
           max_iterations: int = 50, ftol: float = 1e-9, xtol: float = 1e-10, rcond: float = 1e-8,
           auto_identifiable: bool = True, prior_weight: float = 0.0, outlier_threshold: float = 0.5,
           reject_outliers: bool = True, chi2_tol: float = 1e-3, state0=None,
-          progress=None) -> CalibrationResult:
+          progress=None, warn: bool = True) -> CalibrationResult:
     """Identify the problem's free variables (see :func:`_solve_once` for the arguments).
+
+    warn: a :class:`NotConvergedWarning` when the fit did not converge (``result.converged`` says
+    it either way). Callers that report convergence themselves pass False instead of changing the
+    process's warning filters, which ``warnings.catch_warnings`` does for every thread at once (two
+    calibrations in two threads could leave a filter of one behind for the whole process).
 
     With ``auto_identifiable`` the identifiable set is chosen at the starting point, and chosen
     again at the solution: a start far from the truth (a tool point guessed on the joint-6 axis,
@@ -156,7 +161,7 @@ def solve(problem: Problem, *, method: str = "lm", loss: str = "linear", f_scale
     res = _solve_once(problem, state0=state0, **kw)
     if auto_identifiable:
         res = _refine_identifiable(problem, res, state0, kw)
-    if not res.converged:
+    if warn and not res.converged:
         warnings.warn(NotConvergedWarning(not_converged_message(res)), stacklevel=2)
     return res
 

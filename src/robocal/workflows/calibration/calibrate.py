@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from ...calib import solve
-from ...calib.solve import NotConvergedWarning
+from ...calib.solve import NotConvergedWarning, not_converged_message
 from ...calib.outputs import corrected_joint_targets, json_ready, result_to_dict
 from ...calib.sanity import Verdict, calibration_verdict
 from ...calib.uncertainty import predicted_point_std
@@ -434,25 +434,28 @@ def _solve(setup, step, total, n_train, n_free, K, loss, method, max_iterations,
     convergence warnings of the calibration (list of str)."""
     step(2, total, f"initial base frame and target point(s) with the nominal geometry ({n_train} poses; "
                    f"{setup['description']})")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", NotConvergedWarning)  # the baseline only starts the real solve
-        res0 = solve(setup["problem0"], loss=loss, method="svd" if method == "svd" else "lm",
-                     max_iterations=max_iterations, progress=solver_progress(step, 2, total))
+    # no warnings.catch_warnings on the default path: it changes the filters of every thread at once,
+    # and calibrations run side by side in the threads of a fleet worker or a user's program
+    res0 = solve(setup["problem0"], loss=loss, method="svd" if method == "svd" else "lm",
+                 max_iterations=max_iterations, progress=solver_progress(step, 2, total),
+                 warn=False)  # the baseline only starts the real solve
     step(3, total, f"identifying {n_free} parameter(s) + base + {K} target point(s) ({loss} loss)")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", NotConvergedWarning)
-        start = res0.state
-        if getattr(setup["problem"], "deflection", None) is not None:  # the baseline has no elastic blocks
-            start = start._replace(**{b.name: b.initial for b in setup["problem"].deflection.blocks})
-        if method in ("lm", "svd"):
-            result = solve(setup["problem"], loss=loss, method=method, state0=start,
-                           max_iterations=max_iterations, progress=solver_progress(step, 3, total))
-        else:
+    start = res0.state
+    if getattr(setup["problem"], "deflection", None) is not None:  # the baseline has no elastic blocks
+        start = start._replace(**{b.name: b.initial for b in setup["problem"].deflection.blocks})
+    if method in ("lm", "svd"):
+        result = solve(setup["problem"], loss=loss, method=method, state0=start,
+                       max_iterations=max_iterations, progress=solver_progress(step, 3, total), warn=False)
+        messages = [] if result.converged else [not_converged_message(result)]
+    else:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", NotConvergedWarning)
             result = identify(setup["problem"], start, method=method, loss=loss, max_iterations=max_iterations,
                               **swarm)
+        messages = [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
     if start is not res0.state:
         _before_is_the_baseline(result, res0)
-    return res0, result, [str(w.message) for w in caught if issubclass(w.category, NotConvergedWarning)]
+    return res0, result, messages
 
 
 def _before_is_the_baseline(result, res0) -> None:
